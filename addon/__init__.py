@@ -1,0 +1,1 @@
+"""Blender UI: the LANTERN render engine, its properties, panels and operators."""
