@@ -1,0 +1,52 @@
+"""File > Export > Lantern USD: the same code path as `lantern export`."""
+import bpy
+from bpy_extras.io_utils import ExportHelper
+
+from ..exporters import ExportError, ExportOptions, export_depsgraph_to_file
+
+
+class EXPORT_SCENE_OT_lantern_usd(bpy.types.Operator, ExportHelper):
+    """Export the scene to USD with Lantern"""
+    bl_idname = "export_scene.lantern_usd"
+    bl_label = "Export Lantern USD"
+    bl_options = {'PRESET'}
+
+    filename_ext = ".usdc"
+    filter_glob: bpy.props.StringProperty(default="*.usd;*.usda;*.usdc", options={'HIDDEN'})
+    textures: bpy.props.EnumProperty(
+        name="Textures", default="reference",
+        items=(("reference", "Reference", "Point at images where they are"),
+               ("copy", "Copy", "Copy images beside the USD file")))
+
+    def check(self, context):
+        # Keep .usd/.usda/.usdc as typed instead of forcing filename_ext.
+        return False
+
+    def execute(self, context):
+        path = self.filepath
+        if not path.lower().endswith((".usd", ".usda", ".usdc")):
+            path += self.filename_ext
+        try:
+            report = export_depsgraph_to_file(
+                context.evaluated_depsgraph_get(), path, ExportOptions(textures=self.textures))
+        except ExportError as error:
+            self.report({'ERROR'}, str(error))
+            return {'CANCELLED'}
+        for warning in report.warnings:
+            self.report({'WARNING'}, warning)
+        self.report({'INFO'}, f"Exported {path} in {report.seconds:.2f} s")
+        return {'FINISHED'}
+
+
+def _menu_entry(self, context):
+    self.layout.operator(EXPORT_SCENE_OT_lantern_usd.bl_idname, text="Lantern USD (.usd/.usda/.usdc)")
+
+
+def register():
+    bpy.utils.register_class(EXPORT_SCENE_OT_lantern_usd)
+    bpy.types.TOPBAR_MT_file_export.append(_menu_entry)
+
+
+def unregister():
+    bpy.types.TOPBAR_MT_file_export.remove(_menu_entry)
+    bpy.utils.unregister_class(EXPORT_SCENE_OT_lantern_usd)
