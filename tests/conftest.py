@@ -7,6 +7,7 @@ on import, so it goes first, before any test module imports pxr. The CLI tests r
 """
 import os
 import pathlib
+import sys
 
 import pytest
 
@@ -14,6 +15,9 @@ import lantern.exporters  # noqa: F401  (must precede any pxr import)
 
 REPO = pathlib.Path(__file__).resolve().parent.parent
 CORPUS = REPO.parent / "shared" / "corpus"
+
+# Shared test modules (calibration scenes and closed forms) live beside the tests.
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
 
 @pytest.fixture(scope="session")
