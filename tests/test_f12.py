@@ -1,0 +1,68 @@
+"""F12 inside Blender gives the pixels `lantern render` gives on the exported file."""
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+WIDTH, HEIGHT = 96, 54
+
+
+@pytest.fixture(scope="module")
+def addon():
+    import lantern
+    lantern.register()
+    yield
+    lantern.unregister()
+
+
+def _lantern(*args):
+    proc = subprocess.run([sys.executable, "-m", "lantern", *args], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    return proc
+
+
+def test_f12_equals_the_cli_on_the_exported_file(addon, tmp_path):
+    import bpy
+    from lantern.demo.build_scene import build
+    from lantern.engine.image_io import read_exr
+
+    blend = tmp_path / "demo.blend"
+    build(str(blend))
+    scene = bpy.context.scene
+    scene.render.engine = 'LANTERN'
+    scene.render.resolution_x, scene.render.resolution_y = WIDTH, HEIGHT
+    scene.render.image_settings.file_format = 'OPEN_EXR'
+    scene.render.image_settings.color_depth = '32'
+    scene.render.filepath = str(tmp_path / "f12.exr")
+    bpy.ops.render.render(write_still=True)
+    f12 = read_exr(str(tmp_path / "f12.exr"))
+
+    # The CLI side: export in one process, render in another that never imports bpy.
+    _lantern("export", str(blend), "-o", str(tmp_path / "demo.usda"))
+    _lantern("render", str(tmp_path / "demo.usda"), "-o", str(tmp_path / "cli.exr"),
+             "--frame", str(scene.frame_current), "--size", f"{WIDTH}x{HEIGHT}")
+    cli = read_exr(str(tmp_path / "cli.exr"))
+
+    assert f12.shape == cli.shape == (HEIGHT, WIDTH, 4)
+    assert f12[..., :3].max() > 0.01, "F12 rendered black"
+    difference = np.abs(f12 - cli).max()
+    print(f"max |F12 - CLI| = {difference:.2e}")
+    assert difference <= 1e-3
+
+
+def test_f12_renders_the_combined_pass_in_scene_linear(addon, tmp_path):
+    """A 2 W/m² sun on a white Lambert plane reads 2·cos θ/π, not a display value."""
+    import bpy
+    import calibration
+    from lantern.engine.image_io import read_exr
+
+    scene = calibration.build_scene("sun")
+    scene.render.engine = 'LANTERN'
+    scene.render.image_settings.file_format = 'OPEN_EXR'
+    scene.render.image_settings.color_depth = '32'
+    scene.render.filepath = str(tmp_path / "sun.exr")
+    bpy.ops.render.render(write_still=True)
+    image = read_exr(str(tmp_path / "sun.exr"))
+    expected = calibration.closed_form_radiance("sun")
+    assert np.allclose(image[..., 0], expected, rtol=0.02)
