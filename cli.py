@@ -130,11 +130,11 @@ def _export_batch(args):
 
     table = Table(title="lantern export")
     for column in ("file", "status", "seconds", "warnings", "output / reason"):
-        table.add_column(column)
+        table.add_column(column, overflow="fold")
     for blend, status, seconds, n_warnings, detail in results:
         style = "green" if status == "ok" else "red"
-        table.add_row(blend, f"[{style}]{status}[/]", f"{seconds:.2f}", str(n_warnings), detail)
-    Console().print(table)
+        table.add_row(os.path.basename(blend), f"[{style}]{status}[/]", f"{seconds:.2f}", str(n_warnings), detail)
+    Console(width=max(120, Console().width)).print(table)
     failed = sum(1 for r in results if r[1] != "ok")
     print(f"{len(results) - failed} exported, {failed} failed")
     return 1 if failed else 0

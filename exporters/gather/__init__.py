@@ -1,0 +1,1 @@
+"""Blender data -> plain records (see `..ir`). Only these modules read bpy."""

@@ -1,0 +1,40 @@
+"""A Blender light -> LightRecord, per the contract's light table."""
+import math
+
+from ..ir import LightRecord
+
+
+def gather_light(light, warn):
+    power = float(light.energy) * 2.0 ** float(getattr(light, "exposure", 0.0))
+    color = tuple(float(c) for c in light.color)
+    if getattr(light, "use_temperature", False):
+        color = tuple(c * float(t) for c, t in zip(color, light.temperature_color))
+    rec = LightRecord(kind=light.type.lower(), color=color, intensity=power / math.pi,
+                      shadow=bool(light.use_shadow),
+                      diffuse=float(light.diffuse_factor), specular=float(light.specular_factor))
+    if light.type in {"POINT", "SPOT"}:
+        rec.radius = float(light.shadow_soft_size)
+        rec.soft_falloff = bool(getattr(light, "use_soft_falloff", True))
+    if light.type == "SPOT":
+        rec.cone_angle = math.degrees(float(light.spot_size)) / 2.0
+        rec.cone_softness = float(light.spot_blend)
+    elif light.type == "SUN":
+        rec.intensity = power  # strength is irradiance in W/m^2
+        rec.angle = math.degrees(float(light.angle))
+    elif light.type == "AREA":
+        sx = float(light.size)
+        sy = float(light.size_y) if light.shape in {"RECTANGLE", "ELLIPSE"} else sx
+        if light.shape in {"SQUARE", "RECTANGLE"}:
+            rec.shape, rec.width, rec.height = "rect", sx, sy
+            area = sx * sy
+        else:
+            rec.shape = "disk"
+            rec.radius = math.sqrt(sx * sy) / 2.0  # area-preserving for ellipses
+            area = math.pi * rec.radius ** 2
+            if light.shape == "ELLIPSE" and abs(sx - sy) > 1e-9:
+                warn(f"light '{light.name}': ellipse {sx:g}x{sy:g} is written as a disk "
+                     f"of equal area (radius {rec.radius:g})")
+        if not getattr(light, "normalize", True):
+            # Unnormalized: the power is per unit area, so the total grows with the size.
+            rec.intensity *= area
+    return rec

@@ -1,0 +1,135 @@
+"""The evaluated depsgraph -> SceneRecord."""
+import numpy as np
+
+from ..ir import ObjectRecord, SceneRecord, StageSettings
+from .camera import gather_camera
+from .light import gather_light
+from .material import gather_material
+from .mesh import gather_mesh
+from .world import gather_world
+
+GEOMETRY = {"MESH", "CURVE", "CURVES", "SURFACE", "FONT", "META"}
+
+
+def render_visible(view_layer):
+    """Names of objects in collections that are neither excluded nor hidden for render."""
+    names = set()
+
+    def walk(layer_collection):
+        if layer_collection.exclude or layer_collection.collection.hide_render:
+            return
+        names.update(ob.name_full for ob in layer_collection.collection.objects)
+        for child in layer_collection.children:
+            walk(child)
+
+    walk(view_layer.layer_collection)
+    return names
+
+
+def _settings(scene):
+    r = scene.render
+    pct = r.resolution_percentage / 100.0
+    return StageSettings(
+        fps=r.fps / r.fps_base, frame_start=scene.frame_start, frame_end=scene.frame_end,
+        meters_per_unit=float(scene.unit_settings.scale_length) or 1.0,
+        resolution=(max(1, int(r.resolution_x * pct)), max(1, int(r.resolution_y * pct))),
+        pixel_aspect=float(r.pixel_aspect_x / r.pixel_aspect_y))
+
+
+def _is_shareable(ob):
+    """True when the evaluated mesh is exactly the mesh data, so objects can share it."""
+    return ob.type == "MESH" and len(ob.modifiers) == 0 and ob.data.shape_keys is None
+
+
+def gather_scene(depsgraph, warn, texture_dir=None):
+    scene = depsgraph.scene
+    rec = SceneRecord(settings=_settings(scene))
+    visible = render_visible(depsgraph.view_layer)
+
+    evaluated, instances = {}, 0
+    for inst in depsgraph.object_instances:
+        if inst.is_instance:
+            instances += 1
+            continue
+        ob = inst.object
+        orig = ob.original
+        if orig.name_full in visible and not orig.hide_render:
+            evaluated[orig.name_full] = ob
+    if instances:
+        warn(f"scene '{scene.name}': {instances} instances (collection, particle or "
+             f"geometry-node instances) are not exported")
+
+    def exported_parent(orig):
+        parent = orig.parent
+        while parent is not None and parent.name_full not in evaluated:
+            parent = parent.parent
+        return parent
+
+    shared_users = {}
+    for ob in evaluated.values():
+        if _is_shareable(ob.original):
+            shared_users.setdefault(ob.original.data.name_full, []).append(ob)
+    shared = {k for k, users in shared_users.items() if len(users) > 1}
+
+    children = {}
+    for key, ob in evaluated.items():
+        parent = exported_parent(ob.original)
+        children.setdefault(parent.name_full if parent else None, []).append(key)
+
+    material_keys = {}
+    order = []
+
+    def visit(parent_key):
+        for key in sorted(children.get(parent_key, [])):
+            order.append((key, parent_key))
+            visit(key)
+    visit(None)
+
+    for key, parent_key in order:
+        ob = evaluated[key]
+        world = np.array(ob.matrix_world, dtype=np.float64)
+        if parent_key is not None:
+            parent_world = np.array(evaluated[parent_key].matrix_world, dtype=np.float64)
+            local = np.linalg.solve(parent_world, world)
+        else:
+            local = world
+        obj = ObjectRecord(key=key, name=ob.original.name, parent=parent_key,
+                           matrix=local, kind="empty")
+        if ob.type == "LIGHT":
+            obj.kind, obj.light = "light", gather_light(ob.data.original, warn)
+        elif ob.type == "CAMERA":
+            obj.kind = "camera"
+            obj.camera = gather_camera(ob.data.original, scene.render, warn)
+        elif ob.type in GEOMETRY:
+            _gather_geometry(ob, obj, rec, shared, warn)
+            for mat in obj.materials:
+                if mat is not None:
+                    material_keys.setdefault(mat[0], mat[1])
+            obj.materials = [m[0] if m else None for m in obj.materials]
+        rec.objects.append(obj)
+
+    for key in sorted(material_keys):
+        rec.materials[key] = gather_material(material_keys[key], warn, texture_dir)
+    if scene.camera is not None and scene.camera.name_full in evaluated:
+        rec.settings.camera = scene.camera.name_full
+    if scene.world is not None:
+        rec.world = gather_world(scene.world, warn)
+    return rec
+
+
+def _gather_geometry(ob, obj, rec, shared, warn):
+    orig = ob.original
+    is_shared = _is_shareable(orig) and orig.data.name_full in shared
+    mesh_key = ("proto:" + orig.data.name_full) if is_shared else ("object:" + orig.name_full)
+    if mesh_key not in rec.meshes:
+        mesh = ob.to_mesh()
+        try:
+            if len(mesh.polygons) == 0:
+                return  # points or edges only: nothing to render
+            name = orig.data.name if orig.type == "MESH" else orig.name
+            rec.meshes[mesh_key] = gather_mesh(mesh, mesh_key, name)
+        finally:
+            ob.to_mesh_clear()
+    obj.kind, obj.mesh, obj.shared = "mesh", mesh_key, is_shared
+    obj.materials = [(s.material.original.name_full, s.material.original)
+                     if s.material is not None else None for s in ob.material_slots]

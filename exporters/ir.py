@@ -1,0 +1,124 @@
+"""Plain records between gathering (bpy) and writing (pxr).
+
+Nothing here imports bpy or pxr, so the writers can be tested and reasoned about
+without Blender, and the gatherers without USD.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass
+class StageSettings:
+    fps: float = 24.0
+    frame_start: int = 1
+    frame_end: int = 250
+    meters_per_unit: float = 1.0
+    up_axis: str = "Z"
+    resolution: tuple[int, int] = (1920, 1080)
+    pixel_aspect: float = 1.0
+    camera: str | None = None  # key of the active camera's ObjectRecord
+
+
+@dataclass
+class TextureRecord:
+    file: str                  # absolute path of an image on disk
+    uv: str | None             # UV map name; None: the mesh's render-active map
+    wrap: str = "repeat"       # repeat / mirror / clamp / black
+    color_space: str = "sRGB"  # sRGB / raw
+    scale: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
+    bias: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+
+
+@dataclass
+class TexInput:
+    """A material input read from a texture output: 'rgb' or one of 'r','g','b','a'."""
+    texture: TextureRecord
+    channel: str = "rgb"
+
+
+@dataclass
+class MaterialRecord:
+    key: str    # Blender's unique name (name_full)
+    name: str
+    # UsdPreviewSurface input name -> float, 3-tuple or TexInput
+    inputs: dict = field(default_factory=dict)
+    backface_culling: bool = False
+
+
+@dataclass
+class MeshRecord:
+    key: str
+    name: str
+    points: np.ndarray            # (N, 3) float32, object space
+    face_counts: np.ndarray       # (F,) int32
+    face_indices: np.ndarray      # (C,) int32
+    normals: np.ndarray           # (N, 3) vertex or (C, 3) faceVarying
+    normals_interpolation: str    # "vertex" / "faceVarying"
+    uvs: dict = field(default_factory=dict)  # name -> (C, 2) float32, faceVarying
+    active_uv: str | None = None  # render-active UV map name
+    material_indices: np.ndarray | None = None  # (F,) int32 slot index per face
+
+
+@dataclass
+class LightRecord:
+    kind: str                   # point / spot / sun / area
+    color: tuple[float, float, float]
+    intensity: float            # USD inputs:intensity, with normalize = true
+    shadow: bool
+    diffuse: float = 1.0
+    specular: float = 1.0
+    radius: float = 0.0         # point / spot / disk
+    soft_falloff: bool = True
+    cone_angle: float = 90.0    # degrees, half angle
+    cone_softness: float = 0.0
+    angle: float = 0.0          # sun, degrees
+    shape: str = "rect"         # area: rect / disk
+    width: float = 1.0
+    height: float = 1.0
+
+
+@dataclass
+class CameraRecord:
+    projection: str             # perspective / orthographic
+    focal_length: float         # mm
+    horizontal_aperture: float  # mm (tenths of a unit when orthographic)
+    vertical_aperture: float
+    horizontal_offset: float
+    vertical_offset: float
+    clip_start: float
+    clip_end: float
+
+
+@dataclass
+class WorldRecord:
+    name: str
+    color: tuple[float, float, float] = (0.05, 0.05, 0.05)
+    intensity: float = 1.0
+    texture: str | None = None  # absolute path of a lat-long image
+
+
+@dataclass
+class ObjectRecord:
+    key: str                     # Blender's unique object name
+    name: str
+    parent: str | None           # key of the exported parent, None: under /root
+    matrix: np.ndarray           # (4, 4) float64, row-major Blender matrix, local
+    kind: str                    # mesh / light / camera / empty
+    mesh: str | None = None      # MeshRecord key
+    shared: bool = False         # mesh is a prototype under /root/_prototypes
+    materials: list = field(default_factory=list)  # per slot: MaterialRecord key or None
+    light: LightRecord | None = None
+    camera: CameraRecord | None = None
+
+
+@dataclass
+class SceneRecord:
+    settings: StageSettings = field(default_factory=StageSettings)
+    objects: list = field(default_factory=list)       # parents before children
+    meshes: dict = field(default_factory=dict)        # key -> MeshRecord
+    materials: dict = field(default_factory=dict)     # key -> MaterialRecord
+    world: WorldRecord | None = None
+    warnings: list = field(default_factory=list)

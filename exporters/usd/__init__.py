@@ -1,0 +1,1 @@
+"""Records (see `..ir`) -> USD. pxr only: nothing here imports bpy."""

@@ -1,0 +1,37 @@
+"""LightRecord -> UsdLux light on the object prim."""
+from pxr import Gf, Sdf, UsdLux
+
+
+def write_light(stage, path, rec):
+    if rec.kind in {"point", "spot"}:
+        light = UsdLux.SphereLight.Define(stage, path)
+        light.CreateRadiusAttr(rec.radius)
+        light.CreateTreatAsPointAttr(rec.radius == 0.0)
+        light.GetPrim().CreateAttribute("lantern:softFalloff", Sdf.ValueTypeNames.Bool,
+                                        custom=True).Set(rec.soft_falloff)
+        if rec.kind == "spot":
+            shaping = UsdLux.ShapingAPI.Apply(light.GetPrim())
+            shaping.CreateShapingConeAngleAttr(rec.cone_angle)
+            shaping.CreateShapingConeSoftnessAttr(rec.cone_softness)
+    elif rec.kind == "sun":
+        light = UsdLux.DistantLight.Define(stage, path)
+        light.CreateAngleAttr(rec.angle)
+    elif rec.shape == "rect":
+        light = UsdLux.RectLight.Define(stage, path)
+        light.CreateWidthAttr(rec.width)
+        light.CreateHeightAttr(rec.height)
+    else:
+        light = UsdLux.DiskLight.Define(stage, path)
+        light.CreateRadiusAttr(rec.radius)
+    write_common(light, rec.color, rec.intensity, rec.shadow, rec.diffuse, rec.specular)
+    return light
+
+
+def write_common(light, color, intensity, shadow, diffuse=1.0, specular=1.0):
+    api = UsdLux.LightAPI(light.GetPrim())
+    api.CreateNormalizeAttr(True)
+    api.CreateColorAttr(Gf.Vec3f(*color))
+    api.CreateIntensityAttr(float(intensity))
+    api.CreateDiffuseAttr(float(diffuse))
+    api.CreateSpecularAttr(float(specular))
+    UsdLux.ShadowAPI.Apply(light.GetPrim()).CreateShadowEnableAttr(bool(shadow))

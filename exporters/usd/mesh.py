@@ -1,0 +1,69 @@
+"""MeshRecord -> UsdGeom.Mesh, and material bindings on a mesh."""
+import numpy as np
+from pxr import Sdf, UsdGeom, UsdShade, Vt
+
+from .names import Namer, primvar_name
+
+
+def write_mesh(stage, path, rec, double_sided, slot_names):
+    mesh = UsdGeom.Mesh.Define(stage, path)
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(rec.points)))
+    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(rec.face_counts))
+    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(rec.face_indices))
+    lo, hi = rec.points.min(axis=0), rec.points.max(axis=0)
+    mesh.CreateExtentAttr(Vt.Vec3fArray([tuple(map(float, lo)), tuple(map(float, hi))]))
+    mesh.CreateOrientationAttr(UsdGeom.Tokens.rightHanded)
+    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+    mesh.CreateDoubleSidedAttr(bool(double_sided))
+    mesh.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(rec.normals)))
+    mesh.SetNormalsInterpolation(rec.normals_interpolation)
+    primvars = UsdGeom.PrimvarsAPI(mesh)
+    for name in sorted(rec.uvs):
+        pv = primvars.CreatePrimvar(primvar_name(name), Sdf.ValueTypeNames.TexCoord2fArray,
+                                    UsdGeom.Tokens.faceVarying)
+        pv.Set(Vt.Vec2fArray.FromNumpy(np.ascontiguousarray(rec.uvs[name])))
+    slots = face_slots(rec, len(slot_names))
+    if slots is not None:
+        namer = Namer()
+        for slot in np.unique(slots):
+            subset_path = namer.child(path, slot_names[slot] or f"slot_{slot}")
+            subset = UsdGeom.Subset.Define(stage, subset_path)
+            subset.CreateElementTypeAttr(UsdGeom.Tokens.face)
+            subset.CreateFamilyNameAttr(UsdShade.Tokens.materialBind)
+            subset.CreateIndicesAttr(Vt.IntArray.FromNumpy(
+                np.flatnonzero(slots == slot).astype(np.int32)))
+        UsdGeom.Subset.SetFamilyType(mesh, UsdShade.Tokens.materialBind,
+                                     UsdGeom.Tokens.nonOverlapping)
+    return mesh
+
+
+def face_slots(rec, slot_count):
+    """Material slot per face, or None when one slot (or none) covers the mesh."""
+    if slot_count <= 1 or rec.material_indices is None:
+        return None
+    slots = np.clip(rec.material_indices, 0, slot_count - 1)
+    return slots if len(np.unique(slots)) > 1 else None
+
+
+def bind_materials(stage, mesh_path, rec, slot_materials, material_paths):
+    """Binds per face slot (subsets written by write_mesh), or the whole mesh."""
+    slots = face_slots(rec, len(slot_materials))
+    mesh_prim = stage.GetPrimAtPath(mesh_path)
+    if slots is None:
+        key = slot_materials[int(np.clip(rec.material_indices[0], 0, len(slot_materials) - 1))] \
+            if slot_materials and len(rec.material_indices) else None
+        if key is not None:
+            material = UsdShade.Material(stage.GetPrimAtPath(material_paths[key]))
+            UsdShade.MaterialBindingAPI.Apply(mesh_prim).Bind(material)
+        return
+    subsets = {int(s.GetIndicesAttr().Get()[0]): s for s in
+               UsdGeom.Subset.GetGeomSubsets(UsdGeom.Imageable(mesh_prim),
+                                             UsdGeom.Tokens.face, UsdShade.Tokens.materialBind)}
+    for first_face, subset in sorted(subsets.items()):
+        key = slot_materials[slots[first_face]]
+        if key is None:
+            continue
+        # Over the subset: on a referenced prototype this is a local opinion.
+        prim = stage.OverridePrim(subset.GetPath())
+        material = UsdShade.Material(stage.GetPrimAtPath(material_paths[key]))
+        UsdShade.MaterialBindingAPI.Apply(prim).Bind(material)

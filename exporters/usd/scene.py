@@ -1,0 +1,94 @@
+"""SceneRecord -> a stage, laid out as docs/stage_contract.md says."""
+from pxr import Gf, Sdf, UsdGeom
+
+from .camera import write_camera
+from .light import write_light
+from .material import write_material
+from .mesh import bind_materials, write_mesh
+from .names import Namer, primvar_name, set_blender_name
+from .stage import write_metadata, write_render_settings
+from .world import write_world
+
+ROOT = Sdf.Path("/root")
+PROTOTYPES = ROOT.AppendChild("_prototypes")
+MATERIALS = ROOT.AppendChild("_materials")
+WORLD = ROOT.AppendChild("_world")
+
+
+def _transform(prim, matrix):
+    # Blender's matrices act on column vectors, USD's on row vectors: transpose.
+    UsdGeom.Xformable(prim).AddTransformOp().Set(Gf.Matrix4d(matrix.T.tolist()))
+
+
+def write_scene(stage, scene, asset_path):
+    namer = Namer()
+    for reserved in ("_prototypes", "_materials", "_world"):
+        namer.reserve(ROOT, reserved)
+    UsdGeom.Xform.Define(stage, ROOT)
+    write_metadata(stage, scene.settings, ROOT)
+
+    slots_of = {}  # mesh key -> slot materials of its first user (prototype subsets, sidedness)
+    for obj in scene.objects:
+        if obj.mesh is not None:
+            slots_of.setdefault(obj.mesh, obj.materials)
+
+    material_paths = {}
+    if scene.materials:
+        UsdGeom.Scope.Define(stage, MATERIALS)
+        for key, rec in scene.materials.items():
+            default_uv = next((primvar_name(scene.meshes[o.mesh].active_uv)
+                               for o in scene.objects
+                               if o.mesh is not None and key in o.materials
+                               and scene.meshes[o.mesh].active_uv), "UVMap")
+            path = namer.child(MATERIALS, rec.name)
+            write_material(stage, path, rec, default_uv, asset_path)
+            set_blender_name(stage.GetPrimAtPath(path), rec.name)
+            material_paths[key] = path
+
+    def double_sided(slot_materials):
+        mats = [scene.materials[k] for k in slot_materials if k is not None]
+        return not (mats and all(m.backface_culling for m in mats))
+
+    def slot_names(slot_materials):
+        return [scene.materials[k].name if k is not None else None for k in slot_materials]
+
+    proto_paths = {}
+    shared = sorted({o.mesh for o in scene.objects if o.shared})
+    if shared:
+        stage.CreateClassPrim(PROTOTYPES)
+        for key in shared:
+            rec = scene.meshes[key]
+            path = namer.child(PROTOTYPES, rec.name)
+            write_mesh(stage, path, rec, double_sided(slots_of[key]), slot_names(slots_of[key]))
+            set_blender_name(stage.GetPrimAtPath(path), rec.name)
+            proto_paths[key] = path
+
+    object_paths = {}
+    for obj in scene.objects:
+        parent = object_paths[obj.parent] if obj.parent is not None else ROOT
+        path = namer.child(parent, obj.name)
+        object_paths[obj.key] = path
+        if obj.kind == "light":
+            prim = write_light(stage, path, obj.light).GetPrim()
+        elif obj.kind == "camera":
+            prim = write_camera(stage, path, obj.camera).GetPrim()
+        else:
+            prim = UsdGeom.Xform.Define(stage, path).GetPrim()
+        _transform(prim, obj.matrix)
+        set_blender_name(prim, obj.name)
+        if obj.kind != "mesh":
+            continue
+        rec = scene.meshes[obj.mesh]
+        mesh_path = namer.child(path, rec.name)
+        if obj.shared:
+            stage.DefinePrim(mesh_path).GetReferences().AddInternalReference(proto_paths[obj.mesh])
+        else:
+            write_mesh(stage, mesh_path, rec, double_sided(obj.materials), slot_names(obj.materials))
+            set_blender_name(stage.GetPrimAtPath(mesh_path), rec.name)
+        bind_materials(stage, mesh_path, rec, obj.materials, material_paths)
+
+    if scene.world is not None:
+        write_world(stage, WORLD, scene.world, asset_path)
+    camera = object_paths.get(scene.settings.camera)
+    write_render_settings(stage, scene.settings, camera)
+    return object_paths

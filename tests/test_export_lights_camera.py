@@ -1,0 +1,123 @@
+"""Lights per the contract's table, and the scene camera."""
+import math
+
+import bpy
+import pytest
+from pxr import UsdGeom, UsdLux, UsdRender
+
+from _export_helpers import export_current
+
+
+def add_light(name, kind, **props):
+    light = bpy.data.lights.new(name, kind)
+    for key, value in props.items():
+        setattr(light, key, value)
+    ob = bpy.data.objects.new(name, light)
+    bpy.context.scene.collection.objects.link(ob)
+    return ob
+
+
+def attr(prim, name):
+    return prim.GetAttribute(name).Get()
+
+
+def test_lights_follow_the_contract_table(empty_scene):
+    add_light("Point", "POINT", energy=100.0, shadow_soft_size=0.2, use_shadow=False,
+              use_soft_falloff=False, color=(1.0, 0.5, 0.25))
+    add_light("Spot", "SPOT", energy=50.0, shadow_soft_size=0.0, spot_size=1.0, spot_blend=0.3)
+    add_light("Sun", "SUN", energy=3.0, angle=0.1)
+    add_light("Rect", "AREA", energy=20.0, shape="RECTANGLE", size=2.0, size_y=1.0)
+    add_light("Disk", "AREA", energy=20.0, shape="DISK", size=1.5)
+    stage, report = export_current()
+    assert report.counts["lights"] == 5
+
+    point = stage.GetPrimAtPath("/root/Point")
+    assert point.IsA(UsdLux.SphereLight)
+    assert attr(point, "inputs:intensity") == pytest.approx(100.0 / math.pi)
+    assert attr(point, "inputs:radius") == pytest.approx(0.2)
+    assert attr(point, "treatAsPoint") is False
+    assert attr(point, "inputs:normalize") is True
+    assert attr(point, "inputs:shadow:enable") is False
+    assert point.HasAPI(UsdLux.ShadowAPI)
+    assert attr(point, "lantern:softFalloff") is False
+    assert tuple(attr(point, "inputs:color")) == pytest.approx((1.0, 0.5, 0.25))
+
+    spot = stage.GetPrimAtPath("/root/Spot")
+    assert spot.IsA(UsdLux.SphereLight) and spot.HasAPI(UsdLux.ShapingAPI)
+    assert attr(spot, "inputs:intensity") == pytest.approx(50.0 / math.pi)
+    assert attr(spot, "inputs:shaping:cone:angle") == pytest.approx(math.degrees(0.5), rel=1e-6)
+    assert attr(spot, "inputs:shaping:cone:softness") == pytest.approx(0.3)
+    assert attr(spot, "treatAsPoint") is True
+    assert attr(spot, "inputs:shadow:enable") is True
+
+    sun = stage.GetPrimAtPath("/root/Sun")
+    assert sun.IsA(UsdLux.DistantLight)
+    assert attr(sun, "inputs:intensity") == pytest.approx(3.0)
+    assert attr(sun, "inputs:angle") == pytest.approx(math.degrees(0.1), rel=1e-6)
+
+    rect = stage.GetPrimAtPath("/root/Rect")
+    assert rect.IsA(UsdLux.RectLight)
+    assert (attr(rect, "inputs:width"), attr(rect, "inputs:height")) == (2.0, 1.0)
+    assert attr(rect, "inputs:intensity") == pytest.approx(20.0 / math.pi)
+
+    disk = stage.GetPrimAtPath("/root/Disk")
+    assert disk.IsA(UsdLux.DiskLight)
+    assert attr(disk, "inputs:radius") == pytest.approx(0.75)
+
+
+def add_camera(**props):
+    cam = bpy.data.cameras.new("Cam")
+    for key, value in props.items():
+        setattr(cam, key, value)
+    ob = bpy.data.objects.new("Cam", cam)
+    bpy.context.scene.collection.objects.link(ob)
+    bpy.context.scene.camera = ob
+    return ob
+
+
+def set_resolution(x, y, pct=100):
+    r = bpy.context.scene.render
+    r.resolution_x, r.resolution_y, r.resolution_percentage = x, y, pct
+
+
+def test_camera_16_9_auto_fit(empty_scene):
+    add_camera(lens=50.0, sensor_width=36.0, sensor_fit="AUTO", clip_start=0.5,
+               clip_end=200.0, shift_x=0.1)
+    set_resolution(1920, 1080, 50)
+    stage, report = export_current()
+    cam = UsdGeom.Camera(stage.GetPrimAtPath("/root/Cam"))
+    assert cam and report.counts["cameras"] == 1
+    assert cam.GetProjectionAttr().Get() == "perspective"
+    assert cam.GetFocalLengthAttr().Get() == pytest.approx(50.0)
+    assert cam.GetHorizontalApertureAttr().Get() == pytest.approx(36.0)
+    assert cam.GetVerticalApertureAttr().Get() == pytest.approx(36.0 * 9 / 16)
+    assert cam.GetHorizontalApertureOffsetAttr().Get() == pytest.approx(3.6)
+    assert tuple(cam.GetClippingRangeAttr().Get()) == pytest.approx((0.5, 200.0))
+    settings = UsdRender.Settings(stage.GetPrimAtPath("/Render/Settings"))
+    assert tuple(settings.GetResolutionAttr().Get()) == (960, 540)
+    assert settings.GetCameraRel().GetTargets() == [cam.GetPath()]
+
+
+def test_camera_portrait_auto_fit_and_orthographic(empty_scene):
+    add_camera(type="ORTHO", ortho_scale=4.0, sensor_fit="AUTO")
+    set_resolution(1080, 1920)
+    stage, _ = export_current()
+    cam = UsdGeom.Camera(stage.GetPrimAtPath("/root/Cam"))
+    assert cam.GetProjectionAttr().Get() == "orthographic"
+    # Ortho scale spans the larger (vertical) side; tenths of a unit.
+    assert cam.GetVerticalApertureAttr().Get() == pytest.approx(40.0)
+    assert cam.GetHorizontalApertureAttr().Get() == pytest.approx(40.0 * 1080 / 1920)
+
+
+def test_stage_metadata(empty_scene):
+    scene = bpy.context.scene
+    scene.render.fps, scene.render.fps_base = 30, 1.001
+    scene.frame_start, scene.frame_end = 5, 42
+    scene.unit_settings.scale_length = 0.01
+    stage, _ = export_current()
+    assert UsdGeom.GetStageUpAxis(stage) == "Z"
+    assert UsdGeom.GetStageMetersPerUnit(stage) == pytest.approx(0.01)
+    assert stage.GetFramesPerSecond() == pytest.approx(30 / 1.001)
+    assert stage.GetTimeCodesPerSecond() == pytest.approx(30 / 1.001)
+    assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (5, 42)
+    assert stage.GetDefaultPrim().GetPath() == "/root"
