@@ -171,7 +171,7 @@ def _render(args):
         return 2
     try:
         result = render_stage(stage, settings) if stage is not None else render_file(args.scene, settings)
-    except (ValueError, RuntimeError) as error:
+    except (ValueError, RuntimeError, OSError) as error:  # pxr's errors are RuntimeErrors
         print(f"lantern render: {args.scene}: {error}", file=sys.stderr)
         return 1
     for warning in result.warnings:

@@ -40,7 +40,7 @@ def _bumps(size=256, cells=6):
     u, v = (x % 1.0) - 0.5, (y % 1.0) - 0.5
     r2 = np.clip(u * u + v * v, 0.0, 0.2)
     slope = 1.5 * np.where(r2 < 0.2, 1.0, 0.0)
-    n = np.stack([-u * slope, -v * slope, np.ones_like(u)], axis=-1)
+    n = np.stack([u * slope, v * slope, np.ones_like(u)], axis=-1)  # outward on a dome
     n /= np.linalg.norm(n, axis=-1, keepdims=True)
     rgba = np.ones((size, size, 4))
     rgba[..., :3] = 0.5 + 0.5 * n

@@ -1,0 +1,135 @@
+"""UsdPreviewSurface networks -> Material records.
+
+Each input is a constant or a UsdUVTexture output (connections are followed through
+material interface inputs with GetValueProducingAttributes). A texture whose file is
+missing gives a warning naming the material and the path, and the input keeps its
+constant value (or the UsdPreviewSurface default)."""
+from __future__ import annotations
+
+import os
+
+from pxr import Usd, UsdShade
+
+from .scene import Material, TextureRef
+
+DEFAULTS = {
+    "diffuseColor": (0.18, 0.18, 0.18), "metallic": 0.0, "roughness": 0.5, "ior": 1.5,
+    "emissiveColor": (0.0, 0.0, 0.0), "opacity": 1.0, "opacityThreshold": 0.0,
+}
+FIELDS = {"diffuseColor": "diffuse", "metallic": "metallic", "roughness": "roughness",
+          "ior": "ior", "emissiveColor": "emissive", "opacity": "opacity",
+          "opacityThreshold": "opacity_threshold"}
+MAPPABLE = ("diffuseColor", "metallic", "roughness", "emissiveColor", "opacity", "normal")
+
+
+def default_material(display_color=None) -> Material:
+    m = Material(name="<default>")
+    if display_color is not None:
+        m.diffuse = tuple(float(c) for c in display_color)
+    return m
+
+
+def _shader_id(shader: UsdShade.Shader) -> str:
+    return str(shader.GetIdAttr().Get() or "")
+
+
+def _source(inp: UsdShade.Input, time):
+    """(value, None) or (None, (shader, output name))."""
+    attrs = inp.GetValueProducingAttributes()
+    if attrs:
+        a = attrs[0]
+        if UsdShade.Output.IsOutput(a):
+            return None, (UsdShade.Shader(a.GetPrim()), a.GetBaseName())
+        return a.Get(time), None
+    return inp.Get(time), None
+
+
+def _input_value(shader, name, time, default=None):
+    inp = shader.GetInput(name)
+    if not inp:
+        return default
+    v, _ = _source(inp, time)
+    return default if v is None else v
+
+
+def _uv_name(tex_shader, time):
+    inp = tex_shader.GetInput("st")
+    if not inp:
+        return None
+    _, src = _source(inp, time)
+    if src is None:
+        return None
+    reader = src[0]
+    if not _shader_id(reader).startswith("UsdPrimvarReader"):
+        return None
+    v = _input_value(reader, "varname", time)
+    return str(v) if v else None
+
+
+def read_material(mat: UsdShade.Material, time, warnings: list) -> Material:
+    path = str(mat.GetPath())
+    out = Material(name=path)
+    surface = mat.ComputeSurfaceSource()[0]
+    if not surface or _shader_id(surface) != "UsdPreviewSurface":
+        warnings.append(f"{path}: no UsdPreviewSurface surface; using the default material")
+        return out
+    for name in list(DEFAULTS) + ["normal"]:
+        inp = surface.GetInput(name)
+        if not inp:
+            continue
+        value, src = _source(inp, time)
+        if src is not None:
+            tex_shader, channel = src
+            if _shader_id(tex_shader) != "UsdUVTexture" or name not in MAPPABLE:
+                warnings.append(f"{path}: input {name} is connected to an unsupported "
+                                f"node {tex_shader.GetPath()}; using its constant value")
+            else:
+                ref = _texture_ref(tex_shader, channel, time, path, warnings)
+                if ref is not None:
+                    out.maps[name] = ref
+                    if out.uv_name is None:
+                        out.uv_name = _uv_name(tex_shader, time)
+            value = inp.Get(time)  # constant fallback if authored alongside
+        if value is not None and name in FIELDS:
+            if isinstance(DEFAULTS[name], tuple):
+                value = tuple(float(c) for c in value)
+            else:
+                value = float(value)
+            setattr(out, FIELDS[name], value)
+    return out
+
+
+def _texture_ref(shader, channel, time, mat_path, warnings):
+    asset = _input_value(shader, "file", time)
+    if asset is None or not asset.path:
+        warnings.append(f"{mat_path}: texture {shader.GetPath()} has no file; using the "
+                        f"constant fallback")
+        return None
+    resolved = asset.resolvedPath
+    if not resolved or not os.path.isfile(resolved):
+        warnings.append(f"{mat_path}: texture file {asset.path!r} not found; using the "
+                        f"constant fallback")
+        return None
+    scale = _input_value(shader, "scale", time, (1.0, 1.0, 1.0, 1.0))
+    bias = _input_value(shader, "bias", time, (0.0, 0.0, 0.0, 0.0))
+    return TextureRef(
+        path=resolved,
+        colorspace=str(_input_value(shader, "sourceColorSpace", time, "auto")),
+        wrap_s=str(_input_value(shader, "wrapS", time, "useMetadata")).replace("useMetadata", "repeat"),
+        wrap_t=str(_input_value(shader, "wrapT", time, "useMetadata")).replace("useMetadata", "repeat"),
+        scale=tuple(float(c) for c in scale), bias=tuple(float(c) for c in bias),
+        channel=channel if channel in ("r", "g", "b", "a") else "rgb")
+
+
+class MaterialLibrary:
+    """Reads each bound material once per render."""
+
+    def __init__(self, time, warnings):
+        self.time, self.warnings = time, warnings
+        self._cache = {}
+
+    def get(self, mat: UsdShade.Material) -> Material:
+        key = str(mat.GetPath())
+        if key not in self._cache:
+            self._cache[key] = read_material(mat, self.time, self.warnings)
+        return self._cache[key]

@@ -1,0 +1,389 @@
+"""The deferred pipeline. Runs on the GL thread; every GL object it makes is released
+at the end of the frame (compiled programs stay cached, see shaders.py).
+
+Passes (reads -> writes):
+  gbuffer  meshes, materials, textures -> RT0 base+alpha, RT1 normal, RT2 metallic/
+           roughness/F0, RT3 emission (RGBA16F), depth (DEPTH24)
+  lights   G-buffer + depth -> HDR (RGBA32F), additive (ONE, ONE): the ambient pass
+           (dome, emission, background), then one draw per light: full-screen for
+           suns, back faces of a light volume with depth test GREATER_EQUAL against a
+           copy of the scene depth otherwise (the camera may be inside the volume).
+  resolve  HDR + depth -> float32 RGBA output, read back top row first.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from . import lights as lt
+from .shaders import program, set_uniform
+from .textures import TextureCache, read_image_linear
+
+PRESETS = {
+    "low": dict(anisotropy=1.0, disk_sides=16, ico_level=1),
+    "medium": dict(anisotropy=4.0, disk_sides=32, ico_level=1),
+    "high": dict(anisotropy=8.0, disk_sides=32, ico_level=2),
+    "ultra": dict(anisotropy=16.0, disk_sides=32, ico_level=2),
+}
+MAP_SLOTS = [("diffuseColor", "diffuse", "HAS_DIFFUSE_MAP"), ("metallic", "metallic", "HAS_METALLIC_MAP"),
+             ("roughness", "roughness", "HAS_ROUGHNESS_MAP"), ("emissiveColor", "emissive", "HAS_EMISSIVE_MAP"),
+             ("opacity", "opacity", "HAS_OPACITY_MAP"), ("normal", "normal", "HAS_NORMAL_MAP")]
+WRAP = {"repeat": 0, "mirror": 1, "clamp": 2, "black": 3}
+CHANNEL = {"rgb": -1, "r": 0, "g": 1, "b": 2, "a": 3}
+CONE_SIDES = 24
+
+
+def icosphere(level: int) -> np.ndarray:
+    """Triangle soup of an icosphere whose faces circumscribe the unit sphere."""
+    t = (1 + 5 ** 0.5) / 2
+    v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t),
+         (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4),
+         (11, 10, 2), (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8),
+         (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    tris = np.array([[v[i] for i in face] for face in f], float)
+    tris /= np.linalg.norm(tris, axis=2, keepdims=True)
+    for _ in range(level):
+        a, b, c = tris[:, 0], tris[:, 1], tris[:, 2]
+        ab, bc, ca = [(x + y) / np.linalg.norm(x + y, axis=1, keepdims=True)
+                      for x, y in ((a, b), (b, c), (c, a))]
+        tris = np.concatenate([np.stack(s, 1) for s in
+                               ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
+    # Scale so the flat faces (not just the vertices) enclose the unit sphere.
+    centroid = tris.mean(axis=1)
+    normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    inradius = np.min(np.abs(np.sum(centroid * normal, axis=1)))
+    return (tris / inradius).reshape(-1, 3).astype("f4")
+
+
+def cone(light, length: float) -> np.ndarray:
+    """World-space triangle soup of a cone enclosing the spot's lit region (apex at
+    the light, height `length` along its axis, polygon base circumscribing)."""
+    half = math.radians(light.cone_angle)
+    r = length * math.tan(half) / math.cos(math.pi / CONE_SIDES)
+    ax = light.axis / np.linalg.norm(light.axis)
+    u = np.cross(ax, [1.0, 0, 0] if abs(ax[0]) < 0.9 else [0, 1.0, 0])
+    u /= np.linalg.norm(u)
+    w = np.cross(ax, u)
+    ang = np.arange(CONE_SIDES) * 2 * math.pi / CONE_SIDES
+    ring = light.position + ax * length + (np.outer(np.cos(ang), u) + np.outer(np.sin(ang), w)) * r
+    apex, center = light.position, light.position + ax * length
+    tris = []
+    for i in range(CONE_SIDES):
+        a, b = ring[i], ring[(i + 1) % CONE_SIDES]
+        tris += [apex, a, b, center, b, a]
+    tris = np.array(tris).reshape(-1, 3, 3)
+    # Wind every face outward (counter-clockwise seen from outside).
+    mid = light.position + ax * length * 0.5
+    nrm = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    flip = np.sum(nrm * (tris.mean(axis=1) - mid), axis=1) < 0
+    tris[flip] = tris[flip][:, [0, 2, 1]]
+    return tris.reshape(-1, 3).astype("f4")
+
+
+def disk_polygon(light, sides: int) -> np.ndarray:
+    """Equal-area regular polygon for a disk light."""
+    R = light.radius * math.sqrt(2 * math.pi / (sides * math.sin(2 * math.pi / sides)))
+    ang = np.arange(sides) * 2 * math.pi / sides
+    return light.position + (np.outer(np.cos(ang), light.x_axis) + np.outer(np.sin(ang), light.y_axis)) * R
+
+
+def rect_polygon(light) -> np.ndarray:
+    hx, hy = light.x_axis * light.width / 2, light.y_axis * light.height / 2
+    c = light.position
+    return np.array([c - hx - hy, c + hx - hy, c + hx + hy, c - hx + hy])
+
+
+class FrameRenderer:
+    def __init__(self, ctx, scene, width, height, preset, transparent):
+        self.ctx, self.scene = ctx, scene
+        self.size = (int(width), int(height))
+        self.opts = PRESETS[preset]
+        self.transparent = transparent
+        self._owned = []  # GL objects released after the frame
+        self.stats = {"meshes_uploaded": 0, "draw_calls": 0, "lights_drawn": 0,
+                      "light_volumes": 0}
+        cam = scene.camera
+        self.view_proj = cam.proj @ cam.view
+        self.inv_view_proj = np.linalg.inv(self.view_proj)
+
+    def own(self, obj):
+        self._owned.append(obj)
+        return obj
+
+    def release(self):
+        for obj in reversed(self._owned):
+            obj.release()
+        self._owned.clear()
+
+    def render(self):
+        timings = {}
+        ctx = self.ctx
+        t0 = time.perf_counter()
+        try:
+            self.textures = TextureCache(ctx, self.opts["anisotropy"])
+            self._gbuffer_pass()
+            ctx.finish()
+            t1 = time.perf_counter()
+            self._light_pass()
+            ctx.finish()
+            t2 = time.perf_counter()
+            rgba = self._resolve_pass()
+            t3 = time.perf_counter()
+        finally:
+            self.textures.release()
+            self.release()
+            ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
+        timings.update(gbuffer=t1 - t0, lights=t2 - t1, resolve=t3 - t2)
+        return rgba, timings
+
+    # --- G-buffer ----------------------------------------------------------------
+    def _gbuffer_pass(self):
+        ctx, size = self.ctx, self.size
+        self.g_base = self.own(ctx.texture(size, 4, dtype="f2"))
+        self.g_normal = self.own(ctx.texture(size, 4, dtype="f2"))
+        self.g_mat = self.own(ctx.texture(size, 4, dtype="f2"))
+        self.g_emit = self.own(ctx.texture(size, 4, dtype="f2"))
+        self.g_depth = self.own(ctx.depth_texture(size))
+        for t in (self.g_base, self.g_normal, self.g_mat, self.g_emit, self.g_depth):
+            t.filter = (ctx.NEAREST, ctx.NEAREST)
+        self.g_depth.compare_func = ""
+        fbo = self.own(ctx.framebuffer(
+            color_attachments=[self.g_base, self.g_normal, self.g_mat, self.g_emit],
+            depth_attachment=self.g_depth))
+        fbo.use()
+        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.depth_func = "<"
+        ctx.disable(ctx.BLEND)
+        ctx.cull_face = "back"
+
+        vbos, vaos = {}, {}
+        for draw in self.scene.draws:
+            mesh = self.scene.meshes[draw.mesh_key]
+            if not mesh.ranges:
+                continue
+            if draw.mesh_key not in vbos:
+                vbos[draw.mesh_key] = self.own(ctx.buffer(mesh.vertices.tobytes()))
+                self.stats["meshes_uploaded"] += 1
+            vbo = vbos[draw.mesh_key]
+            world = draw.world
+            m3 = world[:3, :3]
+            det = np.linalg.det(m3)
+            normal_matrix = np.linalg.inv(m3).T if abs(det) > 1e-30 else m3
+            # A mirroring transform turns counter-clockwise triangles clockwise.
+            ctx.front_face = "cw" if det < 0 else "ccw"
+            if mesh.double_sided:
+                ctx.disable(ctx.CULL_FACE)
+            else:
+                ctx.enable(ctx.CULL_FACE)
+            for mat_index, first, count in mesh.ranges:
+                mat = mesh.materials[mat_index]
+                defines = [flag for name, _, flag in MAP_SLOTS if name in mat.maps]
+                prog = program(ctx, "gbuffer.vert", "gbuffer.frag", defines)
+                key = (draw.mesh_key, id(prog))
+                if key not in vaos:
+                    vaos[key] = self.own(ctx.vertex_array(
+                        prog, [(vbo, "3f 3f 2f 4f", "in_pos", "in_normal", "in_uv", "in_tangent")],
+                        skip_errors=True))
+                set_uniform(prog, "model", world)
+                set_uniform(prog, "view_proj", self.view_proj)
+                set_uniform(prog, "normal_matrix", normal_matrix)
+                self._material_uniforms(prog, mat)
+                vaos[key].render(ctx.TRIANGLES, vertices=count, first=first)
+                self.stats["draw_calls"] += 1
+        ctx.front_face = "ccw"
+        ctx.disable(ctx.CULL_FACE)
+        # Material samplers stay bound to their units otherwise, and would override
+        # the G-buffer textures' own (mip-less) filtering in later passes.
+        ctx.clear_samplers(0, len(MAP_SLOTS) + 1)
+
+    def _material_uniforms(self, prog, mat):
+        set_uniform(prog, "u_diffuse", mat.diffuse)
+        set_uniform(prog, "u_metallic", mat.metallic)
+        set_uniform(prog, "u_roughness", mat.roughness)
+        set_uniform(prog, "u_ior", mat.ior)
+        set_uniform(prog, "u_emissive", mat.emissive)
+        set_uniform(prog, "u_opacity", mat.opacity)
+        set_uniform(prog, "u_opacity_threshold", mat.opacity_threshold)
+        for unit, (name, short, _) in enumerate(MAP_SLOTS, start=1):
+            ref = mat.maps.get(name)
+            if ref is None:
+                continue
+            tex = self.textures.get(ref.path, ref.colorspace)
+            tex.use(unit)
+            self.textures.sampler(ref.wrap_s, ref.wrap_t).use(unit)
+            set_uniform(prog, f"t_{short}", unit)
+            set_uniform(prog, f"m_{short}.wrap", (WRAP.get(ref.wrap_s, 0), WRAP.get(ref.wrap_t, 0)))
+            set_uniform(prog, f"m_{short}.scale", tuple(ref.scale))
+            set_uniform(prog, f"m_{short}.bias", tuple(ref.bias))
+            set_uniform(prog, f"m_{short}.channel", CHANNEL.get(ref.channel, -1))
+
+    # --- lights ------------------------------------------------------------------
+    def _bind_gbuffer(self, prog):
+        for unit, (name, tex) in enumerate([("g_base", self.g_base), ("g_normal", self.g_normal),
+                                            ("g_mat", self.g_mat), ("g_emit", self.g_emit),
+                                            ("g_depth", self.g_depth)]):
+            tex.use(unit)
+            set_uniform(prog, name, unit)
+        cam = self.scene.camera
+        set_uniform(prog, "inv_view_proj", self.inv_view_proj)
+        set_uniform(prog, "cam_pos", cam.position)
+        set_uniform(prog, "cam_forward", cam.forward)
+        set_uniform(prog, "cam_ortho", bool(cam.ortho))
+
+    def _fullscreen(self, prog):
+        vao = self.own(self.ctx.vertex_array(prog, []))
+        vao.render(self.ctx.TRIANGLES, vertices=3)
+
+    def _light_pass(self):
+        ctx, size = self.ctx, self.size
+        self.hdr = self.own(ctx.texture(size, 4, dtype="f4"))
+        self.hdr.filter = (ctx.NEAREST, ctx.NEAREST)
+        depth = self.own(ctx.depth_texture(size))
+        fbo = self.own(ctx.framebuffer(color_attachments=[self.hdr], depth_attachment=depth))
+        fbo.depth_mask = True
+        fbo.use()
+        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+
+        # Scene depth into this pass's depth buffer (the shaders sample g_depth).
+        ctx.disable(ctx.BLEND)
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.depth_func = "1"
+        prog = program(ctx, "fullscreen.vert", "depth_copy.frag")
+        self.g_depth.use(0)
+        set_uniform(prog, "g_depth", 0)
+        self._fullscreen(prog)
+        fbo.depth_mask = False
+        fbo.use()
+
+        ctx.enable(ctx.BLEND)
+        ctx.blend_func = ctx.ONE, ctx.ONE
+        ctx.blend_equation = ctx.FUNC_ADD
+
+        # Ambient: dome, emission, background. Emission is added here and only here.
+        ctx.disable(ctx.DEPTH_TEST)
+        dome = self.scene.dome
+        defines = ["HAS_DOME_MAP"] if dome is not None and dome.texture else []
+        prog = program(ctx, "fullscreen.vert", "ambient.frag", defines)
+        self._bind_gbuffer(prog)
+        set_uniform(prog, "has_dome", dome is not None)
+        set_uniform(prog, "transparent", bool(self.transparent))
+        if dome is not None:
+            set_uniform(prog, "dome_sh", np.asarray(dome.sh, "f4"))
+            set_uniform(prog, "dome_radiance", dome.radiance)
+            if dome.texture:
+                img = read_image_linear(dome.texture, "auto")
+                tex = self.own(ctx.texture((img.shape[1], img.shape[0]), 4,
+                                           np.ascontiguousarray(img, "f4").tobytes(), dtype="f4"))
+                tex.filter = (ctx.LINEAR, ctx.LINEAR)
+                tex.repeat_y = False
+                tex.use(5)
+                set_uniform(prog, "dome_map", 5)
+                set_uniform(prog, "dome_to_local", dome.rotation.T)
+        self._fullscreen(prog)
+
+        unit_sphere = None
+        for light in self.scene.lights:
+            if light.kind == "distant":
+                ctx.disable(ctx.DEPTH_TEST)
+                prog = program(ctx, "fullscreen.vert", "light.frag", ["LIGHT_DISTANT"])
+                self._bind_gbuffer(prog)
+                self._light_uniforms(prog, light, lt.volume_radius(light))
+                self._fullscreen(prog)
+                self.stats["lights_drawn"] += 1
+                continue
+            R = lt.volume_radius(light)
+            if R <= 0:
+                continue
+            variant = "LIGHT_SPHERE" if light.kind in ("sphere", "spot") else "LIGHT_AREA"
+            prog = program(ctx, "volume.vert", "light.frag", [variant])
+            self._bind_gbuffer(prog)
+            self._light_uniforms(prog, light, R)
+            use_cone = light.kind == "spot" and light.cone_angle <= 75.0
+            bound = R / math.cos(math.radians(light.cone_angle)) if use_cone else R * 1.3
+            if self._crosses_far_plane(light.position, bound):
+                # Its back faces would be clipped away: shade the whole screen instead.
+                prog = program(ctx, "fullscreen.vert", "light.frag", [variant])
+                self._bind_gbuffer(prog)
+                self._light_uniforms(prog, light, R)
+                ctx.disable(ctx.DEPTH_TEST)
+                self._fullscreen(prog)
+            else:
+                ctx.enable(ctx.DEPTH_TEST | ctx.CULL_FACE)
+                ctx.depth_func = ">="
+                ctx.cull_face = "front"
+                if use_cone:
+                    vbo = self.own(ctx.buffer(cone(light, R).tobytes()))
+                    mvp = self.view_proj
+                else:
+                    if unit_sphere is None:
+                        unit_sphere = self.own(ctx.buffer(icosphere(self.opts["ico_level"]).tobytes()))
+                    vbo = unit_sphere
+                    model = np.diag([R, R, R, 1.0])
+                    model[:3, 3] = light.position
+                    mvp = self.view_proj @ model
+                set_uniform(prog, "mvp", mvp)
+                vao = self.own(ctx.vertex_array(prog, [(vbo, "3f", "in_pos")]))
+                vao.render(ctx.TRIANGLES)
+                ctx.disable(ctx.DEPTH_TEST | ctx.CULL_FACE)
+                ctx.cull_face = "back"
+                self.stats["light_volumes"] += 1
+            self.stats["lights_drawn"] += 1
+        ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
+
+    def _crosses_far_plane(self, center, radius):
+        cam = self.scene.camera
+        z = float(np.dot(center - cam.position, cam.forward))
+        return z + radius >= cam.far * 0.999
+
+    def _light_uniforms(self, prog, light, R):
+        set_uniform(prog, "light_color", np.asarray(light.color, float))
+        set_uniform(prog, "light_pos", light.position)
+        set_uniform(prog, "light_axis", light.axis / max(np.linalg.norm(light.axis), 1e-30))
+        set_uniform(prog, "light_diffuse", light.diffuse)
+        set_uniform(prog, "light_specular", light.specular)
+        set_uniform(prog, "light_range", R)
+        if light.kind in ("sphere", "spot"):
+            set_uniform(prog, "light_radius", light.radius)
+            set_uniform(prog, "soft_falloff", bool(light.soft_falloff))
+            set_uniform(prog, "is_spot", light.kind == "spot")
+            set_uniform(prog, "cos_half", math.cos(math.radians(min(light.cone_angle, 180.0))))
+            set_uniform(prog, "spot_blend", light.cone_softness)
+        elif light.kind in ("rect", "disk"):
+            if light.kind == "rect":
+                verts = rect_polygon(light)
+                half, area = (light.width / 2, light.height / 2), light.width * light.height
+            else:
+                verts = disk_polygon(light, self.opts["disk_sides"])
+                half, area = (light.radius, 0.0), math.pi * light.radius ** 2
+            poly = np.zeros((32, 3), "f4")
+            poly[:len(verts)] = verts
+            set_uniform(prog, "poly", poly)
+            set_uniform(prog, "n_poly", len(verts))
+            set_uniform(prog, "light_x", light.x_axis)
+            set_uniform(prog, "light_y", light.y_axis)
+            set_uniform(prog, "half_size", half)
+            set_uniform(prog, "is_disk", light.kind == "disk")
+            set_uniform(prog, "light_area", area)
+
+    # --- resolve -----------------------------------------------------------------
+    def _resolve_pass(self):
+        ctx, (w, h) = self.ctx, self.size
+        out = self.own(ctx.texture((w, h), 4, dtype="f4"))
+        fbo = self.own(ctx.framebuffer(color_attachments=[out]))
+        fbo.use()
+        ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
+        prog = program(ctx, "fullscreen.vert", "resolve.frag")
+        self.hdr.use(0)
+        self.g_depth.use(1)
+        set_uniform(prog, "hdr", 0)
+        set_uniform(prog, "g_depth", 1)
+        set_uniform(prog, "transparent", bool(self.transparent))
+        self._fullscreen(prog)
+        data = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32)
+        rgba = data.reshape(h, w, 4)[::-1].copy()  # GL rows run bottom-up
+        return np.nan_to_num(rgba, nan=0.0, posinf=0.0, neginf=0.0)

@@ -1,0 +1,13 @@
+#version 330 core
+#include "lib.glsl"
+// HDR accumulation -> float32 output. Alpha is 1, or coverage when transparent.
+uniform sampler2D hdr;
+uniform sampler2D g_depth;
+uniform bool transparent;
+out vec4 frag;
+void main() {
+    ivec2 px = ivec2(gl_FragCoord.xy);
+    vec3 c = finite(texelFetch(hdr, px, 0).rgb);
+    float coverage = texelFetch(g_depth, px, 0).r < 1.0 ? 1.0 : 0.0;
+    frag = vec4(c, transparent ? coverage : 1.0);
+}

@@ -1,0 +1,167 @@
+"""Textured materials: a top-down plane lit by a sun of irradiance pi straight down,
+so a white Lambert pixel reads exactly its albedo."""
+import math
+
+import imageio.v3 as iio
+import numpy as np
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade
+
+from lantern.engine import RenderSettings, render_stage
+
+W, H = 80, 60
+HALF = 2.0           # plane half size; the camera sees x in +-3.6, y in +-2.7
+
+
+def srgb_to_linear(c):
+    c = c / 255.0
+    return ((c + 0.055) / 1.055) ** 2.4 if c > 0.04045 else c / 12.92
+
+
+def textured_stage(tex_path, uv_range=(0.0, 1.0), wrap="repeat", colorspace="sRGB"):
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    mesh = UsdGeom.Mesh.Define(stage, "/root/plane/mesh")
+    mesh.CreatePointsAttr([(-HALF, -HALF, 0), (HALF, -HALF, 0), (HALF, HALF, 0), (-HALF, HALF, 0)])
+    mesh.CreateFaceVertexCountsAttr([4])
+    mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
+    a, b = uv_range
+    pv = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("UVMap", Sdf.ValueTypeNames.TexCoord2fArray,
+                                                 UsdGeom.Tokens.faceVarying)
+    pv.Set([(a, a), (b, a), (b, b), (a, b)])
+    mat = UsdShade.Material.Define(stage, "/root/_materials/checker")
+    surf = UsdShade.Shader.Define(stage, "/root/_materials/checker/surface")
+    surf.CreateIdAttr("UsdPreviewSurface")
+    surf.CreateInput("ior", Sdf.ValueTypeNames.Float).Set(1.0)
+    surf.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(1.0)
+    surf.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set((0.25, 0.5, 0.75))
+    reader = UsdShade.Shader.Define(stage, "/root/_materials/checker/uv")
+    reader.CreateIdAttr("UsdPrimvarReader_float2")
+    reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set("UVMap")
+    tex = UsdShade.Shader.Define(stage, "/root/_materials/checker/tex")
+    tex.CreateIdAttr("UsdUVTexture")
+    tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(str(tex_path))
+    tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(), "result")
+    tex.CreateInput("wrapS", Sdf.ValueTypeNames.Token).Set(wrap)
+    tex.CreateInput("wrapT", Sdf.ValueTypeNames.Token).Set(wrap)
+    tex.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set(colorspace)
+    surf.GetInput("diffuseColor").ConnectToSource(tex.ConnectableAPI(), "rgb")
+    mat.CreateSurfaceOutput().ConnectToSource(surf.ConnectableAPI(), "surface")
+    UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(mat)
+    cam = UsdGeom.Camera.Define(stage, "/root/cam")
+    cam.CreateFocalLengthAttr(20.0)
+    cam.CreateHorizontalApertureAttr(36.0)
+    cam.CreateVerticalApertureAttr(27.0)
+    cam.CreateClippingRangeAttr(Gf.Vec2f(0.1, 100))
+    cam.AddTranslateOp().Set((0, 0, 4))
+    sun = UsdLux.DistantLight.Define(stage, "/root/sun")
+    sun.CreateIntensityAttr(math.pi)
+    return stage
+
+
+def pixel_of(x, y):
+    """Pixel (row, col) looking at plane point (x, y)."""
+    col = (x / 4 * 20 / 18 + 1) / 2 * W
+    row = (1 - y / 4 * 20 / 13.5) / 2 * H
+    return int(row), int(col)
+
+
+def uv_to_xy(u, v, uv_range=(0.0, 1.0)):
+    a, b = uv_range
+    return -HALF + (u - a) / (b - a) * 2 * HALF, -HALF + (v - a) / (b - a) * 2 * HALF
+
+
+def test_checker_with_mips(tmp_path):
+    n, cell = 64, 16
+    ii, jj = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    img = np.where(((ii // cell) + (jj // cell)) % 2 == 0, 255, 128).astype(np.uint8)
+    path = tmp_path / "checker.png"
+    iio.imwrite(path, np.stack([img] * 3, -1))
+    res = render_stage(textured_stage(path), RenderSettings(width=W, height=H))
+    assert not res.warnings
+    # Texel centre of cell (0, 0) of the image (top-left) -> st (0.125, 0.875): white.
+    white = res.rgba[pixel_of(*uv_to_xy(0.125, 0.875))]
+    grey = res.rgba[pixel_of(*uv_to_xy(0.375, 0.875))]
+    assert abs(white[0] - 1.0) < 0.02
+    assert abs(grey[0] - srgb_to_linear(128)) < 0.02   # decoded from sRGB
+    # A far-away, minified repeat still averages towards the mean (mips, no aliasing).
+    far = render_stage(textured_stage(path, uv_range=(0.0, 40.0)), RenderSettings(width=W, height=H))
+    r, c = pixel_of(0, 0)
+    patch = far.rgba[r - 3:r + 3, c - 3:c + 3, 0]
+    mean = (1.0 + srgb_to_linear(128)) / 2
+    assert abs(patch.mean() - mean) < 0.05 and patch.std() < 0.05
+
+
+def halves(tmp_path):
+    img = np.zeros((32, 32, 3), np.uint8)
+    img[:, :16] = 255          # left half white, right half black
+    path = tmp_path / "halves.png"
+    iio.imwrite(path, img)
+    return path
+
+
+def test_wrap_black_and_mirror(tmp_path):
+    path = halves(tmp_path)
+    rng = (-1.0, 2.0)
+    sample = lambda res, u, v: res.rgba[pixel_of(*uv_to_xy(u, v, rng))][0]
+    black = render_stage(textured_stage(path, rng, "black"), RenderSettings(width=W, height=H))
+    assert sample(black, 0.25, 0.5) > 0.95              # inside [0, 1]: the image
+    assert sample(black, 1.25, 0.5) < 0.01              # outside: black
+    assert sample(black, -0.75, 0.5) < 0.01
+    mirror = render_stage(textured_stage(path, rng, "mirror"), RenderSettings(width=W, height=H))
+    repeat = render_stage(textured_stage(path, rng, "repeat"), RenderSettings(width=W, height=H))
+    assert sample(mirror, 1.25, 0.5) < 0.05             # folded: u 0.75, the black half
+    assert sample(repeat, 1.25, 0.5) > 0.95             # wrapped: u 0.25, the white half
+    assert sample(mirror, -0.25, 0.5) > 0.95            # folded: u 0.25
+    clamp = render_stage(textured_stage(path, rng, "clamp"), RenderSettings(width=W, height=H))
+    assert sample(clamp, -0.75, 0.5) > 0.95 and sample(clamp, 1.75, 0.5) < 0.05
+
+
+def test_missing_texture_warns_and_falls_back(tmp_path):
+    res = render_stage(textured_stage(tmp_path / "nope.png"), RenderSettings(width=W, height=H))
+    assert any("/root/_materials/checker" in w and "nope.png" in w for w in res.warnings), res.warnings
+    px = res.rgba[pixel_of(0, 0)]
+    assert np.allclose(px[:3], (0.25, 0.5, 0.75), atol=0.01)
+
+
+def test_flat_normal_map_changes_nothing_tilted_one_does(tmp_path):
+    def with_normal_map(rgb):
+        path = tmp_path / f"n{rgb[0]}.png"
+        iio.imwrite(path, np.full((8, 8, 3), rgb, np.uint8))
+        stage = textured_stage(tmp_path / "missing.png")
+        surf = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/checker/surface"))
+        surf.GetInput("diffuseColor").ClearSources()
+        nt = UsdShade.Shader.Define(stage, "/root/_materials/checker/normal")
+        nt.CreateIdAttr("UsdUVTexture")
+        nt.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(str(path))
+        nt.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("raw")
+        nt.CreateInput("scale", Sdf.ValueTypeNames.Float4).Set((2, 2, 2, 1))
+        nt.CreateInput("bias", Sdf.ValueTypeNames.Float4).Set((-1, -1, -1, 0))
+        reader = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/checker/uv"))
+        nt.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(), "result")
+        surf.CreateInput("normal", Sdf.ValueTypeNames.Normal3f).ConnectToSource(nt.ConnectableAPI(), "rgb")
+        return render_stage(stage, RenderSettings(width=W, height=H)).rgba[pixel_of(0, 0)]
+
+    flat = with_normal_map((128, 128, 255))
+    assert np.allclose(flat[:3], (0.25, 0.5, 0.75), rtol=0.02)
+    # 45 degrees about the tangent: cos 45 of the overhead sun.
+    tilted = with_normal_map((255, 128, 255))
+    assert np.allclose(tilted[:3], np.array((0.25, 0.5, 0.75)) * math.cos(math.pi / 4), rtol=0.03)
+
+
+def test_dome_lat_long_map(tmp_path):
+    from lantern.engine import write_image
+    path = tmp_path / "sky.exr"
+    write_image(str(path), np.ones((16, 32, 4), np.float32))
+    stage = textured_stage(tmp_path / "missing.png")
+    stage.RemovePrim("/root/sun")
+    dome = UsdLux.DomeLight.Define(stage, "/root/_world")
+    dome.CreateIntensityAttr(0.5)
+    dome.CreateTextureFileAttr(str(path))
+    res = render_stage(stage, RenderSettings(width=W, height=H))
+    assert not [w for w in res.warnings if "_world" in w]
+    # A uniform sky of radiance L: a Lambert plane reflects albedo * L; background L.
+    assert np.allclose(res.rgba[pixel_of(0, 0)][:3], np.array((0.25, 0.5, 0.75)) * 0.5, rtol=0.02)
+    assert np.allclose(res.rgba[0, 0, :3], 0.5, rtol=1e-3)
+    dome.CreateTextureFileAttr(str(tmp_path / "gone.exr"))
+    res = render_stage(stage, RenderSettings(width=W, height=H))
+    assert any("/root/_world" in w and "gone.exr" in w for w in res.warnings)
