@@ -49,7 +49,6 @@ def _bumps(size=256, cells=6):
 
 def _principled(name, color, metallic=0.0, roughness=0.5, image=None, normal_image=None):
     material = bpy.data.materials.new(name)
-    material.use_nodes = True
     nodes, links = material.node_tree.nodes, material.node_tree.links
     bsdf = nodes["Principled BSDF"]
     bsdf.inputs["Base Color"].default_value = (*color, 1.0)
@@ -126,7 +125,6 @@ def build(blend_path):
     scene.camera = camera
 
     world = bpy.data.worlds.new("World")
-    world.use_nodes = True
     world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.05, 0.06, 0.08, 1.0)
     scene.world = world
 

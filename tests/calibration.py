@@ -94,7 +94,6 @@ def build_scene(kind):
     bpy.ops.mesh.primitive_plane_add(size=40.0)
     plane = bpy.context.object
     material = bpy.data.materials.new("WhiteLambert")
-    material.use_nodes = True
     bsdf = material.node_tree.nodes["Principled BSDF"]
     bsdf.inputs["Base Color"].default_value = (1, 1, 1, 1)
     bsdf.inputs["Roughness"].default_value = 1.0
@@ -128,7 +127,6 @@ def build_scene(kind):
     scene.collection.objects.link(light)
 
     world = bpy.data.worlds.new("Black")
-    world.use_nodes = True
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
     scene.world = world
     return scene

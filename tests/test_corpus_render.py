@@ -11,7 +11,7 @@ CORPUS_BLENDS = sorted((pathlib.Path(__file__).resolve().parent.parent.parent
 def _world_image_paths():
     import bpy
     world = bpy.context.scene.world
-    if world is None or not world.use_nodes:
+    if world is None or world.node_tree is None:
         return []
     return [node.image.filepath for node in world.node_tree.nodes
             if node.type == 'TEX_ENVIRONMENT' and node.image is not None]
