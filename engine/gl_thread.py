@@ -23,8 +23,7 @@ class GLThread:
 
     def _context(self):
         if self._ctx is None:
-            import moderngl
-            self._ctx = moderngl.create_context(standalone=True, backend="egl")
+            self._ctx = _create_context()
         return self._ctx
 
     def _run(self):
@@ -57,6 +56,23 @@ class GLThread:
     def stop(self):
         self._jobs.put((None, None))
         self._thread.join()
+
+
+def _create_context():
+    """A headless context: EGL on Linux (no display needed), else the platform's own
+    (CGL on macOS, which stops at GL 4.1; WGL on Windows). GL 3.3 core is the floor."""
+    import sys
+
+    import moderngl
+    if sys.platform.startswith("linux"):
+        try:
+            return moderngl.create_context(standalone=True, backend="egl", require=330)
+        except Exception as egl_error:  # no EGL: try GLX before giving up
+            try:
+                return moderngl.create_context(standalone=True, require=330)
+            except Exception:
+                raise RuntimeError(f"no headless OpenGL 3.3 context: {egl_error}") from egl_error
+    return moderngl.create_context(standalone=True, require=330)
 
 
 def gl_thread() -> GLThread:
