@@ -24,6 +24,8 @@ class ExportError(Exception):
 class ExportOptions:
     textures: str = "reference"     # "reference": relative paths; "copy": into <stem>_textures/
     texture_dir: str | None = None  # where packed/generated images go for in-memory stages
+    animation: bool = True          # sample the frame range (rigs, shape keys, moving objects)
+    max_influences: int | None = None  # trim skin influences per vertex (None: keep all)
 
 
 @dataclass
@@ -52,14 +54,18 @@ def _export(depsgraph, stage, options, layer_path):
             warnings.append(message)
             log.warning(message)
 
-    scene = gather_scene(depsgraph, warn, _texture_dir(layer_path, options))
-    write_scene(stage, scene, asset_resolver(layer_path, options.textures))
+    scene = gather_scene(depsgraph, warn, _texture_dir(layer_path, options), options.animation)
+    write_scene(stage, scene, asset_resolver(layer_path, options.textures),
+                options.max_influences)
     kinds = [o.kind for o in scene.objects]
     counts = {"objects": len(scene.objects), "meshes": len(scene.meshes),
               "materials": len(scene.materials), "lights": kinds.count("light"),
               "cameras": kinds.count("camera"),
               "prototypes": len({o.mesh for o in scene.objects if o.shared}),
-              "world": int(scene.world is not None)}
+              "world": int(scene.world is not None),
+              "skeletons": len(scene.skeletons),
+              "skinned": sum(m.skin is not None for m in scene.meshes.values()),
+              "baked": sum(m.point_samples is not None for m in scene.meshes.values())}
     return ExportReport(path=layer_path, warnings=warnings, counts=counts,
                         seconds=time.perf_counter() - start)
 

@@ -60,6 +60,58 @@ class MeshRecord:
     uvs: dict = field(default_factory=dict)  # name -> (C, 2) float32, faceVarying
     active_uv: str | None = None  # render-active UV map name
     material_indices: np.ndarray | None = None  # (F,) int32 slot index per face
+    skin: SkinRecord | None = None            # points are the rest mesh, skinned by a rig
+    point_samples: PointSamples | None = None  # baked deformation, one sample per frame
+
+
+@dataclass
+class PointSamples:
+    """Baked points (and normals, same interpolation as the record's) per time code."""
+    times: list                   # frames
+    points: list                  # per time: (N, 3) float32
+    normals: list                 # per time: (N, 3) or (C, 3) float32
+
+
+@dataclass
+class BlendShapeRecord:
+    name: str                     # the shape key's name
+    offsets: np.ndarray           # (M, 3) float32, effective offset (masked, minus its relative key)
+    indices: np.ndarray           # (M,) int32 points the offsets move
+
+
+@dataclass
+class SkinRecord:
+    rig: str                      # SkeletonRecord key
+    joint_indices: np.ndarray     # (N, k) int32, into the rig's joints
+    joint_weights: np.ndarray     # (N, k) float32, rows sum to 1
+    geom_bind: np.ndarray         # (4, 4) float64, Blender convention: mesh -> world at bind
+    dual_quaternion: bool = False
+    blend_shapes: list = field(default_factory=list)  # BlendShapeRecord
+    object: str = ""               # the skinned object's key (names its blend shapes)
+
+
+@dataclass
+class SkeletonRecord:
+    """A rig: an armature's bones, or a bone-less host for a mesh's blend shapes.
+
+    With `static_world` set, one more joint follows the bones: a root that never moves,
+    bound at `static_world` (the skeleton's world matrix at bind time), for vertices
+    Blender leaves undeformed.
+    """
+    key: str
+    name: str
+    joint_names: list             # bone names, parents before children
+    parents: list                 # parent joint index per joint, -1 for roots
+    bind: np.ndarray              # (J, 4, 4) world-space rest matrices (Blender convention)
+    rest: np.ndarray              # (J, 4, 4) parent-relative rest matrices
+    rest_armature: np.ndarray     # (J, 4, 4) armature-space rest matrices
+    static_world: np.ndarray | None = None
+    times: list = field(default_factory=list)  # frames; empty: rest pose only
+    translations: np.ndarray | None = None     # (T, J, 3), T == 1 when constant
+    rotations: np.ndarray | None = None        # (T, J, 4) quaternions (x, y, z, w)
+    scales: np.ndarray | None = None           # (T, J, 3)
+    blend_shapes: list = field(default_factory=list)  # (object key, shape key name)
+    blend_weights: np.ndarray | None = None    # (T, B), T == 1 when constant
 
 
 @dataclass
@@ -112,6 +164,8 @@ class ObjectRecord:
     materials: list = field(default_factory=list)  # per slot: MaterialRecord key or None
     light: LightRecord | None = None
     camera: CameraRecord | None = None
+    rig: str | None = None       # SkeletonRecord key: this object's prim is a SkelRoot
+    matrix_samples: np.ndarray | None = None  # (T, 4, 4) local matrices at settings.times
 
 
 @dataclass
@@ -121,4 +175,6 @@ class SceneRecord:
     meshes: dict = field(default_factory=dict)        # key -> MeshRecord
     materials: dict = field(default_factory=dict)     # key -> MaterialRecord
     world: WorldRecord | None = None
+    skeletons: dict = field(default_factory=dict)     # key -> SkeletonRecord
+    times: list = field(default_factory=list)         # sampled frames; empty: static scene
     warnings: list = field(default_factory=list)

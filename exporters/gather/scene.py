@@ -2,10 +2,12 @@
 import numpy as np
 
 from ..ir import ObjectRecord, SceneRecord, StageSettings
+from .animation import Sampler, modifiers_disabled
 from .camera import gather_camera
 from .light import gather_light
 from .material import gather_material
 from .mesh import gather_mesh
+from .skin import animated, classify, group_entries
 from .world import gather_world
 
 GEOMETRY = {"MESH", "CURVE", "CURVES", "SURFACE", "FONT", "META"}
@@ -41,25 +43,79 @@ def _is_shareable(ob):
     return ob.type == "MESH" and len(ob.modifiers) == 0 and ob.data.shape_keys is None
 
 
-def gather_scene(depsgraph, warn, texture_dir=None):
+def _animated_scene(scene):
+    """True when anything may move over the frame range: sampling is worth it."""
+    for ob in scene.objects:
+        keys = ob.data.shape_keys if ob.type == "MESH" else None
+        if ob.type == "ARMATURE" or animated(ob) or animated(ob.data) or animated(keys):
+            return True
+    return False
+
+
+def _ancestors(ob):
+    while ob.parent is not None:
+        ob = ob.parent
+        yield ob
+
+
+def gather_scene(depsgraph, warn, texture_dir=None, animation=True):
+    """`animation`: sample the frame range (rigs, blend shapes, moving objects). Only a
+    viewport depsgraph can step through frames; a render one is exported as a still."""
     scene = depsgraph.scene
     rec = SceneRecord(settings=_settings(scene))
     visible = render_visible(depsgraph.view_layer)
 
-    evaluated, instances = {}, 0
+    originals, instances = {}, 0
     for inst in depsgraph.object_instances:
         if inst.is_instance:
             instances += 1
             continue
-        ob = inst.object
-        orig = ob.original
+        orig = inst.object.original
         if orig.name_full in visible and not orig.hide_render:
-            evaluated[orig.name_full] = ob
+            originals[orig.name_full] = orig
     if instances:
         warn(f"scene '{scene.name}': {instances} instances (collection, particle or "
              f"geometry-node instances) are not exported")
 
+    animate = animation and depsgraph.mode == "VIEWPORT" and _animated_scene(scene)
+    rigs = {}
+    if animate:
+        for key in sorted(originals):
+            ob = originals[key]
+            if ob.type == "MESH":
+                rig = classify(ob, originals)
+                if rig is not None and rig.armature is not None and rig.reason is None \
+                        and ob in _ancestors(rig.armature):
+                    rig.reason, rig.disabled = "its armature is parented to the mesh", []
+                if rig is not None:
+                    rigs[key] = rig
+
+    # Skinned meshes are written at rest: their Armature modifiers are off while the
+    # meshes are read (and while sampling, which then skips Blender's skinning).
+    with modifiers_disabled([m for r in rigs.values() for m in r.disabled], depsgraph):
+        evaluated = {k: ob.evaluated_get(depsgraph) for k, ob in originals.items()}
+        groups = _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir)
+        if animate:
+            sampler = Sampler(depsgraph, rec, originals, rigs, warn)
+            sampler.build_skeletons()
+            sampler.build_skins(groups)
+            times = list(range(scene.frame_start, scene.frame_end + 1))
+            rec.times = times
+            sampler.sample(times)
+            sampler.write_transforms()
+            sampler.write_skeletons()
+    if animate:
+        sampler.bake(times)
+    return rec
+
+
+def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir):
+    scene = depsgraph.scene
+
     def exported_parent(orig):
+        rig = rigs.get(orig.name_full)
+        if rig is not None and rig.armature is not None and rig.reason is None:
+            return rig.armature  # a skinned mesh lives under its rig's SkelRoot
         parent = orig.parent
         while parent is not None and parent.name_full not in evaluated:
             parent = parent.parent
@@ -85,6 +141,7 @@ def gather_scene(depsgraph, warn, texture_dir=None):
             visit(key)
     visit(None)
 
+    groups = {}  # skinned mesh key -> vertex group assignments of its rest mesh
     for key, parent_key in order:
         ob = evaluated[key]
         world = np.array(ob.matrix_world, dtype=np.float64)
@@ -101,7 +158,7 @@ def gather_scene(depsgraph, warn, texture_dir=None):
             obj.kind = "camera"
             obj.camera = gather_camera(ob.data.original, scene.render, warn)
         elif ob.type in GEOMETRY:
-            _gather_geometry(ob, obj, rec, shared, warn)
+            _gather_geometry(ob, obj, rec, shared, rigs.get(key), groups)
             for mat in obj.materials:
                 if mat is not None:
                     material_keys.setdefault(mat[0], mat[1])
@@ -114,22 +171,34 @@ def gather_scene(depsgraph, warn, texture_dir=None):
         rec.settings.camera = scene.camera.name_full
     if scene.world is not None:
         rec.world = gather_world(scene.world, warn)
-    return rec
+    return groups
 
 
-def _gather_geometry(ob, obj, rec, shared, warn):
+def _gather_geometry(ob, obj, rec, shared, rig, groups):
     orig = ob.original
     is_shared = _is_shareable(orig) and orig.data.name_full in shared
     mesh_key = ("proto:" + orig.data.name_full) if is_shared else ("object:" + orig.name_full)
+    skinned = rig is not None and rig.reason is None
     if mesh_key not in rec.meshes:
-        mesh = ob.to_mesh()
+        # Blend shapes apply to the mesh without its shape keys: the data itself (such
+        # meshes have no other modifier), with the reference key's positions.
+        keyed = skinned and rig.shape_keys
+        mesh = orig.data if keyed else ob.to_mesh()
         try:
             if len(mesh.polygons) == 0:
                 return  # points or edges only: nothing to render
             name = orig.data.name if orig.type == "MESH" else orig.name
             rec.meshes[mesh_key] = gather_mesh(mesh, mesh_key, name)
+            if keyed:
+                reference = mesh.shape_keys.reference_key.data
+                co = np.empty(len(reference) * 3, dtype=np.float32)
+                reference.foreach_get("co", co)
+                rec.meshes[mesh_key].points = co.reshape(-1, 3)
+            if skinned and rig.armature is not None:
+                groups[orig.name_full] = group_entries(mesh)
         finally:
-            ob.to_mesh_clear()
+            if not keyed:
+                ob.to_mesh_clear()
     obj.kind, obj.mesh, obj.shared = "mesh", mesh_key, is_shared
     obj.materials = [(s.material.original.name_full, s.material.original)
                      if s.material is not None else None for s in ob.material_slots]

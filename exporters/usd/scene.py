@@ -1,11 +1,13 @@
 """SceneRecord -> a stage, laid out as docs/stage_contract.md says."""
-from pxr import Gf, Sdf, UsdGeom
+import numpy as np
+from pxr import Gf, Sdf, UsdGeom, UsdSkel, Vt
 
 from .camera import write_camera
 from .light import write_light
 from .material import write_material
 from .mesh import bind_materials, write_mesh
 from .names import Namer, primvar_name, set_blender_name
+from .skel import bind_skin, write_skeleton
 from .stage import write_metadata, write_render_settings
 from .world import write_world
 
@@ -15,12 +17,28 @@ MATERIALS = ROOT.AppendChild("_materials")
 WORLD = ROOT.AppendChild("_world")
 
 
-def _transform(prim, matrix):
+def _transform(prim, matrix, samples=None, times=()):
     # Blender's matrices act on column vectors, USD's on row vectors: transpose.
-    UsdGeom.Xformable(prim).AddTransformOp().Set(Gf.Matrix4d(matrix.T.tolist()))
+    op = UsdGeom.Xformable(prim).AddTransformOp()
+    if samples is None:
+        op.Set(Gf.Matrix4d(matrix.T.tolist()))
+        return
+    for frame, m in zip(times, samples):
+        op.Set(Gf.Matrix4d(m.T.tolist()), frame)
 
 
-def write_scene(stage, scene, asset_path):
+def _bake_points(stage, mesh_path, samples):
+    """Time-sampled points, normals and extent of a mesh UsdSkel cannot deform."""
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath(mesh_path))
+    points, normals, extent = mesh.GetPointsAttr(), mesh.GetNormalsAttr(), mesh.GetExtentAttr()
+    for frame, p, n in zip(samples.times, samples.points, samples.normals):
+        points.Set(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(p)), frame)
+        normals.Set(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(n)), frame)
+        lo, hi = p.min(axis=0), p.max(axis=0)
+        extent.Set(Vt.Vec3fArray([tuple(map(float, lo)), tuple(map(float, hi))]), frame)
+
+
+def write_scene(stage, scene, asset_path, max_influences=None):
     namer = Namer()
     for reserved in ("_prototypes", "_materials", "_world"):
         namer.reserve(ROOT, reserved)
@@ -63,7 +81,7 @@ def write_scene(stage, scene, asset_path):
             set_blender_name(stage.GetPrimAtPath(path), rec.name)
             proto_paths[key] = path
 
-    object_paths = {}
+    object_paths, skeletons = {}, {}  # rig key -> (Skeleton path, blend shape tokens)
     for obj in scene.objects:
         parent = object_paths[obj.parent] if obj.parent is not None else ROOT
         path = namer.child(parent, obj.name)
@@ -72,9 +90,12 @@ def write_scene(stage, scene, asset_path):
             prim = write_light(stage, path, obj.light).GetPrim()
         elif obj.kind == "camera":
             prim = write_camera(stage, path, obj.camera).GetPrim()
+        elif obj.rig is not None:
+            prim = UsdSkel.Root.Define(stage, path).GetPrim()
+            skeletons[obj.rig] = write_skeleton(stage, path, scene.skeletons[obj.rig], namer)
         else:
             prim = UsdGeom.Xform.Define(stage, path).GetPrim()
-        _transform(prim, obj.matrix)
+        _transform(prim, obj.matrix, obj.matrix_samples, scene.times)
         set_blender_name(prim, obj.name)
         if obj.kind != "mesh":
             continue
@@ -86,6 +107,11 @@ def write_scene(stage, scene, asset_path):
             write_mesh(stage, mesh_path, rec, double_sided(obj.materials), slot_names(obj.materials))
             set_blender_name(stage.GetPrimAtPath(mesh_path), rec.name)
         bind_materials(stage, mesh_path, rec, obj.materials, material_paths)
+        if rec.skin is not None:
+            skeleton_path, tokens = skeletons[rec.skin.rig]
+            bind_skin(stage, mesh_path, rec.skin, skeleton_path, tokens, max_influences)
+        if rec.point_samples is not None:
+            _bake_points(stage, mesh_path, rec.point_samples)
 
     if scene.world is not None:
         write_world(stage, WORLD, scene.world, asset_path)
