@@ -97,12 +97,14 @@ def classify(ob, exported):
 
 def group_entries(mesh):
     """Flat (vertex, group, weight) arrays of every vertex group assignment."""
-    verts = mesh.vertices
-    counts = np.fromiter((len(v.groups) for v in verts), dtype=np.int64, count=len(verts))
-    pairs = np.fromiter((x for v in verts for g in v.groups for x in (g.group, g.weight)),
-                        dtype=np.float64, count=2 * int(counts.sum()))
-    vertex = np.repeat(np.arange(len(verts)), counts)
-    return vertex, pairs[0::2].astype(np.int64), pairs[1::2]
+    # bpy has no bulk access to vertex groups: read each vertex's groups once.
+    groups = [v.groups for v in mesh.vertices]
+    counts = np.fromiter(map(len, groups), dtype=np.int64, count=len(groups))
+    elements = [g for vertex_groups in groups for g in vertex_groups]
+    group = np.fromiter((g.group for g in elements), dtype=np.int64, count=len(elements))
+    weight = np.fromiter((g.weight for g in elements), dtype=np.float64, count=len(elements))
+    vertex = np.repeat(np.arange(len(groups)), counts)
+    return vertex, group, weight
 
 
 def vertex_weight_totals(mesh, deform_groups):

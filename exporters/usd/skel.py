@@ -29,8 +29,10 @@ def _channel(attr, values, times, convert):
     if len(values) == 1:
         attr.Set(convert(values[0]))
         return
-    for frame, value in zip(times, values):
-        attr.Set(convert(value), frame)
+    # One change notification for all samples instead of one per Set.
+    with Sdf.ChangeBlock():
+        for frame, value in zip(times, values):
+            attr.Set(convert(value), frame)
 
 
 def _with_static(values, rec, constant):
