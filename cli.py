@@ -44,6 +44,9 @@ def _build_parser():
     render.add_argument("scene", metavar="scene.usd|scene.blend")
     render.add_argument("-o", "--output", required=True, help="an .exr (scene linear) or .png (sRGB)")
     render.add_argument("--frame", type=float, default=None, help="time code / frame to render")
+    render.add_argument("--frames", default=None, metavar="A:B",
+                        help="render frames A..B; '####' in -o becomes the zero-padded frame, "
+                             "an -o ending in .gif writes one animated preview")
     render.add_argument("--size", type=_parse_size, default=None, metavar="WxH")
     render.add_argument("--preset", default="medium", help="low, medium, high or ultra")
     return parser
@@ -143,6 +146,8 @@ def _export_batch(args):
 # --- render -----------------------------------------------------------------------------
 
 def _render(args):
+    if args.frames is not None:
+        return _render_sequence(args)
     if not args.output.lower().endswith(IMAGE_SUFFIXES):
         print(f"lantern render: {args.output}: the output must be .exr or .png", file=sys.stderr)
         return 2
@@ -180,6 +185,68 @@ def _render(args):
     height_px, width_px = result.rgba.shape[:2]
     print(f"{args.scene} -> {args.output} ({width_px}x{height_px}, "
           f"{result.timings.get('total', 0.0) * 1000:.1f} ms)")
+    return 0
+
+
+def _frame_path(pattern, frame):
+    """'####' (any run of #) -> the frame number zero-padded to that width."""
+    import re
+    return re.sub(r"#+", lambda m: f"{int(round(frame)):0{len(m.group(0))}d}", pattern, count=1)
+
+
+def _render_sequence(args):
+    try:
+        first, last = (float(x) for x in args.frames.split(":"))
+    except ValueError:
+        print(f"lantern render: --frames must look like 1:24, not {args.frames!r}", file=sys.stderr)
+        return 2
+    gif = args.output.lower().endswith(".gif")
+    if not gif and (not args.output.lower().endswith(IMAGE_SUFFIXES) or "#" not in args.output):
+        print(f"lantern render: {args.output}: a sequence needs '####' in an .exr/.png name, "
+              "or a .gif", file=sys.stderr)
+        return 2
+    if not os.path.isfile(args.scene):
+        print(f"lantern render: {args.scene}: no such file", file=sys.stderr)
+        return 1
+    if args.scene.lower().endswith(".blend"):
+        stage = _stage_from_blend(args.scene)
+        if stage is None:
+            return 1
+    else:
+        from pxr import Usd
+        stage = Usd.Stage.Open(args.scene)
+    from .engine import RenderSettings
+    from .engine.api import render_sequence
+    from .engine.image_io import write_image
+    width, height = args.size if args.size else (None, None)
+    settings = RenderSettings(width=width, height=height, preset=args.preset)
+    frames, seen = [], set()
+    try:
+        for frame, result in render_sequence(stage, first, last, settings):
+            for warning in result.warnings:
+                if warning not in seen:
+                    seen.add(warning)
+                    print(f"warning: {warning}", file=sys.stderr)
+            if gif:
+                import numpy as np
+                lin = np.clip(result.rgba[..., :3], 0.0, 1.0)
+                srgb = np.where(lin <= 0.0031308, lin * 12.92, 1.055 * lin ** (1 / 2.4) - 0.055)
+                frames.append((srgb * 255 + 0.5).astype("uint8"))
+                continue
+            path = _frame_path(args.output, frame)
+            os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+            write_image(path, result.rgba)
+            print(f"{args.scene} frame {frame:g} -> {path} "
+                  f"({result.timings.get('total', 0.0) * 1000:.1f} ms)")
+    except (ValueError, RuntimeError, OSError) as error:
+        print(f"lantern render: {args.scene}: {error}", file=sys.stderr)
+        return 1
+    if gif:
+        import imageio.v3 as iio
+        os.makedirs(os.path.dirname(os.path.abspath(args.output)), exist_ok=True)
+        fps = stage.GetFramesPerSecond() or 24.0
+        iio.imwrite(args.output, frames, duration=1000.0 / fps, loop=0)
+        print(f"{args.scene} frames {first:g}:{last:g} -> {args.output}")
     return 0
 
 

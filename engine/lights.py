@@ -91,11 +91,13 @@ def read_light(prim: Usd.Prim, world: np.ndarray, time, warnings: list):
     diffuse = float(_get(prim, "inputs:diffuse", 1.0, time))
     specular = float(_get(prim, "inputs:specular", 1.0, time))
     shadow = bool(_get(prim, "inputs:shadow:enable", True, time))
+    shadow_res = int(_get(prim, "lantern:shadowResolution", 0, time) or 0)
     scale = _axis_lengths(world)
     pos = world[:3, 3].copy()
     axis = _unit(-world[:3, 2])
     common = dict(name=path, position=pos, axis=axis, x_axis=_unit(world[:3, 0]),
-                  y_axis=_unit(world[:3, 1]), diffuse=diffuse, specular=specular, shadow=shadow)
+                  y_axis=_unit(world[:3, 1]), diffuse=diffuse, specular=specular, shadow=shadow,
+                  shadow_resolution=shadow_res)
 
     if tname == "SphereLight":
         radius = float(_get(prim, "inputs:radius", 0.5, time)) * float(np.mean(scale))

@@ -18,14 +18,25 @@ import time
 import numpy as np
 
 from . import lights as lt
+from . import skinning
+from . import shadows
+from . import stencil
 from .shaders import program, set_uniform
 from .textures import TextureCache, read_image_linear
 
+# Quality presets, the one table. Shadows: shadow_size = texels per tile side (a
+# cube face, a spot map, one sun cascade; a light's lantern:shadowResolution wins),
+# pcf_taps / blocker_taps = PCSS filter and blocker-search samples, cascades = sun
+# cascades.
 PRESETS = {
-    "low": dict(anisotropy=1.0, disk_sides=16, ico_level=1),
-    "medium": dict(anisotropy=4.0, disk_sides=32, ico_level=1),
-    "high": dict(anisotropy=8.0, disk_sides=32, ico_level=2),
-    "ultra": dict(anisotropy=16.0, disk_sides=32, ico_level=2),
+    "low": dict(anisotropy=1.0, disk_sides=16, ico_level=1,
+                shadow_size=512, pcf_taps=8, blocker_taps=8, cascades=2),
+    "medium": dict(anisotropy=4.0, disk_sides=32, ico_level=1,
+                   shadow_size=1024, pcf_taps=16, blocker_taps=12, cascades=3),
+    "high": dict(anisotropy=8.0, disk_sides=32, ico_level=2,
+                 shadow_size=2048, pcf_taps=32, blocker_taps=16, cascades=4),
+    "ultra": dict(anisotropy=16.0, disk_sides=32, ico_level=2,
+                  shadow_size=4096, pcf_taps=64, blocker_taps=32, cascades=4),
 }
 MAP_SLOTS = [("diffuseColor", "diffuse", "HAS_DIFFUSE_MAP"), ("metallic", "metallic", "HAS_METALLIC_MAP"),
              ("roughness", "roughness", "HAS_ROUGHNESS_MAP"), ("emissiveColor", "emissive", "HAS_EMISSIVE_MAP"),
@@ -97,15 +108,90 @@ def rect_polygon(light) -> np.ndarray:
     return np.array([c - hx - hy, c + hx - hy, c + hx + hy, c - hx + hy])
 
 
+class GeometryCache:
+    """GL buffers of meshes (with their VAOs and static blend-shape textures), kept
+    across the frames of a sequence; joint textures are rewritten in place."""
+
+    def __init__(self):
+        self.vbos, self.skin_vbos, self.vaos, self.shapes, self.joints = {}, {}, {}, {}, {}
+        self.influences = {}
+        self.bounds = {}
+
+    def vao(self, ctx, prog, mesh, stats):
+        key = (mesh.key, id(prog))
+        vao = self.vaos.get(key)
+        if vao is None:
+            if mesh.key not in self.vbos:
+                self.vbos[mesh.key] = ctx.buffer(mesh.vertices.tobytes())
+                stats["meshes_uploaded"] += 1
+            content = [(self.vbos[mesh.key], "3f 3f 2f 4f", "in_pos", "in_normal", "in_uv",
+                        "in_tangent")]
+            if mesh.skin is not None:
+                if mesh.key not in self.skin_vbos:
+                    data, fmt, names = skinning.vertex_data(mesh)
+                    self.skin_vbos[mesh.key] = (ctx.buffer(data), fmt, names)
+                buf, fmt, names = self.skin_vbos[mesh.key]
+                content.append((buf, fmt, *names))
+            vao = self.vaos[key] = ctx.vertex_array(prog, content, skip_errors=True)
+        return vao
+
+    def shape_texture(self, ctx, mesh):
+        tex = self.shapes.get(mesh.key)
+        if tex is None:
+            tex = self.shapes[mesh.key] = skinning.shape_texture(ctx, mesh.skin)
+        return tex
+
+    def influence_texture(self, ctx, mesh):
+        tex = self.influences.get(mesh.key)
+        if tex is None:
+            tex = self.influences[mesh.key] = skinning.flat_texture(ctx, mesh.skin.point_influences)
+        return tex
+
+    def joint_texture(self, ctx, key, pose):
+        """One upload per skeleton per frame, however many meshes it drives."""
+        tex, stamp = self.joints.get(key, (None, None))
+        if stamp is not pose:
+            texels = skinning.joint_texels(pose.xforms, pose.dqs)
+            if tex is not None and (tex.width, tex.height) == (texels.shape[1], texels.shape[0]):
+                tex.write(texels.tobytes())
+            else:
+                if tex is not None:
+                    tex.release()
+                tex = skinning.float_texture(ctx, texels)
+            self.joints[key] = (tex, pose)
+        return tex
+
+    def rest_bounds(self, mesh):
+        b = self.bounds.get(mesh.key)
+        if b is None:
+            p = mesh.vertices[:, :3].astype(np.float64)
+            b = self.bounds[mesh.key] = (p.min(axis=0), p.max(axis=0))
+        return b
+
+    def release(self):
+        for vao in self.vaos.values():
+            vao.release()
+        for obj in list(self.vbos.values()) + [v[0] for v in self.skin_vbos.values()] + \
+                list(self.shapes.values()) + [v[0] for v in self.joints.values()] + \
+                list(self.influences.values()):
+            obj.release()
+        self.__init__()
+
+
 class FrameRenderer:
-    def __init__(self, ctx, scene, width, height, preset, transparent):
+    def __init__(self, ctx, scene, width, height, preset, transparent, gpu=None):
+        """gpu: a GeometryCache the caller keeps across frames (None: this frame's)."""
         self.ctx, self.scene = ctx, scene
+        self.gpu = gpu if gpu is not None else GeometryCache()
+        self._own_gpu = gpu is None
         self.size = (int(width), int(height))
         self.opts = PRESETS[preset]
         self.transparent = transparent
+        self._unit_sphere = None
         self._owned = []  # GL objects released after the frame
-        self.stats = {"meshes_uploaded": 0, "draw_calls": 0, "lights_drawn": 0,
-                      "light_volumes": 0}
+        self.stats = {"meshes_uploaded": 0, "draw_calls": 0, "culled": 0, "lights_drawn": 0,
+                      "light_volumes": 0, "shadow_maps": 0, "shadow_passes": 0,
+                      "shadow_draws": 0, "stencil_marks": 0}
         cam = scene.camera
         self.view_proj = cam.proj @ cam.view
         self.inv_view_proj = np.linalg.inv(self.view_proj)
@@ -136,6 +222,8 @@ class FrameRenderer:
         finally:
             self.textures.release()
             self.release()
+            if self._own_gpu:
+                self.gpu.release()
             ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
         timings.update(gbuffer=t1 - t0, lights=t2 - t1, resolve=t3 - t2)
         return rgba, timings
@@ -161,15 +249,15 @@ class FrameRenderer:
         ctx.disable(ctx.BLEND)
         ctx.cull_face = "back"
 
-        vbos, vaos = {}, {}
+        planes = skinning.frustum_planes(self.view_proj)
         for draw in self.scene.draws:
             mesh = self.scene.meshes[draw.mesh_key]
             if not mesh.ranges:
                 continue
-            if draw.mesh_key not in vbos:
-                vbos[draw.mesh_key] = self.own(ctx.buffer(mesh.vertices.tobytes()))
-                self.stats["meshes_uploaded"] += 1
-            vbo = vbos[draw.mesh_key]
+            lo, hi = self.world_bounds(draw, mesh)
+            if skinning.aabb_outside(planes, lo, hi):
+                self.stats["culled"] += 1   # frustum culling: no draw call at all
+                continue
             world = draw.world
             m3 = world[:3, :3]
             det = np.linalg.det(m3)
@@ -180,26 +268,57 @@ class FrameRenderer:
                 ctx.disable(ctx.CULL_FACE)
             else:
                 ctx.enable(ctx.CULL_FACE)
+            skin_defs = skinning.defines(mesh.skin)
             for mat_index, first, count in mesh.ranges:
                 mat = mesh.materials[mat_index]
-                defines = [flag for name, _, flag in MAP_SLOTS if name in mat.maps]
+                defines = [flag for name, _, flag in MAP_SLOTS if name in mat.maps] + skin_defs
                 prog = program(ctx, "gbuffer.vert", "gbuffer.frag", defines)
-                key = (draw.mesh_key, id(prog))
-                if key not in vaos:
-                    vaos[key] = self.own(ctx.vertex_array(
-                        prog, [(vbo, "3f 3f 2f 4f", "in_pos", "in_normal", "in_uv", "in_tangent")],
-                        skip_errors=True))
+                vao = self.mesh_vao(prog, mesh)
                 set_uniform(prog, "model", world)
                 set_uniform(prog, "view_proj", self.view_proj)
                 set_uniform(prog, "normal_matrix", normal_matrix)
                 self._material_uniforms(prog, mat)
-                vaos[key].render(ctx.TRIANGLES, vertices=count, first=first)
+                self.bind_skin(prog, draw, mesh)
+                vao.render(ctx.TRIANGLES, vertices=count, first=first)
                 self.stats["draw_calls"] += 1
         ctx.front_face = "ccw"
         ctx.disable(ctx.CULL_FACE)
         # Material samplers stay bound to their units otherwise, and would override
         # the G-buffer textures' own (mip-less) filtering in later passes.
         ctx.clear_samplers(0, len(MAP_SLOTS) + 1)
+
+    # --- geometry, for every pass that draws meshes ----------------------------------
+    def mesh_vao(self, prog, mesh):
+        """A VAO of `mesh` for `prog` (any vertex shader reading in_pos, in_normal,
+        in_uv, in_tangent and skinning.glsl's inputs); uploads the mesh on first use."""
+        return self.gpu.vao(self.ctx, prog, mesh, self.stats)
+
+    def bind_skin(self, prog, draw, mesh):
+        """This frame's joint texture, blend-shape offsets and weights for a skinned
+        draw (nothing for a static mesh). The program needs skinning.defines(mesh.skin)."""
+        skin = mesh.skin
+        if skin is None:
+            return
+        ctx = self.ctx
+        n_active = 0
+        if skin.shape_offsets is not None:
+            self.gpu.shape_texture(ctx, mesh).use(skinning.UNIT_SHAPES)
+            texels, n_active = skinning.active_texels(skin, draw.shapes)
+            self.own(skinning.float_texture(ctx, texels)).use(skinning.UNIT_ACTIVE)
+        if skin.has_joints:
+            pose = self.scene.skeletons[skin.skel_key]
+            self.gpu.joint_texture(ctx, skin.skel_key, pose).use(skinning.UNIT_JOINTS)
+            if skin.point_influences is not None:
+                self.gpu.influence_texture(ctx, mesh).use(skinning.UNIT_INFLUENCES)
+        skinning.set_skin_uniforms(prog, skin, n_active, set_uniform)
+
+    def world_bounds(self, draw, mesh):
+        """World AABB of a draw this frame (skinned meshes: from their joints)."""
+        lo, hi = self.gpu.rest_bounds(mesh)
+        if mesh.skin is not None:
+            pose = self.scene.skeletons.get(mesh.skin.skel_key) if mesh.skin.has_joints else None
+            lo, hi = skinning.local_bounds(mesh.skin, pose, draw.shapes, lo, hi)
+        return skinning.transform_aabb(lo, hi, draw.world)
 
     def _material_uniforms(self, prog, mat):
         set_uniform(prog, "u_diffuse", mat.diffuse)
@@ -241,13 +360,15 @@ class FrameRenderer:
 
     def _light_pass(self):
         ctx, size = self.ctx, self.size
-        self.hdr = self.own(ctx.texture(size, 4, dtype="f4"))
+        self.hdr = self.own(ctx.texture(size, 4, dtype="f2"))
         self.hdr.filter = (ctx.NEAREST, ctx.NEAREST)
-        depth = self.own(ctx.depth_texture(size))
-        fbo = self.own(ctx.framebuffer(color_attachments=[self.hdr], depth_attachment=depth))
+        fbo = self.own(ctx.framebuffer(color_attachments=[self.hdr]))
+        # Depth + stencil: the scene depth for volume tests, the stencil for marking.
+        depth_stencil = self.own(stencil.DepthStencil(fbo, size))
         fbo.depth_mask = True
         fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+        fbo.clear(0.0, 0.0, 0.0, 0.0)
+        depth_stencil.clear()
 
         # Scene depth into this pass's depth buffer (the shaders sample g_depth).
         ctx.disable(ctx.BLEND)
@@ -286,54 +407,116 @@ class FrameRenderer:
                 set_uniform(prog, "dome_to_local", dome.rotation.T)
         self._fullscreen(prog)
 
-        unit_sphere = None
+        self._light_vaos = {}
         for light in self.scene.lights:
-            if light.kind == "distant":
-                ctx.disable(ctx.DEPTH_TEST)
-                prog = program(ctx, "fullscreen.vert", "light.frag", ["LIGHT_DISTANT"])
-                self._bind_gbuffer(prog)
-                self._light_uniforms(prog, light, lt.volume_radius(light))
-                self._fullscreen(prog)
-                self.stats["lights_drawn"] += 1
-                continue
             R = lt.volume_radius(light)
-            if R <= 0:
+            if light.kind != "distant" and R <= 0:
                 continue
-            variant = "LIGHT_SPHERE" if light.kind in ("sphere", "spot") else "LIGHT_AREA"
-            prog = program(ctx, "volume.vert", "light.frag", [variant])
-            self._bind_gbuffer(prog)
-            self._light_uniforms(prog, light, R)
-            use_cone = light.kind == "spot" and light.cone_angle <= 75.0
-            bound = R / math.cos(math.radians(light.cone_angle)) if use_cone else R * 1.3
-            if self._crosses_far_plane(light.position, bound):
-                # Its back faces would be clipped away: shade the whole screen instead.
-                prog = program(ctx, "fullscreen.vert", "light.frag", [variant])
-                self._bind_gbuffer(prog)
-                self._light_uniforms(prog, light, R)
-                ctx.disable(ctx.DEPTH_TEST)
-                self._fullscreen(prog)
-            else:
-                ctx.enable(ctx.DEPTH_TEST | ctx.CULL_FACE)
-                ctx.depth_func = ">="
-                ctx.cull_face = "front"
-                if use_cone:
-                    vbo = self.own(ctx.buffer(cone(light, R).tobytes()))
-                    mvp = self.view_proj
-                else:
-                    if unit_sphere is None:
-                        unit_sphere = self.own(ctx.buffer(icosphere(self.opts["ico_level"]).tobytes()))
-                    vbo = unit_sphere
-                    model = np.diag([R, R, R, 1.0])
-                    model[:3, 3] = light.position
-                    mvp = self.view_proj @ model
-                set_uniform(prog, "mvp", mvp)
-                vao = self.own(ctx.vertex_array(prog, [(vbo, "3f", "in_pos")]))
-                vao.render(ctx.TRIANGLES)
-                ctx.disable(ctx.DEPTH_TEST | ctx.CULL_FACE)
-                ctx.cull_face = "back"
-                self.stats["light_volumes"] += 1
-            self.stats["lights_drawn"] += 1
+            # Shadow pass (meshes -> this light's depth atlas), only for casters.
+            sm = None
+            if light.shadow and self.scene.draws:
+                sm = shadows.render(self, light, R)
+                if sm is not None:
+                    self.stats["shadow_maps"] += 1
+            fbo.use()
+            ctx.enable(ctx.BLEND)
+            ctx.blend_func = ctx.ONE, ctx.ONE
+            try:
+                self._draw_light(light, R, sm)
+            finally:
+                ctx.scissor = None
+                stencil.end()
+                if sm is not None:
+                    sm.release()
         ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
+
+    def _light_program(self, vert, light, variant, R, sm):
+        prog = program(self.ctx, vert, "light.frag", [variant] + (["HAS_SHADOW"] if sm else []))
+        self._bind_gbuffer(prog)
+        self._light_uniforms(prog, light, R)
+        if sm is not None:
+            sm.set_uniforms(prog, self.opts)
+        return prog
+
+    def _vao(self, prog, vbo):
+        key = (id(prog), id(vbo))
+        if key not in self._light_vaos:
+            self._light_vaos[key] = self.own(self.ctx.vertex_array(prog, [(vbo, "3f", "in_pos")]))
+        return self._light_vaos[key]
+
+    def _draw_light(self, light, R, sm):
+        """One light into the HDR target (reads the G-buffer, depth+stencil, its
+        shadow map). Suns shade the screen; other lights shade only inside the
+        scissor rectangle of their volume and, via the stencil, only pixels whose
+        scene surface lies inside the volume."""
+        ctx = self.ctx
+        if light.kind == "distant":
+            ctx.disable(ctx.DEPTH_TEST)
+            self._fullscreen(self._light_program("fullscreen.vert", light, "LIGHT_DISTANT", R, sm))
+            self.stats["lights_drawn"] += 1
+            return
+        variant = "LIGHT_SPHERE" if light.kind in ("sphere", "spot") else "LIGHT_AREA"
+        use_cone = light.kind == "spot" and light.cone_angle <= 75.0
+        if use_cone:
+            vbo = self.own(ctx.buffer(cone(light, R).tobytes()))
+            mvp = self.view_proj
+            hull = np.frombuffer(vbo.read(), "f4").reshape(-1, 3).astype(float)
+        else:
+            if self._unit_sphere is None:
+                self._unit_sphere = self.own(ctx.buffer(icosphere(self.opts["ico_level"]).tobytes()))
+            vbo = self._unit_sphere
+            model = np.diag([R, R, R, 1.0])
+            model[:3, 3] = light.position
+            mvp = self.view_proj @ model
+            hull = light.position + R * 1.3 * np.array(
+                [[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+        rect = self._scissor(hull)
+        if rect is not None and (rect[2] <= 0 or rect[3] <= 0):
+            return                                 # wholly off screen
+        ctx.scissor = rect
+        bound = R / math.cos(math.radians(light.cone_angle)) if use_cone else R * 1.3
+        if self._crosses_far_plane(light.position, bound):
+            # Its back faces would be clipped away: shade the (scissored) screen instead.
+            ctx.disable(ctx.DEPTH_TEST)
+            self._fullscreen(self._light_program("fullscreen.vert", light, variant, R, sm))
+            self.stats["lights_drawn"] += 1
+            return
+        # Stencil marking: depth-fail counting of both faces against the scene depth.
+        mark = program(ctx, "volume.vert", "volume_mark.frag")
+        set_uniform(mark, "mvp", mvp)
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.depth_func = "<"
+        ctx.disable(ctx.CULL_FACE)
+        stencil.begin_mark()
+        self._vao(mark, vbo).render(ctx.TRIANGLES)
+        self.stats["stencil_marks"] += 1
+        # Shading: back faces (present even with the camera inside), marked pixels only.
+        stencil.begin_shade()
+        ctx.disable(ctx.DEPTH_TEST)
+        ctx.enable(ctx.CULL_FACE)
+        ctx.cull_face = "front"
+        prog = self._light_program("volume.vert", light, variant, R, sm)
+        set_uniform(prog, "mvp", mvp)
+        self._vao(prog, vbo).render(ctx.TRIANGLES)
+        stencil.end()
+        ctx.disable(ctx.CULL_FACE)
+        ctx.cull_face = "back"
+        self.stats["light_volumes"] += 1
+        self.stats["lights_drawn"] += 1
+
+    def _scissor(self, points):
+        """Pixel rectangle (x, y, w, h) bounding the projected points, None (the whole
+        screen) when any lies behind the camera's near plane."""
+        w, h = self.size
+        clip = (self.view_proj @ np.c_[points, np.ones(len(points))].T).T
+        if np.any(clip[:, 3] <= self.scene.camera.near * 0.5):
+            return None
+        ndc = clip[:, :2] / clip[:, 3:4]
+        x0, y0 = np.floor((ndc.min(axis=0) * 0.5 + 0.5) * (w, h)).astype(int) - 1
+        x1, y1 = np.ceil((ndc.max(axis=0) * 0.5 + 0.5) * (w, h)).astype(int) + 1
+        x0, x1 = max(x0, 0), min(x1, w)
+        y0, y1 = max(y0, 0), min(y1, h)
+        return (int(x0), int(y0), int(max(x1 - x0, 0)), int(max(y1 - y0, 0)))
 
     def _crosses_far_plane(self, center, radius):
         cam = self.scene.camera

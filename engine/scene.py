@@ -49,13 +49,52 @@ class MeshData:
     ranges: list                   # [(material_index, first_vertex, vertex_count)]
     materials: list                # [Material], indexed by ranges
     double_sided: bool = True
+    point_index: np.ndarray | None = None  # (N,) int32: soup vertex -> mesh point
+    skin: "SkinData | None" = None          # UsdSkel binding (engine/skinning.py)
+
+
+@dataclass
+class SkinData:
+    """A mesh's static UsdSkel binding, per soup vertex. Joint indices are in the
+    skeleton's order (the binding's joint mapper already applied); index n_joints is
+    an identity joint for mesh joints the skeleton lacks."""
+    skel_key: str = ""
+    n_points: int = 0
+    joints: np.ndarray | None = None       # (N, 4g) int32, or None: blend shapes only
+    weights: np.ndarray | None = None      # (N, 4g) float32
+    # More than 8 influences: per point, g texel pairs (joints, weights), read by in_point.
+    point_influences: np.ndarray | None = None
+    geom_bind: np.ndarray = field(default_factory=lambda: np.eye(4))
+    method: str = "lbs"                    # lbs | dqs
+    # Blend shapes: sub-shape i's point offsets are block shape_blocks[i][0] of
+    # shape_offsets (n_points texels each), its normal offsets block [1] (-1: none).
+    shape_offsets: np.ndarray | None = None  # (n_blocks * n_points, 3) float32
+    shape_blocks: list = field(default_factory=list)
+    shape_max: np.ndarray | None = None    # (n_sub,) largest offset length, for bounds
+    joint_radius: np.ndarray | None = None  # (n_joints+1,) bound points' max distance
+    joint_centers: np.ndarray | None = None  # (n_joints+1, 3) bind-pose joint positions
+    joint_used: np.ndarray | None = None    # joints with a non-zero weight somewhere
+
+    @property
+    def has_joints(self) -> bool:
+        return self.joints is not None
 
 
 @dataclass
 class DrawItem:
     mesh_key: tuple
-    world: np.ndarray              # 4x4
+    world: np.ndarray              # 4x4 (skinned: the skeleton's local-to-world)
     prim_path: str = ""
+    # This frame's blend shapes: [(sub-shape index, weight)], zero weights left out.
+    shapes: list = field(default_factory=list)
+
+
+@dataclass
+class SkelPose:
+    """A skeleton at one time: UsdSkel skinning transforms (skeleton space, column-
+    vector), plus the identity joint at index n_joints."""
+    xforms: np.ndarray             # (n_joints + 1, 4, 4)
+    dqs: bool = False              # a bound mesh skins with dual quaternions
 
 
 @dataclass
@@ -80,6 +119,7 @@ class Light:
     diffuse: float = 1.0
     specular: float = 1.0
     shadow: bool = True
+    shadow_resolution: int = 0     # lantern:shadowResolution; 0 = the preset's
 
 
 @dataclass
@@ -114,3 +154,4 @@ class Scene:
     meters_per_unit: float = 1.0
     up_axis: str = "Z"
     bounds: tuple | None = None                    # (min xyz, max xyz) world
+    skeletons: dict = field(default_factory=dict)  # skel key -> SkelPose

@@ -12,6 +12,7 @@ from pxr import Sdf, Usd, UsdGeom, UsdShade
 
 from . import camera as cam
 from . import lights as lt
+from . import skinning
 from .materials import MaterialLibrary, default_material
 from .scene import DrawItem, MeshData, Scene
 
@@ -20,7 +21,21 @@ class MeshError(ValueError):
     pass
 
 
-def read_stage(stage: Usd.Stage, time, aspect: float, camera=None) -> Scene:
+class StageCache:
+    """What a sequence reads once: built meshes (static data) and the stage's skel
+    bindings. Per frame only transforms, skeleton poses, blend weights, cameras and
+    lights are read again."""
+
+    def __init__(self, stage):
+        self.meshes = {}
+        self.skel = skinning.SkelBindings(stage)
+        self.shape_queries = {}
+        self.warnings = []
+
+
+def read_stage(stage: Usd.Stage, time, aspect: float, camera=None, cache=None) -> Scene:
+    """`cache`: a StageCache shared by the frames of one sequence (None: one frame)."""
+    cache = cache or StageCache(stage)
     scene = Scene()
     scene.meters_per_unit = float(UsdGeom.GetStageMetersPerUnit(stage))
     scene.up_axis = str(UsdGeom.GetStageUpAxis(stage))
@@ -55,14 +70,11 @@ def read_stage(stage: Usd.Stage, time, aspect: float, camera=None) -> Scene:
             if purpose in (UsdGeom.Tokens.proxy, UsdGeom.Tokens.guide):
                 continue
             try:
-                key, build = _mesh_key(prim, time, mats)
-                if key not in scene.meshes:
-                    scene.meshes[key] = build()
-                world = cam.gf_to_np(xcache.GetLocalToWorldTransform(prim))
-                scene.draws.append(DrawItem(key, world, str(prim.GetPath())))
+                _add_mesh(scene, cache, prim, time, mats, xcache)
             except MeshError as exc:
                 scene.warnings.append(f"{prim.GetPath()}: malformed mesh ({exc}); skipped")
 
+    scene.warnings[:0] = cache.warnings   # the build-time ones, on every frame
     bbox = UsdGeom.BBoxCache(time, [UsdGeom.Tokens.default_, UsdGeom.Tokens.render],
                              useExtentsHint=True)
     rng = bbox.ComputeWorldBound(stage.GetPseudoRoot()).ComputeAlignedRange()
@@ -84,6 +96,52 @@ def read_stage(stage: Usd.Stage, time, aspect: float, camera=None) -> Scene:
 
 
 # --- meshes ----------------------------------------------------------------------
+
+def _add_mesh(scene, cache, prim, time, mats, xcache):
+    binding = cache.skel.get(prim.GetPath())
+    if binding is not None:
+        # Skinned data is per prim (its binding), static, and built once.
+        key = ("skinned", str(prim.GetPath()))
+        if key not in cache.meshes:
+            _, build = _mesh_key(prim, time, mats)
+            mesh = build()
+            mesh.key = key
+            skinning.attach_skin(mesh, prim, binding, time, cache.warnings)
+            cache.meshes[key] = mesh
+        mesh = scene.meshes[key] = cache.meshes[key]
+        skin = mesh.skin
+        if skin is None:
+            world = cam.gf_to_np(xcache.GetLocalToWorldTransform(prim))
+            scene.draws.append(DrawItem(key, world, str(prim.GetPath())))
+            return
+        skel_query, sq = binding
+        shapes = []
+        if skin.shape_offsets is not None:
+            shapes = skinning.blend_weights(skel_query, sq, cache.shape_queries, prim, time)
+        if skin.has_joints:
+            pose = scene.skeletons.get(skin.skel_key)
+            if pose is None or (skin.method == "dqs" and not pose.dqs):
+                scene.skeletons[skin.skel_key] = skinning.pose(
+                    skel_query, time, skin.method == "dqs" or (pose is not None and pose.dqs))
+            # UsdSkel skins into skeleton space: the mesh's own transform is ignored.
+            world = cam.gf_to_np(xcache.GetLocalToWorldTransform(skel_query.GetPrim()))
+        else:
+            world = cam.gf_to_np(xcache.GetLocalToWorldTransform(prim))
+        scene.draws.append(DrawItem(key, world, str(prim.GetPath()), shapes=shapes))
+        return
+    key, build = _mesh_key(prim, time, mats)
+    if key not in scene.meshes:
+        if key not in cache.meshes:
+            mesh = build()
+            if len(key) > 3:     # time-varying points: this frame only
+                scene.meshes[key] = mesh
+            else:
+                cache.meshes[key] = mesh
+        if key in cache.meshes:
+            scene.meshes[key] = cache.meshes[key]
+    world = cam.gf_to_np(xcache.GetLocalToWorldTransform(prim))
+    scene.draws.append(DrawItem(key, world, str(prim.GetPath())))
+
 
 def _face_materials(prim, mats):
     """[Material], face -> index into it (or None when one material covers all)."""
@@ -245,8 +303,10 @@ def build_mesh(prim, time, base_mat, subsets, key) -> MeshData:
         if len(sel):
             ranges.append((mi, int(sel[0]) * 3, len(sel) * 3))
     double = bool(mesh.GetDoubleSidedAttr().Get(time))
+    point_index = idx[corners].reshape(-1, 3)[order].reshape(-1).astype(np.int32)
     return MeshData(key=key, vertices=np.ascontiguousarray(soup, np.float32),
-                    ranges=ranges, materials=materials, double_sided=double)
+                    ranges=ranges, materials=materials, double_sided=double,
+                    point_index=point_index)
 
 
 def _smooth_normals(pts, idx, corners):

@@ -1,4 +1,5 @@
 #version 330 core
+#include "skinning.glsl"
 in vec3 in_pos;
 in vec3 in_normal;
 in vec2 in_uv;
@@ -10,8 +11,12 @@ out vec3 v_normal;
 out vec2 v_uv;
 out vec4 v_tangent;
 void main() {
-    gl_Position = view_proj * (model * vec4(in_pos, 1.0));
-    v_normal = normal_matrix * in_normal;
+    vec3 p = in_pos, n = in_normal, t = in_tangent.xyz;
+#ifdef SKINNED
+    skin_vertex(p, n, t);
+#endif
+    gl_Position = view_proj * (model * vec4(p, 1.0));
+    v_normal = normal_matrix * n;
     v_uv = in_uv;
-    v_tangent = vec4(mat3(model) * in_tangent.xyz, in_tangent.w);
+    v_tangent = vec4(mat3(model) * t, in_tangent.w);
 }

@@ -38,6 +38,13 @@ uniform bool is_disk;
 uniform float light_area;
 #endif
 
+// The HDR target is RGBA16F: one light never writes more than it holds.
+const float HDR_MAX = 65000.0;
+
+#ifdef HAS_SHADOW
+#include "shadow_lookup.glsl"
+#endif
+
 out vec4 frag;
 
 #ifdef LIGHT_AREA
@@ -146,5 +153,9 @@ void main() {
              + E * light_specular * brdf_specular(s, l, a_spec) * step(0.0, dot(n, l));
 #endif
 
-    frag = vec4(finite(radiance), 0.0);
+#ifdef HAS_SHADOW
+    if (max(radiance.r, max(radiance.g, radiance.b)) > 0.0)
+        radiance *= shadow_factor(p, n, light_pos, light_axis, dot(p - cam_pos, cam_forward));
+#endif
+    frag = vec4(min(finite(radiance), vec3(HDR_MAX)), 0.0);
 }

@@ -7,7 +7,11 @@ uniform bool transparent;
 out vec4 frag;
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
-    vec3 c = finite(texelFetch(hdr, px, 0).rgb);
+    vec3 c = texelFetch(hdr, px, 0).rgb;
+    // Lights summing past float16's range overflow to +Inf: that is "very bright".
+    c = mix(c, vec3(65504.0), bvec3(isinf(c.r) && c.r > 0.0, isinf(c.g) && c.g > 0.0,
+                                    isinf(c.b) && c.b > 0.0));
+    c = finite(c);
     float coverage = texelFetch(g_depth, px, 0).r < 1.0 ? 1.0 : 0.0;
     frag = vec4(c, transparent ? coverage : 1.0);
 }

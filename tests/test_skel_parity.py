@@ -11,7 +11,7 @@ from mathutils import Matrix
 from pxr import UsdGeom, UsdSkel
 
 from _export_helpers import (add_armature_modifier, animate_pose, export_current,
-                             make_armature, make_tube, object_paths, parity,
+                             make_armature, make_tube, object_paths, parity, skinned_stage,
                              weight_by_height)
 from lantern.exporters import ExportOptions
 
@@ -34,12 +34,38 @@ def _parented(arm, tube):
     return tube
 
 
+def _gpu_parity(stage):
+    """Largest |GPU-skinned − UsdSkel-skinned| over the stage's frames and skinned
+    meshes, as a fraction of each mesh's bounding-box diagonal (issue 4: Lantern's
+    own exports on the engine's GPU path)."""
+    from lantern.engine import skinned_points
+    baked = skinned_stage(stage)
+    worst, meshes = 0.0, set()
+    start, end = int(stage.GetStartTimeCode()), int(stage.GetEndTimeCode())
+    for frame in range(start, end + 1):
+        for path, (points, _normals) in skinned_points(stage, frame).items():
+            mesh = UsdGeom.Mesh(baked.GetPrimAtPath(path))
+            cpu = np.array(mesh.GetPointsAttr().Get(frame), dtype=np.float64)
+            m = np.array(mesh.ComputeLocalToWorldTransform(frame))
+            cpu = cpu @ m[:3, :3] + m[3, :3]
+            assert points.shape == cpu.shape, path
+            diag = float(np.linalg.norm(cpu.max(0) - cpu.min(0))) or 1.0
+            worst = max(worst, float(np.abs(points - cpu).max()) / diag)
+            meshes.add(str(path))
+    return worst, meshes
+
+
 def _check(case, objects, *, skinned=(), baked=(), options=None, reason=None):
     stage, report = export_current(options)
     errors = parity(stage, objects)
     FIGURES[case] = max(errors.values())
     print(f"\n{case}: " + ", ".join(f"{k} {v:.2e}" for k, v in errors.items()))
     assert max(errors.values()) <= TOLERANCE, errors
+    if skinned:
+        gpu_error, gpu_meshes = _gpu_parity(stage)
+        print(f"{case}: GPU skinning vs UsdSkel {gpu_error:.2e} over {len(gpu_meshes)} meshes")
+        assert len(gpu_meshes) >= len(skinned), gpu_meshes
+        assert gpu_error <= TOLERANCE, gpu_error
     paths = object_paths(stage)
     for ob in skinned:
         mesh = _mesh(stage, paths[ob.name])

@@ -34,7 +34,10 @@ def test_viewport_from_the_camera_view_equals_f12(addon):
     view, proj = _camera_matrices(scene, depsgraph, size, size)
     pixels = session.draw_pixels(view, proj, size, size)
     assert pixels.shape == final.shape
-    assert np.abs(pixels - final).max() <= 1e-3
+    # Two routes to the same projection (Blender's matrix vs USD's apertures) differ
+    # in the last bits, which may round to a neighbouring float16 in the HDR light
+    # buffer: one half-precision step is 2^-10 relative.
+    assert np.allclose(pixels, final, rtol=2e-3, atol=1e-4), np.abs(pixels - final).max()
 
 
 def test_redraws_do_not_re_export_unchanged_data(addon):
