@@ -39,6 +39,8 @@ def _build_parser():
                         help="file format of a batch's outputs (default usdc)")
     export.add_argument("--textures", choices=("reference", "copy"), default="reference",
                         help="reference images where they are, or copy them beside the USD file")
+    export.add_argument("--max-influences", type=int, default=None, metavar="N",
+                        help="keep the N largest joint influences per vertex (default: all)")
 
     render = commands.add_parser("render", help="render a USD stage or a .blend file")
     render.add_argument("scene", metavar="scene.usd|scene.blend")
@@ -67,18 +69,22 @@ def _export(args):
             print(f"lantern export: {blend}: not a .blend file", file=sys.stderr)
             return 2
     if len(args.blends) == 1 and args.output.lower().endswith(USD_SUFFIXES):
-        return _export_one(args.blends[0], args.output, args.textures)
+        return _export_one(args.blends[0], args.output, args)
     if args.output.lower().endswith(USD_SUFFIXES):
         print("lantern export: several inputs need a folder for -o", file=sys.stderr)
         return 2
     return _export_batch(args)
 
 
-def _export_one(blend, out_path, textures):
+def _export_one(blend, out_path, args):
     """Export in this process. Prints warnings; returns the exit status."""
     from .exporters import ExportError, ExportOptions, export_blend
+    if args.max_influences is not None and args.max_influences < 1:
+        print("lantern export: --max-influences must be at least 1", file=sys.stderr)
+        return 2
+    options = ExportOptions(textures=args.textures, max_influences=args.max_influences)
     try:
-        report = export_blend(blend, out_path, ExportOptions(textures=textures))
+        report = export_blend(blend, out_path, options)
     except ExportError as error:
         print(f"lantern export: {error}", file=sys.stderr)
         return 1
@@ -108,10 +114,11 @@ def _export_batch(args):
         blend, out_path = job
         start = time.perf_counter()
         # Each file in its own process: a crash in Blender fails that file only.
-        proc = subprocess.run(
-            [sys.executable, "-m", "lantern", "export", blend, "-o", out_path,
-             "--textures", args.textures],
-            capture_output=True, text=True)
+        command = [sys.executable, "-m", "lantern", "export", blend, "-o", out_path,
+                   "--textures", args.textures]
+        if args.max_influences is not None:
+            command += ["--max-influences", str(args.max_influences)]
+        proc = subprocess.run(command, capture_output=True, text=True)
         seconds = time.perf_counter() - start
         warnings = [line for line in proc.stderr.splitlines() if line.startswith("warning: ")]
         if proc.returncode == 0:

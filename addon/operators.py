@@ -18,6 +18,13 @@ class EXPORT_SCENE_OT_lantern_usd(bpy.types.Operator, ExportHelper):
         items=(("reference", "Reference", "Point at images where they are"),
                ("copy", "Copy", "Copy images beside the USD file")))
 
+    limit_influences: bpy.props.BoolProperty(
+        name="Limit Influences", default=False,
+        description="Keep only the largest joint influences per vertex")
+    max_influences: bpy.props.IntProperty(
+        name="Max Influences", default=4, min=1, max=64,
+        description="Joint influences kept per vertex when limited")
+
     def check(self, context):
         # Keep .usd/.usda/.usdc as typed instead of forcing filename_ext.
         return False
@@ -28,7 +35,9 @@ class EXPORT_SCENE_OT_lantern_usd(bpy.types.Operator, ExportHelper):
             path += self.filename_ext
         try:
             report = export_depsgraph_to_file(
-                context.evaluated_depsgraph_get(), path, ExportOptions(textures=self.textures))
+                context.evaluated_depsgraph_get(), path, ExportOptions(
+                    textures=self.textures,
+                    max_influences=self.max_influences if self.limit_influences else None))
         except ExportError as error:
             self.report({'ERROR'}, str(error))
             return {'CANCELLED'}

@@ -60,6 +60,8 @@ class MeshRecord:
     uvs: dict = field(default_factory=dict)  # name -> (C, 2) float32, faceVarying
     active_uv: str | None = None  # render-active UV map name
     material_indices: np.ndarray | None = None  # (F,) int32 slot index per face
+    # MikkTSpace (C, 4): tangent xyz, bitangent sign; only with a normal-mapped material.
+    tangents: np.ndarray | None = None
     skin: SkinRecord | None = None            # points are the rest mesh, skinned by a rig
     point_samples: PointSamples | None = None  # baked deformation, one sample per frame
 

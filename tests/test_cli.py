@@ -65,3 +65,17 @@ def test_bad_arguments_get_clear_messages(tmp_path):
     assert proc.returncode == 2 and "not a .blend" in proc.stderr
     proc = _lantern("render", "x.usda", "-o", "x.exr", "--size", "big")
     assert proc.returncode == 2 and "--size" in proc.stderr
+
+
+def test_max_influences_option_trims_exported_influences(corpus, tmp_path):
+    from pxr import Usd, UsdSkel
+    out = tmp_path / "cylinder.usda"
+    proc = _lantern("export", str(corpus / "blender" / "03_skinned_cylinder.blend"), "-o", str(out),
+                    "--max-influences", "1")
+    assert proc.returncode == 0, proc.stderr
+    stage = Usd.Stage.Open(str(out))
+    sizes = [UsdSkel.BindingAPI(p).GetJointIndicesPrimvar().GetElementSize()
+             for p in stage.Traverse() if p.HasAPI(UsdSkel.BindingAPI)
+             and UsdSkel.BindingAPI(p).GetJointIndicesPrimvar()]
+    assert sizes and all(size == 1 for size in sizes), sizes
+    assert _lantern("export", "x.blend", "-o", str(out), "--max-influences", "0").returncode == 2

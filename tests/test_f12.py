@@ -66,3 +66,24 @@ def test_f12_renders_the_combined_pass_in_scene_linear(addon, tmp_path):
     image = read_exr(str(tmp_path / "sun.exr"))
     expected = calibration.closed_form_radiance("sun")
     assert np.allclose(image[..., 0], expected, rtol=0.02)
+
+
+def test_export_operator_writes_the_same_stage_as_the_cli(addon, corpus, tmp_path):
+    """File > Export > Lantern USD goes through the same exporter as `lantern export`."""
+    import bpy
+    from pxr import Usd, UsdSkel
+    from lantern.exporters import open_blend, validation_errors
+
+    open_blend(str(corpus / "blender" / "03_skinned_cylinder.blend"))
+    out = tmp_path / "operator.usda"
+    assert bpy.ops.export_scene.lantern_usd(filepath=str(out), limit_influences=True,
+                                            max_influences=2) == {'FINISHED'}
+    _lantern("export", str(corpus / "blender" / "03_skinned_cylinder.blend"),
+             "-o", str(tmp_path / "cli.usda"), "--max-influences", "2")
+    operator, cli = Usd.Stage.Open(str(out)), Usd.Stage.Open(str(tmp_path / "cli.usda"))
+    assert validation_errors(operator) == []
+    skinned = [p for p in operator.Traverse() if p.HasAPI(UsdSkel.BindingAPI)
+               and UsdSkel.BindingAPI(p).GetJointIndicesPrimvar()]
+    assert skinned and all(UsdSkel.BindingAPI(p).GetJointIndicesPrimvar().GetElementSize() <= 2
+                           for p in skinned)
+    assert [str(p.GetPath()) for p in operator.Traverse()] == [str(p.GetPath()) for p in cli.Traverse()]

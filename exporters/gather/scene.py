@@ -7,6 +7,7 @@ from .camera import gather_camera
 from .light import gather_light
 from .material import gather_material
 from .mesh import gather_mesh
+from .tangents import mikktspace_tangents, tangent_uv_map
 from .skin import animated, classify, group_entries
 from .world import gather_world
 
@@ -189,6 +190,9 @@ def _gather_geometry(ob, obj, rec, shared, rig, groups):
                 return  # points or edges only: nothing to render
             name = orig.data.name if orig.type == "MESH" else orig.name
             rec.meshes[mesh_key] = gather_mesh(mesh, mesh_key, name)
+            uv_map = tangent_uv_map([s.material for s in ob.material_slots])
+            if uv_map is not None:
+                rec.meshes[mesh_key].tangents = mikktspace_tangents(mesh, uv_map)
             if keyed:
                 reference = mesh.shape_keys.reference_key.data
                 co = np.empty(len(reference) * 3, dtype=np.float32)

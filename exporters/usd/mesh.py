@@ -22,6 +22,10 @@ def write_mesh(stage, path, rec, double_sided, slot_names):
         pv = primvars.CreatePrimvar(primvar_name(name), Sdf.ValueTypeNames.TexCoord2fArray,
                                     UsdGeom.Tokens.faceVarying)
         pv.Set(Vt.Vec2fArray.FromNumpy(np.ascontiguousarray(rec.uvs[name])))
+    if rec.tangents is not None:
+        pv = primvars.CreatePrimvar("tangents", Sdf.ValueTypeNames.Float4Array,
+                                    UsdGeom.Tokens.faceVarying)
+        pv.Set(Vt.Vec4fArray.FromNumpy(np.ascontiguousarray(rec.tangents)))
     slots = face_slots(rec, len(slot_names))
     if slots is not None:
         namer = Namer()
