@@ -224,7 +224,7 @@ def _render_sequence(args):
         stage = Usd.Stage.Open(args.scene)
     from .engine import RenderSettings
     from .engine.api import render_sequence
-    from .engine.image_io import write_image
+    from .engine.image_io import write_animation, write_image
     width, height = args.size if args.size else (None, None)
     settings = RenderSettings(width=width, height=height, preset=args.preset)
     frames, seen = [], set()
@@ -235,10 +235,7 @@ def _render_sequence(args):
                     seen.add(warning)
                     print(f"warning: {warning}", file=sys.stderr)
             if gif:
-                import numpy as np
-                lin = np.clip(result.rgba[..., :3], 0.0, 1.0)
-                srgb = np.where(lin <= 0.0031308, lin * 12.92, 1.055 * lin ** (1 / 2.4) - 0.055)
-                frames.append((srgb * 255 + 0.5).astype("uint8"))
+                frames.append(result.rgba)
                 continue
             path = _frame_path(args.output, frame)
             os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
@@ -249,10 +246,8 @@ def _render_sequence(args):
         print(f"lantern render: {args.scene}: {error}", file=sys.stderr)
         return 1
     if gif:
-        import imageio.v3 as iio
         os.makedirs(os.path.dirname(os.path.abspath(args.output)), exist_ok=True)
-        fps = stage.GetFramesPerSecond() or 24.0
-        iio.imwrite(args.output, frames, duration=1000.0 / fps, loop=0)
+        write_animation(args.output, frames, stage.GetFramesPerSecond() or 24.0)
         print(f"{args.scene} frames {first:g}:{last:g} -> {args.output}")
     return 0
 

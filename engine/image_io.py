@@ -24,12 +24,31 @@ def _write_exr(path, rgba):
         f.write(path)
 
 
-def _write_png(path, rgba):
-    import imageio.v3 as iio
+def to_srgb8(rgba: np.ndarray) -> np.ndarray:
+    """Scene-linear RGBA -> 8-bit through Blender's Standard view (sRGB), alpha kept."""
     out = np.empty(rgba.shape, dtype=np.uint8)
     out[..., :3] = np.round(linear_to_srgb(rgba[..., :3]) * 255.0)
     out[..., 3] = np.round(np.clip(rgba[..., 3], 0.0, 1.0) * 255.0)
-    iio.imwrite(path, out, extension=".png")
+    return out
+
+
+def _write_png(path, rgba):
+    import imageio.v3 as iio
+    iio.imwrite(path, to_srgb8(rgba), extension=".png")
+
+
+def _atomic(path, ext, write):
+    """write(tmp) to a temp file beside `path`, then rename: never a half-written file."""
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix=".lantern-", suffix=ext, dir=folder)
+    os.close(fd)
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
 
 
 def write_image(path: str, rgba: np.ndarray) -> None:
@@ -41,16 +60,17 @@ def write_image(path: str, rgba: np.ndarray) -> None:
     rgba = np.asarray(rgba, dtype=np.float32)
     if rgba.ndim != 3 or rgba.shape[2] != 4:
         raise ValueError(f"expected an (H, W, 4) image, got {rgba.shape}")
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".lantern-", suffix=ext, dir=folder)
-    os.close(fd)
-    try:
-        writers[ext](tmp, rgba)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
+    _atomic(path, ext, lambda tmp: writers[ext](tmp, rgba))
+
+
+def write_animation(path: str, frames, fps: float) -> None:
+    """An animated .gif preview of scene-linear RGBA frames (sRGB, looping), atomically."""
+    import imageio.v3 as iio
+    if not path.lower().endswith(".gif"):
+        raise ValueError(f"animated previews are .gif files, not {path}")
+    images = [to_srgb8(np.asarray(f, dtype=np.float32))[..., :3] for f in frames]
+    _atomic(path, ".gif", lambda tmp: iio.imwrite(tmp, images, extension=".gif",
+                                                  duration=1000.0 / fps, loop=0))
 
 
 def read_exr(path: str) -> np.ndarray:

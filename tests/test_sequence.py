@@ -81,3 +81,24 @@ def test_cli_frames_writes_numbered_images(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "lantern", "render", str(src), "--frames", "1:3",
                           "-o", str(tmp_path / "x.png")], capture_output=True, text=True, timeout=300)
     assert bad.returncode == 2 and "####" in bad.stderr
+
+
+def test_cli_frames_to_an_animated_gif(tmp_path):
+    """A sequence as one looping preview: one GIF frame per rendered frame, each the
+    sRGB encoding of that frame's render."""
+    import imageio.v3 as iio
+    from lantern.engine.image_io import to_srgb8
+    stage = skel_stage(3)
+    src = tmp_path / "skel.usda"
+    stage.GetRootLayer().Export(str(src))
+    gif = tmp_path / "preview.gif"
+    proc = subprocess.run([sys.executable, "-m", "lantern", "render", str(src), "--frames", "1:3",
+                           "--size", "32x24", "-o", str(gif)], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    frames = iio.imread(gif, index=None)
+    assert frames.shape[:3] == (3, 24, 32)
+    single = render_stage(stage, RenderSettings(width=32, height=24, frame=2)).rgba
+    # GIF palettes quantise colours: compare loosely against the exact sRGB frame.
+    assert np.abs(frames[1][..., :3].astype(int) - to_srgb8(single)[..., :3].astype(int)).mean() < 3
+    assert not any(p.name.startswith(".lantern-") for p in tmp_path.iterdir())
