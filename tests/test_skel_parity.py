@@ -197,6 +197,28 @@ def test_subsurf_before_armature(empty_scene):
     _check("subsurf before armature", [tube], skinned=[tube])
 
 
+def test_mirror_before_armature(empty_scene):
+    """A Mirror modifier before the armature changes the rest mesh, not the skinning."""
+    arm, tube = _rig()
+    for vertex in tube.data.vertices:
+        vertex.co.x += 0.6  # so the mirrored half is a separate copy at -0.6
+    tube.modifiers.new("Mirror", "MIRROR")
+    add_armature_modifier(tube, arm)
+    animate_pose(arm)
+    stage, _ = _check("mirror before armature", [tube], skinned=[tube])
+    mesh = UsdGeom.Mesh(_mesh(stage, object_paths(stage)[tube.name]))
+    assert len(mesh.GetPointsAttr().Get()) == 2 * len(tube.data.vertices)
+
+
+def test_non_uniform_mesh_scale(empty_scene):
+    arm, tube = _rig()
+    _parented(arm, tube)
+    tube.scale = (1.8, 0.6, 1.3)
+    tube.rotation_euler = (0.0, 0.0, 0.4)
+    animate_pose(arm)
+    _check("non-uniform mesh scale", [tube], skinned=[tube])
+
+
 @pytest.mark.parametrize("width", [6, 9, 12])
 def test_many_influences(empty_scene, width):
     bones = tuple(f"B{i}" for i in range(12))
