@@ -186,8 +186,11 @@ def _plan_sun(frame, light, res):
     depth = (corners - cam.position) @ cam.forward
     z0 = max(cam.near, float(depth.min()))
     z1 = min(cam.far, float(depth.max()))
-    if z1 <= z0:
-        return None
+    if z1 < z0:
+        return None                       # the scene is wholly outside the view
+    # A scene flat along the view (a plane seen straight on) still needs a slice.
+    pad = 1e-3 * max(z1, 1.0)
+    z0, z1 = max(cam.near, z0 - pad), min(cam.far, z1 + pad)
     n = int(frame.opts["cascades"])
     splits = []
     for i in range(1, n + 1):
