@@ -16,7 +16,7 @@ import numpy as np
 from lantern.engine import RenderSettings, render_stage
 from lantern.exporters import stage_from_depsgraph
 
-sys.path.insert(0, str(pathlib.Path(__file__).parent))
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "tests"))
 from image_metrics import mean_flip, psnr  # noqa: E402
 
 REPO = pathlib.Path(__file__).resolve().parent.parent

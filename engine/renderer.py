@@ -71,24 +71,29 @@ def icosphere(level: int) -> np.ndarray:
 
 
 def cone(light, length: float) -> np.ndarray:
-    """World-space triangle soup of a cone enclosing the spot's lit region (apex at
-    the light, height `length` along its axis, polygon base circumscribing)."""
+    """World-space triangle soup of a cone enclosing the spot's lit region (height
+    `length` along its axis past the light, polygon base circumscribing). A spot with
+    a radius lights from every point of its sphere, so the apex moves back until the
+    cone contains the cone of every such point: by radius / sin(half angle)."""
     half = math.radians(light.cone_angle)
-    r = length * math.tan(half) / math.cos(math.pi / CONE_SIDES)
     ax = light.axis / np.linalg.norm(light.axis)
+    back = light.radius / max(math.sin(half), 1e-3)
+    length += back
+    r = length * math.tan(half) / math.cos(math.pi / CONE_SIDES)
     u = np.cross(ax, [1.0, 0, 0] if abs(ax[0]) < 0.9 else [0, 1.0, 0])
     u /= np.linalg.norm(u)
     w = np.cross(ax, u)
     ang = np.arange(CONE_SIDES) * 2 * math.pi / CONE_SIDES
-    ring = light.position + ax * length + (np.outer(np.cos(ang), u) + np.outer(np.sin(ang), w)) * r
-    apex, center = light.position, light.position + ax * length
+    apex = light.position - ax * back
+    ring = apex + ax * length + (np.outer(np.cos(ang), u) + np.outer(np.sin(ang), w)) * r
+    center = apex + ax * length
     tris = []
     for i in range(CONE_SIDES):
         a, b = ring[i], ring[(i + 1) % CONE_SIDES]
         tris += [apex, a, b, center, b, a]
     tris = np.array(tris).reshape(-1, 3, 3)
     # Wind every face outward (counter-clockwise seen from outside).
-    mid = light.position + ax * length * 0.5
+    mid = apex + ax * length * 0.5
     nrm = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
     flip = np.sum(nrm * (tris.mean(axis=1) - mid), axis=1) < 0
     tris[flip] = tris[flip][:, [0, 2, 1]]

@@ -81,6 +81,32 @@ float polygon_irradiance_factor(vec3 p, vec3 n) {
 }
 #endif
 
+#ifdef LIGHT_SPHERE
+// Blender's spot cone, smoothstep over (cos phi - cos(size/2)) / ((1 - cos(size/2)) blend).
+float cone(vec3 from_light) {
+    float t = dot(from_light, light_axis) - cos_half;
+    float width = (1.0 - cos_half) * spot_blend;
+    return width > 0.0 ? smoothstep(0.0, 1.0, t / width) : step(0.0, t);
+}
+
+// Cycles evaluates the cone from each sampled point of a spot with a radius, which
+// softens its edge; average over the light's disk as seen from p (7-point disk rule:
+// centre 1/4, six points at radius sqrt(2/3) of 1/8 each).
+float spot_mask(vec3 p, vec3 l, float d) {
+    if (light_radius <= 0.0 || d <= light_radius) return cone(-l);
+    vec3 e1 = normalize(abs(l.z) < 0.9 ? cross(l, vec3(0, 0, 1)) : cross(l, vec3(1, 0, 0)));
+    vec3 e2 = cross(l, e1);
+    float mask = 0.25 * cone(-l);
+    float rr = light_radius * 0.8164966;
+    for (int i = 0; i < 6; ++i) {
+        float ang = float(i) * 1.0471976;
+        vec3 q = light_pos + rr * (cos(ang) * e1 + sin(ang) * e2);
+        mask += 0.125 * cone(normalize(p - q));
+    }
+    return mask;
+}
+#endif
+
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(g_depth, px, 0).r;
@@ -112,12 +138,7 @@ void main() {
     if (NoL <= 0.0) discard;
     float falloff = soft_falloff ? d2 + light_radius * light_radius : d2;
     vec3 E = light_color * NoL / max(falloff, 1e-8);
-    if (is_spot) {
-        float t = dot(-l, light_axis) - cos_half;
-        float width = (1.0 - cos_half) * spot_blend;
-        float mask = width > 0.0 ? smoothstep(0.0, 1.0, t / width) : step(0.0, t);
-        E *= mask;
-    }
+    if (is_spot) E *= spot_mask(p, l, d);
     // A sphere source widens the highlight (Karis 2013); a point keeps alpha.
     float a_spec = min(1.0, a + light_radius / max(2.0 * d, 1e-6));
     radiance = E * (light_diffuse * brdf_diffuse(s) + light_specular * brdf_specular(s, l, a_spec));

@@ -130,3 +130,57 @@ def build_scene(kind):
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
     scene.world = world
     return scene
+
+
+# --- Box on a plane: shadows against Cycles (issue 5) -------------------------------
+
+BOX_SIZE = (96, 54)
+BOX_LIGHTS = {
+    "sun": dict(type='SUN', energy=3.0, location=(0, 0, 5),
+                rotation=(math.radians(40), 0, math.radians(30)), angle=math.radians(5)),
+    "point": dict(type='POINT', energy=600.0, location=(1.5, -1.2, 2.5), radius=0.1),
+    "spot": dict(type='SPOT', energy=1500.0, location=(-1.5, -1.8, 3.0), radius=0.1,
+                 spot_size=math.radians(60), spot_blend=0.2, target=(0.0, 0.0, 0.0)),
+    "area": dict(type='AREA', energy=300.0, location=(1.2, -1.2, 2.5), size=1.0,
+                 target=(0.0, 0.0, 0.0)),
+}
+
+
+def build_box_scene(kind):
+    """A white unit box on the white plane, one shadow-casting light, a perspective
+    camera, no world light."""
+    import bpy
+    from mathutils import Vector
+    scene = build_scene("sun")  # plane, material, black world; its light is replaced
+    bpy.data.objects.remove(bpy.data.objects["sun"])
+    scene.render.resolution_x, scene.render.resolution_y = BOX_SIZE
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0.0, 0.0, 0.5))
+    bpy.context.object.data.materials.append(bpy.data.materials["WhiteLambert"])
+
+    camera = scene.camera
+    camera.data.type = 'PERSP'
+    camera.data.lens = 35
+    camera.location = (4.0, -5.0, 3.5)
+    camera.rotation_euler = (Vector((0.0, 0.0, 0.4)) - camera.location).to_track_quat('-Z', 'Y').to_euler()
+
+    spec = BOX_LIGHTS[kind]
+    data = bpy.data.lights.new(kind, spec["type"])
+    data.energy = spec["energy"]
+    data.use_shadow = True
+    if spec["type"] in ('POINT', 'SPOT'):
+        data.shadow_soft_size = spec["radius"]
+    if spec["type"] == 'SPOT':
+        data.spot_size, data.spot_blend = spec["spot_size"], spec["spot_blend"]
+    if spec["type"] == 'SUN':
+        data.angle = spec["angle"]
+    if spec["type"] == 'AREA':
+        data.shape, data.size = 'SQUARE', spec["size"]
+    light = bpy.data.objects.new(kind, data)
+    light.location = spec["location"]
+    if "target" in spec:
+        direction = Vector(spec["target"]) - light.location
+        light.rotation_euler = direction.to_track_quat('-Z', 'Y').to_euler()
+    elif "rotation" in spec:
+        light.rotation_euler = spec["rotation"]
+    scene.collection.objects.link(light)
+    return scene
