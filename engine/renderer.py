@@ -413,9 +413,13 @@ class FrameRenderer:
         self._fullscreen(prog)
 
         self._light_vaos = {}
+        batched = []
         for light in self.scene.lights:
             R = lt.volume_radius(light)
             if light.kind != "distant" and R <= 0:
+                continue
+            if self._batchable(light, R):
+                batched.append((light, R))
                 continue
             # Shadow pass (meshes -> this light's depth atlas), only for casters.
             sm = None
@@ -433,7 +437,54 @@ class FrameRenderer:
                 stencil.end()
                 if sm is not None:
                     sm.release()
+        if batched:
+            fbo.use()
+            self._draw_batched_lights(batched)
         ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
+
+    def _batchable(self, light, R):
+        """Shadowless point and spot lights whose sphere volume lies before the far
+        plane share one instanced draw: per-light work in Python and draw calls would
+        otherwise cost more than shading their few pixels."""
+        return (light.kind in ("sphere", "spot") and not (light.shadow and self.scene.draws)
+                and not self._crosses_far_plane(light.position, R * 1.3))
+
+    def _draw_batched_lights(self, batched):
+        """All batched lights in one draw of their sphere volumes (reads the G-buffer
+        and the scene depth). Back faces pass the depth test only where the scene
+        surface is in front of them, and the shader's distance test discards surfaces
+        in front of the volume, so only pixels inside a volume are shaded; the camera
+        may be inside one. No per-light stencil or scissor: one draw has none."""
+        ctx = self.ctx
+        rows = np.zeros((len(batched), 16), "f4")
+        for i, (light, R) in enumerate(batched):
+            axis = light.axis / max(np.linalg.norm(light.axis), 1e-30)
+            flags = (1 if light.soft_falloff else 0) + (2 if light.kind == "spot" else 0)
+            cos_half = math.cos(math.radians(min(light.cone_angle, 180.0)))
+            rows[i] = [*light.position, R, *np.asarray(light.color, float), light.radius,
+                       *axis, cos_half, light.cone_softness, light.diffuse, light.specular, flags]
+        if self._unit_sphere is None:
+            self._unit_sphere = self.own(ctx.buffer(icosphere(self.opts["ico_level"]).tobytes()))
+        prog = program(ctx, "volume.vert", "light.frag", ["LIGHT_SPHERE", "LIGHTS_INSTANCED"])
+        self._bind_gbuffer(prog)
+        set_uniform(prog, "mvp", self.view_proj)
+        instances = self.own(ctx.buffer(rows.tobytes()))
+        vao = self.own(ctx.vertex_array(prog, [
+            (self._unit_sphere, "3f", "in_pos"),
+            (instances, "4f 4f 4f 4f/i", "i_pos_range", "i_color_radius", "i_axis_cos", "i_params"),
+        ]))
+        ctx.enable(ctx.BLEND)
+        ctx.blend_func = ctx.ONE, ctx.ONE
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.depth_func = ">="
+        ctx.enable(ctx.CULL_FACE)
+        ctx.cull_face = "front"
+        vao.render(ctx.TRIANGLES, instances=len(batched))
+        ctx.disable(ctx.CULL_FACE)
+        ctx.cull_face = "back"
+        self.stats["light_volumes"] += len(batched)
+        self.stats["lights_drawn"] += len(batched)
+        self.stats["batched_lights"] = self.stats.get("batched_lights", 0) + len(batched)
 
     def _light_program(self, vert, light, variant, R, sm):
         prog = program(self.ctx, vert, "light.frag", [variant] + (["HAS_SHADOW"] if sm else []))

@@ -13,19 +13,38 @@ uniform vec3 cam_pos;
 uniform vec3 cam_forward;
 uniform bool cam_ortho;
 
+#ifdef LIGHTS_INSTANCED
+// Many shadowless sphere lights in one draw: each fragment's light comes from its
+// instance (shaders/volume.vert); the names below are those of the one-light path.
+flat in vec4 v_pos_range;
+flat in vec4 v_color_radius;
+flat in vec4 v_axis_cos;
+flat in vec4 v_params;
+#define light_pos v_pos_range.xyz
+#define light_range v_pos_range.w
+#define light_color v_color_radius.rgb
+#define light_radius v_color_radius.w
+#define light_axis v_axis_cos.xyz
+#define cos_half v_axis_cos.w
+#define spot_blend v_params.x
+#define light_diffuse v_params.y
+#define light_specular v_params.z
+#define soft_falloff ((int(v_params.w) & 1) != 0)
+#define is_spot ((int(v_params.w) & 2) != 0)
+#else
 uniform vec3 light_color;      // I [W/sr], L [W/(sr m2)] or E [W/m2]
 uniform vec3 light_pos;
 uniform vec3 light_axis;       // direction of emission (light's -Z)
 uniform float light_diffuse;
 uniform float light_specular;
 uniform float light_range;     // volume radius: nothing is added beyond it
-
 #ifdef LIGHT_SPHERE
 uniform float light_radius;
 uniform bool soft_falloff;
 uniform bool is_spot;
 uniform float cos_half;
 uniform float spot_blend;
+#endif
 #endif
 #ifdef LIGHT_AREA
 #define MAX_VERTS 32

@@ -90,8 +90,8 @@ def _place(light, pos, aim=None):
 
 def add_light(stage, kind, shadow=True, **kw):
     """kind: sun | point | spot | area. kw: pos, aim, power/strength, radius, angle,
-    cone (half angle deg), softness, size, resolution."""
-    path = f"/root/{kind}"
+    cone (half angle deg), softness, size, resolution, name (prim name, default kind)."""
+    path = f"/root/{kw.get('name', kind)}"
     if kind == "sun":
         light = UsdLux.DistantLight.Define(stage, path)
         light.CreateIntensityAttr(kw.get("strength", 3.0))

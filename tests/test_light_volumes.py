@@ -1,0 +1,38 @@
+"""Light volumes: many shadowless point lights share one instanced draw, and what they
+add is exactly the sum of the lights drawn one by one (additive HDR blending)."""
+import numpy as np
+
+import shadow_scenes as ss
+from lantern.engine import RenderSettings, render_stage
+from test_shadows import top_down_camera
+
+POSITIONS = [(x, y, 0.4) for x in (-2.4, -0.8, 0.8, 2.4) for y in (-2.4, -0.8, 0.8, 2.4)]
+
+
+def _render(lights, shadow=False):
+    stage = ss.new_stage()
+    ss.add_box(stage, center=(0.3, 0.2, 0.5))
+    for i, pos in enumerate(lights):
+        ss.add_light(stage, "point", shadow=shadow, pos=pos, power=0.5, radius=0.05,
+                     name=f"point_{i:02d}")
+    top_down_camera(stage, 8.0)
+    return render_stage(stage, RenderSettings(width=64, height=64))
+
+
+def test_batched_lights_equal_the_sum_of_single_lights():
+    together = _render(POSITIONS)
+    assert together.stats["batched_lights"] == len(POSITIONS)
+    assert together.stats["draw_calls"] >= 1
+    alone = sum(_render([pos]).rgba[..., :3] for pos in POSITIONS)
+    lit = alone > 1e-3
+    # Each additive blend into the float16 HDR target rounds by up to one
+    # half-precision step (2^-10 relative): one step per light at most.
+    assert np.allclose(together.rgba[..., :3][lit], alone[lit],
+                       rtol=len(POSITIONS) * 2.0 ** -10, atol=2e-4)
+    assert np.all(together.rgba[..., :3][~lit] < 2e-3)
+
+
+def test_shadow_casting_lights_take_the_stencil_path():
+    result = _render(POSITIONS[:3], shadow=True)
+    assert result.stats.get("batched_lights", 0) == 0
+    assert result.stats["stencil_marks"] == 3 and result.stats["shadow_maps"] == 3
