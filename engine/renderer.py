@@ -317,6 +317,16 @@ class FrameRenderer:
                 self.gpu.influence_texture(ctx, mesh).use(skinning.UNIT_INFLUENCES)
         skinning.set_skin_uniforms(prog, skin, n_active, set_uniform)
 
+    def geometry_bounds(self):
+        """World AABB of every draw this frame, skinned meshes as posed (the stage's
+        own bounds miss skinning), or None without geometry. Shadow maps fit it."""
+        if not hasattr(self, "_geometry_bounds"):
+            boxes = [self.world_bounds(d, self.scene.meshes[d.mesh_key]) for d in self.scene.draws
+                     if d.mesh_key in self.scene.meshes]
+            self._geometry_bounds = (np.min([b[0] for b in boxes], axis=0),
+                                     np.max([b[1] for b in boxes], axis=0)) if boxes else None
+        return self._geometry_bounds
+
     def world_bounds(self, draw, mesh):
         """World AABB of a draw this frame (skinned meshes: from their joints)."""
         lo, hi = self.gpu.rest_bounds(mesh)

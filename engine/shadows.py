@@ -11,7 +11,8 @@ Layouts (every map is a set of tiles in one 2D depth texture):
                                 major axis (as a hardware cube map does) never filters
                                 across a tile edge: the shadow is continuous across faces.
   sun                           N orthographic cascades (1 x N), each fitted to a slice
-                                of the view frustum clipped to the scene bounds; depth
+                                of the view frustum clipped to the bounds of what is
+                                drawn this frame (posed skinned meshes included); depth
                                 spans the whole scene so off-screen casters still cast.
 
 Stored depth is linear: radial maps write distance / far (shadow.frag), so every
@@ -27,6 +28,7 @@ import math
 
 import numpy as np
 
+from . import skinning
 from .camera import frustum, ortho
 from .shaders import program, set_uniform
 
@@ -58,23 +60,23 @@ def resolution(light, opts) -> int:
     return int(min(max(res, MIN_RES), MAX_RES))
 
 
-def draw_caster(frame, draw, view_proj, prog):
+def draw_caster(frame, draw, view_proj, light, sm):
     """Draws one DrawItem's triangles into the bound depth target with `view_proj`.
-    Every caster goes through here."""
+    Every caster goes through here: the mesh's own shader variant (skinned meshes
+    cast their posed shadow) and the frame's shared geometry buffers."""
     mesh = frame.scene.meshes[draw.mesh_key]
     if not mesh.ranges:
         return
-    cache = frame.__dict__.setdefault("_shadow_vaos", {})
-    key = (draw.mesh_key, id(prog))
-    if key not in cache:
-        vbo = frame.own(frame.ctx.buffer(mesh.vertices.tobytes()))
-        cache[key] = frame.own(frame.ctx.vertex_array(
-            prog, [(vbo, "3f 36x", "in_pos")], skip_errors=True))
+    prog = program(frame.ctx, "shadow.vert", "shadow.frag", skinning.defines(mesh.skin))
+    set_uniform(prog, "radial", sm.radial)
+    set_uniform(prog, "light_pos", np.asarray(light.position, float))
+    set_uniform(prog, "far", sm.far)
     set_uniform(prog, "model", draw.world)
     set_uniform(prog, "view_proj", view_proj)
+    frame.bind_skin(prog, draw, mesh)
     first = mesh.ranges[0][1]
     count = sum(r[2] for r in mesh.ranges)
-    cache[key].render(frame.ctx.TRIANGLES, vertices=count, first=first)
+    frame.mesh_vao(prog, mesh).render(frame.ctx.TRIANGLES, vertices=count, first=first)
     frame.stats["shadow_draws"] += 1
 
 
@@ -124,20 +126,17 @@ class ShadowMap:
                 obj.release()
 
 
-def _scene_far(scene, origin, fallback):
-    """Distance from origin to the farthest corner of the scene bounds."""
-    if scene.bounds is None:
-        return fallback
-    lo, hi = scene.bounds
-    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                        for z in (lo[2], hi[2])])
-    return float(np.max(np.linalg.norm(corners - origin, axis=1)))
-
-
-def _bounds_corners(scene):
-    lo, hi = scene.bounds
+def _bounds_corners(bounds):
+    lo, hi = bounds
     return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
                      for z in (lo[2], hi[2])])
+
+
+def _scene_far(bounds, origin, fallback):
+    """Distance from origin to the farthest corner of the casters' bounds."""
+    if bounds is None:
+        return fallback
+    return float(np.max(np.linalg.norm(_bounds_corners(bounds) - origin, axis=1)))
 
 
 def plan(frame, light, R):
@@ -147,7 +146,7 @@ def plan(frame, light, R):
     if light.kind == "distant":
         return _plan_sun(frame, light, res)
     pos = np.asarray(light.position, float)
-    far = max(min(R, _scene_far(scene, pos, R)) * 1.01, 1e-3)
+    far = max(min(R, _scene_far(frame.geometry_bounds(), pos, R)) * 1.01, 1e-3)
     near = max(far * 1e-4, 1e-4)
     if light.kind in ("sphere", "spot", "rect", "disk"):
         size = light.radius if light.kind in ("sphere", "spot", "disk") else \
@@ -173,12 +172,13 @@ def plan(frame, light, R):
 
 def _plan_sun(frame, light, res):
     scene, cam = frame.scene, frame.scene.camera
-    if scene.bounds is None:
+    bounds = frame.geometry_bounds()
+    if bounds is None:
         return None
     d = np.asarray(light.axis, float)
     d /= np.linalg.norm(d)
     up = [0, 0, 1.0] if abs(d[2]) < 0.9 else [0, 1.0, 0]
-    corners = _bounds_corners(scene)
+    corners = _bounds_corners(bounds)
     view = look_at(np.zeros(3), d, up)
     lc = (view[:3, :3] @ corners.T).T          # scene bounds in light space
     lo_b, hi_b = lc.min(axis=0), lc.max(axis=0)
@@ -250,16 +250,12 @@ def render(frame, light, R):
         ctx.enable(ctx.DEPTH_TEST)
         ctx.depth_func = "<"
         ctx.disable(ctx.BLEND | ctx.CULL_FACE)   # single-sided planes cast too
-        prog = program(ctx, "shadow.vert", "shadow.frag")
-        set_uniform(prog, "radial", sm.radial)
-        set_uniform(prog, "light_pos", np.asarray(light.position, float))
-        set_uniform(prog, "far", sm.far)
         for m, (x, y, sx, sy) in zip(sm.mats, sm.rects):
             fbo.viewport = (round(x * tw), round(y * th), round(sx * tw), round(sy * th))
             fbo.use()
             frame.stats["shadow_passes"] += 1
             for draw in frame.scene.draws:
-                draw_caster(frame, draw, m, prog)
+                draw_caster(frame, draw, m, light, sm)
     finally:
         fbo.release()
         ctx.disable(ctx.DEPTH_TEST)
