@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import os
 
-from pxr import Usd, UsdShade
+from pxr import UsdShade
 
 from .scene import Material, TextureRef
 

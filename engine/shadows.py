@@ -141,7 +141,7 @@ def _scene_far(bounds, origin, fallback):
 
 def plan(frame, light, R):
     """ShadowMap geometry (matrices, tiles) for one light, or None (nothing to shadow)."""
-    scene, opts = frame.scene, frame.opts
+    opts = frame.opts
     res = resolution(light, opts)
     if light.kind == "distant":
         return _plan_sun(frame, light, res)
@@ -171,7 +171,7 @@ def plan(frame, light, R):
 
 
 def _plan_sun(frame, light, res):
-    scene, cam = frame.scene, frame.scene.camera
+    cam = frame.scene.camera
     bounds = frame.geometry_bounds()
     if bounds is None:
         return None

@@ -83,6 +83,32 @@ def closed_form_radiance(kind):
     return radiance * polygon_irradiance(corners, points) / math.pi
 
 
+def add_light(scene, name, spec, shadow):
+    """A Blender light from a spec of LIGHTS or BOX_LIGHTS: aimed at spec["target"],
+    or turned by spec["rotation"]; a sun without an "angle" is a sharp one."""
+    import bpy
+    from mathutils import Vector
+    data = bpy.data.lights.new(name, spec["type"])
+    data.energy = spec["energy"]
+    data.use_shadow = shadow
+    if spec["type"] in ('POINT', 'SPOT'):
+        data.shadow_soft_size = spec["radius"]
+    if spec["type"] == 'SPOT':
+        data.spot_size, data.spot_blend = spec["spot_size"], spec["spot_blend"]
+    if spec["type"] == 'SUN':
+        data.angle = spec.get("angle", 0.0)
+    if spec["type"] == 'AREA':
+        data.shape, data.size = 'SQUARE', spec["size"]
+    light = bpy.data.objects.new(name, data)
+    light.location = spec["location"]
+    if "target" in spec:
+        light.rotation_euler = (Vector(spec["target"]) - light.location).to_track_quat('-Z', 'Y').to_euler()
+    else:
+        light.rotation_euler = spec.get("rotation", (0, 0, 0))
+    scene.collection.objects.link(light)
+    return light
+
+
 def build_scene(kind):
     """The calibration scene in the current Blender session (factory-empty first)."""
     import bpy
@@ -109,22 +135,7 @@ def build_scene(kind):
     scene.collection.objects.link(camera)
     scene.camera = camera
 
-    spec = LIGHTS[kind]
-    data = bpy.data.lights.new(kind, spec["type"])
-    data.energy = spec["energy"]
-    data.use_shadow = False
-    if spec["type"] in ('POINT', 'SPOT'):
-        data.shadow_soft_size = spec["radius"]
-    if spec["type"] == 'SPOT':
-        data.spot_size, data.spot_blend = spec["spot_size"], spec["spot_blend"]
-    if spec["type"] == 'SUN':
-        data.angle = 0.0
-    if spec["type"] == 'AREA':
-        data.shape, data.size = 'SQUARE', spec["size"]
-    light = bpy.data.objects.new(kind, data)
-    light.location = spec["location"]
-    light.rotation_euler = spec.get("rotation", (0, 0, 0))
-    scene.collection.objects.link(light)
+    add_light(scene, kind, LIGHTS[kind], shadow=False)
 
     world = bpy.data.worlds.new("Black")
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
@@ -163,24 +174,5 @@ def build_box_scene(kind):
     camera.location = (4.0, -5.0, 3.5)
     camera.rotation_euler = (Vector((0.0, 0.0, 0.4)) - camera.location).to_track_quat('-Z', 'Y').to_euler()
 
-    spec = BOX_LIGHTS[kind]
-    data = bpy.data.lights.new(kind, spec["type"])
-    data.energy = spec["energy"]
-    data.use_shadow = True
-    if spec["type"] in ('POINT', 'SPOT'):
-        data.shadow_soft_size = spec["radius"]
-    if spec["type"] == 'SPOT':
-        data.spot_size, data.spot_blend = spec["spot_size"], spec["spot_blend"]
-    if spec["type"] == 'SUN':
-        data.angle = spec["angle"]
-    if spec["type"] == 'AREA':
-        data.shape, data.size = 'SQUARE', spec["size"]
-    light = bpy.data.objects.new(kind, data)
-    light.location = spec["location"]
-    if "target" in spec:
-        direction = Vector(spec["target"]) - light.location
-        light.rotation_euler = direction.to_track_quat('-Z', 'Y').to_euler()
-    elif "rotation" in spec:
-        light.rotation_euler = spec["rotation"]
-    scene.collection.objects.link(light)
+    add_light(scene, kind, BOX_LIGHTS[kind], shadow=True)
     return scene

@@ -5,7 +5,6 @@ USD (a bpy process may never load a second one). `lantern.exporters` arranges th
 on import, so it goes first, before any test module imports pxr. The CLI tests run
 `lantern render file.usd` in subprocesses without bpy, which use usd-core.
 """
-import os
 import pathlib
 import sys
 

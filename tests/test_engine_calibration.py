@@ -6,8 +6,10 @@ engine's polygon formula)."""
 import math
 
 import numpy as np
+
+import shadow_scenes
 import pytest
-from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade
+from pxr import Gf, Sdf, UsdGeom, UsdLux
 
 from lantern.engine import RenderSettings, render_stage
 
@@ -19,25 +21,7 @@ TOL = 0.02
 
 
 def plane_stage(half=20.0, cam_z=CAM_Z, far=100.0):
-    stage = Usd.Stage.CreateInMemory()
-    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
-    UsdGeom.Xform.Define(stage, "/root")
-    mesh = UsdGeom.Mesh.Define(stage, "/root/plane")
-    mesh.CreatePointsAttr([(-half, -half, 0), (half, -half, 0), (half, half, 0), (-half, half, 0)])
-    mesh.CreateFaceVertexCountsAttr([4])
-    mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
-    mesh.CreateNormalsAttr([(0, 0, 1)] * 4)
-    mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
-    mesh.CreateDoubleSidedAttr(False)
-    mat = UsdShade.Material.Define(stage, "/root/_materials/white")
-    sh = UsdShade.Shader.Define(stage, "/root/_materials/white/surface")
-    sh.CreateIdAttr("UsdPreviewSurface")
-    sh.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set((1, 1, 1))
-    sh.CreateInput("ior", Sdf.ValueTypeNames.Float).Set(1.0)
-    sh.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(1.0)
-    sh.CreateInput("metallic", Sdf.ValueTypeNames.Float).Set(0.0)
-    mat.CreateSurfaceOutput().ConnectToSource(sh.ConnectableAPI(), "surface")
-    UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(mat)
+    stage = shadow_scenes.new_stage(half)  # the white Lambert plane at z = 0
     cam = UsdGeom.Camera.Define(stage, "/root/cam")
     cam.CreateFocalLengthAttr(FOCAL)
     cam.CreateHorizontalApertureAttr(HAP)

@@ -4,7 +4,7 @@ import threading
 
 import numpy as np
 import pytest
-from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade
+from pxr import Gf, Usd, UsdGeom
 
 from lantern.engine import RenderSettings, render_stage
 from lantern.engine.gl_thread import run_gl

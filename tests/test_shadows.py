@@ -207,7 +207,7 @@ def test_no_nan_or_inf_with_shadows_at_extremes():
     stage = ss.new_stage()
     ss.add_box(stage, center=(0, 0, 0.5))
     ss.add_light(stage, "point", pos=(0.0, 0.0, 1.0), power=1000.0, radius=0.0)  # on the box
-    light = ss.add_light(stage, "spot", pos=(2.0, 0.0, 0.0), aim=(2.0, 0.0, -1.0), power=1e6)
+    ss.add_light(stage, "spot", pos=(2.0, 0.0, 0.0), aim=(2.0, 0.0, -1.0), power=1e6)
     top_down_camera(stage, 8.0)
     for preset in ("low", "ultra"):
         rgba = render(stage, 48, 48, preset).rgba

@@ -1,6 +1,6 @@
 """Against Cycles, direct light only: a white box on a white plane per light type,
 rendered once by Cycles (2048 spp, bounces 0, fixed seed, no denoiser; committed EXRs
-from references/make_cycles_shadow_references.py) and by Lantern at the medium preset.
+from references/make_cycles_references.py box) and by Lantern at the medium preset.
 
 The thresholds are the measured mean HDR-FLIP (2026-11-21, llvmpipe) plus about 25%,
 so a regression in lights or shadows fails here:
@@ -9,7 +9,7 @@ The spot's figure is the largest: its cone edge, softened by the light's radius,
 approximated by a 7-point average over the light's disk (shaders/light.frag)."""
 import pathlib
 
-import numpy as np
+
 import pytest
 
 import calibration
