@@ -1,8 +1,9 @@
 """Builds Lantern's demo scene with bpy and saves it as a .blend.
 
-Static for now (rigs are not exported yet): a textured ground, Suzanne with a
-subdivision modifier, a metal sphere, a normal-mapped box, and one light of each
-kind. Textures are generated here, so the demo needs no downloaded assets.
+A textured ground, Suzanne with a subdivision modifier, a metal sphere, a
+normal-mapped box, a rigged tentacle swaying over frames 1-24 (an armature skinning
+a tube), and one light of each kind. Textures are generated here, so the demo needs
+no downloaded assets.
 """
 import math
 import os
@@ -67,7 +68,54 @@ def _principled(name, color, metallic=0.0, roughness=0.5, image=None, normal_ima
     return material
 
 
-def build(blend_path):
+def _tentacle(scene, location, bones=4, height=2.4, rings=33, segments=16):
+    """A tapered tube skinned by a chain of bones, swaying: the demo's rig."""
+    arm_data = bpy.data.armatures.new("TentacleRig")
+    rig = bpy.data.objects.new("TentacleRig", arm_data)
+    rig.location = location
+    scene.collection.objects.link(rig)
+    bpy.context.view_layer.objects.active = rig
+    bpy.ops.object.mode_set(mode='EDIT')
+    step, parent = height / bones, None
+    for b in range(bones):
+        bone = arm_data.edit_bones.new(f"Segment{b}")
+        bone.head, bone.tail = (0, 0, b * step), (0, 0, (b + 1) * step)
+        bone.parent, bone.use_connect = parent, parent is not None
+        parent = bone
+    bpy.ops.object.mode_set(mode='OBJECT')
+
+    z = np.linspace(0.0, height, rings)
+    angle = np.arange(segments) * 2 * math.pi / segments
+    radius = 0.28 * (1.0 - 0.75 * z / height)
+    verts = np.stack([np.outer(radius, np.cos(angle)).ravel(), np.outer(radius, np.sin(angle)).ravel(),
+                      np.repeat(z, segments)], axis=1)
+    faces = [(r * segments + k, r * segments + (k + 1) % segments,
+              (r + 1) * segments + (k + 1) % segments, (r + 1) * segments + k)
+             for r in range(rings - 1) for k in range(segments)]
+    mesh = bpy.data.meshes.new("Tentacle")
+    mesh.from_pydata(verts.tolist(), [], faces)
+    mesh.shade_smooth()
+    body = bpy.data.objects.new("Tentacle", mesh)
+    scene.collection.objects.link(body)
+    body.parent = rig
+    body.modifiers.new("Armature", 'ARMATURE').object = rig
+    for b in range(bones):
+        group = body.vertex_groups.new(name=f"Segment{b}")
+        weight = np.clip(1.0 - np.abs(verts[:, 2] - (b + 0.5) * step) / step, 0.0, 1.0)
+        for v in np.flatnonzero(weight > 0):
+            group.add([int(v)], float(weight[v]), 'REPLACE')
+    body.data.materials.append(_principled("Tentacle", (0.25, 0.7, 0.35), roughness=0.35))
+
+    for frame in (1, 7, 13, 19, 24):
+        phase = (frame - 1) / 23 * 2 * math.pi
+        for b, pose_bone in enumerate(rig.pose.bones):
+            pose_bone.rotation_mode = 'XYZ'
+            pose_bone.rotation_euler = (0.35 * math.sin(phase + b), 0.25 * math.cos(phase + 0.7 * b), 0)
+            pose_bone.keyframe_insert("rotation_euler", frame=frame)
+
+
+def build(blend_path, rigged=True):
+    """Builds the demo and saves it to `blend_path`; rigged=False leaves out the rig."""
     out_dir = os.path.dirname(os.path.abspath(blend_path))
     tex_dir = os.path.join(out_dir, "demo_textures")
     os.makedirs(tex_dir, exist_ok=True)
@@ -75,6 +123,7 @@ def build(blend_path):
     scene = bpy.context.scene
     scene.render.resolution_x, scene.render.resolution_y = 640, 360
     scene.render.resolution_percentage = 100
+    scene.frame_start, scene.frame_end, scene.frame_current = 1, 24, 13
 
     checker = _image("checker", _checker(), os.path.join(tex_dir, "checker.png"))
     bumps = _image("bumps", _bumps(), os.path.join(tex_dir, "bumps.png"), non_color=True)
@@ -101,6 +150,9 @@ def build(blend_path):
     box = bpy.context.object
     box.name = "BumpyBox"
     box.data.materials.append(_principled("Bumpy", (0.3, 0.5, 0.8), roughness=0.5, normal_image=bumps))
+
+    if rigged:
+        _tentacle(scene, (1.1, -2.0, 0.0))
 
     def light(name, kind, energy, location, rotation=(0, 0, 0), **settings):
         data = bpy.data.lights.new(name, kind)
