@@ -193,6 +193,7 @@ class FrameRenderer:
         self.opts = PRESETS[preset]
         self.transparent = transparent
         self._unit_sphere = None
+        self._draw_bounds = None
         self._owned = []  # GL objects released after the frame
         self.stats = {"meshes_uploaded": 0, "draw_calls": 0, "culled": 0, "lights_drawn": 0,
                       "light_volumes": 0, "shadow_maps": 0, "shadow_passes": 0,
@@ -255,11 +256,12 @@ class FrameRenderer:
         ctx.cull_face = "back"
 
         planes = skinning.frustum_planes(self.view_proj)
-        for draw in self.scene.draws:
+        bounds = self.draw_bounds()
+        for i, draw in enumerate(self.scene.draws):
+            if i not in bounds:
+                continue                    # no triangles
             mesh = self.scene.meshes[draw.mesh_key]
-            if not mesh.ranges:
-                continue
-            lo, hi = self.world_bounds(draw, mesh)
+            lo, hi = bounds[i]
             if skinning.aabb_outside(planes, lo, hi):
                 self.stats["culled"] += 1   # frustum culling: no draw call at all
                 continue
@@ -317,15 +319,24 @@ class FrameRenderer:
                 self.gpu.influence_texture(ctx, mesh).use(skinning.UNIT_INFLUENCES)
         skinning.set_skin_uniforms(prog, skin, n_active, set_uniform)
 
+    def draw_bounds(self):
+        """{draw index: world AABB} of every draw with triangles, skinned meshes as
+        posed this frame. Computed once a frame: culling and shadow fitting share it."""
+        if self._draw_bounds is None:
+            self._draw_bounds = {}
+            for i, draw in enumerate(self.scene.draws):
+                mesh = self.scene.meshes.get(draw.mesh_key)
+                if mesh is not None and mesh.ranges:
+                    self._draw_bounds[i] = self.world_bounds(draw, mesh)
+        return self._draw_bounds
+
     def geometry_bounds(self):
-        """World AABB of every draw this frame, skinned meshes as posed (the stage's
-        own bounds miss skinning), or None without geometry. Shadow maps fit it."""
-        if not hasattr(self, "_geometry_bounds"):
-            boxes = [self.world_bounds(d, self.scene.meshes[d.mesh_key]) for d in self.scene.draws
-                     if d.mesh_key in self.scene.meshes]
-            self._geometry_bounds = (np.min([b[0] for b in boxes], axis=0),
-                                     np.max([b[1] for b in boxes], axis=0)) if boxes else None
-        return self._geometry_bounds
+        """World AABB of everything drawn this frame (the stage's own bounds miss
+        skinning), or None without geometry. Shadow maps fit it."""
+        boxes = list(self.draw_bounds().values())
+        if not boxes:
+            return None
+        return np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0)
 
     def world_bounds(self, draw, mesh):
         """World AABB of a draw this frame (skinned meshes: from their joints)."""
