@@ -76,7 +76,7 @@ def cone(light, length: float) -> np.ndarray:
     a radius lights from every point of its sphere, so the apex moves back until the
     cone contains the cone of every such point: by radius / sin(half angle)."""
     half = math.radians(light.cone_angle)
-    ax = light.axis / np.linalg.norm(light.axis)
+    ax = light.direction
     back = light.radius / max(math.sin(half), 1e-3)
     length += back
     r = length * math.tan(half) / math.cos(math.pi / CONE_SIDES)
@@ -479,11 +479,10 @@ class FrameRenderer:
         ctx = self.ctx
         rows = np.zeros((len(batched), 16), "f4")
         for i, (light, R) in enumerate(batched):
-            axis = light.axis / max(np.linalg.norm(light.axis), 1e-30)
             flags = (1 if light.soft_falloff else 0) + (2 if light.kind == "spot" else 0)
-            cos_half = math.cos(math.radians(min(light.cone_angle, 180.0)))
             rows[i] = [*light.position, R, *np.asarray(light.color, float), light.radius,
-                       *axis, cos_half, light.cone_softness, light.diffuse, light.specular, flags]
+                       *light.direction, light.cos_half, light.cone_softness, light.diffuse,
+                       light.specular, flags]
         if self._unit_sphere is None:
             self._unit_sphere = self.own(ctx.buffer(icosphere(self.opts["ico_level"]).tobytes()))
         prog = program(ctx, "volume.vert", "light.frag", ["LIGHT_SPHERE", "LIGHTS_INSTANCED"])
@@ -603,7 +602,7 @@ class FrameRenderer:
     def _light_uniforms(self, prog, light, R):
         set_uniform(prog, "light_color", np.asarray(light.color, float))
         set_uniform(prog, "light_pos", light.position)
-        set_uniform(prog, "light_axis", light.axis / max(np.linalg.norm(light.axis), 1e-30))
+        set_uniform(prog, "light_axis", light.direction)
         set_uniform(prog, "light_diffuse", light.diffuse)
         set_uniform(prog, "light_specular", light.specular)
         set_uniform(prog, "light_range", R)
@@ -611,7 +610,7 @@ class FrameRenderer:
             set_uniform(prog, "light_radius", light.radius)
             set_uniform(prog, "soft_falloff", bool(light.soft_falloff))
             set_uniform(prog, "is_spot", light.kind == "spot")
-            set_uniform(prog, "cos_half", math.cos(math.radians(min(light.cone_angle, 180.0))))
+            set_uniform(prog, "cos_half", light.cos_half)
             set_uniform(prog, "spot_blend", light.cone_softness)
         elif light.kind in ("rect", "disk"):
             if light.kind == "rect":

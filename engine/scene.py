@@ -5,6 +5,7 @@ Matrices are numpy float64 4x4 in column-vector convention (p' = M @ p), so a
 matrix goes to GLSL as `M.T` bytes (column-major)."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -120,6 +121,16 @@ class Light:
     specular: float = 1.0
     shadow: bool = True
     shadow_resolution: int = 0     # lantern:shadowResolution; 0 = the preset's
+
+    @property
+    def direction(self) -> np.ndarray:
+        """The unit emission direction."""
+        return self.axis / max(float(np.linalg.norm(self.axis)), 1e-30)
+
+    @property
+    def cos_half(self) -> float:
+        """cos of the spot cone's half angle (-1: no cone)."""
+        return math.cos(math.radians(min(self.cone_angle, 180.0)))
 
 
 @dataclass

@@ -175,8 +175,7 @@ def _plan_sun(frame, light, res):
     bounds = frame.geometry_bounds()
     if bounds is None:
         return None
-    d = np.asarray(light.axis, float)
-    d /= np.linalg.norm(d)
+    d = light.direction
     up = [0, 0, 1.0] if abs(d[2]) < 0.9 else [0, 1.0, 0]
     corners = _bounds_corners(bounds)
     view = look_at(np.zeros(3), d, up)
