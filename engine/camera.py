@@ -41,11 +41,13 @@ def ortho(l, r, b, t, n, f):
 
 
 def look_at(eye, target, up):
+    """The world matrix of a camera at `eye` looking at `target` (its view matrix is
+    the inverse)."""
     fwd = target - eye
     fwd /= np.linalg.norm(fwd)
     side = np.cross(fwd, up)
-    if np.linalg.norm(side) < 1e-9:
-        side = np.cross(fwd, np.array([1.0, 0.0, 0.0]))
+    if np.linalg.norm(side) < 1e-6:  # up along the view: any perpendicular will do
+        side = np.cross(fwd, [1.0, 0.0, 0.0] if abs(fwd[0]) < 0.9 else [0.0, 1.0, 0.0])
     side /= np.linalg.norm(side)
     upv = np.cross(side, fwd)
     world = np.eye(4)

@@ -29,7 +29,7 @@ import math
 import numpy as np
 
 from . import skinning
-from .camera import frustum, ortho
+from .camera import frustum, look_at, ortho
 from .shaders import program, set_uniform
 
 BORDER = 2                 # cube tiles: texels beyond 90 deg on each side
@@ -41,18 +41,10 @@ CUBE_FACES = [((1, 0, 0), (0, -1, 0)), ((-1, 0, 0), (0, -1, 0)), ((0, 1, 0), (0,
               ((0, -1, 0), (0, 0, -1)), ((0, 0, 1), (0, -1, 0)), ((0, 0, -1), (0, -1, 0))]
 
 
-def look_at(eye, forward, up):
-    f = np.asarray(forward, float)
-    f = f / np.linalg.norm(f)
-    s = np.cross(f, up)
-    if np.linalg.norm(s) < 1e-6:
-        s = np.cross(f, [1.0, 0, 0] if abs(f[0]) < 0.9 else [0, 1.0, 0])
-    s /= np.linalg.norm(s)
-    u = np.cross(s, f)
-    m = np.eye(4)
-    m[0, :3], m[1, :3], m[2, :3] = s, u, -f
-    m[:3, 3] = -m[:3, :3] @ np.asarray(eye, float)
-    return m
+def _view(eye, forward, up):
+    """View matrix of a shadow map at `eye` looking along `forward`."""
+    eye = np.asarray(eye, float)
+    return np.linalg.inv(look_at(eye, eye + np.asarray(forward, float), np.asarray(up, float)))
 
 
 def resolution(light, opts) -> int:
@@ -156,7 +148,7 @@ def plan(frame, light, R):
         t = math.tan(half) * near
         proj = frustum(-t, t, -t, t, near, far)
         up = light.y_axis if abs(np.dot(light.y_axis, light.axis)) < 0.9 else light.x_axis
-        m = proj @ look_at(pos, light.axis, up)
+        m = proj @ _view(pos, light.axis, up)
         return ShadowMap(True, 1, [m], [(0.0, 0.0, 1.0, 1.0)], 2 * math.tan(half) / res,
                          far=far, size=size), (res, res)
     res = min(res, MAX_CUBE_TILE)
@@ -165,7 +157,7 @@ def plan(frame, light, R):
     proj = frustum(-t, t, -t, t, near, far)
     mats, rects = [], []
     for i, (fwd, up) in enumerate(CUBE_FACES):
-        mats.append(proj @ look_at(pos, fwd, up))
+        mats.append(proj @ _view(pos, fwd, up))
         rects.append(((i % 3) / 3, (i // 3) / 2, 1 / 3, 1 / 2))
     return ShadowMap(True, 6, mats, rects, 2 * k / res, far=far, size=size), (3 * res, 2 * res)
 
@@ -178,7 +170,7 @@ def _plan_sun(frame, light, res):
     d = light.direction
     up = [0, 0, 1.0] if abs(d[2]) < 0.9 else [0, 1.0, 0]
     corners = _bounds_corners(bounds)
-    view = look_at(np.zeros(3), d, up)
+    view = _view(np.zeros(3), d, up)
     lc = (view[:3, :3] @ corners.T).T          # scene bounds in light space
     lo_b, hi_b = lc.min(axis=0), lc.max(axis=0)
     # The visible depth range, clipped to the scene.
