@@ -3,11 +3,12 @@ baselines of testUsdSkelBakeSkinning, UsdSkel's CPU skinning, and UsdSkel.BakeSk
 renders; malformed bindings, 1,000+ joints, >8 influences, frustum culling."""
 import numpy as np
 import pytest
-from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdSkel, Vt
+from pxr import Gf, Usd, UsdGeom, UsdLux, UsdSkel, Vt
 
 from lantern.engine import RenderSettings, render_stage
 from lantern.engine.api import skinned_points
 from lantern.engine.usd_reader import StageCache
+from _export_helpers import skinned_stage  # UsdSkel.BakeSkinning on an in-memory copy
 
 SKEL = "usdskel/usd/usdSkel/testenv/testUsdSkelBakeSkinning"
 
@@ -201,14 +202,6 @@ def test_malformed_binding_warns_and_draws_unskinned(defect):
     assert skinned_points(stage, 3) == {}       # no skin: the rest pose is drawn
 
 
-def bake_copy(stage):
-    baked = Usd.Stage.CreateInMemory()
-    baked.GetRootLayer().TransferContent(stage.GetRootLayer())
-    assert UsdSkel.BakeSkinning(baked.Traverse(), Gf.Interval(stage.GetStartTimeCode(),
-                                                               stage.GetEndTimeCode()))
-    return baked
-
-
 @pytest.mark.parametrize("method", ["classicLinear", "dualQuaternion"])
 def test_render_skinned_equals_render_baked(method):
     stage = skel_stage(5, method=method, influences=3, grid=12, rot_deg=60)
@@ -220,7 +213,7 @@ def test_render_skinned_equals_render_baked(method):
     mesh.CreateNormalsAttr([Gf.Vec3f(*n) for n in nrm / np.linalg.norm(nrm, axis=1, keepdims=True)])
     mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
     look(stage, (2, -8, 5), (2, 0, 0))
-    baked = bake_copy(stage)
+    baked = skinned_stage(stage)
     assert not UsdSkel.BindingAPI(baked.GetPrimAtPath("/root/mesh")).GetJointIndicesPrimvar().HasValue() \
         or StageCache(baked).skel.get("/root/mesh") is None
     for t in (1, 3):
@@ -287,7 +280,7 @@ def test_skinned_meshes_cast_posed_shadows():
     sun.AddTransformOp().Set(Gf.Matrix4d().SetLookAt(
         Gf.Vec3d(0, 0, 0), Gf.Vec3d(0.3, 0.2, -1), Gf.Vec3d(0, 1, 0)).GetInverse())
     look(stage, (2, -8, 5), (2, 0, -1))
-    baked = bake_copy(stage)
+    baked = skinned_stage(stage)
     for t in (1, 3):
         s = RenderSettings(width=96, height=64, frame=t)
         a = render_stage(stage, s)
