@@ -158,23 +158,12 @@ def _render(args):
     if not args.output.lower().endswith(IMAGE_SUFFIXES):
         print(f"lantern render: {args.output}: the output must be .exr or .png", file=sys.stderr)
         return 2
-    if not os.path.isfile(args.scene):
-        print(f"lantern render: {args.scene}: no such file", file=sys.stderr)
-        return 1
+    stage, status = _open_scene(args.scene)
+    if stage is None:
+        return status
     width, height = args.size if args.size else (None, None)
 
-    if args.scene.lower().endswith(".blend"):
-        stage = _stage_from_blend(args.scene)
-        if stage is None:
-            return 1
-    elif args.scene.lower().endswith(USD_SUFFIXES):
-        stage = None
-    else:
-        print(f"lantern render: {args.scene}: expected a .usd, .usda, .usdc or .blend file",
-              file=sys.stderr)
-        return 2
-
-    from .engine import RenderSettings, render_file, render_stage
+    from .engine import RenderSettings, render_stage
     from .engine.image_io import write_image
     try:
         settings = RenderSettings(width=width, height=height, frame=args.frame, preset=args.preset)
@@ -182,7 +171,7 @@ def _render(args):
         print(f"lantern render: {error}", file=sys.stderr)
         return 2
     try:
-        result = render_stage(stage, settings) if stage is not None else render_file(args.scene, settings)
+        result = render_stage(stage, settings)
     except (ValueError, RuntimeError, OSError) as error:  # pxr's errors are RuntimeErrors
         print(f"lantern render: {args.scene}: {error}", file=sys.stderr)
         return 1
@@ -193,6 +182,27 @@ def _render(args):
     print(f"{args.scene} -> {args.output} ({width_px}x{height_px}, "
           f"{result.timings.get('total', 0.0) * 1000:.1f} ms)")
     return 0
+
+
+def _open_scene(path):
+    """(stage, 0), or (None, exit status) after saying why: a .blend is exported into
+    memory (Blender's own pxr), a USD file is opened (usd-core, no bpy)."""
+    if not os.path.isfile(path):
+        print(f"lantern render: {path}: no such file", file=sys.stderr)
+        return None, 1
+    if path.lower().endswith(".blend"):
+        stage = _stage_from_blend(path)
+        return (stage, 0) if stage is not None else (None, 1)
+    if not path.lower().endswith(USD_SUFFIXES):
+        print(f"lantern render: {path}: expected a .usd, .usda, .usdc or .blend file",
+              file=sys.stderr)
+        return None, 2
+    from pxr import Usd
+    try:
+        return Usd.Stage.Open(path), 0
+    except RuntimeError as error:  # pxr's errors: an unreadable or invalid layer
+        print(f"lantern render: {path}: {error}", file=sys.stderr)
+        return None, 1
 
 
 def _frame_path(pattern, frame):
@@ -212,16 +222,9 @@ def _render_sequence(args):
         print(f"lantern render: {args.output}: a sequence needs '####' in an .exr/.png name, "
               "or a .gif", file=sys.stderr)
         return 2
-    if not os.path.isfile(args.scene):
-        print(f"lantern render: {args.scene}: no such file", file=sys.stderr)
-        return 1
-    if args.scene.lower().endswith(".blend"):
-        stage = _stage_from_blend(args.scene)
-        if stage is None:
-            return 1
-    else:
-        from pxr import Usd
-        stage = Usd.Stage.Open(args.scene)
+    stage, status = _open_scene(args.scene)
+    if stage is None:
+        return status
     from .engine import RenderSettings
     from .engine.api import render_sequence
     from .engine.image_io import write_animation, write_image
