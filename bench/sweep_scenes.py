@@ -83,8 +83,10 @@ def sweep_one(blend, out_dir, size, timeout):
     status, out, err, seconds = _run([sys.executable, "-m", "lantern", "export", str(blend),
                                       "-o", str(usd)], timeout)
     warnings = [line for line in err.splitlines() if line.startswith("warning: ")]
+    # A message printed twice (once by a logger, once by the CLI) counts as repeated.
+    messages = [line.removeprefix("warning: ") for line in err.splitlines() if line.strip()]
     row.update(export_seconds=seconds, warnings=len(warnings),
-               repeated_warnings=len(warnings) - len(set(warnings)),
+               repeated_warnings=len(messages) - len(set(messages)),
                instance_warning=any("instance" in w for w in warnings))
     if status != 0 or not usd.is_file():
         row.update(exported=False, reason=_reason(status, err))
