@@ -180,7 +180,7 @@ def _check_output(path, kinds, what="output"):
     """Fails before any work when `path` cannot be written: wrong kind, a directory, or
     a folder that cannot be made or written."""
     if not path.lower().endswith(kinds):
-        raise _usage(f"{path}: the {what} must end in {', '.join(kinds)}")
+        raise _usage(f"{path}: the {what} must be {' or '.join(kinds)}")
     if os.path.isdir(path):
         raise _usage(f"{path}: is a directory, not a file name")
     _check_folder(os.path.dirname(os.path.abspath(path)))
