@@ -153,7 +153,7 @@ def main(argv=None):
     except Exception as error:  # a bug: one line, or the traceback with --debug
         if args.debug:
             raise
-        _fail(args, f"internal error: {type(error).__name__}: {_one_line(str(error))} "
+        _fail(args, f"internal error: {type(error).__name__}: {_one_line(_text(error))} "
                     "(--debug shows the traceback)")
         return FAILED
 
@@ -163,6 +163,15 @@ def _fail(args, message):
 
 
 _PXR_ERROR = re.compile(r"^Error in '.*' at line \d+ in file .* : '(.*)'$")
+
+
+def _text(error):
+    """str(error), even when pxr's message holds bytes that are not UTF-8 (a damaged
+    file's contents quoted in a parse error)."""
+    try:
+        return str(error)
+    except UnicodeDecodeError:
+        return f"{type(error).__name__} (its message is not UTF-8 text: the file is damaged)"
 
 
 def _one_line(text):
@@ -356,9 +365,13 @@ def _open_usd(path):
     try:
         stage = Usd.Stage.Open(path)
     except Tf.ErrorException as error:
-        raise CommandError(f"{path}: cannot be read as USD: {_one_line(str(error))}")
+        raise CommandError(f"{path}: cannot be read as USD: {_one_line(_text(error))}")
     if stage is None:
         raise CommandError(f"{path}: cannot be read as USD")
+    # Missing or broken references, sublayers and payloads, and cycles: USD composes
+    # what it can; say what it could not.
+    _print_warnings([f"{path}: {_one_line(_text(e))}" for e in stage.GetCompositionErrors()],
+                    set())
     return stage
 
 
@@ -399,7 +412,7 @@ def _rendered(scene, run):
     try:
         return run()
     except (ValueError, RuntimeError, OSError) as error:  # pxr's errors are RuntimeErrors
-        raise CommandError(f"{scene}: {_one_line(str(error))}")
+        raise CommandError(f"{scene}: {_one_line(_text(error))}")
 
 
 def _write(path, write):
