@@ -27,14 +27,12 @@ def joint_order(bones):
     """Bone indices parents first (depth first, Blender's child order), and parent indices."""
     index = {b.name: i for i, b in enumerate(bones)}
     order = []
-
-    def visit(bone):
+    # An explicit stack, not recursion: a chain of a thousand bones is a thousand deep.
+    stack = [bone for bone in reversed(bones) if bone.parent is None]
+    while stack:
+        bone = stack.pop()
         order.append(index[bone.name])
-        for child in bone.children:
-            visit(child)
-    for bone in bones:
-        if bone.parent is None:
-            visit(bone)
+        stack.extend(reversed(bone.children))
     position = {bone_index: j for j, bone_index in enumerate(order)}
     parents = [position[index[bones[i].parent.name]] if bones[i].parent else -1 for i in order]
     return order, parents
