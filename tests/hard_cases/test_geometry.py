@@ -201,3 +201,38 @@ def test_exported_polygon_matches_blenders_loop_triangles(empty_scene, name, rin
     hard_case(f"{name} polygon: grid samples covered differently from Blender's",
               int((ours != theirs).sum()), 0)
     assert bpy.context.scene.objects[name].type == "MESH"
+
+
+def _polygon_stage(points, counts, indices):
+    """One mesh seen from above by an orthographic camera that frames it."""
+    from pxr import Gf, Usd, UsdGeom, Vt
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    mesh = UsdGeom.Mesh.Define(stage, "/Shape")
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.asarray(points, np.float32)))
+    mesh.CreateFaceVertexCountsAttr(Vt.IntArray([int(c) for c in counts]))
+    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray([int(i) for i in indices]))
+    mesh.CreateDoubleSidedAttr(True)
+    camera = UsdGeom.Camera.Define(stage, "/Camera")
+    camera.CreateProjectionAttr(UsdGeom.Tokens.orthographic)
+    camera.CreateHorizontalApertureAttr(48.0)   # tenths of a unit: 4.8 units wide
+    camera.CreateVerticalApertureAttr(48.0)
+    camera.CreateClippingRangeAttr(Gf.Vec2f(0.1, 100))
+    camera.AddTranslateOp().Set(Gf.Vec3d(1.0, 1.0, 10.0))
+    return stage
+
+
+@pytest.mark.xfail(strict=True, raises=AssertionError,
+                   reason="engine: build the mesh with core.triangulate (it fans today)")
+def test_engine_covers_the_concave_polygon_exactly():
+    """The L rendered as one polygon covers the same pixels as the L cut by
+    core.triangulate beforehand (the engine has nothing left to cut)."""
+    from lantern.engine import RenderSettings, render_stage
+    points = _ring(L_SHAPE)
+    corners, _ = triangulate(points, [6], np.arange(6))
+    settings = RenderSettings(width=64, height=64, transparent=True)
+    polygon = render_stage(_polygon_stage(points, [6], range(6)), settings).rgba[..., 3]
+    cut = render_stage(_polygon_stage(points, [3] * len(corners), corners.ravel()),
+                       settings).rgba[..., 3]
+    assert (cut > 0.5).sum() > 500, "the reference covers the L"
+    assert int(((polygon > 0.5) != (cut > 0.5)).sum()) == 0

@@ -11,8 +11,20 @@ import sys
 
 import pytest
 
-sys.path.insert(0, str(pathlib.Path(__file__).parent))
-import malformed_usd  # noqa: E402
+
+
+def _load_generator():
+    """malformed_usd.py beside this file, loaded by path: putting this folder on
+    sys.path would shadow tests/test_skinning.py and friends."""
+    import importlib.util
+    path = pathlib.Path(__file__).with_name("malformed_usd.py")
+    spec = importlib.util.spec_from_file_location("lantern_malformed_usd", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+malformed_usd = _load_generator()
 
 BAD = {"traceback", "hang", "crash", "nan", "black", "no-reason"}
 
