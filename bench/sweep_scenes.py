@@ -10,7 +10,6 @@ The render reads the exported USD file (usd-core, no bpy), as a pipeline would.
 """
 import argparse
 import collections
-import os
 import pathlib
 import subprocess
 import sys

@@ -565,7 +565,7 @@ def main(argv):
     written = generate(folder)
     results = run([str(folder / f) for f in sorted(written)], folder / "_images")
     counts = {}
-    print(f"| file | expected | outcome | detail |\n|---|---|---|---|")
+    print("| file | expected | outcome | detail |\n|---|---|---|---|")
     for f in sorted(written):
         name, expect = written[f]
         outcome, detail = results[str(folder / f)]

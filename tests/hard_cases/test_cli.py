@@ -91,7 +91,7 @@ def test_version_and_help_document_the_exit_statuses():
     (["export", "{cube}", "-o", "{tmp}/a.usda", "--max-influences", "0"], ["--max-influences"]),
     (["export", "{cube}", "-o", "{tmp}/out", "-j", "0"], ["-j"]),
 ], ids=lambda v: " ".join(v) if isinstance(v, list) and v and v[0] in ("render", "export") else None)
-def test_usage_errors_exit_2_before_any_work(scene, tmp_path, args, words, hard_case):
+def test_usage_errors_exit_2_before_any_work(scene, tmp_path, args, words):
     (tmp_path / "dir.png").mkdir()
     (tmp_path / "scene.txt").write_text("x")
     args = [a.format(scene=scene, tmp=tmp_path, cube=CUBE) for a in args]

@@ -29,7 +29,6 @@ def _grease_pencil():
 
 
 def _particle_hair():
-    import bpy
     from _export_helpers import cube_object
     ob = cube_object("Furry")
     system = ob.modifiers.new("Fur", "PARTICLE_SYSTEM").particle_system

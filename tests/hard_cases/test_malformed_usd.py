@@ -7,7 +7,6 @@ The cases whose failure lies in engine/ today are marked with the engine fix the
 need (strict: they fail the suite the moment the engine handles them, so the mark
 must go)."""
 import pathlib
-import sys
 
 import pytest
 
