@@ -112,7 +112,7 @@ class ImageioMissing(AssertionError):
 
 
 @pytest.fixture(scope="module")
-def installed(extension_zip, tmp_path_factory):
+def installed(extension_zip, corpus, tmp_path_factory):
     """Runs tests/_addon_host.py once; (report, out dir)."""
     from lantern.demo.build_scene import build
     out = tmp_path_factory.mktemp("installed")
@@ -120,7 +120,7 @@ def installed(extension_zip, tmp_path_factory):
     build(str(demo), rigged=True)
     proc = subprocess.run(
         [sys.executable, str(REPO / "tests" / "_addon_host.py"), str(extension_zip), str(out),
-         str(REPO.parent / "shared" / "corpus"), str(demo)],
+         str(corpus), str(demo)],
         capture_output=True, text=True, timeout=600)
     report_path = out / "report.json"
     assert proc.returncode == 0 and report_path.is_file(), \
