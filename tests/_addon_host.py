@@ -83,7 +83,7 @@ class BlenderBundleOnly(importlib.abc.MetaPathFinder):
 
 
 sys.meta_path.insert(0, BlenderBundleOnly())
-USER = tempfile.mkdtemp(prefix="lantern-blender-user-")
+USER = tempfile.mkdtemp(prefix="blender-user-", dir=OUT)  # inside OUT even if this crashes
 os.environ["BLENDER_USER_RESOURCES"] = USER
 
 import bpy  # noqa: E402  (after the hiding and the user folder)
