@@ -1,25 +1,52 @@
-"""Scene settings for Lantern, stored on `scene.lantern`."""
+"""Lantern's settings: `scene.lantern` (the render) and `light.lantern` (each light).
+
+Only settings the engine honours today. The quality presets are the engine's own table;
+the light defaults are the exporter's LightRecord defaults (both mean "not authored").
+"""
 import bpy
 
-PRESETS = (
-    ("low", "Low", "Fastest: smallest shadow maps and fewest filter taps"),
-    ("medium", "Medium", "Balanced quality and speed"),
-    ("high", "High", "Larger shadow maps and softer filtering"),
-    ("ultra", "Ultra", "Closest to Cycles, slowest"),
-)
+from ..engine.renderer import PRESETS
+from ..exporters.ir import LightRecord
+
+
+def _preset_items():
+    return tuple((name, name.title(),
+                  f"{p['shadow_size']} px shadow maps, {p['pcf_taps']} filter taps, "
+                  f"{p['cascades']} sun cascades, {p['anisotropy']:g}x anisotropic textures")
+                 for name, p in PRESETS.items())
 
 
 class LanternSceneSettings(bpy.types.PropertyGroup):
     preset: bpy.props.EnumProperty(
-        name="Quality", items=PRESETS, default="medium",
+        name="Quality", items=_preset_items(), default="medium",
         description="Trades render time for error against Cycles")
 
 
+class LanternLightSettings(bpy.types.PropertyGroup):
+    shadow_resolution: bpy.props.IntProperty(
+        name="Resolution", default=LightRecord.shadow_resolution, min=0, max=8192,
+        soft_max=4096, subtype='PIXEL',
+        description="Shadow map size in texels per side (a cube face, a spot map, one sun "
+                    "cascade). 0: the quality preset chooses")
+    shadow_bias: bpy.props.FloatProperty(
+        name="Bias", default=LightRecord.shadow_bias, min=0.0, soft_max=10.0,
+        description="Scale of the automatic shadow bias (about one shadow-map texel, more "
+                    "at grazing angles). Lower shows contact detail and risks acne, higher "
+                    "detaches shadows from their casters")
+
+
+_CLASSES = (LanternSceneSettings, LanternLightSettings)
+
+
 def register():
-    bpy.utils.register_class(LanternSceneSettings)
+    for cls in _CLASSES:
+        bpy.utils.register_class(cls)
     bpy.types.Scene.lantern = bpy.props.PointerProperty(type=LanternSceneSettings)
+    bpy.types.Light.lantern = bpy.props.PointerProperty(type=LanternLightSettings)
 
 
 def unregister():
+    del bpy.types.Light.lantern
     del bpy.types.Scene.lantern
-    bpy.utils.unregister_class(LanternSceneSettings)
+    for cls in reversed(_CLASSES):
+        bpy.utils.unregister_class(cls)

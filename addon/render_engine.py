@@ -1,41 +1,30 @@
-"""The LANTERN RenderEngine: F12 and the viewport.
+"""The LANTERN RenderEngine: F12, material previews and the viewport.
 
 Kept thin: the exporter turns the evaluated depsgraph into an in-memory USD stage,
-the engine renders that stage on its own GL thread, and the pixels come back here.
-Blender's own GL context is never touched by ModernGL.
+the engine renders that stage on its own GL thread, and the pixels come back here
+(scene_render.py holds every step but the `gpu` drawing). Blender's own GL context is
+never touched by ModernGL.
 """
 import bpy
 
-from .scene_render import ViewportSession, render_final
+from .scene_render import ViewportSession, render_frame
 
 
 class LanternRenderEngine(bpy.types.RenderEngine):
     bl_idname = "LANTERN"
     bl_label = "Lantern"
-    bl_use_preview = False
-    bl_use_postprocess = True
+    bl_use_preview = True               # material, light and world previews
+    bl_use_postprocess = True           # compositing and sequencer apply
+    bl_use_shading_nodes_custom = False  # Blender's shader nodes (Principled BSDF) stay
+    bl_use_eevee_viewport = True        # Material Preview shading stays EEVEE's, as with Cycles
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         self._viewport = None
 
-    # F12 ---------------------------------------------------------------------------------
+    # F12 and previews ---------------------------------------------------------------------
     def render(self, depsgraph):
-        scene = depsgraph.scene
-        scale = scene.render.resolution_percentage / 100.0
-        width = max(1, int(scene.render.resolution_x * scale))
-        height = max(1, int(scene.render.resolution_y * scale))
-        try:
-            rgba, warnings = render_final(depsgraph, width, height)
-        except Exception as error:  # a failed frame is a report, never a crash of Blender
-            self.report({'ERROR'}, f"Lantern: {error}")
-            return
-        for warning in warnings:
-            self.report({'WARNING'}, f"Lantern: {warning}")
-        result = self.begin_result(0, 0, width, height)
-        # Blender's passes are bottom row first; the engine returns top row first.
-        result.layers[0].passes["Combined"].rect.foreach_set(rgba[::-1].ravel())
-        self.end_result(result)
+        render_frame(self, depsgraph)
 
     # Viewport ----------------------------------------------------------------------------
     def view_update(self, context, depsgraph):

@@ -38,6 +38,7 @@ class GLThread:
             except BaseException as exc:  # handed to the caller, never lost here
                 fut.set_exception(exc)
         if self._ctx is not None:
+            _forget_programs(self._ctx)
             self._ctx.release()
             self._ctx = None
 
@@ -56,6 +57,15 @@ class GLThread:
     def stop(self):
         self._jobs.put((None, None))
         self._thread.join()
+
+
+def _forget_programs(ctx):
+    """Compiled programs are cached per context id; a context made after this one is
+    released may get the same id, so its entries go with it."""
+    from . import shaders, skinning
+    for cache in (shaders._programs, skinning._tf_programs):
+        for key in [k for k in cache if k[0] == id(ctx)]:
+            del cache[key]
 
 
 def _create_context():
@@ -81,6 +91,16 @@ def gl_thread() -> GLThread:
         if _instance is None or not _instance._thread.is_alive():
             _instance = GLThread()
         return _instance
+
+
+def shutdown():
+    """Stops the GL thread after the jobs already queued and releases its context (the
+    Blender add-on calls this when it is disabled); the next job starts a new thread."""
+    global _instance
+    with _lock:
+        instance, _instance = _instance, None
+    if instance is not None and instance._thread.is_alive():
+        instance.stop()
 
 
 def run_gl(fn):

@@ -132,6 +132,10 @@ class LightRecord:
     shape: str = "rect"         # area: rect / disk
     width: float = 1.0
     height: float = 1.0
+    # Lantern's own shadow settings (`light.lantern` in Blender); the defaults are the
+    # add-on's property defaults and mean "not authored".
+    shadow_resolution: int = 0  # texels per shadow-map side; 0: the quality preset chooses
+    shadow_bias: float = 1.0    # scale of the engine's texel-sized shadow bias
 
 
 @dataclass

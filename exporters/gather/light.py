@@ -4,6 +4,17 @@ import math
 from ..ir import LightRecord
 
 
+def lantern_settings(light):
+    """The light's Lantern settings (shadow resolution, shadow bias) as the .blend stores
+    them, so `lantern export`, which never registers the add-on, reads what F12 reads.
+    Blender keeps add-on properties in the ID's system properties (5.0+) or among its
+    custom properties (4.x), and stores only values that were set."""
+    store = light.bl_system_properties_get() if hasattr(light, "bl_system_properties_get") else light
+    stored = (store.get("lantern") if store is not None else None) or {}
+    return (int(stored.get("shadow_resolution", LightRecord.shadow_resolution)),
+            float(stored.get("shadow_bias", LightRecord.shadow_bias)))
+
+
 def gather_light(light, warn):
     power = float(light.energy) * 2.0 ** float(getattr(light, "exposure", 0.0))
     color = tuple(float(c) for c in light.color)
@@ -12,6 +23,8 @@ def gather_light(light, warn):
     rec = LightRecord(kind=light.type.lower(), color=color, intensity=power / math.pi,
                       shadow=bool(light.use_shadow),
                       diffuse=float(light.diffuse_factor), specular=float(light.specular_factor))
+    if rec.shadow:
+        rec.shadow_resolution, rec.shadow_bias = lantern_settings(light)
     if light.type in {"POINT", "SPOT"}:
         rec.radius = float(light.shadow_soft_size)
         rec.soft_falloff = bool(getattr(light, "use_soft_falloff", True))

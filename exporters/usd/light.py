@@ -1,6 +1,8 @@
 """LightRecord -> UsdLux light on the object prim."""
 from pxr import Gf, Sdf, UsdLux
 
+from ..ir import LightRecord
+
 
 def write_light(stage, path, rec):
     if rec.kind in {"point", "spot"}:
@@ -24,7 +26,18 @@ def write_light(stage, path, rec):
         light = UsdLux.DiskLight.Define(stage, path)
         light.CreateRadiusAttr(rec.radius)
     write_common(light, rec.color, rec.intensity, rec.shadow, rec.diffuse, rec.specular)
+    _write_shadow_settings(light.GetPrim(), rec)
     return light
+
+
+def _write_shadow_settings(prim, rec):
+    """Lantern's shadow overrides, authored only where they differ from the defaults."""
+    if rec.shadow_resolution != LightRecord.shadow_resolution:
+        prim.CreateAttribute("lantern:shadowResolution", Sdf.ValueTypeNames.Int,
+                             custom=True).Set(int(rec.shadow_resolution))
+    if rec.shadow_bias != LightRecord.shadow_bias:
+        prim.CreateAttribute("lantern:shadowBias", Sdf.ValueTypeNames.Float,
+                             custom=True).Set(float(rec.shadow_bias))
 
 
 def write_common(light, color, intensity, shadow, diffuse=1.0, specular=1.0):

@@ -1,0 +1,386 @@
+"""A fresh bpy process that plays a real Blender: installs the built extension zip and
+uses it. Run by tests/test_addon_install.py, which checks what this writes:
+
+    python tests/_addon_host.py EXTENSION.zip OUT_DIR CORPUS_DIR DEMO.blend
+
+- Blender's user resources (preferences, extensions, the extracted wheels) live in a
+  temporary folder, so nothing leaks into the machine.
+- Every module a real Blender does not bundle is unimportable: whatever the venv's
+  site-packages holds beyond bpy and the packages bpy itself requires (Blender bundles
+  those), plus a list named by the brief. So moderngl and glcontext must come from the
+  zip's wheels, pxr from Blender's own USD, and the add-on from the zip, not from the
+  editable `lantern` install.
+- Renders are tiny (64x36). Images go to OUT_DIR as EXR, everything else to
+  OUT_DIR/report.json; a step that fails records its error and the rest go on.
+"""
+import importlib.abc
+import importlib.machinery
+import importlib.metadata
+import json
+import os
+import re
+import shutil
+import sys
+import sysconfig
+import tempfile
+import threading
+import time
+import traceback
+
+ZIP, OUT, CORPUS, DEMO = (os.path.abspath(p) for p in sys.argv[1:5])
+WIDTH, HEIGHT = 64, 36
+# Named by the brief: none of these ships with Blender.
+NOT_IN_BLENDER = ("imageio", "OpenEXR", "Imath", "PIL", "rich", "jsonschema", "dask",
+                  "flip_evaluator", "skimage", "matplotlib", "tqdm", "lantern")
+
+
+# --- module hiding (before anything else is imported) ---------------------------------
+
+def _norm(name):
+    return re.sub(r"[-_.]+", "-", name).lower()
+
+
+def _bpy_bundle():
+    """Top-level modules of bpy and of what bpy requires, transitively (Blender ships
+    them all: numpy, requests, zstandard, cython and their own requirements)."""
+    wanted, todo = set(), ["bpy"]
+    while todo:
+        dist = _norm(todo.pop())
+        if dist in wanted:
+            continue
+        wanted.add(dist)
+        for req in importlib.metadata.requires(dist) or ():
+            if "extra ==" not in req:
+                todo.append(re.match(r"[A-Za-z0-9._-]+", req).group(0))
+    return {module for module, dists in importlib.metadata.packages_distributions().items()
+            if any(_norm(d) in wanted for d in dists)}
+
+
+class BlenderBundleOnly(importlib.abc.MetaPathFinder):
+    """Top-level imports resolve as in a real Blender: never to a hidden name, and from
+    the venv's site-packages only for bpy's own bundle (other sys.path entries, such as
+    Blender's bundled site-packages or the extension's wheels, are searched instead)."""
+
+    def __init__(self):
+        self.venv = os.path.normpath(sysconfig.get_paths()["purelib"])
+        self.allowed = _bpy_bundle()
+        self.hidden = set(NOT_IN_BLENDER)
+
+    def find_spec(self, name, path=None, target=None):
+        if path is not None:
+            return None  # submodules follow their parent package
+        if name in self.hidden:
+            raise ModuleNotFoundError(f"No module named {name!r} (not in Blender)", name=name)
+        if name in self.allowed:
+            return None
+        if importlib.machinery.PathFinder.find_spec(name, [self.venv]) is None:
+            return None
+        others = [p for p in sys.path if os.path.normpath(p or os.getcwd()) != self.venv]
+        spec = importlib.machinery.PathFinder.find_spec(name, others)
+        if spec is None:
+            raise ModuleNotFoundError(f"No module named {name!r} (only in the venv)", name=name)
+        return spec
+
+
+sys.meta_path.insert(0, BlenderBundleOnly())
+USER = tempfile.mkdtemp(prefix="blender-user-", dir=OUT)  # inside OUT even if this crashes
+os.environ["BLENDER_USER_RESOURCES"] = USER
+
+import bpy  # noqa: E402  (after the hiding and the user folder)
+import numpy as np  # noqa: E402
+
+report = {"steps": {}, "renders": {}}
+REPO_ID = "user_default"
+MODULE = f"bl_ext.{REPO_ID}.lantern"
+
+
+def run_step(name, fn):
+    """Records fn's return value, or its error (the steps after it still run)."""
+    t0 = time.perf_counter()
+    try:
+        report["steps"][name] = {"ok": True, "value": fn()}
+    except Exception as error:
+        report["steps"][name] = {"ok": False, "error": f"{type(error).__name__}: {error}",
+                                 "traceback": traceback.format_exc()}
+    report["steps"][name]["seconds"] = time.perf_counter() - t0
+
+
+def files_under(root):
+    return sorted(os.path.relpath(os.path.join(d, f), root)
+                  for d, _, names in os.walk(root) for f in names)
+
+
+def python_threads():
+    return sorted(t.name for t in threading.enumerate())
+
+
+def native_threads():
+    names = []
+    for task in os.listdir("/proc/self/task"):
+        with open(f"/proc/self/task/{task}/comm") as f:
+            names.append(f.read().strip())
+    return sorted(names)
+
+
+def child_processes():
+    me, children = str(os.getpid()), []
+    for pid in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            with open(f"/proc/{pid}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if fields[1] == me:
+            children.append(int(pid))
+    return children
+
+
+def setup_render(scene):
+    scene.render.engine = "LANTERN"
+    scene.render.resolution_x, scene.render.resolution_y = WIDTH, HEIGHT
+    scene.render.resolution_percentage = 100
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.render.image_settings.color_depth = "32"
+
+
+def f12(name, scene):
+    """F12 of `scene` into OUT/name.exr; the record holds its time and any error."""
+    scene.render.filepath = os.path.join(OUT, name + ".exr")
+    record = {"file": scene.render.filepath}
+    t0 = time.perf_counter()
+    try:
+        bpy.ops.render.render(write_still=True)
+    except RuntimeError as error:
+        record["error"] = str(error).strip()
+    record["seconds"] = time.perf_counter() - t0
+    report["renders"][name] = record
+    return record
+
+
+# --- the checks -----------------------------------------------------------------------
+
+def check_hidden_modules():
+    importable = []
+    for name in (*NOT_IN_BLENDER, "moderngl", "glcontext"):
+        try:
+            __import__(name)
+            importable.append(name)
+        except ImportError:
+            pass
+    return {"importable": importable}
+
+
+def check_install():
+    t0 = time.perf_counter()
+    result = bpy.ops.extensions.package_install_files(
+        filepath=ZIP, repo=REPO_ID, enable_on_install=True)
+    seconds = time.perf_counter() - t0
+    import moderngl
+    from pxr import Usd
+    package = sys.modules[MODULE]
+    return {"result": sorted(result), "seconds": seconds,
+            "enabled": MODULE in bpy.context.preferences.addons,
+            "package_file": package.__file__, "user_dir": USER,
+            "moderngl": moderngl.__file__, "moderngl_version": moderngl.__version__,
+            "pxr": Usd.__file__, "blender_pxr_dir": bpy.utils.resource_path("LOCAL")}
+
+
+def check_corpus():
+    for path, name in ((os.path.join(CORPUS, "blender", "04_lights.blend"), "lights"),
+                       (os.path.join(CORPUS, "blender", "02_suzanne.blend"), "suzanne"),
+                       (os.path.join(CORPUS, "blender", "03_skinned_cylinder.blend"), "rig"),
+                       (DEMO, "demo")):
+        bpy.ops.wm.open_mainfile(filepath=path, load_ui=False)
+        scene = bpy.context.scene
+        setup_render(scene)
+        f12(name, scene)
+
+
+def two_object_scene():
+    """A sphere left in collection A, a cube right in collection B, a sun and a camera in
+    the scene's own collection; view layer A excludes B and view layer B excludes A."""
+    bpy.ops.wm.read_homefile(use_empty=True)  # keeps the preferences (add-ons) loaded
+    scene = bpy.context.scene
+    for name, x, make in (("A", -2.0, bpy.ops.mesh.primitive_uv_sphere_add),
+                          ("B", 2.0, bpy.ops.mesh.primitive_cube_add)):
+        collection = bpy.data.collections.new(name)
+        scene.collection.children.link(collection)
+        make(location=(x, 0.0, 0.0))
+        ob = bpy.context.active_object
+        for c in ob.users_collection:
+            c.objects.unlink(ob)
+        collection.objects.link(ob)
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
+    sun.data.energy = 3.0
+    sun.rotation_euler = (0.6, 0.2, 0.0)
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    camera.location, camera.rotation_euler = (0.0, -10.0, 0.0), (1.5707963, 0.0, 0.0)
+    for ob in (sun, camera):
+        scene.collection.objects.link(ob)
+    scene.camera = camera
+    setup_render(scene)
+    return scene
+
+
+def check_view_layers():
+    scene = two_object_scene()
+    first = scene.view_layers[0]
+    first.name = "LayerA"
+    second = scene.view_layers.new("LayerB")
+    first.layer_collection.children["B"].exclude = True
+    second.layer_collection.children["A"].exclude = True
+    scene.render.film_transparent = True
+    scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
+    f12("layers", scene)
+
+
+def check_film_border_resolution():
+    scene = two_object_scene()
+    f12("full", scene)
+    scene.render.film_transparent = True
+    f12("transparent", scene)
+    scene.render.film_transparent = False
+    render = scene.render
+    render.use_border = True
+    render.border_min_x, render.border_max_x = 0.1, 0.45  # over the sphere
+    render.border_min_y, render.border_max_y = 0.2, 0.8
+    render.use_crop_to_border = False
+    f12("border", scene)
+    render.use_crop_to_border = True
+    f12("crop", scene)
+    render.use_border = False
+    render.resolution_percentage = 50
+    f12("half", scene)
+    return {"border": [render.border_min_x, render.border_min_y,
+                       render.border_max_x, render.border_max_y]}
+
+
+def check_animation():
+    bpy.ops.wm.open_mainfile(filepath=os.path.join(CORPUS, "blender", "03_skinned_cylinder.blend"),
+                             load_ui=False)
+    scene = bpy.context.scene
+    setup_render(scene)
+    scene.frame_start, scene.frame_end = 1, 10
+    scene.render.filepath = os.path.join(OUT, "anim", "frame_####")
+    t0 = time.perf_counter()
+    bpy.ops.render.render(animation=True)
+    return {"seconds": time.perf_counter() - t0,
+            "files": sorted(os.listdir(os.path.join(OUT, "anim")))}
+
+
+def scene_render_module():
+    return sys.modules[MODULE + ".addon.scene_render"]
+
+
+def check_stats_and_errors():
+    scene = two_object_scene()
+    stats = []
+
+    def on_stats(text):
+        stats.append(str(text))
+
+    bpy.app.handlers.render_stats.append(on_stats)
+    try:
+        f12("stats", scene)
+    finally:
+        bpy.app.handlers.render_stats.remove(on_stats)
+    module = scene_render_module()
+    original = module.render_stage
+
+    def broken(stage, settings):
+        raise RuntimeError("the GL context is gone")
+
+    module.render_stage = broken
+    try:
+        failed = f12("broken", scene)
+    finally:
+        module.render_stage = original
+    return {"stats": stats, "error": failed.get("error")}
+
+
+def check_material_preview():
+    """Blender renders a material preview on its preview scene in a job thread; in
+    background mode that job never reports finished, so this waits for Lantern's
+    render() to return, then for the job to copy the frame into the preview (reading
+    the preview while render() runs Python could wait on the job while holding the GIL)."""
+    scene = two_object_scene()
+    stages = scene_render_module()
+    engine = sys.modules[MODULE + ".addon.render_engine"]
+    render_stage, render_frame = stages.render_stage, engine.render_frame
+    calls, returned = [], threading.Event()
+
+    def spy_stage(stage, settings):
+        result = render_stage(stage, settings)
+        calls.append({"preset": settings.preset, "size": [settings.width, settings.height],
+                      "seconds": result.timings["total"]})
+        return result
+
+    def spy_frame(render_engine, depsgraph):
+        try:
+            render_frame(render_engine, depsgraph)
+        finally:
+            returned.set()
+
+    stages.render_stage, engine.render_frame = spy_stage, spy_frame
+    previews = {}
+    try:
+        for name, colour in (("red", (0.8, 0.05, 0.05, 1.0)), ("blue", (0.05, 0.05, 0.8, 1.0))):
+            material = bpy.data.materials.new(name)
+            material.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = colour
+            returned.clear()
+            t0 = time.perf_counter()
+            with bpy.context.temp_override(id=material):
+                bpy.ops.ed.lib_id_generate_preview()
+            if not returned.wait(60):
+                raise TimeoutError(f"no preview render for {name} in 60 s")
+            preview = material.preview
+            while time.perf_counter() - t0 < 60:
+                pixels = np.array(preview.image_pixels_float[:], dtype=np.float32)
+                if pixels.any():
+                    break
+                time.sleep(0.02)
+            w, h = preview.image_size
+            np.save(os.path.join(OUT, f"preview_{name}.npy"), pixels.reshape(h, w, 4))
+            previews[name] = time.perf_counter() - t0
+    finally:
+        stages.render_stage, engine.render_frame = render_stage, render_frame
+    return {"calls": calls, "seconds": previews, "scene_engine": scene.render.engine}
+
+
+def lantern_threads():
+    return [name for name in python_threads() if name.startswith("lantern")]
+
+
+def check_lifecycle():
+    """Disable, enable, reinstall and uninstall: no thread, process or file left."""
+    life = {"before_disable": lantern_threads(), "native_before_disable": native_threads()}
+    bpy.ops.preferences.addon_disable(module=MODULE)
+    life["after_disable"] = {"python_threads": python_threads(),
+                             "native_threads": native_threads(),
+                             "enabled": MODULE in bpy.context.preferences.addons}
+    bpy.ops.preferences.addon_enable(module=MODULE)
+    scene = two_object_scene()
+    life["reenabled_render"] = f12("reenabled", scene).get("error")
+    bpy.ops.extensions.package_install_files(filepath=ZIP, repo=REPO_ID, enable_on_install=True)
+    scene = two_object_scene()
+    life["reinstalled_render"] = f12("reinstalled", scene).get("error")
+    life["after_reinstall"] = lantern_threads()
+    repo_index = [r.module for r in bpy.context.preferences.extensions.repos].index(REPO_ID)
+    bpy.ops.extensions.package_uninstall(repo_index=repo_index, pkg_id="lantern")
+    life["after_uninstall"] = {"python_threads": python_threads(),
+                               "native_threads": native_threads(),
+                               "child_processes": child_processes(),
+                               "files": files_under(USER),
+                               "enabled": MODULE in bpy.context.preferences.addons}
+    return life
+
+
+report["baseline"] = {"files": files_under(USER), "python_threads": python_threads(),
+                      "native_threads": native_threads()}
+for name in ("hidden_modules", "install", "corpus", "view_layers", "film_border_resolution",
+             "animation", "stats_and_errors", "material_preview", "lifecycle"):
+    run_step(name, globals()["check_" + name])
+
+with open(os.path.join(OUT, "report.json"), "w") as f:
+    json.dump(report, f, indent=1)
+shutil.rmtree(USER, ignore_errors=True)
