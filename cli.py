@@ -3,9 +3,17 @@
 bpy is imported only for work that reads .blend files, so `lantern render scene.usd`
 runs without Blender, on usd-core. Batch export runs each file in its own process:
 a file that crashes Blender then fails alone, and the batch goes on and reports it.
+
+Every failure ends with one line naming the file, prim or option and the reason, and
+an exit status: 2 when the command line is wrong, 1 when an input cannot be read or
+exported or rendered or an output cannot be written, 130 when interrupted (Ctrl-C).
+`--debug` shows the traceback of an unexpected error instead of one line.
 """
 import argparse
+import logging
+import math
 import os
+import re
 import subprocess
 import sys
 import time
@@ -13,7 +21,30 @@ from concurrent.futures import ThreadPoolExecutor
 
 USD_SUFFIXES = (".usd", ".usda", ".usdc")
 IMAGE_SUFFIXES = (".exr", ".png")
+# The largest texture side OpenGL implementations guarantee at most (llvmpipe's limit).
+MAX_SIDE = 16384
 
+USAGE, FAILED, INTERRUPTED = 2, 1, 130
+EXIT_STATUSES = """exit status:
+  0    done
+  1    an input could not be read, exported or rendered, or an output not written
+  2    the command line is wrong (unknown option, bad value, wrong kind of path)
+  130  interrupted (Ctrl-C)"""
+
+
+class CommandError(Exception):
+    """Ends the command with one line and `status`."""
+
+    def __init__(self, message, status=FAILED):
+        super().__init__(message)
+        self.status = status
+
+
+def _usage(message):
+    return CommandError(message, USAGE)
+
+
+# --- arguments --------------------------------------------------------------------------
 
 def _parse_size(text):
     try:
@@ -22,17 +53,60 @@ def _parse_size(text):
         raise argparse.ArgumentTypeError(f"--size must look like 640x360, not {text!r}")
     if width <= 0 or height <= 0:
         raise argparse.ArgumentTypeError(f"--size must be positive, not {text!r}")
+    if width > MAX_SIDE or height > MAX_SIDE:
+        raise argparse.ArgumentTypeError(f"--size {text}: each side must be at most {MAX_SIDE}")
     return width, height
 
 
+def _number(text):
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(text)
+    return value
+
+
+def _parse_frames(text):
+    """'A:B' or 'A:B:STEP' -> the frames A, A+STEP, ... up to B (inclusive)."""
+    parts = text.split(":")
+    try:
+        if len(parts) not in (2, 3):
+            raise ValueError(text)
+        first, last = _number(parts[0]), _number(parts[1])
+        step = _number(parts[2]) if len(parts) == 3 else 1.0
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--frames must look like 1:24 or 1:24:2, not {text!r}")
+    if step <= 0:
+        raise argparse.ArgumentTypeError(f"--frames {text}: the step must be positive")
+    if last < first:
+        raise argparse.ArgumentTypeError(f"--frames {text}: the last frame comes before the first")
+    count = int(math.floor((last - first) / step + 1e-9)) + 1
+    return [first + i * step for i in range(count)]
+
+
+def _version():
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return version("lantern")
+    except PackageNotFoundError:
+        return "unknown"
+
+
 def _build_parser():
-    parser = argparse.ArgumentParser(prog="lantern", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="lantern", description=__doc__.splitlines()[0], epilog=EXIT_STATUSES,
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"lantern {_version()}")
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--debug", action="store_true",
+                        help="show the traceback of an unexpected error")
     commands = parser.add_subparsers(dest="command", required=True)
 
-    export = commands.add_parser("export", help="export .blend files to USD")
+    export = commands.add_parser("export", parents=[common], help="export .blend files to USD",
+                                 epilog=EXIT_STATUSES,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     export.add_argument("blends", nargs="+", metavar="scene.blend")
     export.add_argument("-o", "--output", required=True,
-                        help="a .usd/.usda/.usdc file for one input, or a folder for several")
+                        help="a .usd/.usda/.usdc file for one input, or a folder")
     export.add_argument("-j", "--jobs", type=int, default=max(1, (os.cpu_count() or 2) // 2),
                         help="files exported at once in a batch")
     export.add_argument("--format", choices=("usda", "usdc", "usd"), default="usdc",
@@ -42,23 +116,109 @@ def _build_parser():
     export.add_argument("--max-influences", type=int, default=None, metavar="N",
                         help="keep the N largest joint influences per vertex (default: all)")
 
-    render = commands.add_parser("render", help="render a USD stage or a .blend file")
+    render = commands.add_parser("render", parents=[common],
+                                 help="render a USD stage or a .blend file",
+                                 epilog=EXIT_STATUSES,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     render.add_argument("scene", metavar="scene.usd|scene.blend")
-    render.add_argument("-o", "--output", required=True, help="an .exr (scene linear) or .png (sRGB)")
-    render.add_argument("--frame", type=float, default=None, help="time code / frame to render")
-    render.add_argument("--frames", default=None, metavar="A:B",
-                        help="render frames A..B; '####' in -o becomes the zero-padded frame, "
-                             "an -o ending in .gif writes one animated preview")
-    render.add_argument("--size", type=_parse_size, default=None, metavar="WxH")
+    render.add_argument("-o", "--output", required=True,
+                        help="an .exr (scene linear) or .png (sRGB); for --frames, a name "
+                             "with '####' (the frame) or a .gif")
+    render.add_argument("--frame", type=_number, default=None, help="time code / frame to render")
+    render.add_argument("--frames", type=_parse_frames, default=None, metavar="A:B[:STEP]",
+                        help="render frames A..B every STEP (default 1); '####' in -o becomes "
+                             "the zero-padded frame, an -o ending in .gif writes one preview")
+    render.add_argument("--size", type=_parse_size, default=None, metavar="WxH",
+                        help=f"image size, each side at most {MAX_SIDE}")
     render.add_argument("--preset", default="medium", help="low, medium, high or ultra")
+    render.add_argument("--camera", default=None, metavar="PRIM",
+                        help="the camera prim to render through (default: the stage's "
+                             "render settings camera, else the first camera)")
     return parser
 
 
 def main(argv=None):
     args = _build_parser().parse_args(argv)
-    if args.command == "export":
-        return _export(args)
-    return _render(args)
+    # The exporter logs its warnings and the CLI prints them: keep Python's last-resort
+    # handler from printing each a second time.
+    logging.getLogger("lantern").addHandler(logging.NullHandler())
+    try:
+        return _export(args) if args.command == "export" else _render(args)
+    except CommandError as error:
+        _fail(args, str(error))
+        return error.status
+    except KeyboardInterrupt:
+        _fail(args, "interrupted")
+        return INTERRUPTED
+    except Exception as error:  # a bug: one line, or the traceback with --debug
+        if args.debug:
+            raise
+        _fail(args, f"internal error: {type(error).__name__}: {_one_line(_text(error))} "
+                    "(--debug shows the traceback)")
+        return FAILED
+
+
+def _fail(args, message):
+    print(f"lantern {args.command}: {message}", file=sys.stderr, flush=True)
+
+
+_PXR_ERROR = re.compile(r"^Error in '.*' at line \d+ in file .* : '(.*)'$")
+
+
+def _text(error):
+    """str(error), even when pxr's message holds bytes that are not UTF-8 (a damaged
+    file's contents quoted in a parse error)."""
+    try:
+        return str(error)
+    except UnicodeDecodeError:
+        return f"{type(error).__name__} (its message is not UTF-8 text: the file is damaged)"
+
+
+def _one_line(text):
+    """pxr's errors span lines ("Error in '...' at line N in file F : 'reason'"): keep
+    the reasons, on one line."""
+    reasons = []
+    for line in str(text).splitlines():
+        line = line.strip()
+        match = _PXR_ERROR.match(line)
+        reasons.append(match.group(1) if match else line)
+    return "; ".join(dict.fromkeys(r for r in reasons if r)) or "no reason given"
+
+
+def _check_output(path, kinds, what="output"):
+    """Fails before any work when `path` cannot be written: wrong kind, a directory, or
+    a folder that cannot be made or written."""
+    if not path.lower().endswith(kinds):
+        raise _usage(f"{path}: the {what} must be {' or '.join(kinds)}")
+    if os.path.isdir(path):
+        raise _usage(f"{path}: is a directory, not a file name")
+    _check_folder(os.path.dirname(os.path.abspath(path)))
+
+
+def _check_folder(folder):
+    """The folder, or its nearest existing ancestor (missing folders are made), must be a
+    writable directory."""
+    existing = folder
+    while not os.path.exists(existing):
+        existing = os.path.dirname(existing)
+    if not os.path.isdir(existing):
+        raise CommandError(f"{folder}: cannot be made: {existing} is not a directory")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise CommandError(f"{folder}: {existing} is not writable")
+
+
+def _make_folder(folder):
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except OSError as error:
+        raise CommandError(f"{folder}: cannot be made: {error.strerror}")
+
+
+def _print_warnings(warnings, seen):
+    for warning in warnings:
+        if warning not in seen:
+            seen.add(warning)
+            print(f"warning: {warning}", file=sys.stderr)
 
 
 # --- export -----------------------------------------------------------------------------
@@ -66,30 +226,38 @@ def main(argv=None):
 def _export(args):
     for blend in args.blends:
         if not blend.lower().endswith(".blend"):
-            print(f"lantern export: {blend}: not a .blend file", file=sys.stderr)
-            return 2
-    if len(args.blends) == 1 and args.output.lower().endswith(USD_SUFFIXES):
+            raise _usage(f"{blend}: not a .blend file")
+    if args.max_influences is not None and args.max_influences < 1:
+        raise _usage("--max-influences must be at least 1")
+    if args.jobs < 1:
+        raise _usage("-j must be at least 1")
+    single = args.output.lower().endswith(USD_SUFFIXES)
+    if single and len(args.blends) > 1:
+        raise _usage(f"{args.output}: several inputs need a folder for -o")
+    if not single and os.path.splitext(args.output)[1] and not os.path.isdir(args.output):
+        raise _usage(f"{args.output}: -o must be a .usd, .usda or .usdc file, or a folder")
+    if single:
+        _check_output(args.output, USD_SUFFIXES)
         return _export_one(args.blends[0], args.output, args)
-    if args.output.lower().endswith(USD_SUFFIXES):
-        print("lantern export: several inputs need a folder for -o", file=sys.stderr)
-        return 2
+    if os.path.exists(args.output) and not os.path.isdir(args.output):
+        raise _usage(f"{args.output}: is a file, not a folder")
+    _check_folder(os.path.abspath(args.output))
     return _export_batch(args)
 
 
 def _export_one(blend, out_path, args):
     """Export in this process. Prints warnings; returns the exit status."""
+    if not os.path.isfile(blend):
+        raise CommandError(f"{blend}: no such file")
     from .exporters import ExportError, ExportOptions, export_blend
-    if args.max_influences is not None and args.max_influences < 1:
-        print("lantern export: --max-influences must be at least 1", file=sys.stderr)
-        return 2
     options = ExportOptions(textures=args.textures, max_influences=args.max_influences)
     try:
         report = export_blend(blend, out_path, options)
     except ExportError as error:
-        print(f"lantern export: {error}", file=sys.stderr)
-        return 1
-    for warning in report.warnings:
-        print(f"warning: {warning}", file=sys.stderr)
+        raise CommandError(_one_line(str(error)))
+    except OSError as error:
+        raise CommandError(f"{out_path}: cannot be written: {error.strerror or error}")
+    _print_warnings(report.warnings, set())
     counts = ", ".join(f"{n} {kind}" for kind, n in report.counts.items() if n)
     print(f"{blend} -> {report.path} ({counts}; {report.seconds:.2f} s)")
     return 0
@@ -100,15 +268,13 @@ def _export_batch(args):
     from rich.progress import Progress
     from rich.table import Table
 
-    os.makedirs(args.output, exist_ok=True)
     jobs = []
     for blend in args.blends:
         stem = os.path.splitext(os.path.basename(blend))[0]
         jobs.append((blend, os.path.join(args.output, f"{stem}.{args.format}")))
     if len({out for _, out in jobs}) != len(jobs):
-        print("lantern export: two inputs share a file name; their outputs would collide",
-              file=sys.stderr)
-        return 2
+        raise _usage("two inputs share a file name; their outputs would collide")
+    _make_folder(args.output)
 
     def run(job):
         blend, out_path = job
@@ -123,9 +289,11 @@ def _export_batch(args):
         warnings = [line for line in proc.stderr.splitlines() if line.startswith("warning: ")]
         if proc.returncode == 0:
             return blend, "ok", seconds, len(warnings), out_path
-        reason = [line for line in proc.stderr.splitlines()
+        reason = [line.removeprefix("lantern export: ") for line in proc.stderr.splitlines()
                   if line.strip() and not line.startswith("warning: ")]
-        if proc.returncode < 0:
+        if proc.returncode == INTERRUPTED:
+            reason.append("interrupted")
+        elif proc.returncode < 0:
             reason.append(f"Blender crashed (signal {-proc.returncode})")
         return blend, "failed", seconds, len(warnings), (reason[-1] if reason else "unknown error")
 
@@ -133,7 +301,7 @@ def _export_batch(args):
     console = Console(stderr=True)
     with Progress(console=console, transient=True) as progress:
         task = progress.add_task("exporting", total=len(jobs))
-        with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
+        with ThreadPoolExecutor(max_workers=args.jobs) as pool:
             for result in pool.map(run, jobs):
                 results.append(result)
                 progress.advance(task)
@@ -143,116 +311,68 @@ def _export_batch(args):
         table.add_column(column, overflow="fold")
     for blend, status, seconds, n_warnings, detail in results:
         style = "green" if status == "ok" else "red"
-        table.add_row(os.path.basename(blend), f"[{style}]{status}[/]", f"{seconds:.2f}", str(n_warnings), detail)
+        table.add_row(os.path.basename(blend), f"[{style}]{status}[/]", f"{seconds:.2f}",
+                      str(n_warnings), detail)
     Console(width=max(120, Console().width)).print(table)
     failed = sum(1 for r in results if r[1] != "ok")
     print(f"{len(results) - failed} exported, {failed} failed")
-    return 1 if failed else 0
+    return FAILED if failed else 0
 
 
 # --- render -----------------------------------------------------------------------------
 
 def _render(args):
-    if args.frames is not None:
-        return _render_sequence(args)
-    if not args.output.lower().endswith(IMAGE_SUFFIXES):
-        print(f"lantern render: {args.output}: the output must be .exr or .png", file=sys.stderr)
-        return 2
-    stage, status = _open_scene(args.scene)
+    if args.frames is not None and args.frame is not None:
+        raise _usage("--frame and --frames cannot be used together")
+    if args.frames is None:
+        _check_output(args.output, IMAGE_SUFFIXES)
+    elif args.output.lower().endswith(".gif"):
+        _check_output(args.output, (".gif",))
+    else:
+        _check_output(args.output, IMAGE_SUFFIXES)
+        if "#" not in args.output:
+            raise _usage(f"{args.output}: a sequence needs '####' in an .exr/.png name, or a .gif")
+    if args.camera is not None and not args.camera.startswith("/"):
+        raise _usage(f"--camera {args.camera}: must be an absolute prim path, like /root/Camera")
+    if not os.path.isfile(args.scene):
+        raise CommandError(f"{args.scene}: no such file")
+    is_blend = args.scene.lower().endswith(".blend")
+    if not is_blend and not args.scene.lower().endswith(USD_SUFFIXES):
+        raise _usage(f"{args.scene}: expected a .usd, .usda, .usdc or .blend file")
+    if is_blend:
+        from . import exporters  # noqa: F401  (Blender's pxr before the engine's)
+    _check_preset(args.preset)
+
+    stage = _stage_from_blend(args.scene) if is_blend else _open_usd(args.scene)
+    _check_camera(stage, args)
+    if args.frames is None:
+        return _render_frame(stage, args)
+    return _render_sequence(stage, args)
+
+
+def _check_preset(name):
+    try:
+        from .core.presets import PRESETS  # where the table lives once issue 9 lands
+    except ImportError:
+        from .engine.renderer import PRESETS
+    if name not in PRESETS:
+        raise _usage(f"unknown --preset {name!r}; valid presets: {', '.join(PRESETS)}")
+
+
+def _open_usd(path):
+    """A USD file opened with usd-core (no bpy)."""
+    from pxr import Tf, Usd
+    try:
+        stage = Usd.Stage.Open(path)
+    except Tf.ErrorException as error:
+        raise CommandError(f"{path}: cannot be read as USD: {_one_line(_text(error))}")
     if stage is None:
-        return status
-    width, height = args.size if args.size else (None, None)
-
-    from .engine import RenderSettings, render_stage
-    from .engine.image_io import write_image
-    try:
-        settings = RenderSettings(width=width, height=height, frame=args.frame, preset=args.preset)
-    except ValueError as error:
-        print(f"lantern render: {error}", file=sys.stderr)
-        return 2
-    try:
-        result = render_stage(stage, settings)
-    except (ValueError, RuntimeError, OSError) as error:  # pxr's errors are RuntimeErrors
-        print(f"lantern render: {args.scene}: {error}", file=sys.stderr)
-        return 1
-    for warning in result.warnings:
-        print(f"warning: {warning}", file=sys.stderr)
-    write_image(args.output, result.rgba)
-    height_px, width_px = result.rgba.shape[:2]
-    print(f"{args.scene} -> {args.output} ({width_px}x{height_px}, "
-          f"{result.timings.get('total', 0.0) * 1000:.1f} ms)")
-    return 0
-
-
-def _open_scene(path):
-    """(stage, 0), or (None, exit status) after saying why: a .blend is exported into
-    memory (Blender's own pxr), a USD file is opened (usd-core, no bpy)."""
-    if not os.path.isfile(path):
-        print(f"lantern render: {path}: no such file", file=sys.stderr)
-        return None, 1
-    if path.lower().endswith(".blend"):
-        stage = _stage_from_blend(path)
-        return (stage, 0) if stage is not None else (None, 1)
-    if not path.lower().endswith(USD_SUFFIXES):
-        print(f"lantern render: {path}: expected a .usd, .usda, .usdc or .blend file",
-              file=sys.stderr)
-        return None, 2
-    from pxr import Usd
-    try:
-        return Usd.Stage.Open(path), 0
-    except RuntimeError as error:  # pxr's errors: an unreadable or invalid layer
-        print(f"lantern render: {path}: {error}", file=sys.stderr)
-        return None, 1
-
-
-def _frame_path(pattern, frame):
-    """'####' (any run of #) -> the frame number zero-padded to that width."""
-    import re
-    return re.sub(r"#+", lambda m: f"{int(round(frame)):0{len(m.group(0))}d}", pattern, count=1)
-
-
-def _render_sequence(args):
-    try:
-        first, last = (float(x) for x in args.frames.split(":"))
-    except ValueError:
-        print(f"lantern render: --frames must look like 1:24, not {args.frames!r}", file=sys.stderr)
-        return 2
-    gif = args.output.lower().endswith(".gif")
-    if not gif and (not args.output.lower().endswith(IMAGE_SUFFIXES) or "#" not in args.output):
-        print(f"lantern render: {args.output}: a sequence needs '####' in an .exr/.png name, "
-              "or a .gif", file=sys.stderr)
-        return 2
-    stage, status = _open_scene(args.scene)
-    if stage is None:
-        return status
-    from .engine import RenderSettings
-    from .engine.api import render_sequence
-    from .engine.image_io import write_animation, write_image
-    width, height = args.size if args.size else (None, None)
-    settings = RenderSettings(width=width, height=height, preset=args.preset)
-    frames, seen = [], set()
-    try:
-        for frame, result in render_sequence(stage, first, last, settings):
-            for warning in result.warnings:
-                if warning not in seen:
-                    seen.add(warning)
-                    print(f"warning: {warning}", file=sys.stderr)
-            if gif:
-                frames.append(result.rgba)
-                continue
-            path = _frame_path(args.output, frame)
-            os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-            write_image(path, result.rgba)
-            print(f"{args.scene} frame {frame:g} -> {path} "
-                  f"({result.timings.get('total', 0.0) * 1000:.1f} ms)")
-    except (ValueError, RuntimeError, OSError) as error:
-        print(f"lantern render: {args.scene}: {error}", file=sys.stderr)
-        return 1
-    if gif:
-        os.makedirs(os.path.dirname(os.path.abspath(args.output)), exist_ok=True)
-        write_animation(args.output, frames, stage.GetFramesPerSecond() or 24.0)
-        print(f"{args.scene} frames {first:g}:{last:g} -> {args.output}")
-    return 0
+        raise CommandError(f"{path}: cannot be read as USD")
+    # Missing or broken references, sublayers and payloads, and cycles: USD composes
+    # what it can; say what it could not.
+    _print_warnings([f"{path}: {_one_line(_text(e))}" for e in stage.GetCompositionErrors()],
+                    set())
+    return stage
 
 
 def _stage_from_blend(blend):
@@ -261,11 +381,105 @@ def _stage_from_blend(blend):
     try:
         stage, report = stage_from_blend(blend)
     except ExportError as error:
-        print(f"lantern render: {error}", file=sys.stderr)
-        return None
-    for warning in report.warnings:
-        print(f"warning: {warning}", file=sys.stderr)
+        raise CommandError(_one_line(str(error)))
+    _print_warnings(report.warnings, set())
     return stage
+
+
+def _check_camera(stage, args):
+    if args.camera is None:
+        return
+    from pxr import Sdf, UsdGeom
+    if not Sdf.Path.IsValidPathString(args.camera):
+        raise _usage(f"--camera {args.camera}: not a valid prim path")
+    prim = stage.GetPrimAtPath(args.camera)
+    if not prim:
+        raise _usage(f"--camera {args.camera}: {args.scene} has no such prim")
+    if not prim.IsA(UsdGeom.Camera):
+        raise _usage(f"--camera {args.camera}: is a {prim.GetTypeName() or 'typeless prim'}, "
+                     "not a Camera")
+
+
+def _settings(args, frame=None):
+    from .engine import RenderSettings
+    width, height = args.size if args.size else (None, None)
+    extra = {"camera": args.camera} if args.camera is not None else {}
+    return RenderSettings(width=width, height=height, frame=frame, preset=args.preset, **extra)
+
+
+def _rendered(scene, run):
+    """Runs a render; the engine's errors on this input become one line."""
+    try:
+        return run()
+    except (ValueError, RuntimeError, OSError) as error:  # pxr's errors are RuntimeErrors
+        raise CommandError(f"{scene}: {_one_line(_text(error))}")
+
+
+def _write(path, write):
+    _make_folder(os.path.dirname(os.path.abspath(path)))
+    try:
+        write()
+    except OSError as error:
+        raise CommandError(f"{path}: cannot be written: {error.strerror or error}")
+
+
+def _render_frame(stage, args):
+    from .engine import render_stage
+    from .engine.image_io import write_image
+    result = _rendered(args.scene, lambda: render_stage(stage, _settings(args, args.frame)))
+    _print_warnings(result.warnings, set())
+    _write(args.output, lambda: write_image(args.output, result.rgba))
+    height_px, width_px = result.rgba.shape[:2]
+    print(f"{args.scene} -> {args.output} ({width_px}x{height_px}, "
+          f"{result.timings.get('total', 0.0) * 1000:.1f} ms)")
+    return 0
+
+
+def _frame_path(pattern, frame):
+    """'####' (any run of #) -> the frame zero-padded to that width; a fractional frame
+    keeps its fraction after the padded whole part (0012.5)."""
+    whole = math.floor(frame)
+    fraction = f"{frame - whole:.6f}".rstrip("0").rstrip(".")[1:] if frame != whole else ""
+    return re.sub(r"#+", lambda m: f"{int(whole):0{len(m.group(0))}d}{fraction}", pattern, count=1)
+
+
+def _frames_rendered(stage, args):
+    """(frame, result) for every frame of --frames: whole-frame runs share one sequence
+    (static data read and uploaded once), other steps render frame by frame."""
+    from .engine import render_stage
+    from .engine.api import render_sequence
+    frames = args.frames
+    step = frames[1] - frames[0] if len(frames) > 1 else 1.0
+    if step == 1.0 and float(frames[0]).is_integer():
+        yield from render_sequence(stage, frames[0], frames[-1], _settings(args))
+        return
+    for frame in frames:
+        yield frame, render_stage(stage, _settings(args, frame))
+
+
+def _render_sequence(stage, args):
+    from .engine.image_io import write_animation, write_image
+    gif = args.output.lower().endswith(".gif")
+    images, seen = [], set()
+    results = _frames_rendered(stage, args)
+    while True:
+        item = _rendered(args.scene, lambda: next(results, None))
+        if item is None:
+            break
+        frame, result = item
+        _print_warnings(result.warnings, seen)
+        if gif:
+            images.append(result.rgba)
+            continue
+        path = _frame_path(args.output, frame)
+        _write(path, lambda: write_image(path, result.rgba))
+        print(f"{args.scene} frame {frame:g} -> {path} "
+              f"({result.timings.get('total', 0.0) * 1000:.1f} ms)")
+    if gif:
+        fps = stage.GetFramesPerSecond() or 24.0
+        _write(args.output, lambda: write_animation(args.output, images, fps))
+        print(f"{args.scene} frames {args.frames[0]:g}:{args.frames[-1]:g} -> {args.output}")
+    return 0
 
 
 if __name__ == "__main__":

@@ -25,6 +25,7 @@ class RenderSettings:
     frame: float | None = None   # None: the stage's startTimeCode if authored, else Default
     preset: str = "medium"       # low | medium | high | ultra
     transparent: bool = False    # alpha = coverage instead of 1
+    camera: str | None = None    # a camera prim path; None: /Render/Settings', else the first
     # An explicit view instead of the stage's camera (Blender's viewport): OpenGL
     # world-to-view and projection matrices, column-vector convention.
     view_matrix: np.ndarray | None = None

@@ -8,16 +8,13 @@ from dataclasses import dataclass, field
 import bpy
 from pxr import Usd
 
+from .errors import ExportError
 from .gather.scene import gather_scene
 from .usd.assets import asset_resolver
 from .usd.scene import write_scene
 
 log = logging.getLogger("lantern.export")
 FORMATS = {".usda", ".usdc", ".usd"}
-
-
-class ExportError(Exception):
-    """The input could not be read or the output could not be written."""
 
 
 @dataclass

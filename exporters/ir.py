@@ -159,6 +159,44 @@ class WorldRecord:
 
 
 @dataclass
+class TRS:
+    """Transforms that are exactly translate · rotate · scale, one row per time sample
+    (one row when static): what USD interpolates as Blender does (rotations by slerp)."""
+    translations: np.ndarray      # (T, 3) float64
+    rotations: np.ndarray         # (T, 4) unit quaternions (x, y, z, w), neighbours on one hemisphere
+    scales: np.ndarray            # (T, 3) float64, negative on x for a mirroring matrix
+
+
+@dataclass
+class PointsRecord:
+    """A point cloud: particles or a point cloud's points, in the object's space."""
+    name: str
+    points: np.ndarray            # (N, 3) float32
+    widths: np.ndarray            # (N,) float32 diameters
+
+
+@dataclass
+class PrototypeRecord:
+    """What one instance draws: an object's evaluated geometry in its own space."""
+    key: str
+    name: str
+    mesh: str | None = None       # MeshRecord key (written under /root/_prototypes)
+    materials: list = field(default_factory=list)  # per slot: MaterialRecord key or None
+    points: PointsRecord | None = None
+
+
+@dataclass
+class InstancesRecord:
+    """Instances an object generates (collection, geometry nodes, particles, vertices),
+    placed relative to that object."""
+    prototypes: list              # PrototypeRecord keys; proto_indices index this list
+    proto_indices: np.ndarray     # (M,) int32
+    matrices: np.ndarray          # (M, 4, 4) float64, instance -> instancer object space
+    trs: TRS | None = None        # the matrices as TRS (rows where `exact`)
+    exact: np.ndarray | None = None  # (M,) bool: False where a matrix shears
+
+
+@dataclass
 class ObjectRecord:
     key: str                     # Blender's unique object name
     name: str
@@ -172,6 +210,9 @@ class ObjectRecord:
     camera: CameraRecord | None = None
     rig: str | None = None       # SkeletonRecord key: this object's prim is a SkelRoot
     matrix_samples: np.ndarray | None = None  # (T, 4, 4) local matrices at settings.times
+    trs: TRS | None = None       # the matrix (or its samples) as TRS, None when sheared
+    points: PointsRecord | None = None        # particles or a point cloud it shows
+    instances: InstancesRecord | None = None  # instances it generates
 
 
 @dataclass
@@ -182,5 +223,6 @@ class SceneRecord:
     materials: dict = field(default_factory=dict)     # key -> MaterialRecord
     world: WorldRecord | None = None
     skeletons: dict = field(default_factory=dict)     # key -> SkeletonRecord
+    prototypes: dict = field(default_factory=dict)    # key -> PrototypeRecord
     times: list = field(default_factory=list)         # sampled frames; empty: static scene
     warnings: list = field(default_factory=list)

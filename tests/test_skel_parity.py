@@ -309,7 +309,7 @@ def test_animated_armature_object(empty_scene):
     stage, _ = _check("animated armature object", [tube], skinned=[tube])
     root = stage.GetPrimAtPath(object_paths(stage)[arm.name])
     assert root.IsA(UsdSkel.Root)
-    assert len(root.GetAttribute("xformOp:transform").GetTimeSamples()) == 5
+    assert len(root.GetAttribute("xformOp:orient").GetTimeSamples()) == 5
 
 
 def test_colliding_and_non_ascii_bone_names(empty_scene):

@@ -8,12 +8,13 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from ..errors import require_finite
 from ..ir import PointSamples, SkinRecord
 from .shapes import gather_blend_shapes, shape_weights
 from .mesh import _get
-from .skeleton import (HALF_TOLERANCE, SHEAR_TOLERANCE, bone_scale_error, decompose,
-                       gather_skeleton, local_matrices, pose_index, pose_matrices,
-                       shape_host)
+from .skeleton import (HALF_TOLERANCE, SHEAR_TOLERANCE, TRS_TOLERANCE, bone_scale_error,
+                       decompose, gather_skeleton, local_matrices, pose_index,
+                       pose_matrices, recompose, relative_matrix, shape_host)
 from .skin import skin_weights
 
 # Matrices that move less than this (relative to their size) over the range are static.
@@ -87,6 +88,7 @@ class Sampler:
                 joint_of = {name: j for j, name in enumerate(skel.joint_names) if name in deform}
                 indices, weights = skin_weights(self.originals[key], group_entries[key], n,
                                                 joint_of, len(skel.joint_names))
+                require_finite(weights, f"object '{obj.name}'", "vertex group weights")
                 geom_bind = self._world(key)
             else:
                 indices = np.zeros((n, 1), dtype=np.int32)
@@ -97,6 +99,9 @@ class Sampler:
                               dual_quaternion=bool(rig.modifier is not None
                                                    and rig.modifier.use_deform_preserve_volume))
             if rig.shape_keys:
+                for block in self.originals[key].data.shape_keys.key_blocks:
+                    require_finite(_get(block.data, "co", np.float32, 3),
+                                   f"object '{obj.name}'", f"shape key '{block.name}'")
                 skin.blend_shapes = gather_blend_shapes(self.originals[key])
             mesh.skin = skin
 
@@ -125,6 +130,12 @@ class Sampler:
                     weights[k].append(shape_weights(ev, names[k]))
         finally:
             scene.frame_set(frame, subframe=subframe)
+        for i, k in enumerate(keys):
+            require_finite(worlds[:, i], f"object '{self.objects[k].name}'", "animated transform")
+        for k, v in poses.items():
+            require_finite(v, f"armature '{self.objects[k].name}'", "bone poses")
+        for k, v in weights.items():
+            require_finite(v, f"object '{self.objects[k].name}'", "shape key values")
         self.times = list(times)
         self.worlds = {k: worlds[:, i] for i, k in enumerate(keys)}
         self.poses = {k: np.array(v) for k, v in poses.items()}
@@ -140,7 +151,7 @@ class Sampler:
         for obj in self.rec.objects:
             world = self.worlds[obj.key]
             if obj.parent is not None:
-                local = np.linalg.solve(self.worlds[obj.parent], world)
+                local = relative_matrix(self.worlds[obj.parent], world)
             else:
                 local = world
             if _relative_error(local, local[:1]) > STATIC_TOLERANCE:
@@ -151,8 +162,11 @@ class Sampler:
             skel = self.rec.skeletons[key]
             poses = self.poses[key]
             t, q, s, shear, half = decompose(local_matrices(poses, skel.parents))
+            self._warn_degenerate(key, skel, s)
             reason = None
-            if shear > SHEAR_TOLERANCE:
+            if _composed_error(t, q, s, poses, skel.parents) > TRS_TOLERANCE:
+                reason = "a bone with zero scale has children that do not collapse with it"
+            elif shear > SHEAR_TOLERANCE:
                 reason = "sheared bone transforms (Inherit Scale under non-uniform scale)"
             elif half > HALF_TOLERANCE:
                 reason = "bone scales that half precision (SkelAnimation scales) rounds"
@@ -175,6 +189,17 @@ class Sampler:
                 self._fall_back(mkey, "the mesh moves relative to its armature")
         self._static_joints()
         self._blend_weights()
+
+    def _warn_degenerate(self, key, skel, scales):
+        """One warning per bone that reaches a zero scale on some axis."""
+        zero = (scales == 0).any(axis=2)
+        for j in np.flatnonzero(zero.any(axis=0)):
+            frames = [self.times[f] for f in np.flatnonzero(zero[:, j])]
+            span = f"frame {frames[0]}" if len(frames) == 1 else \
+                f"{len(frames)} frames from {frames[0]} to {frames[-1]}"
+            self.warn(f"armature '{self.objects[key].name}': bone '{skel.joint_names[j]}' "
+                      f"has zero scale ({span}); its joint is written with scale 0 and "
+                      "an identity rotation about the collapsed axes")
 
     def _channels(self, skel, t, q, s):
         skel.times = self.times
@@ -236,7 +261,8 @@ class Sampler:
                     ev = self.originals[k].evaluated_get(self.depsgraph)
                     mesh = ev.to_mesh()
                     try:
-                        _append_points(samples[k], mesh, self.rec.meshes[self.objects[k].mesh])
+                        _append_points(samples[k], mesh, self.rec.meshes[self.objects[k].mesh],
+                                       f"object '{self.objects[k].name}'")
                     finally:
                         ev.to_mesh_clear()
         finally:
@@ -250,7 +276,21 @@ class Sampler:
                           f"frame range; only the current frame is written")
 
 
-def _append_points(samples, mesh, rec):
+def _composed_error(t, q, s, poses, parents):
+    """Largest difference (relative to the pose's size) between the armature-space poses
+    and the channels composed parent by parent, as UsdSkel composes them; only where a
+    parent is singular can they differ (a child that does not collapse with it)."""
+    if not (s == 0).any():
+        return 0.0
+    local = recompose(t, q, s)
+    composed = np.empty_like(local)
+    for j, p in enumerate(parents):
+        composed[:, j] = local[:, j] if p < 0 else composed[:, p] @ local[:, j]
+    size = np.maximum(np.abs(poses).max(), 1.0)
+    return float(np.abs(composed - poses).max()) / size
+
+
+def _append_points(samples, mesh, rec, owner):
     points = _get(mesh.vertices, "co", np.float32, 3)
     if len(points) != len(rec.points) or len(mesh.loops) != len(rec.face_indices):
         return
@@ -258,6 +298,7 @@ def _append_points(samples, mesh, rec):
         normals = _get(mesh.vertex_normals, "vector", np.float32, 3)
     else:
         normals = _get(mesh.corner_normals, "vector", np.float32, 3)
+    require_finite(points, owner, "animated vertex positions")
     samples.points.append(points)
     samples.normals.append(normals)
 

@@ -1,17 +1,19 @@
 """The evaluated depsgraph -> SceneRecord."""
 import numpy as np
 
+from ..errors import require_finite
 from ..ir import ObjectRecord, SceneRecord, StageSettings
 from .animation import Sampler, modifiers_disabled
 from .camera import gather_camera
+from .instances import (MESH_LIKE, UNSUPPORTED, InstanceGatherer, faceless_warning,
+                        particle_points, pointcloud_points, unsupported_warning)
 from .light import gather_light
 from .material import gather_material
 from .mesh import gather_mesh
+from .skeleton import relative_matrix, trs
 from .tangents import mikktspace_tangents, tangent_uv_map
 from .skin import animated, classify, group_entries
 from .world import gather_world
-
-GEOMETRY = {"MESH", "CURVE", "CURVES", "SURFACE", "FONT", "META"}
 
 
 def render_visible(view_layer):
@@ -66,18 +68,21 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True):
     rec = SceneRecord(settings=_settings(scene))
     visible = render_visible(depsgraph.view_layer)
 
-    originals, instances = {}, 0
+    originals, shown, materials = {}, {}, {}
+    instances = InstanceGatherer(rec, warn, _is_shareable, materials)
+
+    def exported(ob):
+        return ob.name_full in visible and not ob.hide_render
+
     for inst in depsgraph.object_instances:
         if inst.is_instance:
-            instances += 1
+            if exported(inst.parent.original):
+                instances.add(inst)
             continue
         orig = inst.object.original
-        if orig.name_full in visible and not orig.hide_render:
+        if exported(orig):
             originals[orig.name_full] = orig
-    if instances:
-        warn(f"scene '{scene.name}': {instances} instances (collection, particle or "
-             f"geometry-node instances) are not exported")
-
+            shown[orig.name_full] = inst.show_self
     animate = animation and depsgraph.mode == "VIEWPORT" and _animated_scene(scene)
     rigs = {}
     if animate:
@@ -95,7 +100,8 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True):
     # meshes are read (and while sampling, which then skips Blender's skinning).
     with modifiers_disabled([m for r in rigs.values() for m in r.disabled], depsgraph):
         evaluated = {k: ob.evaluated_get(depsgraph) for k, ob in originals.items()}
-        groups = _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir)
+        groups = _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir,
+                                 instances, shown, materials)
         if animate:
             sampler = Sampler(depsgraph, rec, originals, rigs, warn)
             sampler.build_skeletons()
@@ -107,10 +113,13 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True):
             sampler.write_skeletons()
     if animate:
         sampler.bake(times)
+    for obj in rec.objects:
+        obj.trs = trs(obj.matrix_samples if obj.matrix_samples is not None else obj.matrix[None])
     return rec
 
 
-def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir):
+def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir, instances, shown,
+                    material_keys):
     scene = depsgraph.scene
 
     def exported_parent(orig):
@@ -127,13 +136,13 @@ def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir):
         if _is_shareable(ob.original):
             shared_users.setdefault(ob.original.data.name_full, []).append(ob)
     shared = {k for k, users in shared_users.items() if len(users) > 1}
+    shared |= instances.shared_data  # prototypes of instances hold it once already
 
     children = {}
     for key, ob in evaluated.items():
         parent = exported_parent(ob.original)
         children.setdefault(parent.name_full if parent else None, []).append(key)
 
-    material_keys = {}
     order = []
 
     def visit(parent_key):
@@ -146,9 +155,10 @@ def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir):
     for key, parent_key in order:
         ob = evaluated[key]
         world = np.array(ob.matrix_world, dtype=np.float64)
+        require_finite(world, f"object '{ob.original.name}'", "transform")
         if parent_key is not None:
             parent_world = np.array(evaluated[parent_key].matrix_world, dtype=np.float64)
-            local = np.linalg.solve(parent_world, world)
+            local = relative_matrix(parent_world, world)
         else:
             local = world
         obj = ObjectRecord(key=key, name=ob.original.name, parent=parent_key,
@@ -158,12 +168,19 @@ def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir):
         elif ob.type == "CAMERA":
             obj.kind = "camera"
             obj.camera = gather_camera(ob.data.original, scene.render, warn)
-        elif ob.type in GEOMETRY:
-            _gather_geometry(ob, obj, rec, shared, rigs.get(key), groups)
+        elif ob.type in MESH_LIKE and shown[key]:
+            _gather_geometry(ob, obj, rec, shared, rigs.get(key), groups, warn)
             for mat in obj.materials:
                 if mat is not None:
                     material_keys.setdefault(mat[0], mat[1])
             obj.materials = [m[0] if m else None for m in obj.materials]
+        elif ob.type == "POINTCLOUD" and shown[key]:
+            obj.points = pointcloud_points(ob.data, ob.data.name)
+            require_finite(obj.points.points, f"object '{obj.name}'", "point positions")
+        elif ob.type in UNSUPPORTED:
+            warn(unsupported_warning(obj.name, UNSUPPORTED[ob.type]))
+        _gather_points(ob, obj, instances, world, warn)
+        obj.instances = instances.instances_of(key, world)
         rec.objects.append(obj)
 
     for key in sorted(material_keys):
@@ -175,11 +192,24 @@ def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir):
     return groups
 
 
-def _gather_geometry(ob, obj, rec, shared, rig, groups):
+def _gather_points(ob, obj, instances, world, warn):
+    """Particles shown as halos and point clouds a modifier makes, as one Points prim."""
+    found = [p for p in (obj.points, instances.points.get(obj.key),
+                         particle_points(ob, np.linalg.pinv(world), warn)) if p is not None]
+    if len(found) > 1:
+        found[0].points = np.concatenate([p.points for p in found])
+        found[0].widths = np.concatenate([p.widths for p in found])
+    obj.points = found[0] if found else None
+    if obj.points is not None:
+        require_finite(obj.points.points, f"object '{obj.name}'", "particle positions")
+
+
+def _gather_geometry(ob, obj, rec, shared, rig, groups, warn):
     orig = ob.original
     is_shared = _is_shareable(orig) and orig.data.name_full in shared
     mesh_key = ("proto:" + orig.data.name_full) if is_shared else ("object:" + orig.name_full)
     skinned = rig is not None and rig.reason is None
+    owner = f"object '{orig.name}'"
     if mesh_key not in rec.meshes:
         # Blend shapes apply to the mesh without its shape keys: the data itself (such
         # meshes have no other modifier), with the reference key's positions.
@@ -187,9 +217,14 @@ def _gather_geometry(ob, obj, rec, shared, rig, groups):
         mesh = orig.data if keyed else ob.to_mesh()
         try:
             if len(mesh.polygons) == 0:
-                return  # points or edges only: nothing to render
+                # Points or edges only: nothing to render. Empty meshes (a metaball
+                # that only feeds its family, geometry nodes that only instance) are
+                # not worth a word.
+                if len(mesh.vertices) and orig.type != "META":
+                    warn(faceless_warning(orig.name, len(mesh.vertices), len(mesh.edges)))
+                return
             name = orig.data.name if orig.type == "MESH" else orig.name
-            rec.meshes[mesh_key] = gather_mesh(mesh, mesh_key, name)
+            rec.meshes[mesh_key] = gather_mesh(mesh, mesh_key, name, owner)
             uv_map = tangent_uv_map([s.material for s in ob.material_slots])
             if uv_map is not None:
                 rec.meshes[mesh_key].tangents = mikktspace_tangents(mesh, uv_map)
@@ -197,6 +232,7 @@ def _gather_geometry(ob, obj, rec, shared, rig, groups):
                 reference = mesh.shape_keys.reference_key.data
                 co = np.empty(len(reference) * 3, dtype=np.float32)
                 reference.foreach_get("co", co)
+                require_finite(co, owner, "shape key positions")
                 rec.meshes[mesh_key].points = co.reshape(-1, 3)
             if skinned and rig.armature is not None:
                 groups[orig.name_full] = group_entries(mesh)

@@ -8,6 +8,11 @@ from ..ir import SkeletonRecord
 SHEAR_TOLERANCE = 1e-5
 # SkelAnimation scales are half3: a scale half precision rounds is not exact.
 HALF_TOLERANCE = 1e-6
+# A 3×3 part whose determinant is below this times its size cubed is singular.
+SINGULAR = 1e-12
+# A matrix is written as translate · orient · scale when they recompose it this closely
+# (relative to its size; Blender's matrices are float32).
+TRS_TOLERANCE = 1e-6
 
 
 def _matrices(collection, attr):
@@ -22,14 +27,12 @@ def joint_order(bones):
     """Bone indices parents first (depth first, Blender's child order), and parent indices."""
     index = {b.name: i for i, b in enumerate(bones)}
     order = []
-
-    def visit(bone):
+    # An explicit stack, not recursion: a chain of a thousand bones is a thousand deep.
+    stack = [bone for bone in reversed(bones) if bone.parent is None]
+    while stack:
+        bone = stack.pop()
         order.append(index[bone.name])
-        for child in bone.children:
-            visit(child)
-    for bone in bones:
-        if bone.parent is None:
-            visit(bone)
+        stack.extend(reversed(bone.children))
     position = {bone_index: j for j, bone_index in enumerate(order)}
     parents = [position[index[bones[i].parent.name]] if bones[i].parent else -1 for i in order]
     return order, parents
@@ -69,18 +72,30 @@ def pose_index(arm_ob, joint_names):
 
 def affine_inverse(m):
     """Inverse of (..., 4, 4) affine matrices by the 3×3 adjugate: numpy's batched LAPACK
-    inverse costs microseconds per matrix, which dominates a crowd's export."""
+    inverse costs microseconds per matrix, which dominates a crowd's export. A singular
+    matrix (a zero or degenerate scale) gets its pseudo-inverse: finite, and exact
+    wherever the matrices it is composed with collapse the same way."""
     a = m[..., :3, :3]
     c0 = np.cross(a[..., 1, :], a[..., 2, :])
     c1 = np.cross(a[..., 2, :], a[..., 0, :])
     c2 = np.cross(a[..., 0, :], a[..., 1, :])
     det = np.sum(a[..., 0, :] * c0, axis=-1)
-    inv3 = np.stack([c0, c1, c2], axis=-1) / det[..., None, None]
+    size = np.abs(a).max(axis=(-2, -1), initial=0.0)
+    singular = np.abs(det) <= SINGULAR * np.maximum(size, 1e-300) ** 3
+    safe = np.where(singular, 1.0, det)
+    inv3 = np.stack([c0, c1, c2], axis=-1) / safe[..., None, None]
+    if singular.any():
+        inv3[singular] = np.linalg.pinv(a[singular])
     out = np.zeros_like(m)
     out[..., :3, :3] = inv3
     out[..., :3, 3] = -np.einsum("...ij,...j->...i", inv3, m[..., :3, 3])
     out[..., 3, 3] = 1.0
     return out
+
+
+def relative_matrix(parent, child):
+    """parent⁻¹ · child for (..., 4, 4) world matrices, finite under a zero-scale parent."""
+    return affine_inverse(parent) @ child
 
 
 def local_matrices(poses, parents):
@@ -122,23 +137,99 @@ def _quaternions(r):
     return q.reshape(r.shape[:-2] + (4,))
 
 
+def _complete_rotation(r, zero):
+    """Fills the columns of `r` whose scale is zero (`zero`, (..., 3)) so that r is a
+    rotation: a zero scale says nothing about the rotation of that axis."""
+    r = r.copy()
+    count = zero.sum(-1)
+    one = count == 1
+    if one.any():  # the missing axis is the cross product of the other two
+        sub, z = r[one], zero[one]
+        for i in range(3):
+            rows = z[:, i]
+            j, k = (i + 1) % 3, (i + 2) % 3
+            sub[rows, :, i] = np.cross(sub[rows, :, j], sub[rows, :, k])
+        r[one] = sub
+    two = count == 2
+    if two.any():  # keep the one known axis, complete it to a right-handed basis
+        sub, z = r[two], zero[two]
+        for i in range(3):
+            rows = ~z[:, i]
+            if not rows.any():
+                continue
+            j, k = (i + 1) % 3, (i + 2) % 3
+            axis = sub[rows, :, i]
+            helper = np.eye(3)[np.argmin(np.abs(axis), axis=1)]
+            u = np.cross(helper, axis)
+            u /= np.linalg.norm(u, axis=1, keepdims=True)
+            sub[rows, :, j], sub[rows, :, k] = u, np.cross(axis, u)
+        r[two] = sub
+    r[count == 3] = np.eye(3)
+    return r
+
+
 def decompose(local):
     """(T, J, 4, 4) -> translations, quaternions (x, y, z, w), scales, and the worst
-    shear and half-precision errors (0 when the channels are exact)."""
+    shear and half-precision errors (0 when the channels are exact). A zero scale
+    keeps an identity rotation for that axis; the matrix is still recomposed exactly."""
     t = local[..., :3, 3]
     a = local[..., :3, :3]
     s = np.linalg.norm(a, axis=-2)
+    size = np.maximum(s.max(axis=-1, keepdims=True), 1e-300)
+    zero = s <= SINGULAR * size
+    s = np.where(zero, 0.0, s)
     flip = np.linalg.det(a) < 0
     s[..., 0] = np.where(flip, -s[..., 0], s[..., 0])
-    r = a / np.where(s == 0, 1.0, s)[..., None, :]
+    r = a / np.where(zero, 1.0, s)[..., None, :]
+    r = np.where(zero[..., None, :], 0.0, r)
+    if zero.any():
+        r = _complete_rotation(r, zero)
     shear = np.abs(np.swapaxes(r, -1, -2) @ r - np.eye(3)).max(initial=0.0)
     q = _quaternions(r)
     # Neighbouring frames on the same hemisphere, so interpolation takes the short way.
     for f in range(1, len(q)):
-        q[f] *= np.where((q[f] * q[f - 1]).sum(-1) < 0, -1.0, 1.0)[:, None]
+        q[f] *= np.where((q[f] * q[f - 1]).sum(-1) < 0, -1.0, 1.0)[..., None]
     half = np.abs(s.astype(np.float16).astype(np.float64) - s)
     half_error = (half / np.maximum(np.abs(s), 1e-12)).max(initial=0.0)
     return t, q, s, shear, half_error
+
+
+def rotation_matrices(q):
+    """(..., 4) unit quaternions (x, y, z, w) -> (..., 3, 3)."""
+    x, y, z, w = np.moveaxis(np.asarray(q, np.float64), -1, 0)
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1)], -2)
+
+
+def recompose(t, q, s):
+    """translate · rotate · scale -> (..., 4, 4) matrices (Blender's convention)."""
+    m = np.zeros(np.shape(t)[:-1] + (4, 4))
+    m[..., :3, :3] = rotation_matrices(q) * np.asarray(s)[..., None, :]
+    m[..., :3, 3] = t
+    m[..., 3, 3] = 1.0
+    return m
+
+
+def trs_parts(matrices):
+    """(T, 4, 4) matrices -> (TRS, exact): exact[i] when translate · orient · scale
+    recompose matrix i within TRS_TOLERANCE (False: it shears). Quaternions of
+    neighbouring rows share a hemisphere, so slerp between them goes the short way."""
+    from ..ir import TRS
+    m = np.asarray(matrices, np.float64)
+    t, q, s, _, _ = decompose(m[:, None])
+    t, q, s = t[:, 0], q[:, 0], s[:, 0]
+    size = np.maximum(np.abs(m[:, :3, :3]).max(axis=(1, 2), initial=0.0), 1.0)
+    error = np.abs(recompose(t, q, s)[:, :3, :3] - m[:, :3, :3]).max(axis=(1, 2), initial=0.0)
+    return TRS(translations=t, rotations=q, scales=s), error / size <= TRS_TOLERANCE
+
+
+def trs(matrices):
+    """TRS of (T, 4, 4) matrices when every one is exactly translate · orient · scale,
+    else None (the matrices must be written as they are)."""
+    parts, exact = trs_parts(matrices)
+    return parts if exact.all() else None
 
 
 def bone_scale_error(poses, rest_armature, deform):

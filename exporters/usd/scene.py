@@ -3,6 +3,7 @@ import numpy as np
 from pxr import Gf, Sdf, UsdGeom, UsdSkel, Vt
 
 from .camera import write_camera
+from .instances import write_instances, write_points, write_prototype
 from .light import write_light
 from .material import write_material
 from .mesh import bind_materials, write_mesh
@@ -17,14 +18,32 @@ MATERIALS = ROOT.AppendChild("_materials")
 WORLD = ROOT.AppendChild("_world")
 
 
-def _transform(prim, matrix, samples=None, times=()):
-    # Blender's matrices act on column vectors, USD's on row vectors: transpose.
-    op = UsdGeom.Xformable(prim).AddTransformOp()
-    if samples is None:
-        op.Set(Gf.Matrix4d(matrix.T.tolist()))
+def _channel(op, values, times, convert):
+    """One default value when the channel does not change, else a sample per time."""
+    if len(values) == 1 or np.all(values == values[:1]):
+        op.Set(convert(values[0]))
         return
-    for frame, m in zip(times, samples):
-        op.Set(Gf.Matrix4d(m.T.tolist()), frame)
+    with Sdf.ChangeBlock():
+        for frame, value in zip(times, values):
+            op.Set(convert(value), frame)
+
+
+def _transform(prim, obj, times=()):
+    """translate, orient (quaternion) and scale ops when the matrix is TRS, so that USD
+    interpolates between samples as Blender does; the matrix op only for shear."""
+    xformable = UsdGeom.Xformable(prim)
+    if obj.trs is not None:
+        precision = UsdGeom.XformOp.PrecisionDouble
+        _channel(xformable.AddTranslateOp(precision), obj.trs.translations, times,
+                 lambda v: Gf.Vec3d(*map(float, v)))
+        _channel(xformable.AddOrientOp(precision), obj.trs.rotations, times,
+                 lambda q: Gf.Quatd(float(q[3]), float(q[0]), float(q[1]), float(q[2])))
+        _channel(xformable.AddScaleOp(precision), obj.trs.scales, times,
+                 lambda v: Gf.Vec3d(*map(float, v)))
+        return
+    # Blender's matrices act on column vectors, USD's on row vectors: transpose.
+    samples = obj.matrix_samples if obj.matrix_samples is not None else obj.matrix[None]
+    _channel(xformable.AddTransformOp(), samples, times, lambda m: Gf.Matrix4d(m.T.tolist()))
 
 
 def _bake_points(stage, mesh_path, samples):
@@ -70,9 +89,13 @@ def write_scene(stage, scene, asset_path, max_influences=None):
     def slot_names(slot_materials):
         return [scene.materials[k].name if k is not None else None for k in slot_materials]
 
-    proto_paths = {}
-    shared = sorted({o.mesh for o in scene.objects if o.shared})
-    if shared:
+    proto_paths = {}  # mesh key -> path of its data, written once
+    for proto in scene.prototypes.values():
+        if proto.mesh is not None:
+            slots_of.setdefault(proto.mesh, proto.materials)
+    shared = sorted({o.mesh for o in scene.objects if o.shared} |
+                    {p.mesh for p in scene.prototypes.values() if p.mesh is not None})
+    if shared or scene.prototypes:
         stage.CreateClassPrim(PROTOTYPES)
         for key in shared:
             rec = scene.meshes[key]
@@ -80,6 +103,12 @@ def write_scene(stage, scene, asset_path, max_influences=None):
             write_mesh(stage, path, rec, double_sided(slots_of[key]), slot_names(slots_of[key]))
             set_blender_name(stage.GetPrimAtPath(path), rec.name)
             proto_paths[key] = path
+    instance_paths = {}  # prototype key -> its Xform under /root/_prototypes
+    for key in sorted(scene.prototypes):
+        proto = scene.prototypes[key]
+        instance_paths[key] = namer.child(PROTOTYPES, proto.name)
+        write_prototype(stage, instance_paths[key], proto, proto_paths, material_paths,
+                        scene.meshes)
 
     object_paths, skeletons = {}, {}  # rig key -> (Skeleton path, blend shape tokens)
     for obj in scene.objects:
@@ -95,8 +124,13 @@ def write_scene(stage, scene, asset_path, max_influences=None):
             skeletons[obj.rig] = write_skeleton(stage, path, scene.skeletons[obj.rig], namer)
         else:
             prim = UsdGeom.Xform.Define(stage, path).GetPrim()
-        _transform(prim, obj.matrix, obj.matrix_samples, scene.times)
+        _transform(prim, obj, scene.times)
         set_blender_name(prim, obj.name)
+        if obj.points is not None:
+            write_points(stage, namer.child(path, obj.points.name), obj.points)
+        if obj.instances is not None:
+            write_instances(stage, namer.child(path, "Instances"), obj.instances,
+                            instance_paths, namer)
         if obj.kind != "mesh":
             continue
         rec = scene.meshes[obj.mesh]

@@ -1,0 +1,217 @@
+"""The command line: every failure ends with one clear line (naming the file, prim or
+option) and its documented exit status, 2 for a wrong command line, 1 for an input
+that cannot be read or an output that cannot be written, 130 for Ctrl-C; never a
+traceback. Arguments are checked before any work starts."""
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+
+
+def _load_generator():
+    """malformed_usd.py beside this file, loaded by path: putting this folder on
+    sys.path would shadow tests/test_skinning.py and friends."""
+    import importlib.util
+    path = pathlib.Path(__file__).with_name("malformed_usd.py")
+    spec = importlib.util.spec_from_file_location("lantern_malformed_usd", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+malformed_usd = _load_generator()
+
+CUBE = pathlib.Path(__file__).resolve().parents[2].parent / "shared" / "corpus" / "blender" / "01_cube.blend"
+
+
+def lantern(*args):
+    return subprocess.run([sys.executable, "-m", "lantern", *map(str, args)],
+                          capture_output=True, text=True)
+
+
+def last_line(proc):
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    return lines[-1] if lines else ""
+
+
+def check(proc, status, *words):
+    """Exit status, no traceback, and a last line holding every word."""
+    assert "Traceback" not in proc.stderr, proc.stderr
+    assert proc.returncode == status, (proc.returncode, proc.stderr)
+    line = last_line(proc)
+    for word in words:
+        assert word in line, (word, line)
+    return line
+
+
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory):
+    """A small valid USD file (a textured cube, a camera, lights, a rig)."""
+    from pxr import Usd
+    folder = tmp_path_factory.mktemp("cli")
+    stage = Usd.Stage.CreateNew(str(folder / "scene.usda"))
+    malformed_usd.build_base(stage, str(folder))
+    stage.SetEndTimeCode(4)
+    stage.GetRootLayer().Save()
+    return folder / "scene.usda"
+
+
+def test_version_and_help_document_the_exit_statuses():
+    proc = lantern("--version")
+    assert proc.returncode == 0 and proc.stdout.startswith("lantern ")
+    for command in ([], ["render"], ["export"]):
+        text = lantern(*command, "--help").stdout
+        assert "130" in text and "exit status" in text
+
+
+@pytest.mark.parametrize("args, words", [
+    (["render", "{scene}", "-o", "{tmp}/x.exr", "--size", "16385x16"], ["--size", "16384"]),
+    (["render", "{scene}", "-o", "{tmp}/x.exr", "--size", "big"], ["--size"]),
+    (["render", "{scene}", "-o", "{tmp}/x.jpg"], [".exr or .png"]),
+    (["render", "{scene}", "-o", "{tmp}/x.exr", "--frames", "3:1"], ["--frames"]),
+    (["render", "{scene}", "-o", "{tmp}/x####.exr", "--frames", "1:3:0"], ["step"]),
+    (["render", "{scene}", "-o", "{tmp}/x####.exr", "--frames", "a:b"], ["--frames"]),
+    (["render", "{scene}", "-o", "{tmp}/x.exr", "--frames", "1:3"], ["####"]),
+    (["render", "{scene}", "-o", "{tmp}/x####.exr", "--frames", "1:3", "--frame", "2"], ["--frame"]),
+    (["render", "{scene}", "-o", "{tmp}/x.exr", "--camera", "Camera"], ["--camera", "absolute"]),
+    (["render", "{scene}", "-o", "{tmp}/x.exr", "--camera", "/root/Nowhere"], ["/root/Nowhere"]),
+    (["render", "{scene}", "-o", "{tmp}/x.exr", "--camera", "/root/Cube"], ["not a Camera"]),
+    (["render", "{scene}", "-o", "{tmp}/x.exr", "--preset", "bogus"], ["bogus", "medium"]),
+    (["render", "{tmp}/scene.txt", "-o", "{tmp}/x.exr"], ["expected a .usd"]),
+    (["render", "{scene}", "-o", "{tmp}"], [".exr or .png"]),
+    (["render", "{scene}", "-o", "{tmp}/dir.png"], ["is a directory"]),
+    (["export", "{cube}", "-o", "{tmp}/o.obj"], ["o.obj", ".usd"]),
+    (["export", "a.txt", "-o", "{tmp}/a.usda"], ["not a .blend"]),
+    (["export", "{cube}", "{cube}", "-o", "{tmp}/a.usda"], ["folder"]),
+    (["export", "{cube}", "-o", "{tmp}/a.usda", "--max-influences", "0"], ["--max-influences"]),
+    (["export", "{cube}", "-o", "{tmp}/out", "-j", "0"], ["-j"]),
+], ids=lambda v: " ".join(v) if isinstance(v, list) and v and v[0] in ("render", "export") else None)
+def test_usage_errors_exit_2_before_any_work(scene, tmp_path, args, words):
+    (tmp_path / "dir.png").mkdir()
+    (tmp_path / "scene.txt").write_text("x")
+    args = [a.format(scene=scene, tmp=tmp_path, cube=CUBE) for a in args]
+    before = set(os.listdir(tmp_path))
+    proc = lantern(*args)
+    check(proc, 2, *words)
+    assert set(os.listdir(tmp_path)) == before, "a usage error left something behind"
+
+
+def test_a_bad_preset_is_rejected_before_the_export(tmp_path):
+    """A .blend that cannot be read and a bad preset: the preset is what is reported."""
+    broken = tmp_path / "broken.blend"
+    broken.write_bytes(b"not a blend file at all")
+    check(lantern("render", broken, "-o", tmp_path / "x.exr", "--preset", "bogus"), 2, "bogus")
+    check(lantern("render", broken, "-o", tmp_path / "x.exr"), 1, "broken.blend")
+
+
+@pytest.mark.parametrize("case", ["missing input", "corrupt input", "not utf-8 input",
+                                  "output under a file", "export output under a file",
+                                  "missing blend"])
+def test_failed_inputs_and_outputs_exit_1(scene, tmp_path, case):
+    if case == "missing input":
+        check(lantern("render", tmp_path / "nothing.usda", "-o", tmp_path / "x.exr"), 1,
+              "nothing.usda", "no such file")
+    elif case == "corrupt input":
+        bad = tmp_path / "bad.usda"
+        bad.write_text("#usda 1.0\n(((garbage")
+        line = check(lantern("render", bad, "-o", tmp_path / "x.exr"), 1, "bad.usda",
+                     "cannot be read as USD")
+        assert len(line.split("cannot be read as USD:", 1)[1].strip()) > 5, "empty reason"
+    elif case == "not utf-8 input":
+        bad = tmp_path / "bytes.usda"
+        bad.write_bytes(scene.read_bytes().replace(b"Cube", b"Cu\xd0\xffbe", 1))
+        check(lantern("render", bad, "-o", tmp_path / "x.exr"), 1, "bytes.usda")
+    elif case == "output under a file":
+        (tmp_path / "afile").write_text("x")
+        check(lantern("render", scene, "-o", tmp_path / "afile" / "sub" / "x.exr"), 1,
+              "not a directory")
+    elif case == "export output under a file":
+        (tmp_path / "afile").write_text("x")
+        check(lantern("export", CUBE, "-o", tmp_path / "afile" / "x.usda"), 1, "not a directory")
+    else:
+        check(lantern("export", tmp_path / "missing.blend", "-o", tmp_path / "x.usda"), 1,
+              "missing.blend", "no such file")
+
+
+def test_a_missing_output_folder_is_made(scene, tmp_path):
+    out = tmp_path / "new" / "deeper" / "x.exr"
+    proc = lantern("render", scene, "-o", out, "--size", "32x18")
+    assert proc.returncode == 0, proc.stderr
+    assert out.is_file()
+
+
+def test_frames_with_a_step_and_fractional_frames(scene, tmp_path):
+    proc = lantern("render", scene, "-o", tmp_path / "f_####.exr", "--frames", "1:4:2",
+                   "--size", "16x9")
+    assert proc.returncode == 0, proc.stderr
+    assert sorted(os.listdir(tmp_path)) == ["f_0001.exr", "f_0003.exr"]
+    proc = lantern("render", scene, "-o", tmp_path / "h_##.exr", "--frames", "1:2:0.5",
+                   "--size", "16x9")
+    assert proc.returncode == 0, proc.stderr
+    assert sorted(p for p in os.listdir(tmp_path) if p.startswith("h_")) == \
+        ["h_01.5.exr", "h_01.exr", "h_02.exr"]
+
+
+@pytest.mark.xfail(strict=True, raises=AssertionError,
+                   reason="engine (issue 9): render through RenderSettings.camera")
+def test_camera_option_picks_the_camera(scene, tmp_path):
+    """--camera /root/Other renders what the stage renders with Other as its camera."""
+    from pxr import Gf, Usd, UsdGeom
+    from lantern.engine.image_io import read_exr
+    folder = scene.parent
+    for name, target in (("two.usda", "/root/Camera"), ("other.usda", "/root/Other")):
+        stage = Usd.Stage.Open(str(scene))
+        stage.GetRootLayer().Export(str(folder / name))
+        stage = Usd.Stage.Open(str(folder / name))
+        other = UsdGeom.Camera.Define(stage, "/root/Other")
+        other.AddTransformOp().Set(Gf.Matrix4d().SetLookAt(
+            Gf.Vec3d(0, 0, 12), Gf.Vec3d(0, 0, 0), Gf.Vec3d(0, 1, 0)).GetInverse())
+        other.CreateFocalLengthAttr(50.0)
+        stage.GetPrimAtPath("/Render/Settings").GetRelationship("camera").SetTargets([target])
+        stage.Save()
+    a, b = tmp_path / "a.exr", tmp_path / "b.exr"
+    proc = lantern("render", folder / "two.usda", "-o", a, "--camera", "/root/Other",
+                   "--size", "32x18")
+    assert proc.returncode == 0, proc.stderr
+    proc = lantern("render", folder / "other.usda", "-o", b, "--size", "32x18")
+    assert proc.returncode == 0, proc.stderr
+    import numpy as np
+    assert np.abs(read_exr(str(a)) - read_exr(str(b))).max() <= 1e-6
+
+
+def test_warnings_print_once(tmp_path, empty_scene):
+    import bpy
+    from _export_helpers import cube_object
+    cube_object("Solid")
+    mesh = bpy.data.meshes.new("Wire")
+    mesh.from_pydata([(0, 0, 0), (1, 0, 0)], [(0, 1)], [])
+    bpy.context.scene.collection.objects.link(bpy.data.objects.new("Wire", mesh))
+    blend = tmp_path / "warn.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    proc = lantern("export", blend, "-o", tmp_path / "warn.usda")
+    assert proc.returncode == 0, proc.stderr
+    mentions = [line for line in proc.stderr.splitlines() if "'Wire'" in line]
+    assert mentions == [mentions[0]] and mentions[0].startswith("warning: "), proc.stderr
+
+
+def test_ctrl_c_prints_one_line_and_exits_130(scene, tmp_path):
+    proc = subprocess.Popen([sys.executable, "-m", "lantern", "render", str(scene), "-o",
+                             str(tmp_path / "f_####.exr"), "--frames", "1:100000",
+                             "--size", "16x9"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # Wait for the first frame: by then every import is done and frames are rendering.
+    for _ in range(600):
+        if any(p.startswith("f_") for p in os.listdir(tmp_path)):
+            break
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    lines = [line for line in err.splitlines() if line.strip() and not line.startswith("warning: ")]
+    assert lines == ["lantern render: interrupted"], err
