@@ -2,25 +2,22 @@
 from __future__ import annotations
 
 import numpy as np
-from pxr import Usd
 
 from .session import RenderResult, RenderSettings, Session
+from .usd.stage import open_stage
 
 
-def render_stage(stage: Usd.Stage, settings: RenderSettings | None = None) -> RenderResult:
-    """One image of a stage."""
+def render_stage(stage, settings: RenderSettings | None = None) -> RenderResult:
+    """One image of a Usd.Stage."""
     with Session(stage, settings) as session:
         return session.render()
 
 
 def render_file(path: str, settings: RenderSettings | None = None) -> RenderResult:
-    stage = Usd.Stage.Open(str(path))
-    if stage is None:
-        raise OSError(f"cannot open USD file {path}")
-    return render_stage(stage, settings)
+    return render_stage(open_stage(path), settings)
 
 
-def render_sequence(stage: Usd.Stage, first: float, last: float,
+def render_sequence(stage, first: float, last: float,
                     settings: RenderSettings | None = None):
     """Yields (frame, RenderResult) for frames first..last with one Session: the
     stage's static data is read and uploaded once, and each frame reads only what
@@ -32,7 +29,7 @@ def render_sequence(stage: Usd.Stage, first: float, last: float,
             yield float(frame), session.render(frame=float(frame))
 
 
-def skinned_points(stage: Usd.Stage, frame: float) -> dict:
+def skinned_points(stage, frame: float) -> dict:
     """GPU-skinned points and normals of every skinned mesh at `frame` (see
     Session.skinned_points)."""
     with Session(stage, RenderSettings(width=1, height=1, preset="low")) as session:

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.presets import preset as find_preset
+from ..core.presets import DEFAULT as DEFAULT_PRESET, preset as find_preset
 from .gpu.context import gl_thread, run_gl
 from .gpu.renderer import Renderer
 from .usd import camera as usd_camera
@@ -31,7 +31,7 @@ class RenderSettings:
     width: int | None = None     # None: /Render/Settings resolution if authored, else 640x360
     height: int | None = None
     frame: float | None = None   # None: the stage's startTimeCode if authored, else Default
-    preset: str = "medium"       # low | medium | high | ultra (core/presets.py)
+    preset: str = DEFAULT_PRESET  # low | medium | high | ultra (core/presets.py)
     transparent: bool = False    # alpha = coverage instead of 1
     # An explicit view instead of the stage's camera (Blender's viewport): OpenGL
     # world-to-view and projection matrices, column-vector convention.

@@ -35,6 +35,13 @@ PROTOTYPE_ROOT = "/__Prototype_"
 HEADLIGHT = "<headlight>"
 
 
+def open_stage(path) -> Usd.Stage:
+    stage = Usd.Stage.Open(str(path))
+    if stage is None:
+        raise OSError(f"cannot open USD file {path}")
+    return stage
+
+
 def under(path: str, root: str) -> bool:
     """Whether prim path `path` is `root` or below it."""
     return root == "/" or path == root or path.startswith(root + "/")

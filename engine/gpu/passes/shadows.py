@@ -86,9 +86,8 @@ class ShadowMap:
         set_uniform(prog, "shadow_tiles", self.tiles)
         mats = np.zeros((6, 4, 4), "f4")
         for i, m in enumerate(self.mats):
-            mats[i] = m.T
-        if "shadow_mats" in prog:
-            prog["shadow_mats"].write(mats.tobytes())
+            mats[i] = m.T                     # column-major, as GLSL reads a mat4
+        set_uniform(prog, "shadow_mats", mats)
         rects = np.zeros((6, 4), "f4")
         rects[:len(self.rects)] = self.rects
         set_uniform(prog, "shadow_rects", rects)

@@ -111,7 +111,6 @@ class SkinningPass(Pass):
 
     def _upload(self, mesh) -> _Input:
         skin = mesh.skin
-        up = self.uploads
         n = len(mesh.vertices)
         cols, fmt, names = [mesh.point_of_vertex.astype(np.int32).reshape(n, 1).view(np.float32)], \
             ["1i"], ["in_point"]
@@ -122,13 +121,14 @@ class SkinningPass(Pass):
                 fmt += ["4i", "4f"]
                 names += [f"in_joints{h}", f"in_weights{h}"]
         attributes = np.ascontiguousarray(np.concatenate(cols, axis=1), np.float32)
-        inp = _Input(rest=up.buffer(mesh.vertices, kind="mesh"),
-                     attributes=up.buffer(attributes, kind="mesh"),
+        inp = _Input(rest=self.uploads.buffer(mesh.vertices, kind="mesh"),
+                     attributes=self.uploads.buffer(attributes, kind="mesh"),
                      fmt=(" ".join(fmt), *names), vaos={})
         if skin.shape_offsets is not None:
-            inp.shapes = up.float_texture(shape_texels(skin), kind="mesh")
+            inp.shapes = self.uploads.float_texture(shape_texels(skin), kind="mesh")
         if skin.point_influences is not None:
-            inp.influences = up.float_texture(flat_texels(skin.point_influences), kind="mesh")
+            inp.influences = self.uploads.float_texture(flat_texels(skin.point_influences),
+                                                        kind="mesh")
         return inp
 
     def execute(self, frame, board):
