@@ -1,17 +1,14 @@
 """Scene settings for Lantern, stored on `scene.lantern`."""
 import bpy
 
-PRESETS = (
-    ("low", "Low", "Fastest: smallest shadow maps and fewest filter taps"),
-    ("medium", "Medium", "Balanced quality and speed"),
-    ("high", "High", "Larger shadow maps and softer filtering"),
-    ("ultra", "Ultra", "Closest to Cycles, slowest"),
-)
+from ..core.presets import DEFAULT, PRESETS as QUALITY
+
+PRESETS = tuple((p.name, p.label, p.description) for p in QUALITY.values())
 
 
 class LanternSceneSettings(bpy.types.PropertyGroup):
     preset: bpy.props.EnumProperty(
-        name="Quality", items=PRESETS, default="medium",
+        name="Quality", items=PRESETS, default=DEFAULT,
         description="Trades render time for error against Cycles")
 
 

@@ -8,12 +8,12 @@ import tempfile
 
 
 def atomic_write(path: str, write, suffix: str = "", keep_mode: bool = False) -> None:
-    """Calls write(tmp_path) for a temporary file in `path`'s folder, then renames it
-    to `path`; on any error the temporary file is removed and the error re-raised.
+    """Calls write(tmp_path) for a temporary file in `path`'s folder (which must
+    exist), then renames it to `path`; on any error the temporary file is removed and
+    the error re-raised.
     keep_mode: give the file the permissions a plain open() would (mkstemp makes it
     0600), for files other users read."""
     folder = os.path.dirname(os.path.abspath(path))
-    os.makedirs(folder, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=suffix,
                                dir=folder)
     os.close(fd)

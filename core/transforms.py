@@ -9,7 +9,8 @@ import numpy as np
 
 
 def quaternions_from_matrices(r: np.ndarray) -> np.ndarray:
-    """(..., 3, 3) proper rotation matrices -> (..., 4) unit quaternions (x, y, z, w).
+    """(..., 3, 3) proper rotation matrices -> (..., 4) unit quaternions (x, y, z, w),
+    for the exporter's SkelAnimation rotations and the engine's dual quaternions.
     Shepperd's method: pivot on the largest of w, x, y, z, so no branch divides by a
     small number."""
     m = np.asarray(r, np.float64).reshape(-1, 3, 3)
@@ -37,17 +38,6 @@ def quaternions_from_matrices(r: np.ndarray) -> np.ndarray:
             q[s] = out
     q /= np.linalg.norm(q, axis=1, keepdims=True)
     return q.reshape(np.shape(r)[:-2] + (4,))
-
-
-def matrices_from_quaternions(q: np.ndarray) -> np.ndarray:
-    """(..., 4) quaternions (x, y, z, w) -> (..., 3, 3) rotation matrices."""
-    q = np.asarray(q, np.float64)
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    x, y, z, w = np.moveaxis(q, -1, 0)
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
-        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
-        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1)], -2)
 
 
 def quaternion_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
