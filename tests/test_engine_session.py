@@ -442,3 +442,35 @@ def test_close_releases_the_gpu_state():
     assert type(table.mglo).__name__ == "InvalidObject"
     with pytest.raises(RuntimeError, match="closed"):
         session.render()
+
+
+def test_blender_backface_culling_reaches_the_engine(empty_scene):
+    """Blender's per-material Backface Culling is exported as doubleSided = false plus
+    lantern:backfaceCulling, and the engine culls exactly those meshes."""
+    import bpy
+    from lantern.exporters import stage_from_depsgraph
+    for name, cull, x in (("Culled", True, -1.2), ("Shown", False, 1.2)):
+        bpy.ops.mesh.primitive_plane_add(size=2.0, location=(x, 0, 0))
+        ob = bpy.context.active_object
+        ob.name = name
+        mat = bpy.data.materials.new(name)
+        mat.use_backface_culling = cull
+        ob.data.materials.append(mat)
+    stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+    culled = stage.GetPrimAtPath("/root/Culled").GetChildren()[0]
+    shown = stage.GetPrimAtPath("/root/Shown").GetChildren()[0]
+    assert culled.GetAttribute("doubleSided").Get() is False
+    assert culled.GetAttribute("lantern:backfaceCulling").Get() is True
+    assert shown.GetAttribute("doubleSided").Get() is True
+    assert not shown.GetAttribute("lantern:backfaceCulling").HasValue()
+    # Seen from below: the culled plane alone shows nothing, until its marker goes.
+    cam = UsdGeom.Camera.Define(stage, "/root/below")
+    cam.AddTransformOp().Set(Gf.Matrix4d().SetLookAt(
+        Gf.Vec3d(0, 0, -8), Gf.Vec3d(0, 0, 0), Gf.Vec3d(0, 1, 0)).GetInverse())
+    settings = RenderSettings(width=64, height=32, transparent=True, camera="/root/below")
+    both = render_stage(stage, settings).rgba[..., 3]
+    stage.RemovePrim("/root/Shown")
+    alone = render_stage(stage, settings).rgba[..., 3]
+    culled.GetAttribute("lantern:backfaceCulling").Set(False)
+    unmarked = render_stage(stage, settings).rgba[..., 3]
+    assert both.sum() > 50 and alone.sum() == 0 and unmarked.sum() > 50
