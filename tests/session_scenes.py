@@ -43,7 +43,12 @@ def cubes_stage(n=1000, merged=False, lights=(), size=0.8, camera=True):
         mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(pts.astype(np.float32)))
         mesh.CreateFaceVertexCountsAttr([4] * (6 * n))
         mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(idx.astype(np.int32)))
-        UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(mats[0])
+        binding = UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim())
+        binding.Bind(mats[0])
+        for k, mat in enumerate(mats):           # the same materials, by face subsets
+            faces = np.array([6 * i + f for i in range(k, n, 3) for f in range(6)], np.int32)
+            subset = binding.CreateMaterialBindSubset(mat.GetPath().name, Vt.IntArray.FromNumpy(faces))
+            UsdShade.MaterialBindingAPI.Apply(subset.GetPrim()).Bind(mat)
     else:
         points = Vt.Vec3fArray.FromNumpy((CUBE_POINTS * size).astype(np.float32))
         for i, p in enumerate(positions):

@@ -256,8 +256,9 @@ class Geometry:
         self.draws = {}                          # instance path -> DrawObject
         self.moved = []                          # world boxes that changed this frame
         self._ids = None                         # object-id attribute buffer (multi-draw)
-        self._commands_stale = True
+        self._stale()
         self._casters = {}                       # store name -> (draws, commands, buffer)
+        self._static_boxes = None                # world boxes while nothing moves
         self._all = self._indirect = self._order = None
 
     # --- keeping up with the scene ----------------------------------------------------
@@ -288,7 +289,7 @@ class Geometry:
             cull = _culls(mesh, cull_backfaces)
             if cull != d.cull:
                 d.cull = cull
-                self._commands_stale = True
+                self._stale()
 
     def _upload_mesh(self, mesh):
         skinned = mesh.skin is not None
@@ -303,7 +304,7 @@ class Geometry:
             store = self._dynamic() if skinned else self.static
             slot = store.alloc(n_v, n_i)
             self.meshes[mesh.key] = (store, slot)
-            self._commands_stale = True
+            self._stale()
         if not skinned:
             store.write_vertices(slot, mesh.vertices)
         store.write_indices(slot, mesh.indices)
@@ -312,13 +313,13 @@ class Geometry:
                 if d.mesh_key == mesh.key:
                     d.ranges = _ranges(mesh, slot)
                     d.local = mesh.bounds
-                    self._commands_stale = True
+                    self._stale()
 
     def _free_mesh(self, key):
         entry = self.meshes.pop(key, None)
         if entry is not None:
             entry[0].free(entry[1])
-            self._commands_stale = True
+            self._stale()
 
     def _dynamic(self) -> VertexStore:
         if self.dynamic is None:
@@ -333,15 +334,16 @@ class Geometry:
             d = self.draws[inst.path] = DrawObject(
                 self.objects.new_id(), inst.path, inst.mesh_key, mesh.skin is not None,
                 _ranges(mesh, slot), _culls(mesh, cull_backfaces), mirrored, mesh.bounds)
-            self._commands_stale = True
+            self._stale()
         else:
             self._note_moved(d)
             if d.mesh_key != inst.mesh_key or d.mirrored != mirrored:
-                self._commands_stale = True
+                self._stale()
             d.mesh_key, d.skinned, d.mirrored = inst.mesh_key, mesh.skin is not None, mirrored
             d.ranges, d.cull, d.local = _ranges(mesh, slot), _culls(mesh, cull_backfaces), mesh.bounds
         d.world = inst.world
         self.objects.set(d.oid, inst.world)
+        self._static_boxes = None
         self._note_moved(d)
 
     def _drop(self, path):
@@ -349,7 +351,12 @@ class Geometry:
         if d is not None:
             self._note_moved(d)
             self.objects.free_id(d.oid)
-            self._commands_stale = True
+            self._stale()
+
+    def _stale(self):
+        """Something drawn was added, removed or changed: commands and boxes again."""
+        self._commands_stale = True
+        self._static_boxes = None
 
     def _note_moved(self, d):
         if d.local is not None:
@@ -363,14 +370,26 @@ class Geometry:
     # --- bounds -----------------------------------------------------------------------
     def world_boxes(self, local_of=None):
         """(draws, lo (n, 3), hi (n, 3)): every object with triangles and its world box
-        this frame. local_of(draw) overrides the local box (posed skinned meshes)."""
-        draws = [d for d in self.draws.values() if d.ranges and d.local is not None]
-        if not draws:
-            return draws, np.zeros((0, 3)), np.zeros((0, 3))
-        lo = np.array([(local_of(d) if local_of else d.local)[0] for d in draws])
-        hi = np.array([(local_of(d) if local_of else d.local)[1] for d in draws])
-        world = np.array([d.world for d in draws])
-        wlo, whi = transform_aabbs(lo, hi, world)
+        this frame, in command-rank order. local_of(draw) overrides skinned objects'
+        local boxes (as posed this frame); the others are kept until something moves."""
+        self.ensure_commands()
+        if self._static_boxes is None:
+            draws = self._ranked
+            if draws:
+                lo = np.array([d.local[0] for d in draws])
+                hi = np.array([d.local[1] for d in draws])
+                wlo, whi = transform_aabbs(lo, hi, np.array([d.world for d in draws]))
+            else:
+                wlo = whi = np.zeros((0, 3))
+            skinned = [i for i, d in enumerate(draws) if d.skinned]
+            self._static_boxes = (draws, wlo, whi, skinned)
+        draws, wlo, whi, skinned = self._static_boxes
+        if local_of is not None and skinned:
+            wlo, whi = wlo.copy(), whi.copy()
+            lo = np.array([local_of(draws[i])[0] for i in skinned])
+            hi = np.array([local_of(draws[i])[1] for i in skinned])
+            slo, shi = transform_aabbs(lo, hi, np.array([draws[i].world for i in skinned]))
+            wlo[skinned], whi[skinned] = slo, shi
         return draws, wlo, whi
 
     # --- commands ---------------------------------------------------------------------
@@ -378,7 +397,9 @@ class Geometry:
         """The command arrays of every (object, range), and the casters' (one command
         per object), in numpy; on the GL 4.3 path also in GPU buffers."""
         self._release_commands()
-        draws = sorted((d for d in self.draws.values() if d.ranges), key=lambda d: d.path)
+        draws = sorted((d for d in self.draws.values() if d.ranges and d.local is not None),
+                       key=lambda d: d.path)
+        self._ranked = draws
         self._rank = {d.path: i for i, d in enumerate(draws)}
         rows, meta = [], []
         for d in draws:
@@ -391,6 +412,9 @@ class Geometry:
         # (culling, and gl_FrontFacing for two-sided shading), so it splits batches.
         self._cmd_key = [(m[0].skinned, m[1], m[0].cull, m[0].mirrored) for m in meta]
         self._cmd_object = np.array([self._rank[m[0].path] for m in meta], np.int64)
+        distinct = sorted(set(self._cmd_key))
+        index = {k: i for i, k in enumerate(distinct)}
+        self._cmd_batch = np.array([index[k] for k in self._cmd_key], np.int64)
         self._casters = {}
         for store in (self.static, self.dynamic):
             if store is None:
@@ -438,19 +462,16 @@ class Geometry:
         self.ensure_commands()
         if not len(self._cmd):
             return [], 0
-        draws, lo, hi = self._boxes
-        visible_rank = np.zeros(len(self._rank), bool)
-        depth_rank = np.zeros(len(self._rank))
-        ranks = np.array([self._rank[d.path] for d in draws], np.int64)
+        draws, lo, hi = self._boxes              # rank order (world_boxes)
         out = outside(lo, hi)
-        visible_rank[ranks[~out]] = True
-        depth_rank[ranks] = ((lo + hi) * 0.5 - eye) @ forward
-        keys = self._batch_keys()
-        sel = np.nonzero(visible_rank[self._cmd_object])[0]
+        visible = ~out
+        depth = ((lo + hi) * 0.5 - eye) @ forward
+        keys = self._cmd_batch
+        sel = np.nonzero(visible[self._cmd_object])[0]
         if not len(sel):
             return [], int(out.sum())
         obj = self._cmd_object[sel]
-        order = sel[np.lexsort((obj, depth_rank[obj], keys[sel]))]
+        order = sel[np.lexsort((obj, depth[obj], keys[sel]))]
         self._view_order = order
         batches, start = [], 0
         bounds = np.flatnonzero(np.diff(keys[order])) + 1
@@ -469,12 +490,6 @@ class Geometry:
             gather.run((len(order) + 63) // 64)
             self.ctx.memory_barrier()
         return batches, int(out.sum())
-
-    def _batch_keys(self) -> np.ndarray:
-        """Per command, its batch's position among the sorted distinct states."""
-        distinct = sorted(set(self._cmd_key), key=lambda k: (k[0], k[1], k[2], k[3]))
-        index = {k: i for i, k in enumerate(distinct)}
-        return np.array([index[k] for k in self._cmd_key], np.int64)
 
     def set_boxes(self, boxes):
         """This frame's (draws, world lo, world hi), shared by culling and shadows."""

@@ -45,7 +45,7 @@ def camera_from_usd(prim: Usd.Prim, time, aspect: float, xcache=None):
 def might_vary(prim: Usd.Prim) -> bool:
     """Whether the camera's transform (or any ancestor's) or its lens may change over
     time."""
-    if any(a.ValueMightBeTimeVarying() for a in prim.GetAttributes()):
+    if any(a.ValueMightBeTimeVarying() for a in prim.GetAuthoredAttributes()):
         return True
     p = prim
     while p and not p.IsPseudoRoot():

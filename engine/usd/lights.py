@@ -47,7 +47,7 @@ def is_light(prim: Usd.Prim) -> bool:
 def might_vary(prim: Usd.Prim) -> bool:
     """Whether any of the light's own values may change over time (its transform is
     the reader's concern)."""
-    return any(a.ValueMightBeTimeVarying() for a in prim.GetAttributes()
+    return any(a.ValueMightBeTimeVarying() for a in prim.GetAuthoredAttributes()
                if not a.GetName().startswith("xformOp"))
 
 

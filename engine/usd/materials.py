@@ -127,7 +127,7 @@ def might_vary(mat: UsdShade.Material) -> bool:
     """Whether any value of the material's network may change over time (it is then
     read again at every new time)."""
     for prim in Usd.PrimRange(mat.GetPrim()):
-        for attr in prim.GetAttributes():
+        for attr in prim.GetAuthoredAttributes():
             if attr.ValueMightBeTimeVarying():
                 return True
     return False

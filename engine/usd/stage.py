@@ -618,7 +618,7 @@ _NOT_GEOMETRY = ("xformOp", "visibility", "purpose", "proxyPrim", "material:", "
 def _mesh_attributes_vary(prim) -> bool:
     """Points, normals, primvars or topology with time samples: the mesh is rebuilt at
     every new time (and never shared)."""
-    return any(a.ValueMightBeTimeVarying() for a in prim.GetAttributes()
+    return any(a.ValueMightBeTimeVarying() for a in prim.GetAuthoredAttributes()
                if not a.GetName().startswith(_NOT_GEOMETRY))
 
 

@@ -69,6 +69,7 @@ class ShadowMap:
         self.splits, self.ranges = list(splits), list(ranges)
         self.size = size            # radial: light radius; ortho: tan(half angle)
         self.atlas = atlas          # texture size
+        self.inputs = None          # (light record, casters' bounds) it was planned for
         self.texture = self.cmp = self.raw = None
 
     def same_layout(self, other) -> bool:
@@ -242,23 +243,32 @@ class ShadowPass(Pass):
             if not casts(light, R):
                 self._drop([path])
                 continue
-            new = plan(light, R, self.preset, view.bounds, view)
-            if new is None:
-                self._drop([path])
-                continue
             old = self.maps.get(path)
-            if old is not None and new.same_layout(old) and not _reached(light, R, moved):
+            bounds = _key(view.bounds)
+            if old is not None and old.inputs == (light, bounds) and light.kind != SUN:
+                sm = old                   # same light, same casters' bounds: same layout
+            else:
+                sm = plan(light, R, self.preset, view.bounds, view)
+                if sm is None:
+                    self._drop([path])
+                    continue
+                sm.inputs = (light, bounds)
+                if sm.same_layout(old):
+                    old.inputs, sm = sm.inputs, old
+            if sm is old and not _reached(light, R, moved):
                 out[path] = old
                 continue
-            self._render(frame, new, old, light)
-            self.maps[path] = out[path] = new
+            self._render(frame, sm, old, light)
+            self.maps[path] = out[path] = sm
             frame.count("shadow_maps_rendered")
-            frame.count("shadow_passes", new.tiles)
+            frame.count("shadow_passes", sm.tiles)
         frame.count("shadow_maps", len(out))
         board["shadow_maps"] = out
 
     def _render(self, frame, sm, old, light):
-        if old is not None and old.atlas == sm.atlas:
+        if sm is old:
+            pass                           # drawn again into its own texture
+        elif old is not None and old.atlas == sm.atlas:
             sm.adopt(old)
         else:
             if old is not None:
@@ -306,6 +316,10 @@ class ShadowPass(Pass):
 
     def release(self):
         self._drop(list(self.maps))
+
+
+def _key(bounds):
+    return None if bounds is None else (tuple(bounds[0]), tuple(bounds[1]))
 
 
 def _reached(light, R, moved) -> bool:
