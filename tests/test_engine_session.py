@@ -210,6 +210,21 @@ def test_shadow_map_redrawn_only_when_a_caster_in_its_reach_moves():
         assert np.abs(moved.rgba - fresh(stage)).max() <= 1e-5
 
 
+def test_a_cube_map_redraws_only_the_faces_a_moving_caster_is_in():
+    stage = shadow_scenes.new_stage(half=8.0)
+    shadow_scenes.add_box(stage, center=(2.5, 0.0, 0.5))          # on the light's +X side
+    shadow_scenes.add_light(stage, "point", pos=(0.0, 0.0, 1.5), power=800.0)
+    shadow_scenes.add_camera(stage, eye=(3, -7, 6), target=(1, 0, 0))
+    box = UsdGeom.Xformable(stage.GetPrimAtPath("/root/box"))
+    with Session(stage, RenderSettings(width=W, height=H)) as session:
+        assert session.render().stats["shadow_passes"] == 6
+        box.AddTranslateOp().Set(Gf.Vec3d(0.4, 0.3, 0.0))
+        moved = session.render()
+    assert moved.stats["shadow_maps_rendered"] == 1
+    assert 1 <= moved.stats["shadow_passes"] <= 3, moved.stats["shadow_passes"]
+    assert np.abs(moved.rgba - fresh(stage)).max() <= 1e-5
+
+
 # --- time --------------------------------------------------------------------------------
 
 def crowd_stage():

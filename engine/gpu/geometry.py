@@ -259,6 +259,7 @@ class Geometry:
         self._stale()
         self._casters = {}                       # store name -> (draws, commands, buffer)
         self._static_boxes = None                # world boxes while nothing moves
+        self._gathered = None                    # the order in the indirect buffer
         self._all = self._indirect = self._order = None
 
     # --- keeping up with the scene ----------------------------------------------------
@@ -266,8 +267,9 @@ class Geometry:
         """Uploads what `changes` says the scene replaced; returns how many meshes
         went up."""
         self.moved = []
-        for path in changes.dropped_instances - scene.instances.keys():
-            self._drop(path)
+        for path in changes.dropped_instances:
+            if path not in scene.instances:
+                self._drop(path)
         for key in changes.dropped_meshes:
             self._free_mesh(key)
         uploaded = 0
@@ -439,6 +441,7 @@ class Geometry:
 
     def _upload_commands(self):
         n = len(self._cmd)
+        self._gathered = None
         self._all = self.uploads.buffer(self._cmd, kind="commands")
         self._indirect = self.uploads.buffer(reserve=n * COMMAND_UINTS * 4, kind="commands")
         self._order = self.uploads.buffer(reserve=n * 4, kind="commands")
@@ -480,7 +483,9 @@ class Geometry:
             store = self.dynamic if skinned else self.static
             batches.append(Batch(store, material, cull, mirrored, start, end - start))
             start = end
-        if self.multi_draw:
+        if self.multi_draw and not np.array_equal(order, self._gathered):
+            # The same order as the last view leaves the indirect buffer as it is.
+            self._gathered = order
             self.uploads.write(self._order, order.astype(np.uint32), kind="commands")
             gather = self.programs.get("gather_commands.comp", compute=True)
             self._all.bind_to_storage_buffer(0)

@@ -1,10 +1,11 @@
 """The shadow pass: a depth atlas per light that casts shadows (`light.shadow`), kept
 by the session and drawn again only when it would change:
-  - a point, spot or area light's map when that light changed, or when a caster
-    within its range changed (its box before or after an edit, a skinned caster's
-    posed box) or its fit to the casters' bounds moved;
-  - a sun's cascades when their fit to the view (or to the casters) changed, or any
-    caster changed.
+  - a point, spot or area light's map when that light changed or its fit to the
+    casters' bounds moved, and otherwise only the tiles (cube faces) in which a
+    caster within its range changed (its box before or after an edit, a skinned
+    caster's posed box);
+  - a sun's cascades when their fit to the view (or to the casters) changed, and
+    otherwise only the cascades in which a caster changed.
 Maps are textures from the session's pool; a light that stops casting gives its back.
 
 Layouts (every map is a set of tiles in one 2D depth texture):
@@ -33,6 +34,7 @@ import numpy as np
 
 from ....core.lights import DISK, POINT, SPOT, SUN
 from ....core.transforms import aabb_corners, frustum, look_at, ortho
+from ...view import boxes_outside, frustum_planes
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
 
@@ -255,17 +257,20 @@ class ShadowPass(Pass):
                 sm.inputs = (light, bounds)
                 if sm.same_layout(old):
                     old.inputs, sm = sm.inputs, old
-            if sm is old and not _reached(light, R, moved):
+            tiles = _stale_tiles(sm, light, R, moved) if sm is old else range(sm.tiles)
+            if not tiles:
                 out[path] = old
                 continue
-            self._render(frame, sm, old, light)
+            self._render(frame, sm, old, light, tiles)
             self.maps[path] = out[path] = sm
             frame.count("shadow_maps_rendered")
-            frame.count("shadow_passes", sm.tiles)
+            frame.count("shadow_passes", len(tiles))
         frame.count("shadow_maps", len(out))
         board["shadow_maps"] = out
 
-    def _render(self, frame, sm, old, light):
+    def _render(self, frame, sm, old, light, tiles):
+        """Draws the given tiles of the map (all of a new one), each cleared and
+        scissored to its own rectangle."""
         if sm is old:
             pass                           # drawn again into its own texture
         elif old is not None and old.atlas == sm.atlas:
@@ -283,22 +288,24 @@ class ShadowPass(Pass):
         ctx = self.ctx
         tw, th = sm.atlas
         fbo = self.pool.framebuffer(depth=sm.texture)
-        fbo.viewport = (0, 0, tw, th)
-        fbo.use()
-        fbo.clear(depth=1.0)
-        ctx.enable(ctx.DEPTH_TEST)
-        ctx.depth_func = "<"
         ctx.disable(ctx.BLEND | ctx.CULL_FACE)   # single-sided planes cast too
         prog = self.programs.get("shadow.vert", "shadow.frag", self.geometry.object_defines())
         self.geometry.bind_objects(UNITS["u_objects"])
         set_uniform(prog, "radial", sm.radial)
         set_uniform(prog, "light_pos", np.asarray(light.position, float))
         set_uniform(prog, "far", sm.far)
-        for m, (x, y, sx, sy) in zip(sm.mats, sm.rects):
-            fbo.viewport = (round(x * tw), round(y * th), round(sx * tw), round(sy * th))
+        for i in tiles:
+            x, y, sx, sy = sm.rects[i]
+            rect = (round(x * tw), round(y * th), round(sx * tw), round(sy * th))
+            fbo.viewport = rect
             fbo.use()
-            set_uniform(prog, "view_proj", m)
+            fbo.clear(depth=1.0, viewport=rect)
+            ctx.scissor = rect
+            ctx.enable(ctx.DEPTH_TEST)
+            ctx.depth_func = "<"
+            set_uniform(prog, "view_proj", sm.mats[i])
             frame.count("shadow_draws", self.geometry.draw_casters(prog))
+        ctx.scissor = None
         ctx.disable(ctx.DEPTH_TEST)
 
     def _drop(self, paths):
@@ -322,14 +329,18 @@ def _key(bounds):
     return None if bounds is None else (tuple(bounds[0]), tuple(bounds[1]))
 
 
-def _reached(light, R, moved) -> bool:
-    """Whether any changed box lies within the light's reach (a sun reaches all)."""
+def _stale_tiles(sm, light, R, moved) -> list:
+    """The tiles of a kept map that a changed box (before or after the change) falls
+    in: within the light's reach (a sun reaches all) and inside the tile's frustum."""
     if not moved:
-        return False
-    if light.kind == SUN:
-        return True
-    p = np.asarray(light.position, float)
+        return []
     lo = np.array([b[0] for b in moved])
     hi = np.array([b[1] for b in moved])
-    nearest = np.clip(p, lo, hi)
-    return bool(np.any(np.sum((nearest - p) ** 2, axis=1) <= R * R))
+    if light.kind != SUN:
+        p = np.asarray(light.position, float)
+        near = np.sum((np.clip(p, lo, hi) - p) ** 2, axis=1) <= R * R
+        lo, hi = lo[near], hi[near]
+        if not len(lo):
+            return []
+    return [i for i, m in enumerate(sm.mats)
+            if not np.all(boxes_outside(frustum_planes(m), lo, hi))]
