@@ -59,7 +59,10 @@ class Session:
         self._camera = None          # (key, Camera) of the stage camera last read
         renderer = run_gl(lambda gl: Renderer(gl, self._preset))
         self._renderer = renderer
+        # A session dropped without close() still frees its GPU state; at exit the
+        # process's context goes with the process.
         self._finalizer = weakref.finalize(self, _release, renderer, self._reader)
+        self._finalizer.atexit = False
 
     @property
     def scene(self):

@@ -339,10 +339,11 @@ class Geometry:
             self._stale()
         else:
             self._note_moved(d)
-            if d.mesh_key != inst.mesh_key or d.mirrored != mirrored:
-                self._stale()
-            d.mesh_key, d.skinned, d.mirrored = inst.mesh_key, mesh.skin is not None, mirrored
-            d.ranges, d.cull, d.local = _ranges(mesh, slot), _culls(mesh, cull_backfaces), mesh.bounds
+            state = (inst.mesh_key, mirrored, _culls(mesh, cull_backfaces), _ranges(mesh, slot))
+            if state != (d.mesh_key, d.mirrored, d.cull, d.ranges):
+                self._stale()             # a new mesh or pipeline state: new commands
+            d.mesh_key, d.mirrored, d.cull, d.ranges = state
+            d.skinned, d.local = mesh.skin is not None, mesh.bounds
         d.world = inst.world
         self.objects.set(d.oid, inst.world)
         self._static_boxes = None
@@ -409,7 +410,6 @@ class Geometry:
                 rows.append((count, 1, first, 0, d.oid))
                 meta.append((d, material))
         self._cmd = np.array(rows, np.uint32).reshape(-1, COMMAND_UINTS)
-        self._cmd_draw = [m[0] for m in meta]
         # A mirrored object's front faces wind clockwise: the winding is pipeline state
         # (culling, and gl_FrontFacing for two-sided shading), so it splits batches.
         self._cmd_key = [(m[0].skinned, m[1], m[0].cull, m[0].mirrored) for m in meta]
@@ -458,14 +458,14 @@ class Geometry:
         if self._commands_stale:
             self._build_commands()
 
-    def view_batches(self, planes, eye, forward, outside) -> list:
-        """The visible commands of a view, in draw order, as state batches; on the
-        GL 4.3 path gathered into the indirect buffer. outside(lo, hi) -> culled mask
-        of world boxes."""
+    def view_batches(self, boxes, eye, forward, outside):
+        """(state batches, objects culled): the commands of the objects a view sees,
+        in draw order; on the GL 4.3 path gathered into the indirect buffer.
+        boxes: this frame's world_boxes; outside(lo, hi) -> culled mask of boxes."""
         self.ensure_commands()
         if not len(self._cmd):
             return [], 0
-        draws, lo, hi = self._boxes              # rank order (world_boxes)
+        _, lo, hi = boxes                         # rank order
         out = outside(lo, hi)
         visible = ~out
         depth = ((lo + hi) * 0.5 - eye) @ forward
@@ -495,10 +495,6 @@ class Geometry:
             gather.run((len(order) + 63) // 64)
             self.ctx.memory_barrier()
         return batches, int(out.sum())
-
-    def set_boxes(self, boxes):
-        """This frame's (draws, world lo, world hi), shared by culling and shadows."""
-        self._boxes = boxes
 
     # --- drawing ----------------------------------------------------------------------
     def draw_batch(self, batch: Batch, prog):

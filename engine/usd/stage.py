@@ -200,8 +200,9 @@ class StageReader:
         self._drop_subtree(root, changes)
         self.skel.refresh(root)
         self._read_subtree(root, changes)
-        order = _traversal_order(self.stage, set(self._cameras))
-        self._cameras.sort(key=lambda p: order.get(p, -1))
+        if any(under(p, root) for p in self._cameras):   # re-read ones went last
+            order = _traversal_order(self.stage, set(self._cameras))
+            self._cameras.sort(key=lambda p: order.get(p, -1))
         for path in dependants:
             prim = self.stage.GetPrimAtPath(path)
             if not under(path, root) and prim:
@@ -233,6 +234,7 @@ class StageReader:
         self._read.add(path)
         warnings = self.scene.warnings[path] = []
         binding = self.skel.get(path)
+        self._shape_queries.pop(path, None)    # its blend shapes may have been edited
         try:
             mats, subsets = self._face_materials(prim)
             if binding is not None:
@@ -298,6 +300,7 @@ class StageReader:
             changes.shapes.add(path)
 
     def _drop_instance(self, path: str, changes: Changes):
+        self._shape_queries.pop(path, None)
         inst = self.scene.instances.pop(path, None)
         dyn = self._inst.pop(path, None)
         if inst is not None:
@@ -507,7 +510,7 @@ class StageReader:
                 continue
             if not prim:
                 continue
-            if path.startswith("/Render"):
+            if under(path, "/Render"):
                 self.settings_changed = True
                 continue
             if name in ("visibility", "purpose", "proxyPrim"):

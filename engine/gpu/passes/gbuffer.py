@@ -42,7 +42,7 @@ class GBufferPass(Pass):
         ctx.disable(ctx.BLEND)
         ctx.cull_face = "back"
         cam = view.camera
-        batches, culled = self.geometry.view_batches(view.planes, cam.position, cam.forward,
+        batches, culled = self.geometry.view_batches(view.boxes, cam.position, cam.forward,
                                                      view.outside)
         frame.count("culled", culled)
         self.geometry.bind_objects(UNITS["u_objects"])

@@ -24,6 +24,7 @@ class View:
     view_proj: np.ndarray
     inv_view_proj: np.ndarray
     planes: np.ndarray
+    boxes: tuple                   # (draws, lo, hi): every object's world box, posed
     bounds: tuple | None           # (lo, hi) of everything drawn, world
 
     def outside(self, lo, hi) -> np.ndarray:
@@ -42,7 +43,6 @@ class ViewPass(Pass):
         posed = board.get("skinned")
         local_of = (lambda d: posed.boxes.get(d.path, d.local)) if posed else None
         boxes = self.geometry.world_boxes(local_of)
-        self.geometry.set_boxes(boxes)
         _, lo, hi = boxes
         bounds = (lo.min(axis=0), hi.max(axis=0)) if len(lo) else None
         camera = frame.camera
@@ -51,7 +51,7 @@ class ViewPass(Pass):
             camera = default_camera(self._drawn_bounds(posed), frame.scene.up_axis, w / h)
         view_proj = camera.proj @ camera.view
         board["view"] = View(camera, view_proj, np.linalg.inv(view_proj),
-                             frustum_planes(view_proj), bounds)
+                             frustum_planes(view_proj), boxes, bounds)
 
     def _drawn_bounds(self, posed):
         """The world box of what is drawn, skinned meshes by their skinned vertices."""
