@@ -160,18 +160,18 @@ def crowd():
     with Session(stage, RenderSettings(width=CROWD_SIZE[0], height=CROWD_SIZE[1])) as session:
         session.render(frame=frames[0])
         runs = [timed(lambda f=f: session.render(frame=float(f))) for f in frames[1:]]
-    lantern = [t for t, _ in runs]
+    ours = [t for t, _ in runs]
     s = runs[-1][1].stats
     eevee = eevee_frames(scene, frames)
     kinds = ", ".join(f"{k} {v}" for k, v in sorted(s["bytes_by_kind"].items()))
     print(f"crowd frame change, 16 characters x ~1,200 vertices, 3 shadowed lights, "
           f"{CROWD_SIZE[0]}x{CROWD_SIZE[1]}:")
-    print(f"  Lantern {median_ms(lantern):7.1f} ms (goal 100 ms): {s['meshes_skinned']} meshes "
+    print(f"  Lantern {median_ms(ours):7.1f} ms (goal 100 ms): {s['meshes_skinned']} meshes "
           f"skinned once each, {s['shadow_maps_rendered']} shadow maps redrawn "
           f"({s['shadow_passes']} tiles), {s['prims_read']} prims read, "
           f"{s['bytes_uploaded']} bytes up ({kinds})")
     print(f"  EEVEE, 1 sample {median_ms(eevee):7.1f} ms: ratio Lantern / EEVEE "
-          f"{np.median(lantern) / np.median(eevee):.3f}")
+          f"{np.median(ours) / np.median(eevee):.3f}")
     print("  Lantern passes (ms): " + ", ".join(
         f"{k} {v * 1000:.1f}" for k, v in runs[-1][1].timings.items()))
 
