@@ -25,7 +25,14 @@ prim path so any session draws in the same order as a fresh one.
                   command's baseInstance.
   GL 3.3 path     one glDrawElements per command with the object id as a uniform.
 Shadow casters draw every object once (all of its ranges, one command) from a
-buffer made with the commands."""
+buffer made with the commands.
+
+Measured (bench/bench_session.py, 320x180, llvmpipe, 2026-11-22): a view of 1,000
+separate cubes takes 12.2 ms against 10.5 ms for the same cubes merged into one mesh
+(1.16x), 14.1 ms on the GL 3.3 path; 4,004 bytes go up per view. The gather costs
+0.03 ms; what remains is llvmpipe's own cost per indirect sub-draw, about 3.5 us
+(1,000 commands 4.3 ms against 0.8 ms for one), which only merging objects' draws
+would remove, at the price of front-to-back order and per-material state."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -197,12 +204,13 @@ class ObjectTable:
         self._dirty.add(oid)
 
     def flush(self):
-        """Uploads the rows of objects set since the last flush (the whole table when
-        it was just made)."""
+        """Uploads the texels of objects set since the last flush (of every object
+        when the table was just made or grown), a span per texture row."""
         if self.texture is None:
-            self.texture = self.uploads.float_texture(self.data, kind="objects")
-            self._dirty.clear()
-            return
+            h, w = self.data.shape[:2]
+            self.texture = self.uploads.texture((w, h), 4, kind="objects", dtype="f4")
+            self.texture.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
+            self._dirty = set(range(self._next))
         per_row = OBJECT_TEX_W // OBJECT_TEXELS
         rows = {}
         for oid in self._dirty:
