@@ -92,7 +92,7 @@ class LightPass(Pass):
         self.ctx, self.pool, self.programs, self.uploads = ctx, pool, programs, uploads
         self.stencil, self.table, self.geometry, self.preset = stencil, table, geometry, preset
         self._sphere = None
-        self._cones = {}            # light path -> (cone params, vertex buffer)
+        self._cones = {}            # light path -> (cone params, vertex buffer, vertices)
         self._instances = None      # (light rows, instance buffer) of the batched draw
         self._vaos = {}
 
@@ -102,7 +102,6 @@ class LightPass(Pass):
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]
         shadow_maps = board.get("shadow_maps", {})
-        self._frame, self._view, self._board = frame, view, board
         fbo = self.pool.framebuffer([board["hdr"]], depth_stencil=board["depth_stencil"])
         fbo.depth_mask = True
         fbo.use()
@@ -130,14 +129,14 @@ class LightPass(Pass):
             R = self.table.ranges[path]
             if light.kind != SUN and R <= 0:
                 continue
-            if self._batchable(light, R, has_casters):
+            if self._batchable(light, R, has_casters, view):
                 batched.append(path)
                 continue
             fbo.use()
             ctx.enable(ctx.BLEND)
             ctx.blend_func = ctx.ONE, ctx.ONE
             try:
-                self._draw_light(path, light, R, shadow_maps.get(path))
+                self._draw_light(frame, board, view, path, light, R, shadow_maps.get(path))
             finally:
                 ctx.scissor = None
                 self.stencil.end()
@@ -146,12 +145,12 @@ class LightPass(Pass):
             self._cones.pop(gone)[1].release()
         if batched:
             fbo.use()
-            self._draw_batched(batched)
+            self._draw_batched(frame, board, view, batched)
         ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
 
-    def _batchable(self, light, R, has_casters):
+    def _batchable(self, light, R, has_casters, view):
         return (light.kind in (POINT, SPOT) and not (light.shadow and has_casters)
-                and not self._crosses_far_plane(light.position, R * 1.3))
+                and not _crosses_far_plane(view, light.position, R * 1.3))
 
     def _sphere_vbo(self):
         if self._sphere is None:
@@ -168,13 +167,13 @@ class LightPass(Pass):
             vao = self._vaos[key] = self.ctx.vertex_array(prog, content)
         return vao
 
-    def _draw_batched(self, paths):
+    def _draw_batched(self, frame, board, view, paths):
         """All batched lights in one draw of their sphere volumes (reads the G-buffer
         and the scene depth). Back faces pass the depth test only where the scene
         surface is in front of them, and the shader's distance test discards surfaces
         in front of the volume, so only pixels inside a volume are shaded; the camera
         may be inside one. No per-light stencil or scissor: one draw has none."""
-        ctx, frame = self.ctx, self._frame
+        ctx = self.ctx
         rows = np.array([self.table.index[p] for p in paths], np.int32)
         if self._instances is None or not np.array_equal(self._instances[0], rows):
             if self._instances is not None:
@@ -182,8 +181,8 @@ class LightPass(Pass):
                 self._instances[1].release()
             self._instances = (rows, self.uploads.buffer(rows, kind="lights"))
         prog = self.programs.get("volume.vert", "light.frag", ["LIGHT_SPHERE", "LIGHTS_INSTANCED"])
-        bind_gbuffer(self._board, prog, self._view)
-        set_uniform(prog, "mvp", self._view.view_proj)
+        bind_gbuffer(board, prog, view)
+        set_uniform(prog, "mvp", view.view_proj)
         ctx.enable(ctx.BLEND)
         ctx.blend_func = ctx.ONE, ctx.ONE
         ctx.enable(ctx.DEPTH_TEST)
@@ -198,9 +197,9 @@ class LightPass(Pass):
         frame.count("lights_drawn", len(paths))
         frame.count("batched_lights", len(paths))
 
-    def _program(self, vert, light, variant, row, sm):
+    def _program(self, board, view, vert, variant, row, sm):
         prog = self.programs.get(vert, "light.frag", [variant] + (["HAS_SHADOW"] if sm else []))
-        bind_gbuffer(self._board, prog, self._view)
+        bind_gbuffer(board, prog, view)
         set_uniform(prog, "light_index", row)
         if sm is not None:
             sm.set_uniforms(prog, self.preset)
@@ -217,16 +216,17 @@ class LightPass(Pass):
             entry = self._cones[path] = (params, self.uploads.buffer(data, kind="lights"), data)
         return entry[1], entry[2]
 
-    def _draw_light(self, path, light, R, sm):
+    def _draw_light(self, frame, board, view, path, light, R, sm):
         """One light into the HDR target (reads the G-buffer, depth+stencil, its
         shadow map). Suns shade the screen; other lights shade only inside the
         scissor rectangle of their volume and, via the stencil, only pixels whose
         scene surface lies inside the volume."""
-        ctx, frame, view = self.ctx, self._frame, self._view
+        ctx = self.ctx
         row = self.table.index[path]
         if light.kind == SUN:
             ctx.disable(ctx.DEPTH_TEST)
-            self.programs.fullscreen(self._program("fullscreen.vert", light, "LIGHT_DISTANT", row, sm))
+            self.programs.fullscreen(self._program(board, view, "fullscreen.vert", "LIGHT_DISTANT",
+                                                   row, sm))
             frame.count("lights_drawn")
             return
         variant = KINDS[light.kind].shader
@@ -242,15 +242,15 @@ class LightPass(Pass):
             mvp = view.view_proj @ model
             hull = light.position + R * 1.3 * np.array(
                 [[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
-        rect = self._scissor(hull)
+        rect = _scissor(view, frame.size, hull)
         if rect is not None and (rect[2] <= 0 or rect[3] <= 0):
             return                                 # wholly off screen
         ctx.scissor = rect
         bound = R / math.cos(math.radians(light.cone_angle)) if use_cone else R * 1.3
-        if self._crosses_far_plane(light.position, bound):
+        if _crosses_far_plane(view, light.position, bound):
             # Its back faces would be clipped away: shade the (scissored) screen instead.
             ctx.disable(ctx.DEPTH_TEST)
-            self.programs.fullscreen(self._program("fullscreen.vert", light, variant, row, sm))
+            self.programs.fullscreen(self._program(board, view, "fullscreen.vert", variant, row, sm))
             frame.count("lights_drawn")
             return
         # Stencil marking: depth-fail counting of both faces against the scene depth.
@@ -267,7 +267,7 @@ class LightPass(Pass):
         ctx.disable(ctx.DEPTH_TEST)
         ctx.enable(ctx.CULL_FACE)
         ctx.cull_face = "front"
-        prog = self._program("volume.vert", light, variant, row, sm)
+        prog = self._program(board, view, "volume.vert", variant, row, sm)
         set_uniform(prog, "mvp", mvp)
         self._vao(prog, vbo).render(ctx.TRIANGLES)
         self.stencil.end()
@@ -275,25 +275,6 @@ class LightPass(Pass):
         ctx.cull_face = "back"
         frame.count("light_volumes")
         frame.count("lights_drawn")
-
-    def _scissor(self, points):
-        """Pixel rectangle (x, y, w, h) bounding the projected points, None (the whole
-        screen) when any lies behind the camera's near plane."""
-        w, h = self._frame.size
-        clip = (self._view.view_proj @ np.c_[points, np.ones(len(points))].T).T
-        if np.any(clip[:, 3] <= self._view.camera.near * 0.5):
-            return None
-        ndc = clip[:, :2] / clip[:, 3:4]
-        x0, y0 = np.floor((ndc.min(axis=0) * 0.5 + 0.5) * (w, h)).astype(int) - 1
-        x1, y1 = np.ceil((ndc.max(axis=0) * 0.5 + 0.5) * (w, h)).astype(int) + 1
-        x0, x1 = max(x0, 0), min(x1, w)
-        y0, y1 = max(y0, 0), min(y1, h)
-        return (int(x0), int(y0), int(max(x1 - x0, 0)), int(max(y1 - y0, 0)))
-
-    def _crosses_far_plane(self, center, radius):
-        cam = self._view.camera
-        z = float(np.dot(center - cam.position, cam.forward))
-        return z + radius >= cam.far * 0.999
 
     def _drop_vaos(self, buffer):
         for key in [k for k in self._vaos if id(buffer) in k[1:]]:
@@ -309,3 +290,24 @@ class LightPass(Pass):
                 obj.release()
         self._vaos.clear()
         self._cones.clear()
+
+
+def _scissor(view, size, points):
+    """Pixel rectangle (x, y, w, h) bounding the projected points, None (the whole
+    screen) when any lies behind the camera's near plane."""
+    w, h = size
+    clip = (view.view_proj @ np.c_[points, np.ones(len(points))].T).T
+    if np.any(clip[:, 3] <= view.camera.near * 0.5):
+        return None
+    ndc = clip[:, :2] / clip[:, 3:4]
+    x0, y0 = np.floor((ndc.min(axis=0) * 0.5 + 0.5) * (w, h)).astype(int) - 1
+    x1, y1 = np.ceil((ndc.max(axis=0) * 0.5 + 0.5) * (w, h)).astype(int) + 1
+    x0, x1 = max(x0, 0), min(x1, w)
+    y0, y1 = max(y0, 0), min(y1, h)
+    return (int(x0), int(y0), int(max(x1 - x0, 0)), int(max(y1 - y0, 0)))
+
+
+def _crosses_far_plane(view, center, radius):
+    cam = view.camera
+    z = float(np.dot(center - cam.position, cam.forward))
+    return z + radius >= cam.far * 0.999
