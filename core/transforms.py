@@ -118,17 +118,9 @@ def aabb_corners(lo, hi) -> np.ndarray:
                      for z in (lo[2], hi[2])])
 
 
-def transform_aabb(lo, hi, m) -> tuple[np.ndarray, np.ndarray]:
-    """The axis-aligned box around a box carried by a 4x4 (projective allowed)."""
-    corners = np.c_[aabb_corners(lo, hi), np.ones(8)]
-    w = corners @ np.asarray(m, np.float64).T
-    p = w[:, :3] / w[:, 3:4]
-    return p.min(axis=0), p.max(axis=0)
-
-
 def transform_aabbs(lo: np.ndarray, hi: np.ndarray, m: np.ndarray):
-    """transform_aabb for (n, 3) boxes and (n, 4, 4) matrices at once, affine only:
-    the centre moves, the half extents go through |M3|."""
+    """The axis-aligned boxes around (n, 3) boxes carried by (n, 4, 4) affine
+    matrices: the centres move, the half extents go through |M3| (Arvo's bound)."""
     c = (lo + hi) * 0.5
     e = (hi - lo) * 0.5
     m3 = m[:, :3, :3]
