@@ -28,8 +28,8 @@ Shadow casters draw every object once (all of its ranges, one command) from a
 buffer made with the commands.
 
 Measured (bench/bench_session.py, 320x180, llvmpipe, 2026-11-22): a view of 1,000
-separate cubes takes 12.2 ms against 10.5 ms for the same cubes merged into one mesh
-(1.16x), 14.1 ms on the GL 3.3 path; 4,004 bytes go up per view. The gather costs
+separate cubes takes 1.13-1.23x the time of the same cubes merged into one mesh (e.g.
+14.2 against 12.4 ms), 1.28-1.41x on the GL 3.3 path; 4,004 bytes go up per view. The gather costs
 0.03 ms; what remains is llvmpipe's own cost per indirect sub-draw, about 3.5 us
 (1,000 commands 4.3 ms against 0.8 ms for one), which only merging objects' draws
 would remove, at the price of front-to-back order and per-material state."""
