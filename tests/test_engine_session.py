@@ -270,7 +270,10 @@ def test_frame_change_on_a_rig_uploads_joints_and_weights_and_skins_once():
             Gf.Matrix4d().SetLookAt(Gf.Vec3d(3, -8, 6), Gf.Vec3d(2, 0, 0), Gf.Vec3d(0, 0, 1))
             .GetInverse()).T), projection_matrix=scenes.orbit_views(stage, 1, W / H)[0][1])
     s = second.stats
+    # Joint matrices and blend-shape weights; "commands" is the view's draw order (posed
+    # objects may swap places front to back), 4 bytes per object: no mesh data.
     assert set(s["bytes_by_kind"]) <= {"joints", "shapes", "commands"}, s["bytes_by_kind"]
+    assert s["bytes_by_kind"].get("commands", 0) <= 4 * 4
     assert s["bytes_by_kind"]["joints"] > 0 and s["bytes_by_kind"]["shapes"] > 0
     assert s["meshes_uploaded"] == 0
     # Two skinned meshes, skinned once each, though 7 shadow tiles (a cube and a spot)
