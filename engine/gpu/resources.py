@@ -82,13 +82,10 @@ def _bytes(data) -> bytes:
     return bytes(data)
 
 
-# Target formats: (components, dtype) of a colour texture, or a depth kind.
-FORMATS = {
-    "rgba16f": (4, "f2"),
-    "rgba32f": (4, "f4"),
-    "depth": None,             # DEPTH_COMPONENT24, sampled (G-buffer depth, shadow maps)
-    "depth_stencil": None,     # DEPTH24_STENCIL8 renderbuffer (light volumes)
-}
+# Target formats. Colour: (components, dtype). Besides these, "depth" is a sampled
+# DEPTH_COMPONENT24 texture (G-buffer depth, shadow maps) and "depth_stencil" a
+# DEPTH24_STENCIL8 renderbuffer (light volumes).
+COLOR_FORMATS = {"rgba16f": (4, "f2"), "rgba32f": (4, "f4")}
 
 
 class TargetPool:
@@ -123,7 +120,7 @@ class TargetPool:
             tex = ctx.depth_texture(size)
             tex.compare_func = ""
         else:
-            components, dtype = FORMATS[fmt]
+            components, dtype = COLOR_FORMATS[fmt]
             tex = ctx.texture(size, components, dtype=dtype)
         tex.filter = (ctx.NEAREST, ctx.NEAREST)
         return tex
