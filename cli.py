@@ -351,10 +351,7 @@ def _render(args):
 
 
 def _check_preset(name):
-    try:
-        from .core.presets import PRESETS  # where the table lives once issue 9 lands
-    except ImportError:
-        from .engine.renderer import PRESETS
+    from .core.presets import PRESETS
     if name not in PRESETS:
         raise _usage(f"unknown --preset {name!r}; valid presets: {', '.join(PRESETS)}")
 

@@ -6,9 +6,10 @@ a temp file in the same folder, then os.replace."""
 from __future__ import annotations
 
 import os
-import tempfile
 
 import numpy as np
+
+from ..core.files import atomic_write
 
 
 def linear_to_srgb(x: np.ndarray) -> np.ndarray:
@@ -37,20 +38,6 @@ def _write_png(path, rgba):
     iio.imwrite(path, to_srgb8(rgba), extension=".png")
 
 
-def _atomic(path, ext, write):
-    """write(tmp) to a temp file beside `path`, then rename: never a half-written file."""
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".lantern-", suffix=ext, dir=folder)
-    os.close(fd)
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
-
-
 def write_image(path: str, rgba: np.ndarray) -> None:
     """Write float (H, W, 4) scene-linear RGBA, row 0 = top, to .exr or .png."""
     ext = os.path.splitext(path)[1].lower()
@@ -60,7 +47,7 @@ def write_image(path: str, rgba: np.ndarray) -> None:
     rgba = np.asarray(rgba, dtype=np.float32)
     if rgba.ndim != 3 or rgba.shape[2] != 4:
         raise ValueError(f"expected an (H, W, 4) image, got {rgba.shape}")
-    _atomic(path, ext, lambda tmp: writers[ext](tmp, rgba))
+    atomic_write(path, lambda tmp: writers[ext](tmp, rgba), suffix=ext)
 
 
 def write_animation(path: str, frames, fps: float) -> None:
@@ -69,8 +56,8 @@ def write_animation(path: str, frames, fps: float) -> None:
     if not path.lower().endswith(".gif"):
         raise ValueError(f"animated previews are .gif files, not {path}")
     images = [to_srgb8(np.asarray(f, dtype=np.float32))[..., :3] for f in frames]
-    _atomic(path, ".gif", lambda tmp: iio.imwrite(tmp, images, extension=".gif",
-                                                  duration=1000.0 / fps, loop=0))
+    atomic_write(path, lambda tmp: iio.imwrite(tmp, images, extension=".gif",
+                                               duration=1000.0 / fps, loop=0), suffix=".gif")
 
 
 def read_exr(path: str) -> np.ndarray:

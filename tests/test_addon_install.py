@@ -90,7 +90,7 @@ def test_blender_accepts_the_zip(extension_zip, blender, platform):
     error, wheels = _blender_check(_zip_manifest(extension_zip), blender, BLENDERS[blender],
                                    platform)
     assert error is None, error
-    assert wheels == ["glcontext", "moderngl"]
+    assert wheels == ["glcontext", "mapbox_earcut", "moderngl"]
 
 
 @pytest.mark.parametrize("blender, python, platform, refused", [
