@@ -51,6 +51,11 @@ def _build_parser():
                              "an -o ending in .gif writes one animated preview")
     render.add_argument("--size", type=_parse_size, default=None, metavar="WxH")
     render.add_argument("--preset", default="medium", help="low, medium, high or ultra")
+    # Blender's colour management for .png/.gif outputs (an .exr stays scene linear).
+    render.add_argument("--view", default="Standard",
+                        help="view transform: Standard, AgX, Filmic, Khronos PBR Neutral, ...")
+    render.add_argument("--look", default=None, help="a look of that view, e.g. Punchy")
+    render.add_argument("--exposure", type=float, default=0.0, help="exposure in stops")
     return parser
 
 
@@ -161,6 +166,7 @@ def _render(args):
     stage, status = _open_scene(args.scene)
     if stage is None:
         return status
+    colour = _colour(args)  # a bad --view or --look fails before rendering
     width, height = args.size if args.size else (None, None)
 
     from .engine import RenderSettings, render_stage
@@ -177,11 +183,22 @@ def _render(args):
         return 1
     for warning in result.warnings:
         print(f"warning: {warning}", file=sys.stderr)
-    write_image(args.output, result.rgba)
+    write_image(args.output, result.rgba, **colour)
     height_px, width_px = result.rgba.shape[:2]
     print(f"{args.scene} -> {args.output} ({width_px}x{height_px}, "
           f"{result.timings.get('total', 0.0) * 1000:.1f} ms)")
     return 0
+
+
+def _colour(args):
+    """The view settings for image writers; an unknown view or look exits with status 2."""
+    from .engine.color import ColorManagementError, check
+    try:
+        check(args.view, args.look, args.exposure)
+    except ColorManagementError as error:
+        print(f"lantern render: {error}", file=sys.stderr)
+        raise SystemExit(2)
+    return dict(view=args.view, look=args.look, exposure=args.exposure)
 
 
 def _open_scene(path):
@@ -225,6 +242,7 @@ def _render_sequence(args):
     stage, status = _open_scene(args.scene)
     if stage is None:
         return status
+    colour = _colour(args)  # a bad --view or --look fails before rendering
     from .engine import RenderSettings
     from .engine.api import render_sequence
     from .engine.image_io import write_animation, write_image
@@ -242,7 +260,7 @@ def _render_sequence(args):
                 continue
             path = _frame_path(args.output, frame)
             os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-            write_image(path, result.rgba)
+            write_image(path, result.rgba, **colour)
             print(f"{args.scene} frame {frame:g} -> {path} "
                   f"({result.timings.get('total', 0.0) * 1000:.1f} ms)")
     except (ValueError, RuntimeError, OSError) as error:
@@ -250,7 +268,7 @@ def _render_sequence(args):
         return 1
     if gif:
         os.makedirs(os.path.dirname(os.path.abspath(args.output)), exist_ok=True)
-        write_animation(args.output, frames, stage.GetFramesPerSecond() or 24.0)
+        write_animation(args.output, frames, stage.GetFramesPerSecond() or 24.0, **colour)
         print(f"{args.scene} frames {first:g}:{last:g} -> {args.output}")
     return 0
 

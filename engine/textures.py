@@ -5,9 +5,9 @@ black are finished in the shader, see lib.glsl sample_map). Cached by (path,
 colourspace) for one render."""
 from __future__ import annotations
 
-import os
-
 import numpy as np
+
+from .image_io import read_image
 
 GL_SRGB8_ALPHA8 = 0x8C43
 
@@ -17,12 +17,7 @@ def srgb_to_linear(x):
 
 
 def _read(path: str) -> np.ndarray:
-    ext = os.path.splitext(path)[1].lower()
-    if ext == ".exr":
-        from .image_io import read_exr
-        return read_exr(path)
-    import imageio.v3 as iio
-    return np.asarray(iio.imread(path))
+    return read_image(path)
 
 
 def _rgba(img: np.ndarray) -> np.ndarray:
