@@ -103,10 +103,9 @@ def sky_pixels(height=SKY_SIZE[1], width=SKY_SIZE[0]):
 
 
 def write_sky(workdir):
-    from lantern.engine.image_io import write_image
     path = os.path.join(workdir, "sky.exr")
     if not os.path.exists(path):
-        write_image(path, sky_pixels())
+        _write_image(path, sky_pixels())
     return path
 
 
@@ -231,19 +230,22 @@ def _image_node(mat, path, non_color=False, link_to="Base Color", extension='REP
     return tex
 
 
-def _write_png(path, pixels):
-    from lantern.engine.image_io import atomic_write
+def _write_image(path, pixels):
+    """8/16-bit PNG or float EXR with OpenImageIO (Blender's, in a bpy process): no
+    dependency on Lantern, so the script can measure any version of it."""
     import OpenImageIO as oiio
-
-    def write(tmp):
-        spec = oiio.ImageSpec(pixels.shape[1], pixels.shape[0], pixels.shape[2],
-                              "uint16" if pixels.dtype == np.uint16 else "uint8")
-        spec.attribute("oiio:UnassociatedAlpha", 1)
-        out = oiio.ImageOutput.create(tmp)
-        assert out.open(tmp, spec) and out.write_image(pixels), out.geterror()
-        out.close()
-    atomic_write(path, write, ".png")
+    kind = {np.dtype(np.uint8): "uint8", np.dtype(np.uint16): "uint16"}.get(pixels.dtype, "float")
+    spec = oiio.ImageSpec(pixels.shape[1], pixels.shape[0], pixels.shape[2], kind)
+    spec.attribute("oiio:UnassociatedAlpha", 1)
+    tmp = path + ".tmp" + os.path.splitext(path)[1]
+    out = oiio.ImageOutput.create(tmp)
+    assert out.open(tmp, spec) and out.write_image(np.ascontiguousarray(pixels)), out.geterror()
+    out.close()
+    os.replace(tmp, path)
     return path
+
+
+_write_png = _write_image
 
 
 # --- builders ------------------------------------------------------------------------------
@@ -393,11 +395,9 @@ def build_tex_gradient16(workdir):
 
 def build_tex_exr4(workdir):
     """Black, non-reflecting surface whose emission colour is an EXR texture of 4.0."""
-    from lantern.engine.image_io import write_image
     scene = _empty_scene("tex_exr4")
     _world(scene, (0.0, 0.0, 0.0), 0.0)
-    path = os.path.join(workdir, "four.exr")
-    write_image(path, np.full((8, 8, 4), 4.0, np.float32))
+    path = _write_image(os.path.join(workdir, "four.exr"), np.full((8, 8, 4), 4.0, np.float32))
     mat = _material("Four", (0.0, 0.0, 0.0), roughness=1.0, specular=0.0,
                     **{"Emission Strength": 1.0})
     tex = _image_node(mat, path, non_color=False, link_to="Emission Color")

@@ -16,13 +16,17 @@ threshold 0.
   the point), ZIP.
 
 `before` renders each looks scene with the Lantern importable in this process (the
-medium preset, the same size) and writes looks/BEFORE.md: mean HDR-FLIP and PSNR
-against the reference, and the render time. The committed table was made with the
-main branch as it was before issue 10 (commit a55bdc4) on the import path.
+medium preset, the same size) and writes looks/BEFORE.md (or --out): mean HDR-FLIP and
+PSNR against the reference, and the render time. The committed BEFORE.md was made with
+main as it was before issue 10 (commit a55bdc4) first on the import path:
+    git archive a55bdc4 | tar -x -C /tmp/base/lantern
+    PYTHONPATH=/tmp/base .venv/bin/python tests/references/make_cycles_references.py before \
+        --label "Lantern at a55bdc4 (main before issue 10)"
+and EXPORTER.md with this branch (the exporter half of issue 10, the engine unchanged).
 
 Run from the repository root (no argument: all sets):
     .venv/bin/python tests/references/make_cycles_references.py [calibration|box|looks] [NAME ...]
-    .venv/bin/python tests/references/make_cycles_references.py before [--label TEXT] [NAME ...]
+    .venv/bin/python tests/references/make_cycles_references.py before [--label TEXT] [--out FILE.md] [NAME ...]
 """
 import pathlib
 import sys
@@ -98,14 +102,11 @@ def lantern_against_reference(name):
     """(mean HDR-FLIP, PSNR dB, render seconds) of this process's Lantern on `name`."""
     from image_metrics import mean_flip, psnr
     from lantern.engine import RenderSettings, read_exr, render_stage
-    from lantern.exporters import ExportOptions, stage_from_depsgraph
+    from lantern.exporters import stage_from_depsgraph
     spec = reference_scenes.SCENES[name]
     reference_scenes.build(name, WORKDIR)
-    try:
-        options = ExportOptions(texture_dir=str(WORKDIR / "packed"))
-    except TypeError:
-        options = None
-    stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get(), options)
+    # As `lantern render scene.blend` does: an in-memory stage, default options.
+    stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
     width, height = spec.size
     settings = RenderSettings(width=width, height=height, preset="medium")
     render_stage(stage, settings)                          # warm: shaders, textures
@@ -116,7 +117,7 @@ def lantern_against_reference(name):
     return mean_flip(result.rgba, reference), psnr(result.rgba, reference), seconds
 
 
-def before(names, label):
+def before(names, label, out="BEFORE.md"):
     rows = []
     for name in names:
         flip, db, seconds = lantern_against_reference(name)
@@ -125,7 +126,7 @@ def before(names, label):
     import datetime
     import platform
     text = [
-        "# Lantern against the Cycles references, before issue 10",
+        "# Lantern against the Cycles references",
         "",
         f"{label}. Measured {datetime.date.today()} on {platform.machine()}, "
         f"{platform.processor() or 'CPU'}, Mesa llvmpipe (no GPU), with "
@@ -138,18 +139,18 @@ def before(names, label):
         *rows,
         "",
     ]
-    (LOOKS / "BEFORE.md").write_text("\n".join(text))
+    (LOOKS / out).write_text("\n".join(text))
 
 
 if __name__ == "__main__":
     args = sys.argv[1:]
     chosen = [args.pop(0)] if args else list(SETS) + ["looks"]
     if chosen == ["before"]:
-        label = "Lantern on this import path"
-        if args[:1] == ["--label"]:
-            label = args[1]
+        options = {"--label": "Lantern on this import path", "--out": "BEFORE.md"}
+        while args[:1] and args[0] in options:
+            options[args[0]] = args[1]
             args = args[2:]
-        before(args or list(reference_scenes.SCENES), label)
+        before(args or list(reference_scenes.SCENES), options["--label"], options["--out"])
         raise SystemExit(0)
     for name in chosen:
         if name == "looks":
