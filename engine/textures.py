@@ -3,22 +3,18 @@ precision, and whether to take it as sRGB-encoded. The GL side
 (engine/gpu/textures.py) uploads them."""
 from __future__ import annotations
 
-import os
-
 import numpy as np
+
+from .image_io import read_image
 
 
 def srgb_to_linear(x):
     return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
 
 
-def _read(path: str) -> np.ndarray:
-    ext = os.path.splitext(path)[1].lower()
-    if ext == ".exr":
-        from .image_io import read_exr
-        return read_exr(path)
-    import imageio.v3 as iio
-    return np.asarray(iio.imread(path))
+def read_rgba(path: str) -> np.ndarray:
+    """(H, W, 4) RGBA in the file's own precision (grey, grey+alpha and RGB filled in)."""
+    return _rgba(read_image(path))
 
 
 def _rgba(img: np.ndarray) -> np.ndarray:
@@ -46,7 +42,7 @@ def is_srgb(img: np.ndarray, colorspace: str) -> bool:
 
 def read_image_linear(path: str, colorspace: str) -> np.ndarray:
     """float32 (H, W, 4) linear values, row 0 = top of the image."""
-    img = _rgba(_read(path))
+    img = read_rgba(path)
     srgb = is_srgb(img, colorspace)
     if img.dtype.kind in "ui":
         img = img.astype(np.float32) / np.iinfo(img.dtype).max

@@ -155,6 +155,7 @@ class WorldRecord:
     color: tuple[float, float, float] = (0.05, 0.05, 0.05)
     intensity: float = 1.0
     texture: str | None = None  # absolute path of a lat-long image
+    rotation: tuple = (0.0, 0.0, 0.0)  # the texture's Mapping node rotation, Euler XYZ radians
 
 
 @dataclass

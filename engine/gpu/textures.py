@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..textures import _read, _rgba, is_srgb, read_image_linear, srgb_to_linear
+from ..textures import is_srgb, read_image_linear, read_rgba, srgb_to_linear
 
 GL_SRGB8_ALPHA8 = 0x8C43
 
@@ -29,7 +29,7 @@ class MaterialTextures:
         return self._tex[key]
 
     def _upload(self, path, colorspace):
-        img = _rgba(_read(path))
+        img = read_rgba(path)
         img = np.ascontiguousarray(img[::-1])  # GL's t = 0 is the bottom row, as USD st
         h, w = img.shape[:2]
         srgb = is_srgb(img, colorspace)
