@@ -43,7 +43,7 @@ PASSES = {p.name: p for p in (
     RenderPass("IndexOB", 1, "X", "VALUE", "use_pass_object_index", True),
     RenderPass("IndexMA", 1, "X", "VALUE", "use_pass_material_index", True),
     # Lighting passes: written by the lighting passes once they compute them.
-    RenderPass("AO", 3, "RGB", "COLOR", "use_pass_ambient_occlusion", False),
+    RenderPass("AO", 3, "RGB", "COLOR", "use_pass_ambient_occlusion", True),
     RenderPass("Shadow", 3, "RGB", "COLOR", "use_pass_shadow", False),
     RenderPass("DiffDir", 3, "RGB", "COLOR", "use_pass_diffuse_direct", False),
     RenderPass("GlossDir", 3, "RGB", "COLOR", "use_pass_glossy_direct", False),

@@ -43,6 +43,9 @@ class RenderSettings:
     # Render passes (AOVs) to compute besides Combined, by Blender's names
     # (core/passes.py): only these are computed and read back.
     passes: frozenset = frozenset()
+    # Shading (issue 10). Ambient occlusion of the dome's light (the preset sets its
+    # rays and steps); off: the dome lights every surface unoccluded.
+    ambient_occlusion: bool = True
 
 
 @dataclass
@@ -94,7 +97,7 @@ class Session:
         t_load = time.perf_counter() - t0
         scene, size, s = self._reader.scene, self.size, self.settings
         rgba, aovs, stats, timings = run_gl(lambda gl: self._renderer.render(
-            scene, changes, camera, size, s.transparent, s.cull_backfaces, self._passes))
+            scene, changes, camera, size, s.transparent, s.cull_backfaces, self._passes, s))
         stats["prims_read"] = changes.prims_read + read
         timings["load"] = t_load
         timings["total"] = time.perf_counter() - t0

@@ -1,7 +1,8 @@
 #version 330 core
 #include "lib.glsl"
-// G-buffer: RT0 base colour + alpha, RT1 world normal, RT2 metallic / roughness /
-// dielectric F0 / 1, RT3 emission.
+// G-buffer: RT0 base colour + alpha, RT1 world normal + clearcoat roughness, RT2
+// metallic / roughness / dielectric F0 / clearcoat, RT3 emission. Base colour is not
+// clamped at 1 (Cycles takes any value; float16 holds it).
 in vec3 v_normal;
 in vec2 v_uv;
 in vec4 v_tangent;
@@ -23,6 +24,8 @@ uniform float u_ior;
 uniform vec3 u_emissive;
 uniform float u_opacity;
 uniform float u_opacity_threshold;
+uniform float u_clearcoat;
+uniform float u_clearcoat_roughness;
 
 // A UsdUVTexture: wrap (0 repeat, 1 mirror, 2 clamp, 3 black), scale, bias, channel
 // (-1 rgb, 0..3 r g b a).
@@ -103,9 +106,10 @@ void main() {
     }
 #endif
     float f = (u_ior - 1.0) / (u_ior + 1.0);
-    rt_base = vec4(clamp(base, 0.0, 1.0), alpha);
-    rt_normal = vec4(n, 1.0);
-    rt_mat = vec4(clamp(metallic, 0.0, 1.0), clamp(roughness, 0.0, 1.0), f * f, 1.0);
+    rt_base = vec4(clamp(base, 0.0, 65000.0), alpha);      // float16 target
+    rt_normal = vec4(n, clamp(u_clearcoat_roughness, 0.0, 1.0));
+    rt_mat = vec4(clamp(metallic, 0.0, 1.0), clamp(roughness, 0.0, 1.0), f * f,
+                  clamp(u_clearcoat, 0.0, 1.0));
     rt_emit = vec4(clamp(emissive, 0.0, 60000.0), 1.0);  // float16 target
 #ifdef WRITE_INDEX
     rt_index = vec2(v_object_index, u_material_index);

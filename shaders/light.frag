@@ -104,16 +104,20 @@ void main() {
     vec3 p = position_from_depth(uv, depth, inv_view_proj);   // camera-relative
     vec3 n = normalize(texelFetch(g_normal, px, 0).xyz);
     vec3 v = cam_ortho ? -cam_forward : normalize(-p);
-    Surface s = make_surface(p, n, v, texelFetch(g_base, px, 0), texelFetch(g_mat, px, 0));
+    vec4 nrm = texelFetch(g_normal, px, 0);
+    Surface s = make_surface(p, n, v, texelFetch(g_base, px, 0), texelFetch(g_mat, px, 0), nrm.w);
     float a = ggx_alpha(s.roughness);
-    vec3 radiance = vec3(0.0);
+    float ac = ggx_alpha(s.coat_roughness);
+    vec3 diffuse = vec3(0.0);    // what the light reflects diffusely
+    vec3 glossy = vec3(0.0);     // and specularly (base lobe and coat)
 
 #ifdef LIGHT_DISTANT
     vec3 l = -light_axis;
     float NoL = dot(n, l);
     if (NoL <= 0.0) discard;
     vec3 E = light_color * NoL;
-    radiance = E * (light_diffuse * brdf_diffuse(s) + light_specular * brdf_specular(s, l, a));
+    diffuse = E * light_diffuse * brdf_diffuse(s);
+    glossy = E * light_specular * (brdf_specular(s, l, a) + brdf_coat(s, l, ac));
 #endif
 
 #ifdef LIGHT_SPHERE
@@ -129,8 +133,10 @@ void main() {
     vec3 E = light_color * NoL / max(falloff, 1e-8);
     if (is_spot) E *= spot_mask(p, l, d);
     // A sphere source widens the highlight (Karis 2013); a point keeps alpha.
-    float a_spec = min(1.0, a + light_radius / max(2.0 * d, 1e-6));
-    radiance = E * (light_diffuse * brdf_diffuse(s) + light_specular * brdf_specular(s, l, a_spec));
+    float widen = light_radius / max(2.0 * d, 1e-6);
+    diffuse = E * light_diffuse * brdf_diffuse(s);
+    glossy = E * light_specular * (brdf_specular(s, l, min(1.0, a + widen))
+                                   + brdf_coat(s, l, min(1.0, ac + widen)));
 #endif
 
 #ifdef LIGHT_AREA
@@ -158,11 +164,13 @@ void main() {
     vec3 lq = q - p;
     float dq = length(lq);
     vec3 l = dq > 1e-6 ? lq / dq : n;
-    float a_spec = min(1.0, a + sqrt(light_area / PI) / max(2.0 * dq, 1e-6));
-    radiance = E * light_diffuse * brdf_diffuse(s)
-             + E * light_specular * brdf_specular(s, l, a_spec) * step(0.0, dot(n, l));
+    float widen = sqrt(light_area / PI) / max(2.0 * dq, 1e-6);
+    diffuse = E * light_diffuse * brdf_diffuse(s);
+    glossy = E * light_specular * step(0.0, dot(n, l)) * (brdf_specular(s, l, min(1.0, a + widen))
+                                                          + brdf_coat(s, l, min(1.0, ac + widen)));
 #endif
 
+    vec3 radiance = diffuse + glossy;
 #ifdef HAS_SHADOW
     if (max(radiance.r, max(radiance.g, radiance.b)) > 0.0)
         radiance *= shadow_factor(p, n, light_pos, light_axis, dot(p, cam_forward));

@@ -10,10 +10,12 @@ import numpy as np
 
 from .context import Features
 from .depth import DepthConvention
-from .framegraph import Frame, FrameGraph
+from .environment import Environment
+from .framegraph import Frame, FrameGraph, FrameOptions
 from .geometry import Geometry
 from .lights import LightTable
 from .passes.ambient import AmbientPass
+from .passes.ao import AoPass
 from .passes.aovs import AovPass
 from .passes.gbuffer import GBufferPass
 from .passes.lights import LightPass
@@ -45,6 +47,7 @@ class Renderer:
         self.geometry = Geometry(ctx, self.uploads, programs, self.features)
         self.lights = LightTable(self.uploads, preset.disk_sides)
         self.textures = MaterialTextures(ctx, self.uploads, preset.anisotropy)
+        self.environment = Environment(ctx, self.uploads, programs, gl.proc)
         self.skinning = SkinningPass(ctx, self.uploads, programs, self.geometry, gl.scratch)
         self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights, preset,
                                   self.depth)
@@ -54,9 +57,10 @@ class Renderer:
             self.shadows,
             GBufferPass(ctx, self.pool, programs, self.geometry, self.textures, self.depth),
             AovPass(ctx, self.pool, programs),
-            AmbientPass(ctx, self.pool, programs, self.textures),
+            AoPass(ctx, self.pool, programs),
+            AmbientPass(ctx, self.pool, programs, self.environment),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
-                      self.geometry, preset),
+                      self.geometry, preset, self.environment),
             ResolvePass(ctx, self.pool, programs),
         ])
         self._cull_backfaces = None
@@ -74,13 +78,15 @@ class Renderer:
         return meshes
 
     def render(self, scene, changes, camera, size, transparent, cull_backfaces,
-               aovs=frozenset()):
+               aovs=frozenset(), settings=None):
         """(rgba float32 (H, W, 4), {render pass: float32 (H, W, C)}, stats, timings)
-        of one frame; `aovs`: the render passes asked for (core/passes.py)."""
+        of one frame; `aovs`: the render passes asked for (core/passes.py);
+        `settings`: the session's RenderSettings (shading and post options)."""
         t0 = time.perf_counter()
         frame = Frame(scene=scene, changes=changes, size=tuple(size), preset=self.preset,
                       transparent=transparent, aovs=frozenset(aovs), camera=camera,
-                      stats={name: 0 for name in COUNTERS})
+                      stats={name: 0 for name in COUNTERS},
+                      options=FrameOptions.of(settings))
         frame.stats["meshes_uploaded"] = self.update(scene, changes, cull_backfaces)
         frame.timings["upload"] = time.perf_counter() - t0
         self.depth.begin()
@@ -133,6 +139,7 @@ class Renderer:
     def release(self):
         self.graph.release()
         self.textures.release()
+        self.environment.release()
         self.lights.release()
         self.geometry.release()
         self.pool.release_all()

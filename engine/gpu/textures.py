@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..textures import is_srgb, read_image_linear, read_rgba, srgb_to_linear
+from ..textures import is_srgb, read_rgba, srgb_to_linear
 
 GL_SRGB8_ALPHA8 = 0x8C43
 
@@ -20,7 +20,6 @@ class MaterialTextures:
         self.anisotropy = anisotropy
         self._tex = {}
         self._samplers = {}
-        self._dome = None              # (path, texture)
 
     def get(self, path: str, colorspace: str):
         key = (path, colorspace)
@@ -60,19 +59,6 @@ class MaterialTextures:
                 anisotropy=self.anisotropy, compare_func="")
         return self._samplers[key]
 
-    def dome(self, path: str):
-        """The environment's lat-long image, linear float32, kept while it is the dome's."""
-        if self._dome is not None and self._dome[0] == path:
-            return self._dome[1]
-        if self._dome is not None:
-            self._dome[1].release()
-        img = np.ascontiguousarray(read_image_linear(path, "auto"), np.float32)
-        tex = self.uploads.texture((img.shape[1], img.shape[0]), 4, img, kind="textures", dtype="f4")
-        tex.filter = (self.ctx.LINEAR, self.ctx.LINEAR)
-        tex.repeat_y = False
-        self._dome = (path, tex)
-        return tex
-
     def prune(self, materials):
         """Releases the images no material uses any more."""
         used = {(ref.path, ref.colorspace) for m in materials for ref in m.maps.values()}
@@ -84,8 +70,5 @@ class MaterialTextures:
             t.release()
         for s in self._samplers.values():
             s.release()
-        if self._dome is not None:
-            self._dome[1].release()
         self._tex.clear()
         self._samplers.clear()
-        self._dome = None

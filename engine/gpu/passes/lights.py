@@ -92,8 +92,9 @@ class LightPass(Pass):
     reads = GBUFFER + ("hdr", "view", "shadow_maps")
     writes = ("hdr", "depth_stencil")
 
-    def __init__(self, ctx, pool, programs, uploads, stencil, table, geometry, preset):
+    def __init__(self, ctx, pool, programs, uploads, stencil, table, geometry, preset, environment):
         self.ctx, self.pool, self.programs, self.uploads = ctx, pool, programs, uploads
+        self.environment = environment      # the split-sum table every BRDF reads
         self.stencil, self.table, self.geometry, self.preset = stencil, table, geometry, preset
         self._sphere = None
         self._cones = {}            # light path -> (cone params, vertex buffer, vertices)
@@ -127,6 +128,7 @@ class LightPass(Pass):
         ctx.blend_func = ctx.ONE, ctx.ONE
         ctx.blend_equation = ctx.FUNC_ADD
         self.table.texture.use(UNITS["u_lights"])
+        self.environment.lut.use(UNITS["dfg_lut"])
 
         has_casters = any(d.ranges for d in self.geometry.draws.values())
         batched = []
