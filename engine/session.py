@@ -46,6 +46,9 @@ class RenderSettings:
     # Shading (issue 10). Ambient occlusion of the dome's light (the preset sets its
     # rays and steps); off: the dome lights every surface unoccluded.
     ambient_occlusion: bool = True
+    # 8-bit sRGB textures: "encoded" filters the stored values and decodes after (as
+    # Cycles does); "linear" decodes, then filters (as EEVEE and GL's sRGB formats do).
+    srgb_filtering: str = "encoded"
 
 
 @dataclass
@@ -67,7 +70,7 @@ class Session:
         self.size = usd_camera.resolution(stage, settings.width, settings.height)
         self._reader = StageReader(stage)
         self._camera = None          # (key, Camera) of the stage camera last read
-        renderer = run_gl(lambda gl: Renderer(gl, self._preset))
+        renderer = run_gl(lambda gl: Renderer(gl, self._preset, settings.srgb_filtering))
         self._renderer = renderer
         # A session dropped without close() still frees its GPU state; at exit the
         # process's context goes with the process.

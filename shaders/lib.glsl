@@ -164,6 +164,12 @@ vec3 sh_irradiance(vec3 sh[9], vec3 d) {
         + sh[7] * 1.092548 * d.x * d.z + sh[8] * 0.546274 * (d.x * d.x - d.y * d.y);
 }
 
+// The sRGB transfer function, decoded (IEC 61966-2-1), as Cycles decodes 8-bit images.
+vec3 srgb_to_linear(vec3 c) {
+    bvec3 low = lessThanEqual(c, vec3(0.04045));
+    return mix(pow((c + 0.055) / 1.055, vec3(2.4)), c / 12.92, vec3(low));
+}
+
 // Never hand NaN or Inf on to the blend unit.
 vec3 finite(vec3 c) {
     bvec3 bad = bvec3(isnan(c.x) || isinf(c.x), isnan(c.y) || isinf(c.y), isnan(c.z) || isinf(c.z));

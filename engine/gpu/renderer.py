@@ -34,7 +34,7 @@ COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow
 
 
 class Renderer:
-    def __init__(self, gl, preset):
+    def __init__(self, gl, preset, srgb_filtering: str = "encoded"):
         ctx = gl.ctx
         self.ctx = ctx
         self.preset = preset
@@ -46,7 +46,7 @@ class Renderer:
         programs = gl.programs
         self.geometry = Geometry(ctx, self.uploads, programs, self.features)
         self.lights = LightTable(self.uploads, preset.disk_sides)
-        self.textures = MaterialTextures(ctx, self.uploads, preset.anisotropy)
+        self.textures = MaterialTextures(ctx, self.uploads, preset.anisotropy, srgb_filtering)
         self.environment = Environment(ctx, self.uploads, programs, gl.proc)
         self.skinning = SkinningPass(ctx, self.uploads, programs, self.geometry, gl.scratch)
         self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights, preset,

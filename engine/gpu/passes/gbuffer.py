@@ -92,7 +92,9 @@ class GBufferPass(Pass):
             if ref is None:
                 continue
             unit = UNITS[f"t_{short}"]
-            self.textures.get(ref.path, ref.colorspace).use(unit)
+            tex, decode = self.textures.get(ref.path, ref.colorspace)
+            tex.use(unit)
+            set_uniform(prog, f"m_{short}.srgb", bool(decode))
             self.textures.sampler(ref.wrap_s, ref.wrap_t).use(unit)
             set_uniform(prog, f"m_{short}.wrap", (WRAP.get(ref.wrap_s, 0), WRAP.get(ref.wrap_t, 0)))
             set_uniform(prog, f"m_{short}.scale", tuple(ref.scale))
