@@ -12,6 +12,7 @@ view change reads and uploads nothing but the view's draw order. USD is read on 
 caller's thread; every GL call runs on the engine's GL thread."""
 from __future__ import annotations
 
+import math
 import time
 import weakref
 from dataclasses import dataclass, field
@@ -49,6 +50,33 @@ class RenderSettings:
     # 8-bit sRGB textures: "encoded" filters the stored values and decodes after (as
     # Cycles does); "linear" decodes, then filters (as EEVEE and GL's sRGB formats do).
     srgb_filtering: str = "encoded"
+    # Anti-aliasing: jittered drawings averaged per image with Cycles' pixel filter
+    # (None: the preset's; high and ultra draw several, for F12 and the command line;
+    # an interactive viewport may ask for 1), and FXAA on one-drawing images (None:
+    # the preset's).
+    samples: int | None = None
+    fxaa: bool | None = None
+    # The post chain, on the scene-linear image (engine/gpu/passes/post.py): exposure
+    # in stops, a Gaussian blur of `blur` pixels (sigma), grayscale (Rec. 709
+    # luminance), mirror "x", "y" or "xy". All off by default: inside Blender the image
+    # stays as rendered and Blender's colour management applies.
+    exposure: float = 0.0
+    blur: float = 0.0
+    grayscale: bool = False
+    mirror: str = ""
+
+    def __post_init__(self):
+        if self.samples is not None and (int(self.samples) != self.samples or self.samples < 1):
+            raise ValueError(f"samples must be a whole number >= 1, not {self.samples!r}")
+        if not (self.blur >= 0.0 and math.isfinite(self.blur)):
+            raise ValueError(f"blur must be a finite sigma >= 0 (pixels), not {self.blur!r}")
+        if not math.isfinite(self.exposure):
+            raise ValueError(f"exposure must be finite, not {self.exposure!r}")
+        if self.mirror not in ("", "x", "y", "xy"):
+            raise ValueError(f"mirror must be '', 'x', 'y' or 'xy', not {self.mirror!r}")
+        if self.srgb_filtering not in ("encoded", "linear"):
+            raise ValueError(f"srgb_filtering must be 'encoded' or 'linear', not "
+                             f"{self.srgb_filtering!r}")
 
 
 @dataclass

@@ -65,7 +65,8 @@ void main() {
                         * specular_occlusion(s.NoV, ao, s.coat_roughness);
         }
     }
-    frag = vec4(finite(diffuse + glossy + background + emitted), 0.0);
+    // Alpha: coverage (resolve.frag), averaged by anti-aliasing.
+    frag = vec4(finite(diffuse + glossy + background + emitted), is_background(depth) ? 0.0 : 1.0);
 #ifdef WRITE_AOVS
     aov_diffuse = vec4(finite(diffuse), 0.0);
     aov_glossy = vec4(finite(glossy), 0.0);

@@ -48,8 +48,15 @@ TARGETS = {
 
 @dataclass(frozen=True)
 class FrameOptions:
-    """What a render asks of the shading and post passes (from RenderSettings)."""
+    """What a render asks of the shading and post passes (from RenderSettings; see
+    engine/session.py for each)."""
     ambient_occlusion: bool = True
+    samples: int | None = None       # None: the preset's
+    fxaa: bool | None = None         # None: the preset's
+    exposure: float = 0.0
+    blur: float = 0.0
+    grayscale: bool = False
+    mirror: str = ""
 
     @staticmethod
     def of(settings) -> "FrameOptions":
@@ -70,6 +77,17 @@ class Frame:
     aovs: frozenset = frozenset()  # render passes asked for (core/passes.py names)
     camera: object = None          # None: the view pass frames the default view
     options: FrameOptions = field(default_factory=FrameOptions)
+    # Anti-aliasing: drawing `sample` of `samples`, its projection moved by `jitter`
+    # pixels, weighted by `weight` (passes/antialias.py).
+    sample: int = 0
+    samples: int = 1
+    jitter: tuple = (0.0, 0.0)
+    weight: float = 1.0            # this drawing's share of the average
+
+    @property
+    def fxaa(self) -> bool:
+        o = self.options.fxaa
+        return bool(self.preset.fxaa if o is None else o)
     stats: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
 
@@ -144,7 +162,7 @@ class FrameGraph:
                 t0 = time.perf_counter()
                 p.execute(frame, board)
                 self.ctx.finish()            # so each pass's time is its own
-                frame.timings[p.name] = time.perf_counter() - t0
+                frame.timings[p.name] = frame.timings.get(p.name, 0.0) + time.perf_counter() - t0
                 for name in [n for n, last in last_use.items() if last == i and n in board]:
                     self.pool.release(board.pop(name))
             board["aovs"] = {aov: self._read_back(board, *self.producers[aov].aovs[aov], aov)

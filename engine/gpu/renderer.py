@@ -15,10 +15,12 @@ from .framegraph import Frame, FrameGraph, FrameOptions
 from .geometry import Geometry
 from .lights import LightTable
 from .passes.ambient import AmbientPass
+from .passes.antialias import AccumulatePass, jitter_offsets
 from .passes.ao import AoPass
 from .passes.aovs import AovPass
 from .passes.gbuffer import GBufferPass
 from .passes.lights import LightPass
+from .passes.post import PostPass
 from .passes.resolve import ResolvePass
 from .passes.shadows import ShadowPass
 from .passes.skinning import SkinningPass
@@ -61,6 +63,8 @@ class Renderer:
             AmbientPass(ctx, self.pool, programs, self.environment),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
                       self.geometry, preset, self.environment),
+            AccumulatePass(ctx, self.pool, programs),
+            PostPass(ctx, self.pool, programs),
             ResolvePass(ctx, self.pool, programs),
         ])
         self._cull_backfaces = None
@@ -89,9 +93,16 @@ class Renderer:
                       options=FrameOptions.of(settings))
         frame.stats["meshes_uploaded"] = self.update(scene, changes, cull_backfaces)
         frame.timings["upload"] = time.perf_counter() - t0
+        samples = frame.options.samples or self.preset.samples
+        offsets, weights = jitter_offsets(samples)
         self.depth.begin()
         try:
-            board = self.graph.run(frame)
+            for i, offset in enumerate(offsets):
+                # Each drawing of an anti-aliased image; only the last reads back.
+                frame.sample, frame.samples, frame.jitter = i, len(offsets), tuple(offset)
+                frame.weight = float(weights[i])
+                frame.aovs = frozenset(aovs) if i == len(offsets) - 1 else frozenset()
+                board = self.graph.run(frame)
         finally:
             self.depth.end()
         uploaded = self.uploads.take()
