@@ -7,8 +7,9 @@ blocker-search samples. cascades: sun cascades. anisotropy: texture filtering.
 disk_sides: the polygon a disk light is shaded as. ico_level: subdivisions of the
 sphere drawn as a point light's volume. ao_slices / ao_steps: ambient occlusion's
 horizon-search directions (rays) and depth samples per side (0 slices: no AO).
-samples: jittered drawings averaged per image (anti-aliasing; 1: one drawing).
-fxaa: FXAA on one-drawing images.
+supersample: the image is drawn this many times wider and taller and filtered down
+with Cycles' pixel filter (anti-aliasing; 1: not). fxaa: FXAA on images not
+supersampled.
 Cost and error of each preset against the Cycles references: README, "Presets"."""
 from __future__ import annotations
 
@@ -29,7 +30,7 @@ class Preset:
     cascades: int
     ao_slices: int
     ao_steps: int
-    samples: int
+    supersample: int
     fxaa: bool
 
 
@@ -39,9 +40,9 @@ PRESETS = {p.name: p for p in (
     Preset("medium", "Medium", "Balanced quality and speed",
            4.0, 32, 1, 1024, 16, 12, 3, 3, 8, 1, True),
     Preset("high", "High", "Larger shadow maps and softer filtering",
-           8.0, 32, 2, 2048, 32, 16, 4, 4, 12, 4, False),
+           8.0, 32, 2, 2048, 32, 16, 4, 4, 12, 2, False),
     Preset("ultra", "Ultra", "Closest to Cycles, slowest",
-           16.0, 32, 2, 4096, 64, 32, 4, 8, 16, 16, False),
+           16.0, 32, 2, 4096, 64, 32, 4, 8, 16, 3, False),
 )}
 DEFAULT = "medium"
 

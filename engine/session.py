@@ -50,11 +50,11 @@ class RenderSettings:
     # 8-bit sRGB textures: "encoded" filters the stored values and decodes after (as
     # Cycles does); "linear" decodes, then filters (as EEVEE and GL's sRGB formats do).
     srgb_filtering: str = "encoded"
-    # Anti-aliasing: jittered drawings averaged per image with Cycles' pixel filter
-    # (None: the preset's; high and ultra draw several, for F12 and the command line;
-    # an interactive viewport may ask for 1), and FXAA on one-drawing images (None:
-    # the preset's).
-    samples: int | None = None
+    # Anti-aliasing: supersampling, the image drawn k times wider and taller and
+    # filtered down with Cycles' pixel filter (None: the preset's; high and ultra
+    # supersample, for F12 and the command line; an interactive viewport may ask for
+    # 1), and FXAA on images not supersampled (None: the preset's).
+    supersample: int | None = None
     fxaa: bool | None = None
     # The post chain, on the scene-linear image (engine/gpu/passes/post.py): exposure
     # in stops, a Gaussian blur of `blur` pixels (sigma), grayscale (Rec. 709
@@ -66,8 +66,10 @@ class RenderSettings:
     mirror: str = ""
 
     def __post_init__(self):
-        if self.samples is not None and (int(self.samples) != self.samples or self.samples < 1):
-            raise ValueError(f"samples must be a whole number >= 1, not {self.samples!r}")
+        if self.supersample is not None and (int(self.supersample) != self.supersample
+                                             or not 1 <= self.supersample <= 8):
+            raise ValueError(f"supersample must be a whole number from 1 to 8, not "
+                             f"{self.supersample!r}")
         if not (self.blur >= 0.0 and math.isfinite(self.blur)):
             raise ValueError(f"blur must be a finite sigma >= 0 (pixels), not {self.blur!r}")
         if not math.isfinite(self.exposure):

@@ -18,7 +18,6 @@ uniform float pixel_scale;   // pixels per world unit at view depth 1 (orthograp
 uniform float max_pixels;    // the search never reaches further across the screen
 uniform int slices;
 uniform int steps;
-uniform int noise_offset;    // a different rotation per accumulated sample
 out float ao;
 
 // A 4x4 Bayer index in [0, 16): the tile's 16 pixels take 16 evenly spaced slice
@@ -89,10 +88,8 @@ void main() {
     float z = cam_ortho ? 1.0 : max(dot(p, cam_forward), 1e-6);
     float r_px = min(radius * pixel_scale / z, max_pixels);
     if (r_px < 1.0) return;
-    // Accumulated samples (anti-aliasing) turn the pattern by the golden ratio.
-    float turn = fract(0.618034 * float(noise_offset));
-    float rotation = fract((bayer4(px) + 0.5) / 16.0 + turn);
-    float jitter = fract((bayer4(px.yx + ivec2(1, 2)) + 0.5) / 16.0 + turn);
+    float rotation = (bayer4(px) + 0.5) / 16.0;
+    float jitter = (bayer4(px.yx + ivec2(1, 2)) + 0.5) / 16.0;
     float visible = 0.0;
     for (int s = 0; s < slices; ++s) {
         float phi = (float(s) + rotation) * PI / float(slices);

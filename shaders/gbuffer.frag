@@ -65,13 +65,9 @@ vec4 bilinear_encoded(sampler2D t, Map m, vec2 w) {
     return vec4(srgb_to_linear(c.rgb), c.a);
 }
 
-// Footprint scale: 1, or 1/k when k x k jittered drawings make one pixel (each then
-// filters its texture as a k-times larger image would, as Cycles' samples do).
-uniform float u_footprint;
-
 vec4 sample_map(sampler2D t, Map m, vec2 uv) {
     // Gradients from the unwrapped st so mirror folds do not spike the mip level.
-    vec2 dx = dFdx(uv) * u_footprint, dy = dFdy(uv) * u_footprint;
+    vec2 dx = dFdx(uv), dy = dFdy(uv);
     vec2 w = vec2(wrap1(uv.x, m.wrap.x), wrap1(uv.y, m.wrap.y));
     vec4 c = textureGrad(t, w, dx, dy);
     if (m.srgb) {

@@ -16,6 +16,14 @@ uniform float sigma;          // pixels
 #ifdef POST_MIRROR
 uniform bvec2 flip;
 #endif
+#ifdef POST_DOWNSAMPLE
+// One axis of the supersampled image's filter (engine/gpu/passes/antialias.py): tap i
+// reads the sub-pixel factor * pixel + tap[i].x along `axis`, weight tap[i].y.
+uniform int factor;
+uniform int axis;
+uniform int taps;
+uniform vec2 tap[64];
+#endif
 
 // Rec. 709 luminance (the scene-linear primaries Blender uses).
 const vec3 LUMA = vec3(0.2126, 0.7152, 0.0722);
@@ -164,6 +172,18 @@ void main() {
 #ifdef POST_GRAYSCALE
     vec4 c = texelFetch(post_src, px, 0);
     frag = vec4(vec3(dot(c.rgb, LUMA)), c.a);
+#endif
+#ifdef POST_DOWNSAMPLE
+    ivec2 size = textureSize(post_src, 0);
+    vec4 sum = vec4(0.0);
+    for (int i = 0; i < taps; ++i) {
+        ivec2 q = px;
+        int o = int(tap[i].x);
+        if (axis == 0) q.x = clamp(px.x * factor + o, 0, size.x - 1);
+        else q.y = clamp(px.y * factor + o, 0, size.y - 1);
+        sum += texelFetch(post_src, q, 0) * tap[i].y;
+    }
+    frag = sum;
 #endif
 #ifdef POST_MIRROR
     ivec2 size = textureSize(post_src, 0);

@@ -51,7 +51,7 @@ class FrameOptions:
     """What a render asks of the shading and post passes (from RenderSettings; see
     engine/session.py for each)."""
     ambient_occlusion: bool = True
-    samples: int | None = None       # None: the preset's
+    supersample: int | None = None   # None: the preset's
     fxaa: bool | None = None         # None: the preset's
     exposure: float = 0.0
     blur: float = 0.0
@@ -77,12 +77,10 @@ class Frame:
     aovs: frozenset = frozenset()  # render passes asked for (core/passes.py names)
     camera: object = None          # None: the view pass frames the default view
     options: FrameOptions = field(default_factory=FrameOptions)
-    # Anti-aliasing: drawing `sample` of `samples`, its projection moved by `jitter`
-    # pixels, weighted by `weight` (passes/antialias.py).
-    sample: int = 0
-    samples: int = 1
-    jitter: tuple = (0.0, 0.0)
-    weight: float = 1.0            # this drawing's share of the average
+    # Anti-aliasing (passes/antialias.py): drawn `supersample` times wider and taller
+    # than `output_size`, the image's; `size` is what the passes draw at now.
+    supersample: int = 1
+    output_size: tuple | None = None
 
     @property
     def fxaa(self) -> bool:

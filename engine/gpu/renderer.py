@@ -15,7 +15,7 @@ from .framegraph import Frame, FrameGraph, FrameOptions
 from .geometry import Geometry
 from .lights import LightTable
 from .passes.ambient import AmbientPass
-from .passes.antialias import AccumulatePass, jitter_offsets
+from .passes.antialias import SupersamplePass, centre_samples, downsample
 from .passes.ao import AoPass
 from .passes.aovs import AovPass
 from .passes.gbuffer import GBufferPass
@@ -28,6 +28,18 @@ from .passes.view import ViewPass
 from .resources import TargetPool, Uploads
 from .stencil import Stencil
 from .textures import MaterialTextures
+
+# Render passes that are data, not light: never filtered.
+DATA_PASSES = {"Depth", "Normal", "IndexOB", "IndexMA"}
+
+
+def supersample_factor(frame, size, max_texture: int) -> int:
+    """The preset's (or the settings') supersampling, as far as GL's texture size
+    allows."""
+    o = frame.options.supersample
+    k = max(int(frame.preset.supersample if o is None else o), 1)
+    return max(1, min(k, int(max_texture) // max(max(size), 1)))
+
 
 # Every counter a render reports, zero when nothing of the kind happened.
 COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow_maps",
@@ -63,7 +75,7 @@ class Renderer:
             AmbientPass(ctx, self.pool, programs, self.environment),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
                       self.geometry, preset, self.environment),
-            AccumulatePass(ctx, self.pool, programs),
+            SupersamplePass(ctx, self.pool, programs),
             PostPass(ctx, self.pool, programs),
             ResolvePass(ctx, self.pool, programs),
         ])
@@ -93,18 +105,18 @@ class Renderer:
                       options=FrameOptions.of(settings))
         frame.stats["meshes_uploaded"] = self.update(scene, changes, cull_backfaces)
         frame.timings["upload"] = time.perf_counter() - t0
-        samples = frame.options.samples or self.preset.samples
-        offsets, weights = jitter_offsets(samples)
+        k = supersample_factor(frame, size, self.ctx.info.get("GL_MAX_TEXTURE_SIZE", 16384))
+        frame.supersample, frame.output_size = k, tuple(size)
+        frame.size = (size[0] * k, size[1] * k)
         self.depth.begin()
         try:
-            for i, offset in enumerate(offsets):
-                # Each drawing of an anti-aliased image; only the last reads back.
-                frame.sample, frame.samples, frame.jitter = i, len(offsets), tuple(offset)
-                frame.weight = float(weights[i])
-                frame.aovs = frozenset(aovs) if i == len(offsets) - 1 else frozenset()
-                board = self.graph.run(frame)
+            board = self.graph.run(frame)
         finally:
             self.depth.end()
+        # Render passes were drawn at the supersampled size too: light is filtered as
+        # the image is, data (depth, normals, indices) keeps the centre sub-pixel.
+        board["aovs"] = {name: (centre_samples(a, k) if name in DATA_PASSES else downsample(a, k))
+                         for name, a in board["aovs"].items()}
         uploaded = self.uploads.take()
         frame.stats["bytes_uploaded"] = int(sum(uploaded.values()))
         frame.stats["bytes_by_kind"] = dict(uploaded)

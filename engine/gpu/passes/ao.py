@@ -67,7 +67,6 @@ class AoPass(Pass):
         set_uniform(prog, "max_pixels", float((w * w + h * h) ** 0.5))
         set_uniform(prog, "slices", max(preset.ao_slices, 1))
         set_uniform(prog, "steps", max(preset.ao_steps, 1))
-        set_uniform(prog, "noise_offset", int(getattr(frame, "sample", 0)))
         self.programs.fullscreen(prog)
         targets = [board["ao"]] + [board[t] for t in self.aov_targets(frame)]
         self.pool.framebuffer(targets).use()

@@ -62,8 +62,6 @@ class GBufferPass(Pass):
             prog = self.programs.get("gbuffer.vert", "gbuffer.frag", defines)
             set_uniform(prog, "view_proj", view.view_proj)
             set_uniform(prog, "u_far", view.far_clip)
-            # Anti-aliasing's k x k drawings filter textures at 1/k of a pixel.
-            set_uniform(prog, "u_footprint", 1.0 / round(frame.samples ** 0.5))
             view.set_origin(prog)
             self._material(prog, mat)
             # A mirroring transform turns counter-clockwise triangles clockwise.

@@ -3,7 +3,7 @@ scene-linear image, each drawn from the current image into a fresh target of the
 format that then becomes the image (ping-pong through the pool: two targets
 alternate). In order, each only when asked for:
 
-  fxaa       one-sample frames whose preset asks for it (antialias.py does the rest),
+  fxaa       frames not supersampled whose preset asks for it (antialias.py),
              at geometric edges only (depth or normal changes around the pixel)
   exposure   x 2^stops (RenderSettings.exposure)
   blur       separable Gaussian, sigma in pixels (RenderSettings.blur): two draws
@@ -28,7 +28,7 @@ def stages(frame) -> list:
     """[(variant, uniforms)] this frame draws, in order."""
     o = frame.options
     out = []
-    if frame.samples == 1 and frame.fxaa:
+    if frame.supersample == 1 and frame.fxaa:
         out.append(("POST_FXAA", {}))
     if o.exposure != 0.0:
         out.append(("POST_SCALE", {"scale": 2.0 ** o.exposure, "alpha_scale": 1.0}))
@@ -51,7 +51,7 @@ class PostPass(Pass):
         self.ctx, self.pool, self.programs = ctx, pool, programs
 
     def needed(self, frame):
-        return frame.sample == frame.samples - 1 and bool(stages(frame))
+        return bool(stages(frame))
 
     def execute(self, frame, board):
         ctx = self.ctx

@@ -1,7 +1,6 @@
 """The resolve pass: the HDR accumulation into a float32 image, read back top row
 first. Alpha is 1, or coverage when the render is transparent (the HDR target's
-alpha: 1 where a surface was drawn, averaged by anti-aliasing). Runs once per image,
-after its last anti-aliasing drawing.
+alpha: 1 where a surface was drawn, filtered by anti-aliasing).
 
 reads: hdr   writes: output, rgba (the image, numpy)"""
 from __future__ import annotations
@@ -19,9 +18,6 @@ class ResolvePass(Pass):
 
     def __init__(self, ctx, pool, programs):
         self.ctx, self.pool, self.programs = ctx, pool, programs
-
-    def needed(self, frame):
-        return frame.sample == frame.samples - 1
 
     def execute(self, frame, board):
         ctx, (w, h) = self.ctx, frame.size

@@ -18,7 +18,6 @@ from ...view import (boxes_outside, default_camera, frustum_planes, relative_vie
                      render_projection, split_double, window_matrix)
 from ..framegraph import Pass
 from ..programs import set_uniform
-from .antialias import jittered
 
 
 @dataclass
@@ -88,13 +87,7 @@ class ViewPass(Pass):
         if camera is None:
             w, h = frame.size
             camera = default_camera(self._drawn_bounds(posed), frame.scene.up_axis, w / h)
-        view = make_view(camera, self.depth.zero_to_one, boxes, bounds)
-        if any(frame.jitter):
-            # Anti-aliasing moves what is drawn and reconstructed by a sub-pixel offset;
-            # culling and shadow fitting keep the camera itself, so kept shadow maps stay.
-            moved = make_view(jittered(camera, frame.jitter, frame.size), self.depth.zero_to_one)
-            view.view_proj, view.inv_view_proj = moved.view_proj, moved.inv_view_proj
-        board["view"] = view
+        board["view"] = make_view(camera, self.depth.zero_to_one, boxes, bounds)
 
     def _drawn_bounds(self, posed):
         """The world box of what is drawn, skinned meshes by their skinned vertices."""
