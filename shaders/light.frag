@@ -29,7 +29,13 @@ const float HDR_MAX = 65000.0;
 #include "shadow_lookup.glsl"
 #endif
 
-out vec4 frag;
+layout(location = 0) out vec4 frag;
+#ifdef WRITE_AOVS
+// Render passes (engine/gpu/passes/ambient.py LIGHTING_AOVS), added like the light.
+layout(location = 1) out vec4 aov_diffuse;
+layout(location = 2) out vec4 aov_glossy;
+layout(location = 3) out vec4 aov_shadow;   // luminance with shadows, without
+#endif
 
 #ifdef LIGHT_AREA
 // Projected solid angle of the polygon seen from p with normal n, after clipping the
@@ -171,9 +177,16 @@ void main() {
 #endif
 
     vec3 radiance = diffuse + glossy;
+    float lit = 1.0;
 #ifdef HAS_SHADOW
     if (max(radiance.r, max(radiance.g, radiance.b)) > 0.0)
-        radiance *= shadow_factor(p, n, light_pos, light_axis, dot(p, cam_forward));
+        lit = shadow_factor(p, n, light_pos, light_axis, dot(p, cam_forward));
 #endif
-    frag = vec4(min(finite(radiance), vec3(HDR_MAX)), 0.0);
+    frag = vec4(min(finite(radiance * lit), vec3(HDR_MAX)), 0.0);
+#ifdef WRITE_AOVS
+    aov_diffuse = vec4(finite(diffuse * lit), 0.0);
+    aov_glossy = vec4(finite(glossy * lit), 0.0);
+    float luminance = dot(finite(radiance), vec3(0.2126, 0.7152, 0.0722));
+    aov_shadow = vec4(luminance * lit, luminance, 0.0, 0.0);
+#endif
 }

@@ -43,6 +43,10 @@ TARGETS = {
     "aov_normal": "rgba32f",   # world normal
     "aov_emit": "rgba32f",     # emission
     "aov_ao": "rgba32f",       # ambient occlusion (the AO pass)
+    "aov_diffuse": "rgba32f",  # diffuse light (the ambient and light passes)
+    "aov_glossy": "rgba32f",   # specular and coat light (the same)
+    "aov_env": "rgba32f",      # the dome seen directly (the ambient pass)
+    "aov_shadow": "rgba32f",   # light reaching surfaces: with, without shadows (lights)
 }
 
 

@@ -33,6 +33,14 @@ from .textures import MaterialTextures
 DATA_PASSES = {"Depth", "Normal", "IndexOB", "IndexMA"}
 
 
+def shadow_ratio(sums: np.ndarray) -> np.ndarray:
+    """The Shadow pass from its sums (light with shadows, without): their ratio, grey,
+    1 where no light reaches."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(sums[..., 1] > 0, sums[..., 0] / sums[..., 1], 1.0)
+    return np.repeat(np.clip(ratio, 0.0, 1.0)[..., None], 3, axis=2).astype(np.float32)
+
+
 def supersample_factor(frame, size, max_texture: int) -> int:
     """The preset's (or the settings') supersampling, as far as GL's texture size
     allows."""
@@ -117,6 +125,8 @@ class Renderer:
         # the image is, data (depth, normals, indices) keeps the centre sub-pixel.
         board["aovs"] = {name: (centre_samples(a, k) if name in DATA_PASSES else downsample(a, k))
                          for name, a in board["aovs"].items()}
+        if "Shadow" in board["aovs"]:
+            board["aovs"]["Shadow"] = shadow_ratio(board["aovs"]["Shadow"])
         uploaded = self.uploads.take()
         frame.stats["bytes_uploaded"] = int(sum(uploaded.values()))
         frame.stats["bytes_by_kind"] = dict(uploaded)
