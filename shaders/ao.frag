@@ -117,7 +117,7 @@ void main() {
                 vec3 delta = position_at(w, drawn) - p;
                 if (!drawn) continue;
                 float dist = length(delta);
-                if (dist < 1e-6) continue;
+                if (dist < 1e-6 * length(p)) continue;
                 float c = clamp(dot(delta, v) / dist, -1.0, 1.0);
                 // Occluders fade out over the last fifth of the radius.
                 float fade = clamp((radius - dist) / (0.2 * radius), 0.0, 1.0);
