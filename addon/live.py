@@ -179,8 +179,8 @@ class LiveScene:
             elif obj.kind == "mesh":
                 reshaped.add(key)
         for key in sorted(moved - data):
-            export_object(depsgraph, stage, index, key)
-            self._did("object", key)
+            if export_object(depsgraph, stage, index, key):
+                self._did("object", key)
         for key in sorted(data):
             export_data(depsgraph, stage, index, key, self._warn)
             self._did("data", key)

@@ -8,6 +8,8 @@ window.
   renders it progressively (the interactive preset while the view moves, the scene's
   preset once it has been still SETTLE_SECONDS); the latest frame that arrived is
   drawn. Nothing waits: a redraw timer tags the region when a new frame arrives.
+  (engine/host/protocol.py: the interactive preset is `low`, at half resolution past
+  320x180 pixels, drawn stretched.)
 - Views: perspective, orthographic and the camera view, as the region's view and
   window matrices say (Blender's camera zoom and offset are in them). A render border
   (the camera's border in camera view, or the viewport's render region otherwise)

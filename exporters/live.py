@@ -35,18 +35,19 @@ from .gather.light import gather_light
 from .gather.material import gather_material
 from .gather.scene import _gather_geometry, _is_shareable, gather_scene
 from .gather.shapes import shape_weights
-from .gather.skeleton import (decompose, gather_skeleton, local_matrices, pose_index,
-                              pose_matrices, relative_matrix, trs)
+from .gather.skeleton import (decompose, local_matrices, pose_index, pose_matrices,
+                              relative_matrix, trs)
 from .gather.skin import animated
 from .gather.tangents import tangent_uv_map
 from .gather.world import gather_world
 from .ir import ObjectRecord, SceneRecord
 from .usd.assets import asset_resolver
 from .usd.mesh import write_mesh
-from .usd.names import Namer, set_blender_name
+from .usd.names import set_blender_name
 from .usd.scene import (WORLD, define_object_prim, double_sided, slot_names,
                         write_material_prim, write_object_attributes, write_object_mesh,
-                        write_scene, write_skeleton)
+                        write_scene)
+from .usd.skel import joint_paths, write_animation
 from .usd.world import write_world
 
 
@@ -65,6 +66,7 @@ class LiveIndex:
     materials: dict = field(default_factory=dict)   # material key -> MaterialRecord
     tangent_uv: dict = field(default_factory=dict)  # material key -> its normal map's UV
     skeletons: dict = field(default_factory=dict)   # rig key -> SkeletonRecord
+    bones: dict = field(default_factory=dict)       # armature key -> its bones' rest
     rig_of: dict = field(default_factory=dict)      # skinned or blend-shaped object -> rig
     shared_data: set = field(default_factory=set)   # mesh data names written as prototypes
     moving: set = field(default_factory=set)        # objects a frame change may move
@@ -121,6 +123,8 @@ def export_live(depsgraph, stage, warn) -> LiveIndex:
         for name in skel.blend_shapes:
             index.rig_of.setdefault(name[0], key)
         index.skeletons[key] = skel
+        if skel.joint_names:
+            index.bones[key] = _bones(_original(key))
     index.moving = _moving(index)
     return index
 
@@ -149,24 +153,38 @@ def _original(key, kind="objects"):
     return found
 
 
+def _bones(armature):
+    """An armature's bones as they rest: names and armature-space matrices (a change
+    of either is a new skeleton, so a full export)."""
+    bones = armature.data.bones
+    rest = np.empty(len(bones) * 16, np.float32)
+    bones.foreach_get("matrix_local", rest)
+    return [b.name for b in bones], rest
+
+
 def _world_matrix(depsgraph, key) -> np.ndarray:
     return np.array(_original(key).evaluated_get(depsgraph).matrix_world, dtype=np.float64)
 
 
-def _object_now(depsgraph, index, key) -> ObjectRecord:
-    """The object's record with its current local matrix, name and pass index."""
+def _object_now(depsgraph, index, key):
+    """(the object's record with its current local matrix, name and pass index,
+    whether any of those changed since the record was made)."""
     if key not in index.objects:
         raise NeedsFullExport(f"object {key} is not in the stage")
     ob = _original(key)
-    obj = copy.copy(index.objects[key])
+    old = index.objects[key]
     world = _world_matrix(depsgraph, key)
     require_finite(world, f"object '{ob.name}'", "transform")
-    obj.matrix = relative_matrix(_world_matrix(depsgraph, obj.parent), world) \
-        if obj.parent is not None else world
-    obj.matrix_samples, obj.trs = None, trs(obj.matrix[None])
+    local = relative_matrix(_world_matrix(depsgraph, old.parent), world) \
+        if old.parent is not None else world
+    if np.array_equal(local, old.matrix) and (ob.name, ob.pass_index) == \
+            (old.name, old.pass_index) and old.trs is not None and len(old.trs.rotations) == 1:
+        return old, False
+    obj = copy.copy(old)
+    obj.matrix, obj.matrix_samples, obj.trs = local, None, trs(local[None])
     obj.name, obj.pass_index = ob.name, int(ob.pass_index)
     index.objects[key] = obj
-    return obj
+    return obj, True
 
 
 def _copy_properties(src, dst, src_path, dst_path=None):
@@ -194,19 +212,23 @@ def _copy_prim(src, dst, path):
 
 
 def export_object(depsgraph, stage, index, key):
-    """The object's transform (relative to its exported parent), name and pass index."""
-    obj = _object_now(depsgraph, index, key)
+    """The object's transform (relative to its exported parent), name and pass index;
+    False (nothing written) when none changed."""
+    obj, changed = _object_now(depsgraph, index, key)
+    if not changed:
+        return False
     path = index.paths.objects[key]
     scratch = Usd.Stage.CreateInMemory()
     write_object_attributes(scratch.OverridePrim(path), obj)
     with Sdf.ChangeBlock():
         _copy_properties(scratch.GetRootLayer(), stage.GetRootLayer(), path)
+    return True
 
 
 def export_data(depsgraph, stage, index, key, warn):
     """A light's or a camera's prim (the object prim is the UsdLux light or the
     camera), with its transform; its children stay."""
-    obj = _object_now(depsgraph, index, key)
+    obj, _ = _object_now(depsgraph, index, key)
     ob = _original(key)
     if obj.kind == "light" and ob.type == "LIGHT":
         obj.light = gather_light(ob.data, warn)
@@ -294,9 +316,8 @@ def export_pose(depsgraph, stage, index, rig):
     frame = depsgraph.scene.frame_current
     if skel.joint_names:
         arm = _original(rig)
-        rest = gather_skeleton(arm, rig, np.eye(4))
-        if rest.joint_names != skel.joint_names or \
-                not np.array_equal(rest.rest_armature, skel.rest_armature):
+        names, rest = _bones(arm)
+        if names != index.bones[rig][0] or not np.array_equal(rest, index.bones[rig][1]):
             raise NeedsFullExport(f"armature {rig}: its bones changed")
         poses = pose_matrices(arm.evaluated_get(depsgraph), pose_index(arm, skel.joint_names))
         require_finite(poses, f"armature '{arm.name}'", "bone poses")
@@ -308,10 +329,8 @@ def export_pose(depsgraph, stage, index, rig):
         skel.blend_weights = np.array(weights, dtype=np.float64)[None]
         skel.blend_shapes = list(skel.blend_shapes)
     skel.times = [frame]
-    skeleton_path, _ = index.paths.skeletons[rig]
+    path = index.paths.skeletons[rig][0].AppendChild("Animation")
     scratch = Usd.Stage.CreateInMemory()
-    written, _ = write_skeleton(scratch, index.paths.objects[rig], skel, Namer())
+    write_animation(scratch, path, skel, joint_paths(skel))
     with Sdf.ChangeBlock():
-        _copy_properties(scratch.GetRootLayer(), stage.GetRootLayer(),
-                         written.AppendChild("Animation"),
-                         skeleton_path.AppendChild("Animation"))
+        _copy_properties(scratch.GetRootLayer(), stage.GetRootLayer(), path)

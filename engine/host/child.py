@@ -154,6 +154,8 @@ class Host:
         preset = req["preset"] if final else p.INTERACTIVE_PRESET
         passes = [(n, PASSES[n].channels) for n in req["passes"]]
         w, h = req["width"], req["height"]
+        if not final and w * h > p.INTERACTIVE_MIN_PIXELS:
+            w, h = max(1, round(w * p.INTERACTIVE_SCALE)), max(1, round(h * p.INTERACTIVE_SCALE))
         frame_layout, total = p.layout(w, h, passes)
         try:
             session = scene.session(preset)
@@ -185,6 +187,8 @@ class Host:
         for pass_name, channels, offset in frame_layout:
             p.view(block, w, h, channels, offset)[:] = images[pass_name][::-1]
         scene.level = 2 if final else 1
+        if not final:
+            scene.touched = time.monotonic()    # settling counts from the frame shown
         self._send(p.FRAME, scene=name, request=req["id"], tag=req.get("tag"), slot=slot,
                    width=w, height=h, layout=frame_layout, final=final, preset=preset,
                    stats=result.stats, timings=result.timings, warnings=result.warnings)

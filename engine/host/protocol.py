@@ -21,8 +21,13 @@ EDIT, RENDER, SLOTS, RELEASE, FORGET, DROP, QUIT = (
 # host -> Blender
 READY, FRAME, ERROR, FATAL = "ready", "frame", "error", "fatal"
 
-INTERACTIVE_PRESET = "low"   # what a progressive view shows while it moves
-SETTLE_SECONDS = 0.15        # a view unchanged this long gets the scene's preset
+# What a progressive view shows while it moves: the low preset, at half resolution
+# when the frame is larger than INTERACTIVE_MIN_PIXELS (drawn stretched); once no new
+# request came for SETTLE_SECONDS after that frame, the scene's preset at full size.
+INTERACTIVE_PRESET = "low"
+INTERACTIVE_SCALE = 0.5
+INTERACTIVE_MIN_PIXELS = 320 * 180
+SETTLE_SECONDS = 0.15
 SLOTS_PER_TARGET = 3         # one shown, one being written, one in flight
 
 
