@@ -195,3 +195,44 @@ def test_a_move_sends_one_transform_among_many(empty_scene):
             "/root/Cube_100.xformOp:translate").Get()[2], 2.0)
     finally:
         synced.close()
+
+
+def test_blend_shape_weights_at_a_new_frame(corpus):
+    """Animated shape keys (on a rig, and on a mesh holding its blend shapes with a
+    one-joint skeleton): a frame change sends SkelAnimation channels and blend-shape
+    weights only, and a Session fed the fragments draws what a fresh export draws,
+    re-reading no mesh."""
+    import bpy
+    from lantern.engine import RenderSettings, Session
+    from lantern.engine.usd.fragments import apply, receiver
+    from lantern.exporters import open_blend
+    open_blend(str(corpus / "blender" / "28_shapekeys_anim.blend"))
+    scene = bpy.context.scene
+    scene.frame_set(scene.frame_start)
+    synced = Synced()
+    host_stage = receiver()
+    try:
+        for _, fragment in synced.fragments:
+            apply(host_stage, fragment)
+        settings = RenderSettings(width=48, height=32)
+        with Session(host_stage, settings) as session:
+            before = session.render()
+            synced.fragments.clear()
+            scene.frame_set(scene.frame_start + (scene.frame_end - scene.frame_start) // 2)
+            (exports, fragment), = [(e, f) for e, f in synced.fragments if f is not None]
+            assert {kind for kind, _ in exports} == {"pose"}
+            names = [p.rsplit(".", 1)[1] for p in fragment["copy"]]
+            assert all(p.split(".")[0].endswith("/Animation") for p in fragment["copy"])
+            assert "blendShapeWeights" in names and set(names) <= {
+                "blendShapeWeights", "translations", "rotations", "scales"}
+            apply(host_stage, fragment)
+            live = session.render()
+        fresh = Usd.Stage.CreateInMemory()
+        fresh.GetRootLayer().ImportFromString(_fresh())
+        with Session(fresh, settings) as session:
+            expected = session.render()
+        assert live.stats["meshes_uploaded"] == 0 and live.stats["prims_read"] <= 4
+        np.testing.assert_allclose(live.rgba, expected.rgba, atol=1e-5)
+        assert np.abs(live.rgba - before.rgba).max() > 1e-2     # the shapes moved
+    finally:
+        synced.close()
