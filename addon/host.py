@@ -35,6 +35,7 @@ from ..engine.host import protocol as p
 
 RESTART_SECONDS = 2.0     # after a child that never got going, wait this long to retry
 QUIT_SECONDS = 3.0        # a child that does not stop by then is killed
+SENT_KEPT = 10000         # messages remembered (kind, scene, bytes), for tests and bench
 WHEELS = ("pxr", "numpy", "moderngl", "glcontext", "mapbox_earcut")
 PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -113,7 +114,8 @@ class Host:
         self.channels = {}
         self.failure = None        # why the last child stopped, or could not start
         self.info = None           # the child's READY fields (pid, GL)
-        self.sent = []             # (kind, scene, bytes) of every message, for tests and bench
+        self.sent = deque(maxlen=SENT_KEPT)  # (kind, scene, bytes) of the last messages
+        self.messages = 0          # messages sent since this Host was made
         self.log = deque(maxlen=40)  # the child's stderr, last lines
         self._outbox = None
         self._threads = []
@@ -167,18 +169,19 @@ class Host:
         self._ready.clear()
         self._started = time.monotonic()
         self._outbox = queue.Queue()
-        self._threads = [threading.Thread(target=fn, name=name, daemon=True) for fn, name in (
-            (self._read, "lantern-host-read"), (self._write, "lantern-host-write"),
-            (self._drain, "lantern-host-log"))]
+        self._threads = [threading.Thread(target=fn, args=args, name=name, daemon=True)
+                         for fn, args, name in (
+                             (self._read, (self.conn, self.proc), "lantern-host-read"),
+                             (self._write, (self._outbox, self.conn), "lantern-host-write"),
+                             (self._drain, (self.proc.stderr,), "lantern-host-log"))]
         for thread in self._threads:
             thread.start()
 
-    def _drain(self, stream=None):
-        for line in (stream or self.proc.stderr):
+    def _drain(self, stream):
+        for line in stream:
             self.log.append(line.decode(errors="replace").rstrip())
 
-    def _write(self):
-        outbox, conn = self._outbox, self.conn
+    def _write(self, outbox, conn):
         while True:
             data = outbox.get()
             if data is None:
@@ -188,8 +191,7 @@ class Host:
             except (OSError, ValueError):
                 return
 
-    def _read(self):
-        conn, proc = self.conn, self.proc
+    def _read(self, conn, proc):
         try:
             while True:
                 kind, fields = p.loads(conn.recv_bytes())
@@ -239,8 +241,14 @@ class Host:
     def _post(self, kind, **fields) -> int:
         data = p.dumps(kind, **fields)
         self.sent.append((kind, fields.get("scene"), len(data)))
+        self.messages += 1
         self._outbox.put(data)
         return len(data)
+
+    def sent_since(self, mark) -> list:
+        """(kind, scene, bytes) of the messages sent since self.messages was `mark`."""
+        count = self.messages - mark
+        return list(self.sent)[-count:] if count > 0 else []
 
     def send(self, kind, **fields) -> int:
         """Queues a message for the child; returns its size in bytes."""

@@ -62,10 +62,10 @@ class Viewport:
         self.render.update(depsgraph)
 
     def sent(self):
-        return len(self.render.host.sent)
+        return self.render.host.messages
 
     def edits_since(self, mark):
-        return [size for kind, scene, size in self.render.host.sent[mark:]
+        return [size for kind, scene, size in self.render.host.sent_since(mark)
                 if scene == self.render.name and kind == "edit"]
 
     def frames(self, view, preset, t0, since):

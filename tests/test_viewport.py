@@ -150,11 +150,11 @@ def _edit(vp, action):
     """The messages an edit sent: [(kind, bytes)], and the fragments of its edits."""
     import bpy
     host = vp.render.host
-    before = len(host.sent)
+    before = host.messages
     vp.mark = host.channel(vp.render.name).frames
     action()
     bpy.context.view_layer.update()
-    sent = [(kind, size) for kind, scene, size in host.sent[before:] if scene == vp.render.name]
+    sent = [(kind, size) for kind, scene, size in host.sent_since(before) if scene == vp.render.name]
     return sent, list(vp.render.live.last)
 
 
@@ -257,7 +257,7 @@ def test_views_are_progressive_and_send_no_edit(viewport):
     view = _camera_view(scene, depsgraph)
     vp.frame(view)
     host = vp.render.host
-    before = len(host.sent)
+    before = host.messages
     seen = []
     orbit = view.view.copy()
     orbit[0, 3] += 0.5
@@ -274,7 +274,7 @@ def test_views_are_progressive_and_send_no_edit(viewport):
             if latest.final:
                 break
         time.sleep(0.005)
-    kinds = [k for k, s, _ in host.sent[before:] if s == vp.render.name]
+    kinds = [k for k, s, _ in host.sent_since(before) if s == vp.render.name]
     assert "edit" not in kinds and kinds.count("render") == 1
     presets = [f.preset for f in [channel.latest]]
     assert presets == ["medium"]
