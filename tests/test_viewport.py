@@ -376,3 +376,31 @@ def test_a_killed_engine_restarts_on_the_next_redraw(viewport):
     assert vp.render.notices == ["Lantern: the engine process stopped (killed by SIGKILL); "
                                  "it starts again"]
     np.testing.assert_allclose(again, first, atol=1e-6)
+
+
+def test_the_redraw_timer_and_pass_registration(viewport):
+    """RenderEngine._poll (the redraw timer: a redraw per new frame, stopping once
+    nothing is to come) and update_render_passes (Combined and the view layer's
+    passes, from core/passes.py), on stand-in engines."""
+    import bpy
+    from lantern.addon import render_engine
+    from lantern.core.passes import PASSES
+    scene, vp = viewport
+    view = _camera_view(scene, bpy.context.evaluated_depsgraph_get())
+    vp.frame(view)
+    redraws = []
+    engine = SimpleNamespace(_viewport=vp.render, _polling=True,
+                             tag_redraw=lambda: redraws.append(1))
+    engine._poll = lambda: render_engine.LanternRenderEngine._poll(engine)
+    vp.render.host.channel(vp.render.name).fresh = True
+    assert render_engine.LanternRenderEngine._poll(engine) is None   # the final frame is in
+    assert len(redraws) == 2 and engine._polling is False
+
+    registered = []
+    engine = SimpleNamespace(register_pass=lambda *a: registered.append(a[2:]))
+    layer = scene.view_layers[0]
+    layer.use_pass_z, layer.use_pass_object_index = True, True
+    render_engine.LanternRenderEngine.update_render_passes(engine, scene, layer)
+    assert registered == [("Combined", 4, "RGBA", "COLOR"),
+                          ("Depth", 1, "Z", "VALUE"), ("IndexOB", 1, "X", "VALUE")]
+    assert all(PASSES[name].provided for name, *_ in registered[1:])
