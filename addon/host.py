@@ -126,6 +126,17 @@ class Host:
     def running(self) -> bool:
         return self.proc is not None and self.proc.poll() is None and self.failure is None
 
+    def why(self):
+        """Why no child runs (None while one does): the reader's account, or the exit
+        status of a child that died before the reader saw it go."""
+        if self.running():
+            return None
+        if self.failure is not None:
+            return self.failure
+        if self.proc is not None and self.proc.poll() is not None:
+            return f"the engine process stopped ({describe_exit(self.proc.returncode)})"
+        return "the engine process is not running"
+
     def ensure(self) -> bool:
         """Starts the child if none runs (a new generation: every scene must be sent
         again); False while a failed start is too recent to retry."""
@@ -254,7 +265,7 @@ class Host:
         """Queues a message for the child; returns its size in bytes."""
         with self._lock:
             if not self.running():
-                raise HostError(self.failure or "the engine process is not running")
+                raise HostError(self.why())
             return self._post(kind, **fields)
 
     # --- scenes -----------------------------------------------------------------------
@@ -339,7 +350,7 @@ class Host:
                 if channel.latest is not None and channel.latest.request == request:
                     return channel.latest
                 if not self.running():
-                    raise HostError(self.failure or "the engine process is not running")
+                    raise HostError(self.why())
                 channel.event.clear()
             if test_break():
                 with contextlib.suppress(HostError):

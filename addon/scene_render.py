@@ -80,7 +80,7 @@ def render_frame(engine, depsgraph):
     host = host_module.get()
     try:
         if not host.ensure():
-            raise host_module.HostError(host.failure)
+            raise host_module.HostError(host.why())
         still = _still(name, host.generation)
         stats("Exporting the scene")
         engine.update_progress(0.0)

@@ -132,7 +132,7 @@ class ViewportRender:
         process cannot run now (self.status says why)."""
         host = self.host
         if not host.ensure():
-            self.status = f"Lantern: {host.failure}"
+            self.status = f"Lantern: {host.why()}"
             return False
         if self.live is None or self.generation != host.generation:
             if self.live is not None:
@@ -151,7 +151,7 @@ class ViewportRender:
         host = self.host
         try:
             if self.generation != host.generation or not host.running():
-                failure = host.failure
+                failure = host.why() if self.generation == host.generation else host.failure
                 if failure is not None:
                     self.notices.append(f"Lantern: {failure}; it starts again")
                 if not self.update(depsgraph):
