@@ -27,7 +27,8 @@ from .textures import MaterialTextures
 # Every counter a render reports, zero when nothing of the kind happened.
 COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow_maps",
             "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
-            "light_volumes", "stencil_marks", "batched_lights")
+            "light_volumes", "stencil_marks", "batched_lights", "instances_drawn",
+            "points_drawn")
 
 
 class Renderer:

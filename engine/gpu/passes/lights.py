@@ -128,7 +128,7 @@ class LightPass(Pass):
         ctx.blend_equation = ctx.FUNC_ADD
         self.table.texture.use(UNITS["u_lights"])
 
-        has_casters = any(d.ranges for d in self.geometry.draws.values())
+        has_casters = self.geometry.has_casters()
         batched = []
         for path, light in frame.scene.lights.items():
             R = self.table.ranges[path]
