@@ -51,7 +51,7 @@ void main() {
         vec3 bg = vec3(0.0);
         if (has_dome && !transparent)
             bg = dome(pixel_ray(uv, inv_view_proj, cam_ortho, cam_forward));
-        frag = vec4(finite(bg), 0.0);
+        frag = vec4(bg, 0.0);
         return;
     }
     vec3 p = position_from_depth(uv, depth, inv_view_proj);
@@ -68,5 +68,5 @@ void main() {
         vec3 spec_l = max(sh_irradiance(dome_sh, r), vec3(0.0)) / PI;
         c += env_brdf(s.f0, s.f90, s.roughness, max(dot(n, v), 1e-4)) * spec_l;
     }
-    frag = vec4(finite(c), 0.0);
+    frag = vec4(c, 0.0);
 }

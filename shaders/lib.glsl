@@ -1,6 +1,5 @@
 // Shared by every pass: constants, the BRDF, the depth convention, SH irradiance.
 const float PI = 3.14159265358979;
-const float BIG = 1e30;
 
 // --- Depth: read it only through these (engine/view.py states the convention) ----
 // Depth is a 32-bit float, reversed: 1 at the near plane, towards 0 far away (an
@@ -93,8 +92,5 @@ vec3 sh_irradiance(vec3 sh[9], vec3 d) {
         + sh[7] * 1.092548 * d.x * d.z + sh[8] * 0.546274 * (d.x * d.x - d.y * d.y);
 }
 
-// Never hand NaN or Inf on to the blend unit.
-vec3 finite(vec3 c) {
-    bvec3 bad = bvec3(isnan(c.x) || isinf(c.x), isnan(c.y) || isinf(c.y), isnan(c.z) || isinf(c.z));
-    return min(mix(c, vec3(0.0), bvec3(bad)), vec3(BIG));
-}
+// No shader hides NaN or Inf: the resolve pass counts the pixels that hold them and
+// names the prims they lie on (engine/gpu/passes/resolve.py).

@@ -22,9 +22,6 @@ uniform int light_index;
 #define MAX_VERTS 32
 #endif
 
-// The HDR target is RGBA16F: one light never writes more than it holds.
-const float HDR_MAX = 65000.0;
-
 #ifdef HAS_SHADOW
 #include "shadow_lookup.glsl"
 #endif
@@ -167,5 +164,5 @@ void main() {
     if (max(radiance.r, max(radiance.g, radiance.b)) > 0.0)
         radiance *= shadow_factor(p, n, light_pos, light_axis, dot(p, cam_forward));
 #endif
-    frag = vec4(min(finite(radiance), vec3(HDR_MAX)), 0.0);
+    frag = vec4(radiance, 0.0);   // NaN or Inf goes through: the resolve pass counts it
 }

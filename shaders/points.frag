@@ -10,9 +10,12 @@ flat in float v_radius;
 uniform bool u_face_axis;
 uniform vec3 u_axis;
 uniform mat4 u_window;        // origin-relative -> (x, y, window depth, w)
-#ifdef POINTS_SHADOW
+#if defined(POINTS_SHADOW)
 uniform bool radial;          // radial map: depth = distance / far from the origin
 uniform float far;
+#elif defined(POINTS_ID)
+uniform int u_object;
+out int rt_id;
 #else
 #ifdef POINTS_COLOUR
 flat in vec3 v_colour;
@@ -40,8 +43,11 @@ void main() {
     if (t < 0.0) discard;                      // the viewer is inside the sphere
     vec3 p = o + d * t;
     vec4 w = u_window * vec4(p, 1.0);
-#ifdef POINTS_SHADOW
+#if defined(POINTS_SHADOW)
     gl_FragDepth = radial ? clamp(length(p) / far, 0.0, 1.0) : clamp(w.z / w.w, 0.0, 1.0);
+#elif defined(POINTS_ID)
+    gl_FragDepth = w.z / w.w;
+    rt_id = u_object + 1;
 #else
     gl_FragDepth = w.z / w.w;
     vec3 base = u_diffuse;

@@ -598,6 +598,13 @@ class Geometry:
     def bind_objects(self, unit):
         self.objects.texture.use(unit)
 
+    def path_of(self, oid: int):
+        """The instance path (or Points prim) object id `oid` belongs to, or None."""
+        for d in self.draws.values():
+            if d.oid <= oid < d.oid + d.n:
+                return d.path
+        return self.points.path_of(oid)
+
     def has_casters(self) -> bool:
         return any(d.ranges for d in self.draws.values()) or bool(self.points.clouds)
 

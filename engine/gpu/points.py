@@ -79,15 +79,18 @@ class PointClouds:
             vao = cloud.vaos[prog.extra] = self.ctx.vertex_array(prog, content, skip_errors=True)
         return vao
 
-    def draw(self, programs, shadow: bool, setup, visible=None) -> tuple:
-        """Draws every cloud (those `visible(lo, hi)` allows) with the points program;
-        setup(prog, cloud) sets the pass's uniforms. Returns (draws, points)."""
+    VARIANTS = {"gbuffer": [], "shadow": ["POINTS_SHADOW"], "id": ["POINTS_ID"]}
+
+    def draw(self, programs, variant: str, setup, visible=None) -> tuple:
+        """Draws every cloud (those `visible(lo, hi)` allows) with the points program
+        (variant: gbuffer, shadow or id); setup(prog, cloud) sets the pass's uniforms.
+        Returns (draws, points)."""
         draws = points = 0
         for path, cloud in self.clouds.items():
             if visible is not None and not visible(*self._box(cloud)):
                 continue
-            defines = (["POINTS_SHADOW"] if shadow else []) + \
-                (["POINTS_COLOUR"] if cloud.colours is not None and not shadow else [])
+            defines = self.VARIANTS[variant] + \
+                (["POINTS_COLOUR"] if cloud.colours is not None and variant == "gbuffer" else [])
             prog = programs.get("points.vert", "points.frag", defines)
             set_uniform(prog, "u_object", cloud.oid)
             setup(prog, cloud)
@@ -95,6 +98,9 @@ class PointClouds:
             draws += 1
             points += cloud.n
         return draws, points
+
+    def path_of(self, oid: int):
+        return next((p for p, c in self.clouds.items() if c.oid == oid), None)
 
     def release(self):
         for cloud in self.clouds.values():

@@ -28,7 +28,7 @@ from .textures import MaterialTextures
 COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow_maps",
             "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
             "light_volumes", "stencil_marks", "batched_lights", "instances_drawn",
-            "points_drawn")
+            "points_drawn", "nonfinite_pixels")
 
 
 class Renderer:
@@ -48,6 +48,7 @@ class Renderer:
         self.skinning = SkinningPass(ctx, self.uploads, programs, self.geometry, gl.scratch)
         self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights, preset,
                                   self.depth)
+        self.resolve = ResolvePass(ctx, self.pool, programs, self.geometry, self.depth)
         self.graph = FrameGraph(ctx, self.pool, [
             self.skinning,
             ViewPass(self.geometry, self.depth),
@@ -56,7 +57,7 @@ class Renderer:
             AmbientPass(ctx, self.pool, programs, self.textures),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
                       self.geometry, preset),
-            ResolvePass(ctx, self.pool, programs),
+            self.resolve,
         ])
         self._cull_backfaces = None
 
@@ -94,9 +95,9 @@ class Renderer:
         return board["rgba"], frame.stats, frame.timings
 
     def warnings(self) -> list:
-        """What the GL side could not use (images it could not read), as of the last
-        render."""
-        return list(self.textures.failed.values())
+        """What the GL side could not use (images it could not read) and the last
+        render's non-finite pixels, named by the prims they lie on."""
+        return list(self.textures.failed.values()) + self.resolve.warnings
 
     def skinned_points(self, scene, changes) -> dict:
         """{mesh path: (points, normals)} of every skinned mesh at this sync's time,

@@ -89,7 +89,7 @@ class GBufferPass(Pass):
             self._material(prog, materials[cloud.material])
 
         draws, points = self.geometry.points.draw(
-            self.programs, False, setup, lambda lo, hi: not view.outside(lo[None], hi[None])[0])
+            self.programs, "gbuffer", setup, lambda lo, hi: not view.outside(lo[None], hi[None])[0])
         frame.count("draw_calls", draws)
         frame.count("points_drawn", points)
 

@@ -356,7 +356,7 @@ class ShadowPass(Pass):
             set_uniform(prog, "u_face_axis", not sm.radial)
             set_uniform(prog, "u_axis", np.asarray(light.direction, np.float64))
             set_origin(prog, sm.anchor)
-        draws, _ = self.geometry.points.draw(self.programs, True, setup)
+        draws, _ = self.geometry.points.draw(self.programs, "shadow", setup)
         return draws
 
     def _drop(self, paths):
