@@ -367,7 +367,7 @@ class StageReader:
         return key
 
     # --- PointInstancers and Points ----------------------------------------------------
-    def _read_instancer(self, prim, changes: Changes):
+    def _read_instancer(self, prim, changes: Changes, rebuild: bool = False):
         """(Re)reads a PointInstancer: one batch (an Instance with `worlds`) per
         prototype mesh and mirroring, drawn with GPU instancing."""
         path = str(prim.GetPath())
@@ -410,14 +410,15 @@ class StageReader:
                 for sign, part in (("", ~mirrored), ("-", mirrored)):
                     if part.any():
                         batch = f"{path}{{{mesh_prim.GetPath()}}}{sign}"
-                        if self._read_batch(batch, mesh_prim, worlds[part], warnings, changes):
+                        if self._read_batch(batch, mesh_prim, worlds[part], warnings, changes,
+                                            rebuild):
                             state.batches.add(batch)
         for batch in old - state.batches:
             self._drop_instance(batch, changes)
         self._instancers[path] = state
 
-    def _read_batch(self, batch, mesh_prim, worlds, warnings, changes) -> bool:
-        key = self._mesh_key(mesh_prim, batch, None, False, warnings, changes)
+    def _read_batch(self, batch, mesh_prim, worlds, warnings, changes, rebuild=False) -> bool:
+        key = self._mesh_key(mesh_prim, batch, None, rebuild, warnings, changes)
         if key is None:
             return False
         mesh = self.scene.meshes[key]
@@ -686,16 +687,19 @@ class StageReader:
                 props.append(p)
             else:
                 roots.add(prim_path)         # prim metadata (active, instanceable, ...)
-        # Anything inside an instancer or one of its prototypes: that instancer again.
+        # An edit of an instancer's values, or anything inside it or one of its
+        # prototypes: that instancer is read again (its batches keep their meshes).
+        # The instancer prim itself recomposed is a resync like any other.
         drawn_by = {}
         for p in list(roots) + [q.partition(".")[0] for q in props]:
             for pi in self._instancers_drawing(p):
-                drawn_by.setdefault(p, set()).add(pi)
+                if not (p == pi and p in roots):
+                    # Its own values: the same meshes; inside a prototype: rebuilt.
+                    drawn_by.setdefault(p, set()).add(
+                        ("instancer" if p == pi else "instancer_geometry", pi))
         roots = {r for r in roots if r not in drawn_by}
         props = [q for q in props if q.partition(".")[0] not in drawn_by]
-        for users in drawn_by.values():
-            roots |= users
-        actions = []
+        actions = sorted({a for users in drawn_by.values() for a in users})
         for p in props:
             prim_path, _, name = p.partition(".")
             actions += self._classify(prim_path, name, roots)
@@ -788,6 +792,16 @@ class StageReader:
         prim = self.stage.GetPrimAtPath(path)
         if path in self._inst or path in self.scene.warnings:
             self._read_instance(prim, changes, rebuild=True)
+
+    def _edit_instancer(self, path: str, changes: Changes, rebuild=False):
+        prim = self.stage.GetPrimAtPath(path)
+        if prim and prim.IsA(UsdGeom.PointInstancer):
+            self._read_instancer(prim, changes, rebuild)
+        else:
+            self._resync(path, changes)
+
+    def _edit_instancer_geometry(self, path: str, changes: Changes):
+        self._edit_instancer(path, changes, rebuild=True)
 
     def _edit_light(self, path: str, changes: Changes):
         if path in self._light_prims:

@@ -263,3 +263,43 @@ def test_a_particle_scene_shows_its_particles_lit_and_shadowed(hard_case):
               int(changed.sum()), 200, "px", lower=True)
     hard_case("500 particles: pixels darker than the bare floor (shadows)",
               int(darker.sum()), 50, "px", lower=True)
+
+
+def test_instancer_and_points_edits_and_frames_equal_fresh_renders():
+    """A Session picks up edits to an instancer, a prototype and a Points prim, and
+    time-sampled positions at a new frame, as a fresh render of the stage shows them."""
+    stage = _instanced()
+    cloud = UsdGeom.Points.Define(stage, "/root/cloud")
+    cloud.CreatePointsAttr([Gf.Vec3f(0, 0, 1.5), Gf.Vec3f(1, 0, 1.8)])
+    cloud.CreateWidthsAttr([0.3, 0.4])
+    pi = UsdGeom.PointInstancer(stage.GetPrimAtPath("/root/scatter"))
+    settings = RenderSettings(width=W, height=H)
+
+    def fresh(frame=None):
+        return render_stage(stage, RenderSettings(width=W, height=H, frame=frame)).rgba
+
+    with Session(stage, settings) as session:
+        session.render()
+        positions = [Gf.Vec3f(p[0] + 0.3, p[1], p[2]) for p in pi.GetPositionsAttr().Get()]
+        pi.GetPositionsAttr().Set(positions)
+        moved = session.render()
+        assert moved.stats["meshes_uploaded"] == 0
+        assert np.abs(moved.rgba - fresh()).max() == 0.0
+        UsdGeom.Xformable(stage.GetPrimAtPath("/root/_protos/pair")).GetOrderedXformOps()[0].Set(
+            Gf.Vec3d(0, 0, 0.4))                                   # a prototype edit
+        assert np.abs(session.render().rgba - fresh()).max() == 0.0
+        cloud.GetPointsAttr().Set([Gf.Vec3f(-1, 0, 1.5)])
+        cloud.GetWidthsAttr().Set([0.6])
+        assert np.abs(session.render().rgba - fresh()).max() == 0.0
+        attr = pi.GetPositionsAttr()
+        base = attr.Get()
+        attr.Clear()
+        for f in (1.0, 2.0):
+            attr.Set([Gf.Vec3f(p[0], p[1] + 0.5 * f, p[2]) for p in base], f)
+        for f in (1.0, 2.0):
+            assert np.abs(session.render(frame=f).rgba - fresh(f)).max() == 0.0
+        mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/root/_protos/box"))
+        mesh.GetPointsAttr().Set([Gf.Vec3f(p) * 1.5 for p in mesh.GetPointsAttr().Get()])
+        edited = session.render(frame=2.0)                     # prototype geometry edited
+        assert edited.stats["meshes_uploaded"] >= 1
+        assert np.abs(edited.rgba - fresh(2.0)).max() == 0.0
