@@ -177,7 +177,7 @@ class ObjectTable:
         self.ctx, self.uploads = ctx, uploads
         self.data = np.zeros((rows, OBJECT_TEX_W, 4), np.float32)
         self.texture = None
-        self._ids = _Arena(self.capacity)
+        self._id_space = _Arena(self.capacity)
         self._next = 0                 # one past the highest id ever handed out
         self._dirty = set()
 
@@ -187,7 +187,7 @@ class ObjectTable:
 
     def new_ids(self, n: int = 1) -> int:
         """The first of n consecutive free ids."""
-        first = self._ids.alloc(n)
+        first = self._id_space.alloc(n)
         if first is None:
             per_row = OBJECT_TEX_W // OBJECT_TEXELS
             rows = max(len(self.data) * 2, -(-(self.capacity + n) // per_row))
@@ -197,13 +197,13 @@ class ObjectTable:
             if self.texture is not None:
                 self.texture.release()
                 self.texture = None
-            self._ids.grow(self.capacity)
-            first = self._ids.alloc(n)
+            self._id_space.grow(self.capacity)
+            first = self._id_space.alloc(n)
         self._next = max(self._next, first + n)
         return first
 
     def free_ids(self, first: int, n: int = 1):
-        self._ids.release(first, n)
+        self._id_space.release(first, n)
 
     def set(self, first: int, worlds: np.ndarray):
         """The matrices of objects first, first + 1, ...: (4, 4) or (n, 4, 4)."""
