@@ -19,8 +19,9 @@ TARGETS = {
     "g_normal": "rgba16f",     # world normal
     "g_mat": "rgba16f",        # metallic, roughness, dielectric F0
     "g_emit": "rgba16f",       # emission
-    "g_depth": "depth",
-    "hdr": "rgba16f",          # light accumulation
+    "g_depth": "depth",         # 32-bit float, reversed (engine/view.py)
+    "hdr": "rgba32f",          # light accumulation: float32, 1e-38..3e38 (a 1e-6 W and a
+                               # 1e6 W light alike; float16 underflowed and overflowed)
     "depth_stencil": "depth_stencil",  # scene depth copy and light-volume marks
     "output": "rgba32f",
 }

@@ -9,6 +9,7 @@ import time
 import numpy as np
 
 from .context import Features
+from .depth import DepthConvention
 from .framegraph import Frame, FrameGraph
 from .geometry import Geometry
 from .lights import LightTable
@@ -26,7 +27,8 @@ from .textures import MaterialTextures
 # Every counter a render reports, zero when nothing of the kind happened.
 COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow_maps",
             "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
-            "light_volumes", "stencil_marks", "batched_lights")
+            "light_volumes", "stencil_marks", "batched_lights", "instances_drawn",
+            "points_drawn", "nonfinite_pixels")
 
 
 class Renderer:
@@ -37,22 +39,25 @@ class Renderer:
         self.features = Features.of(gl.version)
         self.uploads = Uploads(ctx)
         self.stencil = Stencil(gl.proc)
-        self.pool = TargetPool(ctx, self.stencil)
+        self.depth = DepthConvention(gl.proc, self.features.clip_control)
+        self.pool = TargetPool(ctx, self.stencil, self.depth)
         programs = gl.programs
         self.geometry = Geometry(ctx, self.uploads, programs, self.features)
         self.lights = LightTable(self.uploads, preset.disk_sides)
         self.textures = MaterialTextures(ctx, self.uploads, preset.anisotropy)
         self.skinning = SkinningPass(ctx, self.uploads, programs, self.geometry, gl.scratch)
-        self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights, preset)
+        self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights, preset,
+                                  self.depth)
+        self.resolve = ResolvePass(ctx, self.pool, programs, self.geometry, self.depth)
         self.graph = FrameGraph(ctx, self.pool, [
             self.skinning,
-            ViewPass(self.geometry),
+            ViewPass(self.geometry, self.depth),
             self.shadows,
-            GBufferPass(ctx, self.pool, programs, self.geometry, self.textures),
+            GBufferPass(ctx, self.pool, programs, self.geometry, self.textures, self.depth),
             AmbientPass(ctx, self.pool, programs, self.textures),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
                       self.geometry, preset),
-            ResolvePass(ctx, self.pool, programs),
+            self.resolve,
         ])
         self._cull_backfaces = None
 
@@ -76,7 +81,11 @@ class Renderer:
                       stats={name: 0 for name in COUNTERS})
         frame.stats["meshes_uploaded"] = self.update(scene, changes, cull_backfaces)
         frame.timings["upload"] = time.perf_counter() - t0
-        board = self.graph.run(frame)
+        self.depth.begin()
+        try:
+            board = self.graph.run(frame)
+        finally:
+            self.depth.end()
         uploaded = self.uploads.take()
         frame.stats["bytes_uploaded"] = int(sum(uploaded.values()))
         frame.stats["bytes_by_kind"] = dict(uploaded)
@@ -84,6 +93,11 @@ class Renderer:
             "draw per object (GL 3.3)"
         self._restore_state()
         return board["rgba"], frame.stats, frame.timings
+
+    def warnings(self) -> list:
+        """What the GL side could not use (images it could not read) and the last
+        render's non-finite pixels, named by the prims they lie on."""
+        return list(self.textures.failed.values()) + self.resolve.warnings
 
     def skinned_points(self, scene, changes) -> dict:
         """{mesh path: (points, normals)} of every skinned mesh at this sync's time,
