@@ -40,6 +40,7 @@ class Material:
     # input name ('diffuseColor', 'normal', ...) -> TextureRef
     maps: dict = field(default_factory=dict)
     uv_name: str | None = None     # primvar the material's reader asks for
+    pass_index: int = 0            # lantern:passIndex: render pass IndexMA
 
     @property
     def has_normal_map(self) -> bool:
@@ -111,6 +112,7 @@ class Instance:
     # This frame's blend shapes: [(sub-shape index, weight)], zero weights left out.
     shapes: list = field(default_factory=list)
     worlds: np.ndarray | None = None   # (n, 4, 4): instanced, one world matrix per instance
+    pass_index: int = 0            # lantern:passIndex of it or an ancestor: IndexOB
 
 
 @dataclass

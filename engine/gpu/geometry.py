@@ -205,8 +205,9 @@ class ObjectTable:
     def free_ids(self, first: int, n: int = 1):
         self._id_space.release(first, n)
 
-    def set(self, first: int, worlds: np.ndarray):
-        """The matrices of objects first, first + 1, ...: (4, 4) or (n, 4, 4)."""
+    def set(self, first: int, worlds: np.ndarray, pass_index: int = 0):
+        """The matrices of objects first, first + 1, ...: (4, 4) or (n, 4, 4), and their
+        render-pass index (IndexOB)."""
         worlds = np.asarray(worlds, np.float64).reshape(-1, 4, 4)
         n = len(worlds)
         texels = np.zeros((n, OBJECT_TEXELS, 4), np.float32)
@@ -215,6 +216,7 @@ class ObjectTable:
         texels[:, 3, :3] = hi
         texels[:, 4:7, :3] = normal_matrices(worlds).transpose(0, 2, 1)
         texels[:, 7, :3] = lo
+        texels[:, 4, 3] = pass_index                       # render pass IndexOB
         flat = self.data.reshape(-1, 4)
         flat[first * OBJECT_TEXELS:(first + n) * OBJECT_TEXELS] = texels.reshape(-1, 4)
         self._dirty.update(range(first, first + n))
@@ -391,7 +393,7 @@ class Geometry:
             self._worlds.pop(inst.path, None)
         else:
             self._worlds[inst.path] = worlds
-        self.objects.set(d.oid, worlds if worlds is not None else world)
+        self.objects.set(d.oid, worlds if worlds is not None else world, inst.pass_index)
         self._static_boxes = None
         self._note_moved(d)
 

@@ -323,11 +323,14 @@ class StageReader:
             self._retry.discard(path)
         else:
             world = np.eye(4)         # registered, then dropped below
+        index = pass_index(prim)
         if old is not None and old.mesh_key == key:
             old.world = world
             old.shapes = shapes
+            old.pass_index = index
         else:
-            self.scene.instances[path] = Instance(path, key, world, shapes=shapes)
+            self.scene.instances[path] = Instance(path, key, world, shapes=shapes,
+                                                  pass_index=index)
         for name in set(previous.materials if previous else ()) - set(dyn.materials):
             self._unuse_material(name, path)
         for name in dyn.materials:
@@ -739,6 +742,8 @@ class StageReader:
                 continue
             if name in ("visibility", "purpose", "proxyPrim"):
                 roots.add(path)
+            elif name == PASS_INDEX and not prim.IsA(UsdShade.Material):
+                out.append(("binding", path))    # the instances under it read it again
             elif name.startswith("xformOp") or name == "xformOpOrder":
                 out.append(("transform", path))
             elif name.startswith("material:binding"):
@@ -747,6 +752,8 @@ class StageReader:
                 out.append(("light", path))
             elif cam.is_camera(prim):
                 out.append(("camera", path))
+            elif name in ANIMATION_VALUES and _is_animation(prim):
+                out.append(("pose", path))           # values only: pose again, no resync
             elif name.startswith(("skel:", "primvars:skel:")) or _is_skel(prim):
                 roots.add(self.skel.root_of(path) or path)
             elif prim.IsA(UsdGeom.Points):
@@ -809,6 +816,26 @@ class StageReader:
 
     def _edit_camera(self, path: str, changes: Changes):
         changes.cameras.add(path)            # the session reads it again
+
+    def _edit_pose(self, path: str, changes: Changes):
+        """A SkelAnimation's values changed (a live pose): the skeletons it drives are
+        posed again and their meshes' blend-shape weights read again; nothing else."""
+        for key, s in self._skels.items():
+            anim = s.query.GetAnimQuery()
+            if not anim or str(anim.GetPrim().GetPath()) != path:
+                continue
+            self.scene.skeletons[key] = sk.pose(s.query, self._t, s.dqs)
+            self._read.add(key)
+            changes.skeletons.add(key)
+            for inst_path in s.users:
+                mesh = self.scene.meshes.get(self.scene.instances[inst_path].mesh_key)
+                if mesh is not None and mesh.skin is not None and \
+                        mesh.skin.shape_offsets is not None:
+                    skel_query, sq = self.skel.get(inst_path)
+                    prim = self.stage.GetPrimAtPath(inst_path)
+                    self.scene.instances[inst_path].shapes = sk.blend_weights(
+                        skel_query, sq, self._shape_queries, prim, self._t)
+                    changes.shapes.add(inst_path)
 
     def _edit_material(self, name: str, changes: Changes):
         if name in self.scene.materials:
@@ -888,6 +915,20 @@ def _check_binding(prim, warnings):
                             f"using the default material")
 
 
+PASS_INDEX = "lantern:passIndex"
+
+
+def pass_index(prim) -> int:
+    """The render-pass index (IndexOB) of a Mesh prim: `lantern:passIndex` on it or on
+    the nearest ancestor that has one (the object's Xform), else 0."""
+    while prim and not prim.IsPseudoRoot():
+        attr = prim.GetAttribute(PASS_INDEX)
+        if attr and attr.HasAuthoredValue():
+            return int(attr.Get())
+        prim = prim.GetParent()
+    return 0
+
+
 def _strongest_spec(attr):
     stack = attr.GetPropertyStack(Usd.TimeCode.Default())
     if stack:
@@ -904,6 +945,14 @@ def _mesh_attributes_vary(prim) -> bool:
     every new time (and never shared)."""
     return any(a.ValueMightBeTimeVarying() for a in prim.GetAuthoredAttributes()
                if not a.GetName().startswith(_NOT_GEOMETRY))
+
+
+ANIMATION_VALUES = ("translations", "rotations", "scales", "blendShapeWeights")
+
+
+def _is_animation(prim) -> bool:
+    from pxr import UsdSkel
+    return prim.IsA(UsdSkel.Animation)
 
 
 def _is_skel(prim) -> bool:
