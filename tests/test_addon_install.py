@@ -194,20 +194,11 @@ def test_f12_renders_the_textured_rigged_demo(installed):
 
 def test_each_view_layer_renders_its_own_collections(installed):
     """Layer A shows only the sphere (left), layer B only the cube (right)."""
-    import OpenImageIO as oiio
+    from multilayer_exr import read_parts
     _step(installed, "view_layers")
     render = installed[0]["renders"]["layers"]
     assert "error" not in render, render["error"]
-    layers = {}
-    image = oiio.ImageInput.open(render["file"])     # a multi-part EXR: one part a layer
-    try:
-        subimage = 0
-        while image.seek_subimage(subimage, 0):
-            spec = image.spec()
-            layers[spec.getattribute("name")] = image.read_image(subimage, 0, 0, 4, "float")
-            subimage += 1
-    finally:
-        image.close()
+    layers = read_parts(render["file"])
     a, b = layers["LayerA.Combined"], layers["LayerB.Combined"]
     covered_a = np.nonzero(a[..., 3].max(axis=0) > 0)[0]
     covered_b = np.nonzero(b[..., 3].max(axis=0) > 0)[0]

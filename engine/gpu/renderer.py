@@ -52,7 +52,8 @@ def supersample_factor(frame, size, max_texture: int) -> int:
 # Every counter a render reports, zero when nothing of the kind happened.
 COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow_maps",
             "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
-            "light_volumes", "stencil_marks", "batched_lights")
+            "light_volumes", "stencil_marks", "batched_lights", "instances_drawn",
+            "points_drawn", "nonfinite_pixels")
 
 
 class Renderer:
@@ -73,6 +74,7 @@ class Renderer:
         self.skinning = SkinningPass(ctx, self.uploads, programs, self.geometry, gl.scratch)
         self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights, preset,
                                   self.depth)
+        self.resolve = ResolvePass(ctx, self.pool, programs, self.geometry, self.depth)
         self.graph = FrameGraph(ctx, self.pool, [
             self.skinning,
             ViewPass(self.geometry, self.depth),
@@ -85,7 +87,7 @@ class Renderer:
                       self.geometry, preset, self.environment),
             SupersamplePass(ctx, self.pool, programs),
             PostPass(ctx, self.pool, programs),
-            ResolvePass(ctx, self.pool, programs),
+            self.resolve,
         ])
         self._cull_backfaces = None
 
@@ -134,6 +136,11 @@ class Renderer:
             "draw per object (GL 3.3)"
         self._restore_state()
         return board["rgba"], board["aovs"], frame.stats, frame.timings
+
+    def warnings(self) -> list:
+        """What the GL side could not use (images it could not read) and the last
+        render's non-finite pixels, named by the prims they lie on."""
+        return list(self.textures.failed.values()) + self.resolve.warnings
 
     def skinned_points(self, scene, changes) -> dict:
         """{mesh path: (points, normals)} of every skinned mesh at this sync's time,

@@ -257,7 +257,7 @@ class ShadowPass(Pass):
         self.maps = {}             # light path -> ShadowMap, kept across frames
 
     def needed(self, frame):
-        has_casters = any(d.ranges for d in self.geometry.draws.values())
+        has_casters = self.geometry.has_casters()
         wanted = has_casters and any(
             casts(light, self.lights.ranges.get(path, 0.0))
             for path, light in frame.scene.lights.items())
@@ -338,8 +338,26 @@ class ShadowPass(Pass):
             ctx.depth_func = "<"
             set_uniform(prog, "view_proj", clip @ sm.mats[i])
             frame.count("shadow_draws", self.geometry.draw_casters(prog))
+            if self.geometry.points.clouds:
+                frame.count("shadow_draws", self._draw_points(sm, light, clip @ sm.mats[i],
+                                                              BIAS @ sm.mats[i]))
         ctx.scissor = None
         ctx.disable(ctx.DEPTH_TEST)
+
+    def _draw_points(self, sm, light, view_proj, window) -> int:
+        """Point clouds into a tile: spheres facing the light (radial maps) or across
+        the sun's direction, writing the same depth as meshes do."""
+        def setup(prog, cloud):
+            set_uniform(prog, "view_proj", view_proj)
+            set_uniform(prog, "u_window", window)
+            set_uniform(prog, "u_far", 1e30)
+            set_uniform(prog, "radial", sm.radial)
+            set_uniform(prog, "far", sm.far)
+            set_uniform(prog, "u_face_axis", not sm.radial)
+            set_uniform(prog, "u_axis", np.asarray(light.direction, np.float64))
+            set_origin(prog, sm.anchor)
+        draws, _ = self.geometry.points.draw(self.programs, "shadow", setup)
+        return draws
 
     def _drop(self, paths):
         for path in paths:
