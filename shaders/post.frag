@@ -97,7 +97,7 @@ vec4 fxaa(ivec2 px) {
     float lo = min(m, min(min(n, s), min(e, w)));
     float range = hi - lo;
     vec4 centre = texelFetch(post_src, px, 0);
-    if (range < 0.5) return centre;      // under ~40 % contrast: no edge
+    if (range < 0.3) return centre;      // under ~23 % contrast: no edge (FXAA's high-quality threshold)
     float ne = luma_at(px + ivec2(1, 1)), nw = luma_at(px + ivec2(-1, 1));
     float se = luma_at(px + ivec2(1, -1)), sw = luma_at(px + ivec2(-1, -1));
     // Sub-pixel aliasing: how far the centre stands out from its neighbourhood.
