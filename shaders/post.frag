@@ -144,7 +144,7 @@ vec4 fxaa(ivec2 px) {
     float offset = max(good ? pixel_offset : 0.0, sub_blend);
     vec2 final_uv = uv;
     if (is_horizontal) final_uv.y += offset * step_len; else final_uv.x += offset * step_len;
-    return vec4(fetch(final_uv).rgb, centre.a);
+    return fetch(final_uv);       // alpha too: coverage and premultiplied colour blend alike
 }
 #endif
 
