@@ -23,8 +23,9 @@ IMAGE_SUFFIXES = (".exr", ".png")
 # The largest texture side OpenGL implementations guarantee at most (llvmpipe's limit).
 MAX_SIDE = 16384
 
-# Local worker processes for a sequence (bench/bench_distributed.py measured 1 and 2).
-RENDER_PROCESSES = 2
+# Local worker processes for a sequence: one, since on 2 cores llvmpipe already draws
+# with every core and two processes measured slower (bench/bench_distributed.py, README).
+RENDER_PROCESSES = 1
 
 USAGE, FAILED, INTERRUPTED = 2, 1, 130
 EXIT_STATUSES = """exit status:

@@ -338,9 +338,7 @@ def _render_frames(args, runner, stage_text, fps, print_warnings):
             pixels.update(result.pixels)
             written += len(result.written)
             skipped_lost += len(result.skipped)
-            for frame in task.frames:
-                if frame not in result.written and frame not in result.skipped:
-                    failed[frame] = result.reason or "not rendered"
+            failed.update(result.failed)
             progress.advance(bar, len(task.frames))
 
         _drive(runner, submit_more, on_done, RENDER_NEEDS)

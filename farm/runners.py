@@ -26,6 +26,9 @@ from multiprocessing.connection import wait as wait_for_any
 from . import tasks as farm_tasks
 
 RETRIES = 3  # a pool task runs at most 1 + RETRIES times when its process dies
+# Render chunks sent to a pool process at once: one running, one waiting (exports take
+# seconds each: one at a time, so a free process takes the next file).
+PIPELINE = 2
 
 
 class FarmError(Exception):
@@ -85,7 +88,7 @@ class _Process:
         finally:
             signal.signal(signal.SIGINT, previous)
         child.close()
-        self.job = None
+        self.jobs: deque[_Job] = deque()  # sent, in order; the first is running
 
     @property
     def name(self):
@@ -122,27 +125,29 @@ class PoolRunner:
 
     @property
     def pending(self):
-        return len(self._queue) + sum(p.job is not None for p in self._processes)
+        return len(self._queue) + sum(len(p.jobs) for p in self._processes)
 
     def submit(self, task, stage_text=None):
         self._queue.append(_Job(task, stage_text))
 
     def _dispatch(self):
+        """Sends queued jobs: to a process with none first, else (render chunks) as a
+        second behind its running one, so a process never waits for the client
+        between chunks."""
         while self._queue:
-            idle = next((p for p in self._processes if p.job is None), None)
-            if idle is None:
-                if len(self._processes) >= self.size:
-                    return
-                idle = _Process(self._context, self._render)
-                self._processes.append(idle)
+            if len(self._processes) < self.size and all(p.jobs for p in self._processes):
+                self._processes.append(_Process(self._context, self._render))
+            proc = min(self._processes, key=lambda p: len(p.jobs))
+            if len(proc.jobs) >= (PIPELINE if self._render else 1):
+                return
             job = self._queue.popleft()
             job.sent = time.perf_counter()
-            idle.conn.send((job.task, job.stage_text))
-            idle.job = job
+            proc.conn.send((job.task, job.stage_text))
+            proc.jobs.append(job)
 
     def wait(self, timeout=None):
         self._dispatch()
-        busy = [p for p in self._processes if p.job is not None]
+        busy = [p for p in self._processes if p.jobs]
         if not busy:
             return []
         ready = set(wait_for_any([p.conn for p in busy] + [p.process.sentinel for p in busy],
@@ -151,20 +156,28 @@ class PoolRunner:
         for proc in busy:
             if proc.conn not in ready and proc.process.sentinel not in ready:
                 continue
-            job, proc.job = proc.job, None
             try:
-                result, error = proc.conn.recv()
-            except (EOFError, OSError):  # the process died mid-task
-                job.lost.append(proc.name)
-                self._processes.remove(proc)
-                proc.process.join(1)
-                if len(job.lost) > RETRIES:
-                    done.append(Done(job.task, None, f"its worker died {len(job.lost)} times",
-                                     job.lost, time.perf_counter() - job.sent))
-                else:
-                    self._queue.appendleft(job)
+                while proc.jobs and proc.conn.poll():
+                    result, error = proc.conn.recv()
+                    job = proc.jobs.popleft()
+                    done.append(Done(job.task, result, error, job.lost,
+                                     time.perf_counter() - job.sent))
+            except (EOFError, OSError):
+                pass
+            if proc.process.is_alive() or not proc.jobs:
                 continue
-            done.append(Done(job.task, result, error, job.lost, time.perf_counter() - job.sent))
+            # The process died: its running job is lost with it and runs again (up to
+            # RETRIES times); a job queued behind it never started and simply goes back.
+            self._processes.remove(proc)
+            proc.process.join(1)
+            running, *waiting = proc.jobs
+            running.lost.append(proc.name)
+            self._queue.extendleft(reversed(waiting))
+            if len(running.lost) > RETRIES:
+                done.append(Done(running.task, None, f"its worker died {len(running.lost)} times",
+                                 running.lost, time.perf_counter() - running.sent))
+            else:
+                self._queue.appendleft(running)
         self._dispatch()
         return done
 
