@@ -18,7 +18,6 @@ import pathlib
 import shutil
 import signal
 import socket
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -30,7 +29,7 @@ sys.path.insert(0, str(HERE.parent / "tests"))
 
 FRAMES = 96
 SIZE = "320x180"
-ROUNDS = 2
+ROUNDS = 3
 CORPUS = HERE.parent.parent / "shared" / "corpus" / "blender"
 EXPORTS = ["01_cube", "01_morphed_cube", "02_shared_mesh", "03_animated_cube",
            "03_skinned_cylinder", "01_two_sided_plane"]
@@ -55,25 +54,78 @@ def build_scene(folder):
     return skinned_scene(folder / "rig.usda", frames=FRAMES, joints=32, grid=200)
 
 
-def warm_render_seconds(scene):
-    """Median of Session.render over the sequence, the first (cold) frame left out."""
+def per_frame_in_process(scene, out):
+    """Seconds per warm frame, in this process (no process start, no transport): a
+    warm Session render alone; the same plus writing the EXR (today's loop); and farm
+    render chunks of 1 and 8 frames (tasks.run on a worker's cached Session, writes on
+    its writer thread). Interleaved rounds; the least disturbed (smallest) kept."""
+    from dataclasses import replace
+
     from pxr import Usd
 
     from lantern.engine import RenderSettings, Session
+    from lantern.engine.image_io import write_image
+    from lantern.farm import sessions, tasks
     w, h = map(int, SIZE.split("x"))
-    with Session(Usd.Stage.Open(str(scene)), RenderSettings(width=w, height=h)) as session:
-        times = []
-        for frame in range(1, FRAMES + 1):
-            t0 = time.perf_counter()
-            session.render(frame=float(frame))
-            times.append(time.perf_counter() - t0)
-    return statistics.median(times[1:])
+    frames = [float(f) for f in range(2, FRAMES + 1)]
+    os.makedirs(out, exist_ok=True)
+    pattern = str(out / "f_####.exr")
+
+    def session_loop(write):
+        with Session(Usd.Stage.Open(str(scene)), RenderSettings(width=w, height=h)) as session:
+            session.render(frame=1.0)
+            start, cpu = time.perf_counter(), time.process_time()
+            for frame in frames:
+                result = session.render(frame=frame)
+                if write:
+                    write_image(pattern.replace("####", f"{int(frame):04d}"), result.rgba)
+            if not write:
+                warm_cpu.append((time.process_time() - cpu) / len(frames))
+            return (time.perf_counter() - start) / len(frames)
+
+    def chunks(size):
+        base = tasks.RenderChunk(scene=str(scene), frames=(1.0,), pattern=pattern, width=w,
+                                 height=h)
+        tasks.run(base)
+        start = time.perf_counter()
+        for i in range(0, len(frames), size):
+            tasks.run(replace(base, frames=tuple(frames[i:i + size])))
+        seconds = (time.perf_counter() - start) / len(frames)
+        sessions.release_all()
+        return seconds
+
+    modes = {"warm Session render": lambda: session_loop(False),
+             "render + write EXR (today's loop)": lambda: session_loop(True),
+             "farm chunks of 8 frames": lambda: chunks(8),
+             "farm chunks of 2 frames": lambda: chunks(2),
+             "farm chunks of 1 frame": lambda: chunks(1)}
+    best, warm_cpu = {}, []
+    for _ in range(ROUNDS):
+        for name, measure in modes.items():
+            best[name] = min(measure(), best.get(name, float("inf")))
+    return best, min(warm_cpu)
 
 
-def timed(command, out_folder, env=None):
-    """(wall seconds, seconds to the first file in out_folder) of a command."""
+def cpu_seconds(pids):
+    """CPU seconds (user + system, every thread) of this process's reaped children and
+    of the processes `pids` (the external Dask workers and scheduler)."""
+    import resource
+
+    import psutil
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    total = usage.ru_utime + usage.ru_stime
+    for pid in pids:
+        times = psutil.Process(pid).cpu_times()
+        total += times.user + times.system
+    return total
+
+
+def timed(command, out_folder, pids=()):
+    """(wall seconds, seconds to the first file in out_folder, CPU seconds of every
+    process involved) of a command."""
     shutil.rmtree(out_folder, ignore_errors=True)
     first, stop = [None], threading.Event()
+    cpu = cpu_seconds(pids)
     start = time.perf_counter()
 
     def watch():
@@ -87,13 +139,14 @@ def timed(command, out_folder, env=None):
             time.sleep(0.002)
     watcher = threading.Thread(target=watch, daemon=True)
     watcher.start()
-    proc = subprocess.run(command, capture_output=True, text=True, env=env)
+    proc = subprocess.run(command, capture_output=True, text=True)
     wall = time.perf_counter() - start
+    cpu = cpu_seconds(pids) - cpu
     stop.set()
     watcher.join()
     if proc.returncode != 0:
         raise RuntimeError(f"{command[:6]}... failed:\n{proc.stdout}\n{proc.stderr}")
-    return wall, first[0] if first[0] is not None else wall
+    return wall, first[0] if first[0] is not None else wall, cpu
 
 
 def free_port():
@@ -160,10 +213,12 @@ def run(folder):
             for name, command in modes.items():
                 if name == "two Dask workers, first run" and name in best:
                     continue  # only once: the workers are warm after it
-                wall, first = timed(command, out)
+                pids = [p.pid for p in cluster] if address in command else ()
+                wall, first, cpu = timed(command, out, pids)
                 if name not in best or wall < best[name][0]:
-                    best[name] = (wall, first)
-        warm = warm_render_seconds(scene)
+                    best[name] = (wall, first, cpu)
+        in_process, warm_cpu = per_frame_in_process(scene, folder / "in-process")
+        warm = in_process["warm Session render"]
 
         exports = [str(CORPUS / f"{name}.blend") for name in EXPORTS]
         export_modes = {
@@ -173,7 +228,7 @@ def run(folder):
         export_best = {}
         for _ in range(ROUNDS):
             for name, extra in export_modes.items():
-                wall, _ = timed([sys.executable, "-m", "lantern", "export", *exports, "-o",
+                wall, _, _ = timed([sys.executable, "-m", "lantern", "export", *exports, "-o",
                                  str(folder / "exported"), *extra], folder / "exported")
                 export_best[name] = min(wall, export_best.get(name, wall))
     finally:
@@ -183,14 +238,21 @@ def run(folder):
     today_per_frame = (today[0] - today[1]) / (FRAMES - 1)
     print(f"{FRAMES}-frame skinned sequence at {SIZE} (32 joints, 800-point rig, ground, "
           f"shadowed sun); best of {ROUNDS}")
-    print(f"warm Session render (no file written): {warm * 1000:.1f} ms")
+    print("per warm frame, in one process (no transport, no process start):")
+    for name, seconds in in_process.items():
+        print(f"  {name:36} {seconds * 1000:6.1f} ms  {seconds / warm - 1:+5.0%} vs warm render")
+    print(f"  CPU time of a warm Session render (every thread): {warm_cpu * 1000:.1f} ms")
+    print("end to end, the whole command (wall time per frame after the first frame; CPU "
+          "time of every process, start-up included, per frame):")
     print(f"{'mode':36} {'frames/s':>9} {'wall s':>7} {'first frame s':>14} "
-          f"{'ms/frame after':>15} {'vs warm':>8} {'vs today':>9}")
-    for name, (wall, first) in best.items():
+          f"{'ms/frame after':>15} {'vs warm':>8} {'vs today':>9} {'CPU ms/frame':>13} "
+          f"{'vs today':>9}")
+    for name, (wall, first, cpu) in best.items():
         per_frame = (wall - first) / (FRAMES - 1)
         print(f"{name:36} {FRAMES / wall:9.1f} {wall:7.2f} {first:14.2f} "
               f"{per_frame * 1000:15.1f} {per_frame / warm - 1:+8.0%} "
-              f"{per_frame / today_per_frame - 1:+9.0%}")
+              f"{per_frame / today_per_frame - 1:+9.0%} {cpu / FRAMES * 1000:13.1f} "
+              f"{cpu / today[2] - 1:+9.0%}")
     print(f"\nbatch export of {len(EXPORTS)} .blend files (a Blender process each)")
     for name, wall in export_best.items():
         print(f"{name:36} {wall:7.2f} s")

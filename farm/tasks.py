@@ -193,64 +193,63 @@ _render_lock = threading.Lock()
 
 
 def run_chunk(task: RenderChunk, stage_text=None) -> TaskResult:
-    """Renders the chunk's frames with the worker's Session for the stage. Each image is
-    encoded and written on a writer thread while the next frame renders; the chunk
-    returns once every write is done (or failed), so a frame it reports is on disk."""
-    from concurrent.futures import ThreadPoolExecutor
-
+    """Renders the chunk's frames with the worker's Session for the stage, writing (or
+    encoding, with collect) each image as it comes, as today's one-process loop does:
+    a writer thread measured no faster on 2 cores (bench/bench_distributed.py)."""
     from ..cli import _one_line, _text
     from . import sessions
     start = time.perf_counter()
     result = TaskResult(ok=True, seconds=0.0, worker=worker_name())
-    with _render_lock, ThreadPoolExecutor(1, thread_name_prefix="lantern-writer") as writer:
+    with _render_lock:
         try:
             session, load = sessions.session_for(task, stage_text)
         except (OSError, ValueError, RuntimeError) as error:
             # The stage could not be loaded: every frame of the chunk fails for it.
-            result.ok = False
             result.reason = f"{task.scene}: {_one_line(_text(error))}"
             result.failed = {frame: result.reason for frame in task.frames}
-            result.seconds = time.perf_counter() - start
-            return result
-        writes = []
-        for frame in task.frames:
-            path = frame_output(task.pattern, frame) if task.pattern else None
-            if path and not task.collect and _written_since(path, task.since_ns):
-                result.skipped.append(frame)
-                continue
-            t0 = time.perf_counter()
-            try:
-                image = session.render(frame=frame)
-            except (ValueError, RuntimeError, OSError) as error:  # the engine's input errors
-                result.failed[frame] = f"{task.scene}: frame {frame:g}: {_one_line(_text(error))}"
-                continue
-            seconds = time.perf_counter() - t0
-            if load is not None:
-                result.cold, load = load + seconds, None
-            else:
-                result.warm.append(seconds)
-            result.warnings += [w for w in image.warnings if w not in result.warnings]
-            if path is None:
-                result.pixels[frame] = image.rgba
-                result.written.append(frame)
-            else:
-                encode = _encoded if task.collect else _write
-                writes.append((frame, path, writer.submit(encode, path, image.rgba)))
-        for frame, path, write in writes:
-            try:
-                data = write.result()
-            except (OSError, ValueError) as error:
-                result.failed[frame] = f"{path}: cannot be written: " \
-                                       f"{getattr(error, 'strerror', None) or error}"
-                continue
-            if task.collect:
-                result.files[path] = data
-            result.written.append(frame)
+        else:
+            for frame in task.frames:
+                # The load counts in the first frame rendered: the cold cost.
+                _render_frame(task, session, frame, load if result.cold is None else None,
+                              result)
     result.ok = not result.failed
     if result.failed and not result.reason:
         result.reason = next(iter(result.failed.values()))
     result.seconds = time.perf_counter() - start
     return result
+
+
+def _render_frame(task, session, frame, load, result):
+    """One frame into `result`: written, skipped (a lost attempt wrote it) or failed."""
+    from ..cli import _one_line, _text
+    path = frame_output(task.pattern, frame) if task.pattern else None
+    if path and not task.collect and _written_since(path, task.since_ns):
+        result.skipped.append(frame)
+        return
+    t0 = time.perf_counter()
+    try:
+        image = session.render(frame=frame)
+    except (ValueError, RuntimeError, OSError) as error:  # the engine's input errors
+        result.failed[frame] = f"{task.scene}: frame {frame:g}: {_one_line(_text(error))}"
+        return
+    seconds = time.perf_counter() - t0
+    if load is not None:
+        result.cold = load + seconds
+    else:
+        result.warm.append(seconds)
+    result.warnings += [w for w in image.warnings if w not in result.warnings]
+    try:
+        if path is None:
+            result.pixels[frame] = image.rgba
+        elif task.collect:
+            result.files[path] = _encoded(path, image.rgba)
+        else:
+            _write(path, image.rgba)
+    except (OSError, ValueError) as error:
+        result.failed[frame] = f"{path}: cannot be written: " \
+                               f"{getattr(error, 'strerror', None) or error}"
+        return
+    result.written.append(frame)
 
 
 def _written_since(path, since_ns):

@@ -150,6 +150,25 @@ def test_ten_exports_on_the_cluster_match_a_local_batch(cluster, corpus, tmp_pat
     assert proc.stdout.strip().splitlines()[-1] == "0 exported, 2 failed, 8 skipped (up to date)"
 
 
+def _tree(folder):
+    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+
+
+def test_collected_exports_come_back_with_their_textures(cluster, corpus, tmp_path):
+    """--collect: the worker exports into its own temporary folder and sends the layer
+    and its copied textures; this process writes them where a local export would."""
+    blend = corpus / "blender" / "01_textured_sphere.blend"
+    local = lantern("export", blend, "-o", tmp_path / "local" / "01_textured_sphere.usda",
+                    "--textures", "copy")
+    assert local.returncode == 0, local.stderr
+    farm = lantern("export", blend, "-o", tmp_path / "farm", "--format", "usda", "--textures",
+                   "copy", "--collect", "--scheduler", cluster["address"])
+    assert farm.returncode == 0, farm.stdout + farm.stderr
+    want, got = _tree(tmp_path / "local"), _tree(tmp_path / "farm")
+    assert any(name.startswith("01_textured_sphere_textures/") for name in want), sorted(want)
+    assert got == want
+
+
 def test_a_killed_worker_has_its_chunk_retried_and_no_frame_doubled(cluster, scene, tmp_path):
     """Runs last: it leaves the cluster one worker short."""
     from distributed import Client
