@@ -126,6 +126,21 @@ def test_sequence_on_local_workers_equals_one_session(scene, tmp_path):
     assert_same_frames(read_frames(tmp_path, range(1, 13)), reference_frames(scene, 1, 12))
 
 
+def test_a_blend_sequence_ships_its_exported_stage(corpus, tmp_path):
+    """A .blend is exported once, here, and its stage reaches the workers as text: the
+    frames equal single-frame renders of the same .blend."""
+    import imageio.v3 as iio
+    blend = corpus / "blender" / "03_skinned_cylinder.blend"
+    proc = lantern("render", blend, "-o", tmp_path / "f_####.png", "--frames", "1:3",
+                   "--size", "48x27", "--chunk", "2")
+    assert proc.returncode == 0, proc.stderr
+    single = lantern("render", blend, "-o", tmp_path / "single.png", "--frame", "3",
+                     "--size", "48x27")
+    assert single.returncode == 0, single.stderr
+    assert np.array_equal(iio.imread(tmp_path / "f_0003.png"), iio.imread(tmp_path / "single.png"))
+    assert not np.array_equal(iio.imread(tmp_path / "f_0001.png"), iio.imread(tmp_path / "f_0003.png"))
+
+
 def test_chunk_sizes_follow_the_measured_costs():
     # The first wave: FIRST frames for each worker, so each measures cold and warm.
     assert chunking.first_wave(list(range(1, 25)), 2) == [[1, 2], [3, 4]]

@@ -157,15 +157,15 @@ def _tree(folder):
 def test_collected_exports_come_back_with_their_textures(cluster, corpus, tmp_path):
     """--collect: the worker exports into its own temporary folder and sends the layer
     and its copied textures; this process writes them where a local export would."""
-    blend = corpus / "blender" / "01_textured_sphere.blend"
-    local = lantern("export", blend, "-o", tmp_path / "local" / "01_textured_sphere.usda",
+    blend = corpus / "blender" / "01_principled_material.blend"
+    local = lantern("export", blend, "-o", tmp_path / "local" / "01_principled_material.usda",
                     "--textures", "copy")
     assert local.returncode == 0, local.stderr
     farm = lantern("export", blend, "-o", tmp_path / "farm", "--format", "usda", "--textures",
                    "copy", "--collect", "--scheduler", cluster["address"])
     assert farm.returncode == 0, farm.stdout + farm.stderr
     want, got = _tree(tmp_path / "local"), _tree(tmp_path / "farm")
-    assert any(name.startswith("01_textured_sphere_textures/") for name in want), sorted(want)
+    assert any(name.startswith("01_principled_material_textures/") for name in want), sorted(want)
     assert got == want
 
 
