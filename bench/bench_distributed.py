@@ -18,6 +18,7 @@ import pathlib
 import shutil
 import signal
 import socket
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -30,6 +31,7 @@ sys.path.insert(0, str(HERE.parent / "tests"))
 FRAMES = 96
 SIZE = "320x180"
 ROUNDS = 3
+BLOCK = 8     # frames per interleaved block of the in-process comparison
 CORPUS = HERE.parent.parent / "shared" / "corpus" / "blender"
 EXPORTS = ["01_cube", "01_morphed_cube", "02_shared_mesh", "03_animated_cube",
            "03_skinned_cylinder", "01_two_sided_plane"]
@@ -55,55 +57,48 @@ def build_scene(folder):
 
 
 def per_frame_in_process(scene, out):
-    """Seconds per warm frame, in this process (no process start, no transport): a
-    warm Session render alone; the same plus writing the EXR (today's loop); and farm
-    render chunks of 1 and 8 frames (tasks.run on a worker's cached Session, writes on
-    its writer thread). Interleaved rounds; the least disturbed (smallest) kept."""
+    """Seconds per warm frame in this process (no process start, no transport), all on
+    one Session (the farm cache's), interleaved block by block of BLOCK frames so the
+    machine's load drifts alike for every mode; the median block of each is kept:
+    a warm render alone; the same plus writing the EXR (today's loop); farm chunk
+    tasks of BLOCK frames and of 1 frame (tasks.run: cache look-up, bookkeeping, write).
+    Also the CPU time (every thread) of a warm render."""
     from dataclasses import replace
 
-    from pxr import Usd
-
-    from lantern.engine import RenderSettings, Session
     from lantern.engine.image_io import write_image
     from lantern.farm import sessions, tasks
     w, h = map(int, SIZE.split("x"))
-    frames = [float(f) for f in range(2, FRAMES + 1)]
     os.makedirs(out, exist_ok=True)
     pattern = str(out / "f_####.exr")
+    base = tasks.RenderChunk(scene=str(scene), frames=(1.0,), pattern=pattern, width=w, height=h)
+    tasks.run(base)  # loads the stage into the cache: the cold frame, left out
+    session, _ = sessions.session_for(base)
 
-    def session_loop(write):
-        with Session(Usd.Stage.Open(str(scene)), RenderSettings(width=w, height=h)) as session:
-            session.render(frame=1.0)
+    def loop(frames, write):
+        for frame in frames:
+            result = session.render(frame=frame)
+            if write:
+                write_image(pattern.replace("####", f"{int(frame):04d}"), result.rgba)
+
+    modes = {
+        "warm Session render": lambda frames: loop(frames, False),
+        "render + write EXR (today's loop)": lambda frames: loop(frames, True),
+        f"farm chunks of {BLOCK} frames": lambda frames: tasks.run(replace(base, frames=frames)),
+        "farm chunks of 1 frame":
+            lambda frames: [tasks.run(replace(base, frames=(f,))) for f in frames],
+    }
+    seconds = {name: [] for name in modes}
+    warm_cpu = []
+    for first in range(2, FRAMES + 1 - BLOCK, BLOCK):
+        frames = tuple(float(f) for f in range(first, first + BLOCK))
+        for name, run_block in modes.items():
             start, cpu = time.perf_counter(), time.process_time()
-            for frame in frames:
-                result = session.render(frame=frame)
-                if write:
-                    write_image(pattern.replace("####", f"{int(frame):04d}"), result.rgba)
-            if not write:
-                warm_cpu.append((time.process_time() - cpu) / len(frames))
-            return (time.perf_counter() - start) / len(frames)
-
-    def chunks(size):
-        base = tasks.RenderChunk(scene=str(scene), frames=(1.0,), pattern=pattern, width=w,
-                                 height=h)
-        tasks.run(base)
-        start = time.perf_counter()
-        for i in range(0, len(frames), size):
-            tasks.run(replace(base, frames=tuple(frames[i:i + size])))
-        seconds = (time.perf_counter() - start) / len(frames)
-        sessions.release_all()
-        return seconds
-
-    modes = {"warm Session render": lambda: session_loop(False),
-             "render + write EXR (today's loop)": lambda: session_loop(True),
-             "farm chunks of 8 frames": lambda: chunks(8),
-             "farm chunks of 2 frames": lambda: chunks(2),
-             "farm chunks of 1 frame": lambda: chunks(1)}
-    best, warm_cpu = {}, []
-    for _ in range(ROUNDS):
-        for name, measure in modes.items():
-            best[name] = min(measure(), best.get(name, float("inf")))
-    return best, min(warm_cpu)
+            run_block(frames)
+            seconds[name].append((time.perf_counter() - start) / BLOCK)
+            if name == "warm Session render":
+                warm_cpu.append((time.process_time() - cpu) / BLOCK)
+    sessions.release_all()
+    return {name: statistics.median(v) for name, v in seconds.items()}, statistics.median(warm_cpu)
 
 
 def cpu_seconds(pids):

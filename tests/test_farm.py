@@ -201,7 +201,7 @@ def test_a_dead_local_worker_has_its_chunk_run_again(scene, tmp_path):
     written are kept (not written twice), no temporary file is left, the summary says so."""
     out = tmp_path / "out"
     proc = subprocess.Popen([sys.executable, "-m", "lantern", "render", str(scene), "-o",
-                             str(out / "f_####.exr"), "--frames", "1:24", "--size", "160x90",
+                             str(out / "f_####.exr"), "--frames", "1:24", "--size", "320x180",
                              "--chunk", "12", "-j", "2"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:

@@ -174,7 +174,7 @@ def test_a_killed_worker_has_its_chunk_retried_and_no_frame_doubled(cluster, sce
     from distributed import Client
     out = tmp_path / "out"
     proc = subprocess.Popen([sys.executable, "-m", "lantern", "render", str(scene), "-o",
-                             str(out / "f_####.exr"), "--frames", "1:24", "--size", "160x90",
+                             str(out / "f_####.exr"), "--frames", "1:24", "--size", "320x180",
                              "--chunk", "12", "--scheduler", cluster["address"]],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
@@ -205,5 +205,5 @@ def test_a_killed_worker_has_its_chunk_retried_and_no_frame_doubled(cluster, sce
     assert all(after[n] == before[n] for n in before), "a frame was written twice"
     assert f"its worker died while running it ({victim})" in stdout, stdout
     assert "24 frames written, 0 failed" in stdout
-    assert_same_frames(read_frames(out, range(1, 25)), reference_frames(scene, 1, 24, (160, 90)))
+    assert_same_frames(read_frames(out, range(1, 25)), reference_frames(scene, 1, 24, (320, 180)))
     shutil.rmtree(out)
