@@ -23,8 +23,8 @@ IMAGE_SUFFIXES = (".exr", ".png")
 # The largest texture side OpenGL implementations guarantee at most (llvmpipe's limit).
 MAX_SIDE = 16384
 
-# Local worker processes for a sequence: one, since on 2 cores llvmpipe already draws
-# with every core and two processes measured slower (bench/bench_distributed.py, README).
+# Local worker processes for a sequence: one. On 2 cores llvmpipe already draws with
+# every core, and two measured no faster and costlier in CPU (bench/bench_distributed.py).
 RENDER_PROCESSES = 1
 
 USAGE, FAILED, INTERRUPTED = 2, 1, 130

@@ -50,7 +50,7 @@ class ExportTask:
 @dataclass(frozen=True)
 class RenderChunk:
     scene: str                      # the file the user named: messages and the cache key
-    frames: tuple                   # frames to render, in order (None: the stage's default)
+    frames: tuple                   # frames to render, in order
     pattern: str | None             # output name ('####' = the frame); None: return pixels
     width: int | None = None
     height: int | None = None
@@ -122,20 +122,26 @@ def worker_name():
 
 def frame_output(pattern, frame):
     from ..cli import _frame_path
-    return pattern if frame is None else _frame_path(pattern, frame)
+    return _frame_path(pattern, frame)
 
 
 # --- export -----------------------------------------------------------------------------
 
-def _die_with_parent():
-    """In the export's child: die when the worker that started it dies (Linux), so a
-    lost worker leaves no Blender behind still writing its output."""
+def _parent_death_signal():
+    """A function for the export's child, between fork and exec: die when the worker
+    that started it dies (Linux's PR_SET_PDEATHSIG), so a lost worker leaves no Blender
+    behind still writing its output. libc is looked up here, in the parent: the child
+    of a threaded worker only makes the one call."""
     try:
         import ctypes
-        import signal
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        pass
+        prctl = ctypes.CDLL(None, use_errno=True).prctl
+    except (OSError, AttributeError):  # not Linux
+        return None
+    pr_set_pdeathsig, sigkill = 1, 9
+    return lambda: prctl(pr_set_pdeathsig, sigkill)
+
+
+_DIE_WITH_PARENT = _parent_death_signal() if sys.platform.startswith("linux") else None
 
 
 def run_export(task: ExportTask) -> TaskResult:
@@ -150,7 +156,7 @@ def run_export(task: ExportTask) -> TaskResult:
         command += ["--max-influences", str(task.max_influences)]
     try:
         proc = subprocess.run(command, capture_output=True, text=True,
-                              preexec_fn=_die_with_parent if os.name == "posix" else None)
+                              preexec_fn=_DIE_WITH_PARENT)
         warnings = [line.removeprefix("warning: ") for line in proc.stderr.splitlines()
                     if line.startswith("warning: ")]
         result = TaskResult(ok=proc.returncode == 0, seconds=0.0, worker=worker_name(),
