@@ -1,8 +1,12 @@
 #version 330 core
 #include "lib.glsl"
-// Full screen, once: dome lighting (SH irradiance for diffuse, an analytic env-BRDF
-// for specular), emission, and the dome as the background where nothing was drawn.
-// Positions are camera-relative (lib.glsl): the viewer is at the origin.
+#include "environment.glsl"
+// Full screen, once: the dome's light (harmonics for diffuse, the prefiltered cube
+// and the split-sum table for the specular lobe and the coat), emission, and the
+// dome as the background where nothing was drawn. Ambient occlusion (HAS_AO) dims
+// the dome's diffuse light, and its specular light by Lagarde's specular occlusion;
+// it never touches emission or the lights. Positions are camera-relative (lib.glsl):
+// the viewer is at the origin.
 uniform sampler2D g_base;
 uniform sampler2D g_normal;
 uniform sampler2D g_mat;
@@ -13,60 +17,59 @@ uniform vec3 cam_forward;
 uniform bool cam_ortho;
 
 uniform bool has_dome;
-uniform vec3 dome_sh[9];
-uniform vec3 dome_radiance;
 uniform bool transparent;
-#ifdef HAS_DOME_MAP
-uniform sampler2D dome_map;
-uniform mat3 dome_to_local;    // world -> dome frame
+#ifdef HAS_AO
+uniform sampler2D ao_tex;
 #endif
 
-out vec4 frag;
-
-// Karis' mobile env-BRDF fit, with F90 (not 1) on the second term so f0 = 0 gives 0.
-vec3 env_brdf(vec3 f0, vec3 f90, float roughness, float NoV) {
-    const vec4 c0 = vec4(-1.0, -0.0275, -0.572, 0.022);
-    const vec4 c1 = vec4(1.0, 0.0425, 1.04, -0.04);
-    vec4 r = roughness * c0 + c1;
-    float a004 = min(r.x * r.x, exp2(-9.28 * NoV)) * r.x + r.y;
-    vec2 ab = vec2(-1.04, 1.04) * a004 + r.zw;
-    return f0 * ab.x + f90 * ab.y;
-}
-
-vec3 dome(vec3 d) {
-#ifdef HAS_DOME_MAP
-    vec3 l = normalize(dome_to_local * d);
-    vec2 uv = vec2((atan(l.z, l.x) + 0.5 * PI) / (2.0 * PI), acos(clamp(l.y, -1.0, 1.0)) / PI);
-    return textureLod(dome_map, uv, 0.0).rgb * dome_radiance;
-#else
-    return dome_radiance;
+layout(location = 0) out vec4 frag;
+#ifdef WRITE_AOVS
+// Render passes (engine/gpu/passes/ambient.py): the dome's diffuse and glossy light
+// (added to by the light pass), the background, and the occlusion.
+layout(location = 1) out vec4 aov_diffuse;
+layout(location = 2) out vec4 aov_glossy;
+layout(location = 3) out vec4 aov_env;
 #endif
+
+// Lagarde and de Rousiers 2014: the visible share of a specular lobe, from AO.
+float specular_occlusion(float NoV, float ao, float roughness) {
+    return clamp(pow(NoV + ao, exp2(-16.0 * roughness - 1.0)) - 1.0 + ao, 0.0, 1.0);
 }
 
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(g_depth, px, 0).r;
     vec2 uv = (vec2(px) + 0.5) / vec2(textureSize(g_depth, 0));
+    vec3 diffuse = vec3(0.0), glossy = vec3(0.0), background = vec3(0.0), emitted = vec3(0.0);
     if (is_background(depth)) {
-        vec3 bg = vec3(0.0);
         if (has_dome && !transparent)
-            bg = dome(pixel_ray(uv, inv_view_proj, cam_ortho, cam_forward));
-        frag = vec4(bg, 0.0);
-        return;
+            background = dome_background(pixel_ray(uv, inv_view_proj, cam_ortho, cam_forward));
+    } else {
+        vec3 p = position_from_depth(uv, depth, inv_view_proj);
+        vec4 nrm = texelFetch(g_normal, px, 0);
+        vec3 n = normalize(nrm.xyz);
+        vec3 v = cam_ortho ? -cam_forward : normalize(-p);
+        Surface s = make_surface(p, n, v, texelFetch(g_base, px, 0), texelFetch(g_mat, px, 0), nrm.w);
+        emitted = texelFetch(g_emit, px, 0).rgb;
+        if (has_dome) {
+            float ao = 1.0;
+#ifdef HAS_AO
+            ao = texelFetch(ao_tex, px, 0).r;
+#endif
+            diffuse = brdf_diffuse(s) * dome_irradiance(n) * ao;
+            vec3 r = reflect(-v, n);
+            glossy = s.under_coat * s.spec_albedo * dome_specular(r, s.roughness)
+                   * specular_occlusion(s.NoV, ao, s.roughness);
+            if (s.coat > 0.0)
+                glossy += s.coat_albedo * dome_specular(r, s.coat_roughness)
+                        * specular_occlusion(s.NoV, ao, s.coat_roughness);
+        }
     }
-    vec3 p = position_from_depth(uv, depth, inv_view_proj);
-    vec3 n = normalize(texelFetch(g_normal, px, 0).xyz);
-    vec3 v = cam_ortho ? -cam_forward : normalize(-p);
-    Surface s = make_surface(p, n, v, texelFetch(g_base, px, 0), texelFetch(g_mat, px, 0));
-    vec3 c = texelFetch(g_emit, px, 0).rgb;
-    if (has_dome) {
-        vec3 irradiance = max(sh_irradiance(dome_sh, n), vec3(0.0));
-        c += brdf_diffuse(s) * irradiance;
-        // Specular radiance: the irradiance-weighted average around the reflection
-        // direction, E(r)/pi (exact for a uniform dome).
-        vec3 r = reflect(-v, n);
-        vec3 spec_l = max(sh_irradiance(dome_sh, r), vec3(0.0)) / PI;
-        c += env_brdf(s.f0, s.f90, s.roughness, max(dot(n, v), 1e-4)) * spec_l;
-    }
-    frag = vec4(c, 0.0);
+    // Alpha: coverage (resolve.frag), averaged by anti-aliasing.
+    frag = vec4(diffuse + glossy + background + emitted, is_background(depth) ? 0.0 : 1.0);
+#ifdef WRITE_AOVS
+    aov_diffuse = vec4(diffuse, 0.0);
+    aov_glossy = vec4(glossy, 0.0);
+    aov_env = vec4(background, 0.0);
+#endif
 }

@@ -26,7 +26,13 @@ uniform int light_index;
 #include "shadow_lookup.glsl"
 #endif
 
-out vec4 frag;
+layout(location = 0) out vec4 frag;
+#ifdef WRITE_AOVS
+// Render passes (engine/gpu/passes/ambient.py LIGHTING_AOVS), added like the light.
+layout(location = 1) out vec4 aov_diffuse;
+layout(location = 2) out vec4 aov_glossy;
+layout(location = 3) out vec4 aov_shadow;   // luminance with shadows, without
+#endif
 
 #ifdef LIGHT_AREA
 // Projected solid angle of the polygon seen from p with normal n, after clipping the
@@ -101,16 +107,20 @@ void main() {
     vec3 p = position_from_depth(uv, depth, inv_view_proj);   // camera-relative
     vec3 n = normalize(texelFetch(g_normal, px, 0).xyz);
     vec3 v = cam_ortho ? -cam_forward : normalize(-p);
-    Surface s = make_surface(p, n, v, texelFetch(g_base, px, 0), texelFetch(g_mat, px, 0));
+    vec4 nrm = texelFetch(g_normal, px, 0);
+    Surface s = make_surface(p, n, v, texelFetch(g_base, px, 0), texelFetch(g_mat, px, 0), nrm.w);
     float a = ggx_alpha(s.roughness);
-    vec3 radiance = vec3(0.0);
+    float ac = ggx_alpha(s.coat_roughness);
+    vec3 diffuse = vec3(0.0);    // what the light reflects diffusely
+    vec3 glossy = vec3(0.0);     // and specularly (base lobe and coat)
 
 #ifdef LIGHT_DISTANT
     vec3 l = -light_axis;
     float NoL = dot(n, l);
     if (NoL <= 0.0) discard;
     vec3 E = light_color * NoL;
-    radiance = E * (light_diffuse * brdf_diffuse(s) + light_specular * brdf_specular(s, l, a));
+    diffuse = E * light_diffuse * brdf_diffuse(s);
+    glossy = E * light_specular * (brdf_specular(s, l, a) + brdf_coat(s, l, ac));
 #endif
 
 #ifdef LIGHT_SPHERE
@@ -126,8 +136,10 @@ void main() {
     vec3 E = light_color * NoL / max(falloff, 1e-8);
     if (is_spot) E *= spot_mask(p, l, d);
     // A sphere source widens the highlight (Karis 2013); a point keeps alpha.
-    float a_spec = min(1.0, a + light_radius / max(2.0 * d, 1e-6));
-    radiance = E * (light_diffuse * brdf_diffuse(s) + light_specular * brdf_specular(s, l, a_spec));
+    float widen = light_radius / max(2.0 * d, 1e-6);
+    diffuse = E * light_diffuse * brdf_diffuse(s);
+    glossy = E * light_specular * (brdf_specular(s, l, min(1.0, a + widen))
+                                   + brdf_coat(s, l, min(1.0, ac + widen)));
 #endif
 
 #ifdef LIGHT_AREA
@@ -155,14 +167,23 @@ void main() {
     vec3 lq = q - p;
     float dq = length(lq);
     vec3 l = dq > 1e-6 ? lq / dq : n;
-    float a_spec = min(1.0, a + sqrt(light_area / PI) / max(2.0 * dq, 1e-6));
-    radiance = E * light_diffuse * brdf_diffuse(s)
-             + E * light_specular * brdf_specular(s, l, a_spec) * step(0.0, dot(n, l));
+    float widen = sqrt(light_area / PI) / max(2.0 * dq, 1e-6);
+    diffuse = E * light_diffuse * brdf_diffuse(s);
+    glossy = E * light_specular * step(0.0, dot(n, l)) * (brdf_specular(s, l, min(1.0, a + widen))
+                                                          + brdf_coat(s, l, min(1.0, ac + widen)));
 #endif
 
+    vec3 radiance = diffuse + glossy;
+    float lit = 1.0;
 #ifdef HAS_SHADOW
     if (max(radiance.r, max(radiance.g, radiance.b)) > 0.0)
-        radiance *= shadow_factor(p, n, light_pos, light_axis, dot(p, cam_forward));
+        lit = shadow_factor(p, n, light_pos, light_axis, dot(p, cam_forward));
 #endif
-    frag = vec4(radiance, 0.0);   // NaN or Inf goes through: the resolve pass counts it
+    frag = vec4(radiance * lit, 0.0);   // NaN or Inf goes through: the resolve pass counts it
+#ifdef WRITE_AOVS
+    aov_diffuse = vec4(diffuse * lit, 0.0);
+    aov_glossy = vec4(glossy * lit, 0.0);
+    float luminance = dot(radiance, vec3(0.2126, 0.7152, 0.0722));
+    aov_shadow = vec4(luminance * lit, luminance, 0.0, 0.0);
+#endif
 }

@@ -20,9 +20,6 @@ from lantern.engine import RenderSettings, render_stage
 from hard_cases import engine_scenes as E  # tests/ is on sys.path (conftest.py)
 S = E.S
 W, H = 64, 36
-TEXTURE_PRECISION = "issue 10 texture precision"
-
-
 def write_png16(path, rgb):
     """A 16-bit RGB PNG with the standard library."""
     rgb = np.asarray(rgb, ">u2")
@@ -117,7 +114,6 @@ def test_float_exr_emission_keeps_its_values(tmp_path, hard_case):
               float((np.abs(got - values) / values).max()), 1e-3)
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=TEXTURE_PRECISION)
 def test_float_exr_base_colour_above_one_is_not_clamped(tmp_path, hard_case):
     from lantern.engine.image_io import write_image
     img = np.full((8, 8, 4), 2.0, np.float32)
@@ -130,7 +126,6 @@ def test_float_exr_base_colour_above_one_is_not_clamped(tmp_path, hard_case):
               float(np.abs(out[..., :3] / 2.0 - 1.0).max()), 1e-3)
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=TEXTURE_PRECISION)
 def test_constant_base_colour_above_one_is_not_clamped(tmp_path, hard_case):
     from lantern.engine.image_io import write_image
     white = np.ones((2, 2, 4), np.float32)

@@ -1,12 +1,13 @@
 """The resolve pass: the HDR accumulation into a float32 image, read back top row
-first. Alpha is 1, or coverage when the render is transparent.
+first. Alpha is 1, or coverage when the render is transparent (the HDR target's
+alpha: 1 where a surface was drawn, filtered by anti-aliasing).
 
 Nothing masks a non-finite value: the pass counts the pixels holding NaN or Inf
 (`stats["nonfinite_pixels"]`) and, only when there are some, draws the scene's
 object ids (shaders/ids.vert, points.frag's POINTS_ID) to name the prims those
 pixels lie on, in one warning per render ("the background" where nothing is).
 
-reads: hdr, g_depth, view   writes: output, rgba (the image, numpy)"""
+reads: hdr, view   writes: output, rgba (the image, numpy)"""
 from __future__ import annotations
 
 import numpy as np
@@ -19,7 +20,7 @@ NAMED = 5                    # prims named in the warning, most pixels first
 
 class ResolvePass(Pass):
     name = "resolve"
-    reads = ("hdr", "g_depth", "view")
+    reads = ("hdr", "view")
     writes = ("output", "rgba")
 
     def __init__(self, ctx, pool, programs, geometry, depth):
@@ -34,7 +35,6 @@ class ResolvePass(Pass):
         ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
         prog = self.programs.get("fullscreen.vert", "resolve.frag")
         board["hdr"].use(UNITS["hdr"])
-        board["g_depth"].use(UNITS["g_depth"])
         set_uniform(prog, "transparent", bool(frame.transparent))
         self.programs.fullscreen(prog)
         data = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32)
