@@ -40,6 +40,7 @@ class Material:
     # input name ('diffuseColor', 'normal', ...) -> TextureRef
     maps: dict = field(default_factory=dict)
     uv_name: str | None = None     # primvar the material's reader asks for
+    pass_index: int = 0            # lantern:passIndex: render pass IndexMA
 
     @property
     def has_normal_map(self) -> bool:
@@ -107,6 +108,7 @@ class Instance:
     world: np.ndarray              # 4x4 (skinned with joints: the skeleton's local-to-world)
     # This frame's blend shapes: [(sub-shape index, weight)], zero weights left out.
     shapes: list = field(default_factory=list)
+    pass_index: int = 0            # lantern:passIndex of it or an ancestor: IndexOB
 
 
 @dataclass

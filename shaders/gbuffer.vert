@@ -10,10 +10,16 @@ uniform mat4 view_proj;
 out vec3 v_normal;
 out vec2 v_uv;
 out vec4 v_tangent;
+#ifdef WRITE_INDEX
+flat out float v_object_index;
+#endif
 void main() {
     mat4 model = object_model();
     gl_Position = view_proj * (model * vec4(in_pos, 1.0));
     v_normal = object_normal_matrix() * in_normal;
     v_uv = in_uv;
     v_tangent = vec4(mat3(model) * in_tangent.xyz, in_tangent.w);
+#ifdef WRITE_INDEX
+    v_object_index = object_pass_index();
+#endif
 }

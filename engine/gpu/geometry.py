@@ -187,7 +187,7 @@ class ObjectTable:
     def free_id(self, oid: int):
         self._free_ids.append(oid)
 
-    def set(self, oid: int, world: np.ndarray):
+    def set(self, oid: int, world: np.ndarray, pass_index: int = 0):
         if oid >= self.capacity:
             rows = max(len(self.data) * 2, oid // (OBJECT_TEX_W // OBJECT_TEXELS) + 1)
             grown = np.zeros((rows, OBJECT_TEX_W, 4), np.float32)
@@ -199,6 +199,7 @@ class ObjectTable:
         texels = np.zeros((OBJECT_TEXELS, 4))
         texels[:4] = world.T                      # columns
         texels[4:, :3] = normal_matrix(world).T
+        texels[4, 3] = pass_index                 # render pass IndexOB
         flat = self.data.reshape(-1, 4)
         flat[oid * OBJECT_TEXELS:(oid + 1) * OBJECT_TEXELS] = texels
         self._dirty.add(oid)
@@ -353,7 +354,7 @@ class Geometry:
             d.mesh_key, d.mirrored, d.cull, d.ranges = state
             d.skinned, d.local = mesh.skin is not None, mesh.bounds
         d.world = inst.world
-        self.objects.set(d.oid, inst.world)
+        self.objects.set(d.oid, inst.world, inst.pass_index)
         self._static_boxes = None
         self._note_moved(d)
 

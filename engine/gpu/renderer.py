@@ -13,6 +13,7 @@ from .framegraph import Frame, FrameGraph
 from .geometry import Geometry
 from .lights import LightTable
 from .passes.ambient import AmbientPass
+from .passes.aovs import AovPass
 from .passes.gbuffer import GBufferPass
 from .passes.lights import LightPass
 from .passes.resolve import ResolvePass
@@ -49,6 +50,7 @@ class Renderer:
             ViewPass(self.geometry),
             self.shadows,
             GBufferPass(ctx, self.pool, programs, self.geometry, self.textures),
+            AovPass(ctx, self.pool, programs),
             AmbientPass(ctx, self.pool, programs, self.textures),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
                       self.geometry, preset),
@@ -68,11 +70,13 @@ class Renderer:
         self.skinning.update(scene, changes)
         return meshes
 
-    def render(self, scene, changes, camera, size, transparent, cull_backfaces):
-        """(rgba float32 (H, W, 4), stats, timings) of one frame."""
+    def render(self, scene, changes, camera, size, transparent, cull_backfaces,
+               aovs=frozenset()):
+        """(rgba float32 (H, W, 4), {render pass: float32 (H, W, C)}, stats, timings)
+        of one frame; `aovs`: the render passes asked for (core/passes.py)."""
         t0 = time.perf_counter()
         frame = Frame(scene=scene, changes=changes, size=tuple(size), preset=self.preset,
-                      transparent=transparent, camera=camera,
+                      transparent=transparent, aovs=frozenset(aovs), camera=camera,
                       stats={name: 0 for name in COUNTERS})
         frame.stats["meshes_uploaded"] = self.update(scene, changes, cull_backfaces)
         frame.timings["upload"] = time.perf_counter() - t0
@@ -83,7 +87,7 @@ class Renderer:
         frame.stats["gl_path"] = "multi-draw (GL 4.3)" if self.features.multi_draw else \
             "draw per object (GL 3.3)"
         self._restore_state()
-        return board["rgba"], frame.stats, frame.timings
+        return board["rgba"], board["aovs"], frame.stats, frame.timings
 
     def skinned_points(self, scene, changes) -> dict:
         """{mesh path: (points, normals)} of every skinned mesh at this sync's time,

@@ -85,7 +85,8 @@ def _bytes(data) -> bytes:
 # Target formats. Colour: (components, dtype). Besides these, "depth" is a sampled
 # DEPTH_COMPONENT24 texture (G-buffer depth, shadow maps) and "depth_stencil" a
 # DEPTH24_STENCIL8 renderbuffer (light volumes).
-COLOR_FORMATS = {"rgba16f": (4, "f2"), "rgba32f": (4, "f4")}
+COLOR_FORMATS = {"rgba16f": (4, "f2"), "rgba32f": (4, "f4"),
+                 "r32f": (1, "f4"), "rg32f": (2, "f4")}   # render passes (AOVs)
 
 
 class TargetPool:

@@ -71,6 +71,9 @@ def _uv_name(tex_shader, time):
 def read_material(mat: UsdShade.Material, time, warnings: list) -> Material:
     path = str(mat.GetPath())
     out = Material(name=path)
+    index = mat.GetPrim().GetAttribute("lantern:passIndex")
+    if index and index.HasAuthoredValue():
+        out.pass_index = int(index.Get())        # render pass IndexMA
     surface = mat.ComputeSurfaceSource()[0]
     if not surface or _shader_id(surface) != "UsdPreviewSurface":
         warnings.append(f"{path}: no UsdPreviewSurface surface; using the default material")

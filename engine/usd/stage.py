@@ -284,12 +284,14 @@ class StageReader:
                 dyn.world_prim = str(skel_query.GetPrim().GetPath())
                 self._use_skeleton(skel_query, path, skin.method == "dqs", changes)
         dyn.world = self._xform_varies(self.stage.GetPrimAtPath(dyn.world_prim))
+        index = pass_index(prim)
         if old is not None and old.mesh_key == key:
             old.world = self._world(dyn.world_prim)
             old.shapes = shapes
+            old.pass_index = index
         else:
             self.scene.instances[path] = Instance(path, key, self._world(dyn.world_prim),
-                                                  shapes=shapes)
+                                                  shapes=shapes, pass_index=index)
         for name in set(previous.materials if previous else ()) - set(dyn.materials):
             self._unuse_material(name, path)
         for name in dyn.materials:
@@ -515,6 +517,8 @@ class StageReader:
                 continue
             if name in ("visibility", "purpose", "proxyPrim"):
                 roots.add(path)
+            elif name == PASS_INDEX and not prim.IsA(UsdShade.Material):
+                out.append(("binding", path))    # the instances under it read it again
             elif name.startswith("xformOp") or name == "xformOpOrder":
                 out.append(("transform", path))
             elif name.startswith("material:binding"):
@@ -605,6 +609,20 @@ class StageReader:
         for name, varies in list(self._material_varies.items()):
             if varies and name not in self._read:
                 self._reread_material(name, changes)
+
+
+PASS_INDEX = "lantern:passIndex"
+
+
+def pass_index(prim) -> int:
+    """The render-pass index (IndexOB) of a Mesh prim: `lantern:passIndex` on it or on
+    the nearest ancestor that has one (the object's Xform), else 0."""
+    while prim and not prim.IsPseudoRoot():
+        attr = prim.GetAttribute(PASS_INDEX)
+        if attr and attr.HasAuthoredValue():
+            return int(attr.Get())
+        prim = prim.GetParent()
+    return 0
 
 
 def _strongest_spec(attr):

@@ -162,7 +162,7 @@ def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir, instance
         else:
             local = world
         obj = ObjectRecord(key=key, name=ob.original.name, parent=parent_key,
-                           matrix=local, kind="empty")
+                           matrix=local, kind="empty", pass_index=int(ob.original.pass_index))
         if ob.type == "LIGHT":
             obj.kind, obj.light = "light", gather_light(ob.data.original, warn)
         elif ob.type == "CAMERA":

@@ -7,7 +7,7 @@ from .instances import write_instances, write_points, write_prototype
 from .light import write_light
 from .material import write_material
 from .mesh import bind_materials, write_mesh
-from .names import Namer, primvar_name, set_blender_name
+from .names import Namer, primvar_name, set_blender_name, set_pass_index
 from .skel import bind_skin, write_skeleton
 from .stage import write_metadata, write_render_settings
 from .world import write_world
@@ -80,6 +80,7 @@ def write_scene(stage, scene, asset_path, max_influences=None):
             path = namer.child(MATERIALS, rec.name)
             write_material(stage, path, rec, default_uv, asset_path)
             set_blender_name(stage.GetPrimAtPath(path), rec.name)
+            set_pass_index(stage.GetPrimAtPath(path), rec.pass_index)
             material_paths[key] = path
 
     def double_sided(slot_materials):
@@ -126,6 +127,7 @@ def write_scene(stage, scene, asset_path, max_influences=None):
             prim = UsdGeom.Xform.Define(stage, path).GetPrim()
         _transform(prim, obj, scene.times)
         set_blender_name(prim, obj.name)
+        set_pass_index(prim, obj.pass_index)
         if obj.points is not None:
             write_points(stage, namer.child(path, obj.points.name), obj.points)
         if obj.instances is not None:

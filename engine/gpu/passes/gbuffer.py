@@ -8,7 +8,9 @@ and its images stay on the GPU for the session.
 
 reads: skinned (posed geometry), view
 writes: g_base (base colour + alpha), g_normal (world normal), g_mat (metallic,
-        roughness, dielectric F0), g_emit (emission), all RGBA16F; g_depth (DEPTH24)"""
+        roughness, dielectric F0), g_emit (emission), all RGBA16F; g_depth (DEPTH24)
+render passes: IndexOB, IndexMA into g_index (RG32F), only when asked for (a
+        shader variant with a fifth output)"""
 from __future__ import annotations
 
 from ..framegraph import Pass
@@ -27,6 +29,7 @@ class GBufferPass(Pass):
     name = "gbuffer"
     reads = ("skinned", "view")
     writes = TARGETS
+    aovs = {"IndexOB": ("g_index", 0), "IndexMA": ("g_index", 1)}
 
     def __init__(self, ctx, pool, programs, geometry, textures):
         self.ctx, self.pool, self.programs = ctx, pool, programs
@@ -34,7 +37,9 @@ class GBufferPass(Pass):
 
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]
-        fbo = self.pool.framebuffer([board[n] for n in TARGETS[:4]], depth=board["g_depth"])
+        index = "g_index" in self.aov_targets(frame)
+        colors = [board[n] for n in TARGETS[:4]] + ([board["g_index"]] if index else [])
+        fbo = self.pool.framebuffer(colors, depth=board["g_depth"])
         fbo.use()
         fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
         ctx.enable(ctx.DEPTH_TEST)
@@ -50,7 +55,7 @@ class GBufferPass(Pass):
         for batch in batches:
             mat = materials[batch.material]
             defines = [flag for name, _, flag in MAP_SLOTS if name in mat.maps] + \
-                self.geometry.object_defines()
+                self.geometry.object_defines() + (["WRITE_INDEX"] if index else [])
             prog = self.programs.get("gbuffer.vert", "gbuffer.frag", defines)
             set_uniform(prog, "view_proj", view.view_proj)
             self._material(prog, mat)
@@ -73,6 +78,7 @@ class GBufferPass(Pass):
         set_uniform(prog, "u_emissive", mat.emissive)
         set_uniform(prog, "u_opacity", mat.opacity)
         set_uniform(prog, "u_opacity_threshold", mat.opacity_threshold)
+        set_uniform(prog, "u_material_index", float(mat.pass_index))
         for name, short, _ in MAP_SLOTS:
             ref = mat.maps.get(name)
             if ref is None:
