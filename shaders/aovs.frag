@@ -8,7 +8,6 @@ uniform sampler2D g_depth;
 uniform sampler2D g_normal;
 uniform sampler2D g_emit;
 uniform mat4 inv_view_proj;
-uniform vec3 cam_pos;
 uniform vec3 cam_forward;
 uniform float background_depth;
 out vec4 frag;
@@ -16,11 +15,11 @@ out vec4 frag;
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(g_depth, px, 0).r;
-    bool background = depth >= 1.0;
+    bool background = is_background(depth);
 #ifdef AOV_DEPTH
     vec2 uv = (vec2(px) + 0.5) / vec2(textureSize(g_depth, 0));
-    vec3 p = world_from_depth(uv, depth, inv_view_proj);
-    frag = vec4(background ? background_depth : dot(p - cam_pos, cam_forward), 0.0, 0.0, 0.0);
+    vec3 p = position_from_depth(uv, depth, inv_view_proj);     // camera-relative
+    frag = vec4(background ? background_depth : dot(p, cam_forward), 0.0, 0.0, 0.0);
 #endif
 #ifdef AOV_NORMAL
     vec3 n = texelFetch(g_normal, px, 0).xyz;

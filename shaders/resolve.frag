@@ -12,6 +12,6 @@ void main() {
     c = mix(c, vec3(65504.0), bvec3(isinf(c.r) && c.r > 0.0, isinf(c.g) && c.g > 0.0,
                                     isinf(c.b) && c.b > 0.0));
     c = finite(c);
-    float coverage = texelFetch(g_depth, px, 0).r < 1.0 ? 1.0 : 0.0;
+    float coverage = is_background(texelFetch(g_depth, px, 0).r) ? 0.0 : 1.0;
     frag = vec4(c, transparent ? coverage : 1.0);
 }

@@ -31,7 +31,7 @@ TARGETS = {
     "g_normal": "rgba16f",     # world normal
     "g_mat": "rgba16f",        # metallic, roughness, dielectric F0
     "g_emit": "rgba16f",       # emission
-    "g_depth": "depth",
+    "g_depth": "depth",         # 32-bit float, reversed (engine/view.py)
     "hdr": "rgba16f",          # light accumulation
     "depth_stencil": "depth_stencil",  # scene depth copy and light-volume marks
     "output": "rgba32f",

@@ -6,9 +6,12 @@ Storage (seed 003's static and dynamic branches):
                   time-sampled mesh is rewritten in place each frame).
   dynamic store   the same layout, written every frame by the skinning pass (transform
                   feedback); a skinned mesh's indices go up once.
-  object table    per object (a Mesh prim drawn), its model and normal matrices: 7
+  object table    per object (a Mesh prim drawn), its model and normal matrices: 8
                   RGBA32F texels in one texture, indexed by object id, so moving an
-                  object writes 112 bytes.
+                  object writes 128 bytes. The translation is a double split in two
+                  floats (hi in the matrix's fourth column, lo in texel 7): shaders
+                  subtract the frame's origin from it (camera-relative rendering,
+                  engine/view.py), so the table does not change when the view does.
 Indices are absolute in their store, so a draw needs no base vertex (GL 3.3 has none
 in ModernGL).
 
@@ -40,12 +43,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...core.transforms import normal_matrix, transform_aabbs
+from ..view import split_double
 from .programs import set_uniform
 
 VERTEX_FORMAT = ("3f 3f 2f 4f", "in_pos", "in_normal", "in_uv", "in_tangent")
 VERTEX_BYTES = 48
-OBJECT_TEXELS = 7            # model matrix columns (4), normal matrix columns (3)
-OBJECT_TEX_W = 4095          # 585 objects per row: an object never straddles rows
+OBJECT_TEXELS = 8            # model matrix columns (4), normal matrix columns (3), lo translation
+OBJECT_TEX_W = 4096          # 512 objects per row: an object never straddles rows
 COMMAND_UINTS = 5            # DrawElementsIndirectCommand
 
 
@@ -164,7 +168,8 @@ class VertexStore:
 
 
 class ObjectTable:
-    """Per-object model and normal matrices in one RGBA32F texture."""
+    """Per-object model and normal matrices in one RGBA32F texture (shaders/objects.glsl
+    reads them)."""
 
     def __init__(self, ctx, uploads, rows: int = 1):
         self.ctx, self.uploads = ctx, uploads
@@ -196,10 +201,13 @@ class ObjectTable:
             if self.texture is not None:
                 self.texture.release()
                 self.texture = None
-        texels = np.zeros((OBJECT_TEXELS, 4))
+        texels = np.zeros((OBJECT_TEXELS, 4), np.float32)
         texels[:4] = world.T                      # columns
-        texels[4:, :3] = normal_matrix(world).T
+        hi, lo = split_double(world[:3, 3])
+        texels[3, :3] = hi
+        texels[4:7, :3] = normal_matrix(world).T
         texels[4, 3] = pass_index                 # render pass IndexOB
+        texels[7, :3] = lo
         flat = self.data.reshape(-1, 4)
         flat[oid * OBJECT_TEXELS:(oid + 1) * OBJECT_TEXELS] = texels
         self._dirty.add(oid)

@@ -9,6 +9,7 @@ import time
 import numpy as np
 
 from .context import Features
+from .depth import DepthConvention
 from .framegraph import Frame, FrameGraph
 from .geometry import Geometry
 from .lights import LightTable
@@ -38,18 +39,20 @@ class Renderer:
         self.features = Features.of(gl.version)
         self.uploads = Uploads(ctx)
         self.stencil = Stencil(gl.proc)
-        self.pool = TargetPool(ctx, self.stencil)
+        self.depth = DepthConvention(gl.proc, self.features.clip_control)
+        self.pool = TargetPool(ctx, self.stencil, self.depth)
         programs = gl.programs
         self.geometry = Geometry(ctx, self.uploads, programs, self.features)
         self.lights = LightTable(self.uploads, preset.disk_sides)
         self.textures = MaterialTextures(ctx, self.uploads, preset.anisotropy)
         self.skinning = SkinningPass(ctx, self.uploads, programs, self.geometry, gl.scratch)
-        self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights, preset)
+        self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights, preset,
+                                  self.depth)
         self.graph = FrameGraph(ctx, self.pool, [
             self.skinning,
-            ViewPass(self.geometry),
+            ViewPass(self.geometry, self.depth),
             self.shadows,
-            GBufferPass(ctx, self.pool, programs, self.geometry, self.textures),
+            GBufferPass(ctx, self.pool, programs, self.geometry, self.textures, self.depth),
             AovPass(ctx, self.pool, programs),
             AmbientPass(ctx, self.pool, programs, self.textures),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
@@ -80,7 +83,11 @@ class Renderer:
                       stats={name: 0 for name in COUNTERS})
         frame.stats["meshes_uploaded"] = self.update(scene, changes, cull_backfaces)
         frame.timings["upload"] = time.perf_counter() - t0
-        board = self.graph.run(frame)
+        self.depth.begin()
+        try:
+            board = self.graph.run(frame)
+        finally:
+            self.depth.end()
         uploaded = self.uploads.take()
         frame.stats["bytes_uploaded"] = int(sum(uploaded.values()))
         frame.stats["bytes_by_kind"] = dict(uploaded)

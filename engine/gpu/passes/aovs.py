@@ -35,8 +35,6 @@ class AovPass(Pass):
                 continue
             self.pool.framebuffer([board[target]]).use()
             prog = self.programs.get("fullscreen.vert", "aovs.frag", [VARIANT[aov]])
-            set_uniform(prog, "inv_view_proj", view.inv_view_proj)
-            set_uniform(prog, "cam_pos", view.camera.position)
-            set_uniform(prog, "cam_forward", view.camera.forward)
+            view.set_camera(prog)
             set_uniform(prog, "background_depth", BACKGROUND_DEPTH)
             self.programs.fullscreen(prog)

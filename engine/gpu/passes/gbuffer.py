@@ -8,7 +8,8 @@ and its images stay on the GPU for the session.
 
 reads: skinned (posed geometry), view
 writes: g_base (base colour + alpha), g_normal (world normal), g_mat (metallic,
-        roughness, dielectric F0), g_emit (emission), all RGBA16F; g_depth (DEPTH24)
+        roughness, dielectric F0), g_emit (emission), all RGBA16F; g_depth (32-bit
+        float, reversed: cleared to 0, tested GREATER; engine/view.py)
 render passes: IndexOB, IndexMA into g_index (RG32F), only when asked for (a
         shader variant with a fifth output)"""
 from __future__ import annotations
@@ -31,9 +32,9 @@ class GBufferPass(Pass):
     writes = TARGETS
     aovs = {"IndexOB": ("g_index", 0), "IndexMA": ("g_index", 1)}
 
-    def __init__(self, ctx, pool, programs, geometry, textures):
+    def __init__(self, ctx, pool, programs, geometry, textures, depth):
         self.ctx, self.pool, self.programs = ctx, pool, programs
-        self.geometry, self.textures = geometry, textures
+        self.geometry, self.textures, self.depth = geometry, textures, depth
 
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]
@@ -41,9 +42,10 @@ class GBufferPass(Pass):
         colors = [board[n] for n in TARGETS[:4]] + ([board["g_index"]] if index else [])
         fbo = self.pool.framebuffer(colors, depth=board["g_depth"])
         fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=0.0)
         ctx.enable(ctx.DEPTH_TEST)
-        ctx.depth_func = "<"
+        ctx.depth_func = ">"
+        self.depth.far_clip(True)
         ctx.disable(ctx.BLEND)
         ctx.cull_face = "back"
         cam = view.camera
@@ -58,6 +60,8 @@ class GBufferPass(Pass):
                 self.geometry.object_defines() + (["WRITE_INDEX"] if index else [])
             prog = self.programs.get("gbuffer.vert", "gbuffer.frag", defines)
             set_uniform(prog, "view_proj", view.view_proj)
+            set_uniform(prog, "u_far", view.far_clip)
+            view.set_origin(prog)
             self._material(prog, mat)
             # A mirroring transform turns counter-clockwise triangles clockwise.
             ctx.front_face = "cw" if batch.mirrored else "ccw"
@@ -69,6 +73,7 @@ class GBufferPass(Pass):
             frame.count("draw_calls", batch.count)
         ctx.front_face = "ccw"
         ctx.disable(ctx.CULL_FACE | ctx.DEPTH_TEST)
+        self.depth.far_clip(False)
 
     def _material(self, prog, mat):
         set_uniform(prog, "u_diffuse", mat.diffuse)
