@@ -98,7 +98,8 @@ class Session:
         stats["prims_read"] = changes.prims_read + read
         timings["load"] = t_load
         timings["total"] = time.perf_counter() - t0
-        return RenderResult(rgba=rgba, passes=aovs, warnings=scene.warning_list(),
+        return RenderResult(rgba=rgba, passes=aovs,
+                            warnings=scene.warning_list() + self._renderer.warnings(),
                             timings=timings, stats=stats)
 
     def skinned_points(self, frame: float) -> dict:
@@ -123,7 +124,14 @@ class Session:
             view_matrix, projection_matrix = self.settings.view_matrix, self.settings.projection_matrix
         if view_matrix is not None and projection_matrix is not None:
             return camera_from_matrices(view_matrix, projection_matrix), 0
-        path = self.settings.camera or usd_camera.settings_camera_path(self.stage)
+        settings_warnings = []
+        path = self.settings.camera or usd_camera.settings_camera_path(self.stage,
+                                                                        settings_warnings)
+        warnings = self._reader.scene.warnings
+        if settings_warnings:
+            warnings[usd_camera.RENDER_SETTINGS] = settings_warnings
+        else:
+            warnings.pop(usd_camera.RENDER_SETTINGS, None)
         if path is None:
             cameras = self._reader.cameras()
             path = cameras[0] if cameras else None

@@ -96,6 +96,11 @@ class Renderer:
         self._restore_state()
         return board["rgba"], board["aovs"], frame.stats, frame.timings
 
+    def warnings(self) -> list:
+        """What the GL side could not use (images it could not read), as of the last
+        render."""
+        return list(self.textures.failed.values())
+
     def skinned_points(self, scene, changes) -> dict:
         """{mesh path: (points, normals)} of every skinned mesh at this sync's time,
         world space, one row per mesh point (normals unnormalised, as skinned)."""

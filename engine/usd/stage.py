@@ -88,6 +88,7 @@ class StageReader:
         self._xform_memo = {}
         self._read = set()
         self._lights_moved = False    # lights added or removed: their order to restore
+        self._retry = set()           # meshes skipped for a non-finite time-varying transform
         self.settings_changed = False  # /Render/Settings edited since the last sync
 
     def close(self):
@@ -102,6 +103,7 @@ class StageReader:
         self._built = set()
         t = cam.time_code(frame)
         self._xcache = UsdGeom.XformCache(t)
+        self._op_memo = {}
         self._t = t
         if not self._synced:
             self.tracker.take()
@@ -189,6 +191,7 @@ class StageReader:
             del self._visibility[path]
         for path in [p for p in self.scene.warnings if under(p, root)]:
             del self.scene.warnings[path]
+        self._retry = {p for p in self._retry if not under(p, root)}
 
     def _resync(self, root: str, changes: Changes):
         """Reads `root`'s subtree again from scratch; meshes elsewhere that use a
@@ -210,8 +213,31 @@ class StageReader:
 
     # --- instances -------------------------------------------------------------------
     def _world(self, prim_path: str) -> np.ndarray:
+        """The prim's local-to-world at this time; all NaN when an op of it or of an
+        ancestor is not finite (USD composes a NaN quaternion as the identity, which
+        would hide it)."""
         prim = self.stage.GetPrimAtPath(prim_path)
+        if self._bad_op(prim) is not None:
+            return np.full((4, 4), np.nan)
         return cam.gf_to_np(self._xcache.GetLocalToWorldTransform(prim))
+
+    def _bad_op(self, prim):
+        """'<prim path>.<op>' of the first non-finite xform op at or above `prim`, or
+        None."""
+        path = str(prim.GetPath())
+        if path not in self._op_memo:
+            bad = None
+            xf = UsdGeom.Xformable(prim)
+            for op in (xf.GetOrderedXformOps() if xf else []):
+                v = op.Get(self._t)
+                if v is not None and not _finite_value(v):
+                    bad = f"{path}.{op.GetOpName()}"
+                    break
+            parent = prim.GetParent()
+            if bad is None and parent and not parent.IsPseudoRoot():
+                bad = self._bad_op(parent)
+            self._op_memo[path] = bad
+        return self._op_memo[path]
 
     def _xform_varies(self, prim) -> bool:
         """Whether the prim's local-to-world may change in time (any xformable
@@ -234,9 +260,11 @@ class StageReader:
         self._read.add(path)
         warnings = self.scene.warnings[path] = []
         binding = self.skel.get(path)
+        if binding is None:
+            sk.check_unbound(prim, warnings)
         self._shape_queries.pop(path, None)    # its blend shapes may have been edited
         try:
-            mats, subsets = self._face_materials(prim)
+            mats, subsets = self._face_materials(prim, warnings)
             if binding is not None:
                 key = ("skinned", path)
             elif _mesh_attributes_vary(prim):
@@ -248,7 +276,7 @@ class StageReader:
             if key not in self.scene.meshes or key not in self._built and \
                     (rebuild or key[0] in ("skinned", "varying")):
                 mesh = build_mesh(prim, self._t, mats, [(i + 1, f) for i, (_, f) in
-                                                        enumerate(subsets)], key)
+                                                        enumerate(subsets)], key, warnings)
                 if binding is not None:
                     sk.attach_skin(mesh, prim, binding, self._t, warnings)
                 self.scene.meshes[key] = mesh
@@ -285,13 +313,19 @@ class StageReader:
                 self._use_skeleton(skel_query, path, skin.method == "dqs", changes)
         dyn.world = self._xform_varies(self.stage.GetPrimAtPath(dyn.world_prim))
         index = pass_index(prim)
+        world = self._world(dyn.world_prim)
+        finite = bool(np.isfinite(world).all())
+        if finite:
+            self._retry.discard(path)
+        else:
+            world = np.eye(4)         # registered, then dropped below
         if old is not None and old.mesh_key == key:
-            old.world = self._world(dyn.world_prim)
+            old.world = world
             old.shapes = shapes
             old.pass_index = index
         else:
-            self.scene.instances[path] = Instance(path, key, self._world(dyn.world_prim),
-                                                  shapes=shapes, pass_index=index)
+            self.scene.instances[path] = Instance(path, key, world, shapes=shapes,
+                                                  pass_index=index)
         for name in set(previous.materials if previous else ()) - set(dyn.materials):
             self._unuse_material(name, path)
         for name in dyn.materials:
@@ -300,6 +334,23 @@ class StageReader:
         changes.instances.add(path)
         if shapes or skin is not None and skin.shape_offsets is not None:
             changes.shapes.add(path)
+        if not finite:
+            self._non_finite_world(path, dyn, changes)
+
+    def _non_finite_world(self, path, dyn, changes):
+        """A mesh whose world transform is NaN or Inf at this time: skipped with a
+        warning, and read again at the next time if its transform varies."""
+        when = "" if self._t.IsDefault() else f" at time {self._t.GetValue():g}"
+        prim = self.stage.GetPrimAtPath(dyn.world_prim)
+        culprit = (self._bad_op(prim) if prim else None) or dyn.world_prim
+        warning = f"{path}: its world transform is not finite{when} ({culprit}); skipped"
+        warnings = self.scene.warnings.setdefault(path, [])
+        if warning not in warnings:
+            warnings.append(warning)
+        if path in self.scene.instances or path in self._inst:
+            self._drop_instance(path, changes)
+        if dyn.world:
+            self._retry.add(path)
 
     def _drop_instance(self, path: str, changes: Changes):
         self._shape_queries.pop(path, None)
@@ -333,9 +384,19 @@ class StageReader:
         pose = self.scene.skeletons.get(key)
         if pose is None or (dqs and not pose.dqs) or key not in changes.skeletons:
             s.dqs = s.dqs or dqs
-            self.scene.skeletons[key] = sk.pose(skel_query, self._t, s.dqs)
-            self._read.add(key)
+            self._pose(key, s)
             changes.skeletons.add(key)
+
+    def _pose(self, key, s):
+        """A skeleton's pose at this time; its warnings (counts that do not match,
+        non-finite poses) under its own path."""
+        warnings = sk.skeleton_warnings(s.query)
+        self.scene.skeletons[key] = sk.pose(s.query, self._t, s.dqs, warnings)
+        if warnings:
+            self.scene.warnings[key] = warnings
+        else:
+            self.scene.warnings.pop(key, None)
+        self._read.add(key)
 
     def _unuse_skeleton(self, key, path, changes: Changes):
         s = self._skels.get(key)
@@ -345,22 +406,27 @@ class StageReader:
         if not s.users:
             del self._skels[key]
             self.scene.skeletons.pop(key, None)
+            self.scene.warnings.pop(key, None)
 
     # --- materials -------------------------------------------------------------------
-    def _face_materials(self, prim):
+    def _face_materials(self, prim, warnings):
         """[Material] (the prim's, then one per bound GeomSubset) and [(Material name,
-        face indices)] per subset."""
+        face indices)] per subset. A binding to a prim that is not a Material is a
+        warning, and the mesh gets the default material."""
         binding = UsdShade.MaterialBindingAPI(prim)
         base = binding.ComputeBoundMaterial()[0]
         if base:
             base_mat = self._material(base)
         else:
+            _check_binding(prim, warnings)
             dc = UsdGeom.Gprim(prim).GetDisplayColorAttr().Get()
             base_mat = mt.default_material(dc[0] if dc else None)
             self.scene.materials.setdefault(base_mat.name, base_mat)
         mats, subsets = [base_mat], []
         for subset in binding.GetMaterialBindSubsets():
             m = UsdShade.MaterialBindingAPI(subset.GetPrim()).ComputeBoundMaterial()[0]
+            if not m:
+                _check_binding(subset.GetPrim(), warnings)
             if m:
                 idx = subset.GetIndicesAttr().Get()
                 mat = self._material(m)
@@ -541,12 +607,19 @@ class StageReader:
 
     def _edit_transform(self, root: str, changes: Changes):
         changes.cameras.update(p for p in self._cameras if under(p, root))
+        for path in [p for p in self._retry if under(p, root)]:
+            prim = self.stage.GetPrimAtPath(path)
+            if prim:
+                self._read_instance(prim, changes, rebuild=False)
         for path, dyn in list(self._inst.items()):
-            if under(dyn.world_prim, root):
+            if under(dyn.world_prim, root) and path not in self._read:
                 world = self._world(dyn.world_prim)
                 dyn.world = self._xform_varies(self.stage.GetPrimAtPath(dyn.world_prim))
-                self.scene.instances[path].world = world
                 self._read.add(path)
+                if not np.isfinite(world).all():
+                    self._non_finite_world(path, dyn, changes)
+                    continue
+                self.scene.instances[path].world = world
                 changes.instances.add(path)
         for path in [p for p in self._light_prims if under(p, root)]:
             self._read_light(self.stage.GetPrimAtPath(path), changes)
@@ -581,8 +654,7 @@ class StageReader:
                 self._resync(path, changes)
         for key, s in self._skels.items():
             if s.varies and key not in self._read:
-                self.scene.skeletons[key] = sk.pose(s.query, self._t, s.dqs)
-                self._read.add(key)
+                self._pose(key, s)
                 changes.skeletons.add(key)
         for path, dyn in list(self._inst.items()):
             if path in self._read or path not in self._inst:
@@ -594,6 +666,10 @@ class StageReader:
             inst = self.scene.instances[path]
             if dyn.world:
                 world = self._world(dyn.world_prim)
+                if not np.isfinite(world).all():
+                    self._read.add(path)
+                    self._non_finite_world(path, dyn, changes)
+                    continue
                 if not np.array_equal(world, inst.world):
                     inst.world = world
                     changes.instances.add(path)
@@ -603,6 +679,11 @@ class StageReader:
                 inst.shapes = sk.blend_weights(skel_query, sq, self._shape_queries, prim, self._t)
                 changes.shapes.add(path)
                 self._read.add(path)
+        for path in list(self._retry):
+            prim = self.stage.GetPrimAtPath(path)
+            if prim and path not in self._read:
+                self.scene.warnings.pop(path, None)
+                self._read_instance(prim, changes, rebuild=False)
         for path, varies in list(self._light_prims.items()):
             if varies and path not in self._read:
                 self._read_light(self.stage.GetPrimAtPath(path), changes)
@@ -623,6 +704,24 @@ def pass_index(prim) -> int:
             return int(attr.Get())
         prim = prim.GetParent()
     return 0
+
+
+def _finite_value(v) -> bool:
+    """Whether an xform op's value (a number, vector, matrix or quaternion) is finite."""
+    if hasattr(v, "GetReal"):
+        return np.isfinite([v.GetReal(), *v.GetImaginary()]).all()
+    return bool(np.isfinite(np.asarray(v, np.float64)).all())
+
+
+def _check_binding(prim, warnings):
+    """A direct binding whose target is not a Material: say so."""
+    rel = UsdShade.MaterialBindingAPI(prim).GetDirectBindingRel()
+    for target in (rel.GetTargets() if rel else []):
+        p = prim.GetStage().GetPrimAtPath(target)
+        if not p or not p.IsA(UsdShade.Material):
+            what = "does not exist" if not p else f"is a {p.GetTypeName() or 'typeless prim'}"
+            warnings.append(f"{prim.GetPath()}: its material binding {target} {what}; "
+                            f"using the default material")
 
 
 def _strongest_spec(attr):
