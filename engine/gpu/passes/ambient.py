@@ -40,17 +40,28 @@ class AmbientPass(Pass):
         ctx.enable(ctx.BLEND)
         ctx.blend_func = ctx.ONE, ctx.ONE
         ctx.blend_equation = ctx.FUNC_ADD
-        dome = frame.scene.dome
-        defines = ["HAS_DOME_MAP"] if dome is not None and dome.texture else []
-        prog = self.programs.get("fullscreen.vert", "ambient.frag", defines)
+        prog = self.programs.get("fullscreen.vert", "ambient.frag",
+                                 environment_defines(frame.scene))
         bind_gbuffer(board, prog, board["view"])
-        set_uniform(prog, "has_dome", dome is not None)
         set_uniform(prog, "transparent", bool(frame.transparent))
-        if dome is not None:
-            set_uniform(prog, "dome_sh", np.asarray(dome.sh, "f4"))
-            set_uniform(prog, "dome_radiance", dome.radiance)
-            if dome.texture:
-                self.textures.dome(dome.texture).use(UNITS["dome_map"])
-                set_uniform(prog, "dome_to_local", dome.rotation.T)
+        set_environment(prog, frame.scene, self.textures)
         self.programs.fullscreen(prog)
         ctx.disable(ctx.BLEND)
+
+
+def environment_defines(scene) -> list:
+    """The variant of a program including shaders/environment.glsl."""
+    dome = scene.dome
+    return ["HAS_DOME_MAP"] if dome is not None and dome.texture else []
+
+
+def set_environment(prog, scene, textures):
+    """The dome's uniforms of shaders/environment.glsl (every pass lit by the dome)."""
+    dome = scene.dome
+    set_uniform(prog, "has_dome", dome is not None)
+    if dome is not None:
+        set_uniform(prog, "dome_sh", np.asarray(dome.sh, "f4"))
+        set_uniform(prog, "dome_radiance", dome.radiance)
+        if dome.texture:
+            textures.dome(dome.texture).use(UNITS["dome_map"])
+            set_uniform(prog, "dome_to_local", dome.rotation.T)
