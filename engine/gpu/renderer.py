@@ -20,6 +20,7 @@ from .passes.lights import LightPass
 from .passes.resolve import ResolvePass
 from .passes.shadows import ShadowPass
 from .passes.skinning import SkinningPass
+from .passes.transparency import TransparencyPass
 from .passes.view import ViewPass
 from .resources import TargetPool, Uploads
 from .stencil import Stencil
@@ -28,7 +29,8 @@ from .textures import MaterialTextures
 # Every counter a render reports, zero when nothing of the kind happened.
 COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow_maps",
             "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
-            "light_volumes", "stencil_marks", "batched_lights")
+            "light_volumes", "stencil_marks", "batched_lights", "transparent_objects",
+            "transparent_draws")
 
 
 class Renderer:
@@ -57,6 +59,8 @@ class Renderer:
             AmbientPass(ctx, self.pool, programs, self.textures),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
                       self.geometry, preset),
+            TransparencyPass(ctx, self.pool, programs, self.geometry, self.textures,
+                             self.lights, self.depth, preset),
             ResolvePass(ctx, self.pool, programs),
         ])
         self._cull_backfaces = None
