@@ -24,6 +24,10 @@ uniform vec4 shadow_splits;     // sun: far view depth of each cascade
 uniform vec4 shadow_ranges;     // sun: world depth range of each cascade
 uniform vec4 shadow_texels;     // sun: world texel size of each cascade
 uniform float shadow_size;      // light radius, or tan(sun half angle)
+// A map with blended casters (stochastic: shadow.frag): the filter spans at least a
+// screen pixel's footprint, (x * view depth + y) world units, so a pixel averages
+// the texels it covers; (0, 0) otherwise.
+uniform vec2 shadow_footprint;
 uniform int pcf_taps;
 uniform int blocker_taps;
 
@@ -112,7 +116,7 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
         }
         if (blockers == 0.0) return 1.0;
     }
-    float kernel = texel * 1.5;
+    float kernel = max(texel * 1.5, 0.75 * (shadow_footprint.x * view_depth + shadow_footprint.y));
     if (blockers > 0.0) {
         float d_block = max(block_sum / blockers, 1e-6);
         float pen = shadow_radial ? shadow_size * (ref - d_block) / d_block

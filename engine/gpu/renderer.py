@@ -49,7 +49,7 @@ class Renderer:
         self.textures = MaterialTextures(ctx, self.uploads, preset.anisotropy)
         self.skinning = SkinningPass(ctx, self.uploads, programs, self.geometry, gl.scratch)
         self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights, preset,
-                                  self.depth)
+                                  self.depth, self.textures)
         self.graph = FrameGraph(ctx, self.pool, [
             self.skinning,
             ViewPass(self.geometry, self.depth),
@@ -71,6 +71,8 @@ class Renderer:
             self.geometry.set_culling(scene, cull_backfaces)
         self._cull_backfaces = cull_backfaces
         meshes = self.geometry.update(scene, changes, cull_backfaces)
+        self.geometry.set_see_through(name for name, m in scene.materials.items()
+                                      if m.alpha != "opaque")
         self.lights.update(scene, changes.lights)
         if changes.materials or changes.dropped_meshes:
             self.textures.prune(scene.materials.values())
