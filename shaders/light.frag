@@ -54,7 +54,7 @@ void main() {
 #endif
     if (max(radiance.r, max(radiance.g, radiance.b)) <= 0.0) discard;
 #ifdef HAS_SHADOW
-    radiance *= shadow_factor(p, n, light_pos, light_axis, dot(p, cam_forward));
+    radiance *= light_shadow(p, n, dot(p, cam_forward));
 #endif
     frag = vec4(min(finite(radiance), vec3(HDR_MAX)), 0.0);
 }

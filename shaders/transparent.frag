@@ -52,7 +52,7 @@ void main() {
         vec3 r = light_radiance(s);
 #ifdef HAS_SHADOW
         if (max(r.r, max(r.g, r.b)) > 0.0)
-            r *= shadow_factor(p, m.n, light_pos, light_axis, dot(p, cam_forward));
+            r *= light_shadow(p, m.n, dot(p, cam_forward));
 #endif
         c += min(finite(r), vec3(HDR_MAX));
     }
