@@ -18,6 +18,16 @@ Values, as Blender's (docs/stage_contract.md, "Render passes"):
            `lantern:passIndex` on the object prim); 0 where unset and on the background
   IndexMA  the material's pass index (Material > Settings > Pass Index,
            `lantern:passIndex` on the Material prim); 0 likewise
+  AO       the ambient occlusion of the dome's light, grey: 1 unoccluded, also on the
+           background
+  DiffDir  diffuse light leaving surfaces, albedo included (Cycles divides it out into
+           DiffCol; Lantern has no colour passes): the dome's, occluded, and every
+           light's, shadowed
+  GlossDir the same for the specular lobe and the clearcoat
+  Env      the world (dome) seen directly where nothing is drawn; 0 on surfaces
+  Shadow   light reaching surfaces with shadows over without, summed over the lights
+           (luminance, grey): 1 lit or unlit by any light, 0 in full shadow
+  Without FXAA or post, Combined = DiffDir + GlossDir + Env + Emit.
 """
 from __future__ import annotations
 
@@ -42,12 +52,12 @@ PASSES = {p.name: p for p in (
     RenderPass("Emit", 3, "RGB", "COLOR", "use_pass_emit", True),
     RenderPass("IndexOB", 1, "X", "VALUE", "use_pass_object_index", True),
     RenderPass("IndexMA", 1, "X", "VALUE", "use_pass_material_index", True),
-    # Lighting passes: written by the lighting passes once they compute them.
-    RenderPass("AO", 3, "RGB", "COLOR", "use_pass_ambient_occlusion", False),
-    RenderPass("Shadow", 3, "RGB", "COLOR", "use_pass_shadow", False),
-    RenderPass("DiffDir", 3, "RGB", "COLOR", "use_pass_diffuse_direct", False),
-    RenderPass("GlossDir", 3, "RGB", "COLOR", "use_pass_glossy_direct", False),
-    RenderPass("Env", 3, "RGB", "COLOR", "use_pass_environment", False),
+    # Lighting passes (engine/gpu/passes/ao.py and ambient.py say what each holds).
+    RenderPass("AO", 3, "RGB", "COLOR", "use_pass_ambient_occlusion", True),
+    RenderPass("Shadow", 3, "RGB", "COLOR", "use_pass_shadow", True),
+    RenderPass("DiffDir", 3, "RGB", "COLOR", "use_pass_diffuse_direct", True),
+    RenderPass("GlossDir", 3, "RGB", "COLOR", "use_pass_glossy_direct", True),
+    RenderPass("Env", 3, "RGB", "COLOR", "use_pass_environment", True),
 )}
 
 COMBINED = "Combined"   # always rendered: RenderResult.rgba

@@ -5,7 +5,12 @@ shadow_size: texels per shadow tile side (a cube face, a spot map, one sun casca
 a light's lantern:shadowResolution wins). pcf_taps / blocker_taps: PCSS filter and
 blocker-search samples. cascades: sun cascades. anisotropy: texture filtering.
 disk_sides: the polygon a disk light is shaded as. ico_level: subdivisions of the
-sphere drawn as a point light's volume."""
+sphere drawn as a point light's volume. ao_slices / ao_steps: ambient occlusion's
+horizon-search directions (rays) and depth samples per side (0 slices: no AO).
+supersample: the image is drawn this many times wider and taller and filtered down
+with Cycles' pixel filter (anti-aliasing; 1: not). fxaa: FXAA on images not
+supersampled.
+Cost and error of each preset against the Cycles references: README, "Presets"."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -23,17 +28,21 @@ class Preset:
     pcf_taps: int
     blocker_taps: int
     cascades: int
+    ao_slices: int
+    ao_steps: int
+    supersample: int
+    fxaa: bool
 
 
 PRESETS = {p.name: p for p in (
     Preset("low", "Low", "Fastest: smallest shadow maps and fewest filter taps",
-           1.0, 16, 1, 512, 8, 8, 2),
+           1.0, 16, 1, 512, 8, 8, 2, 2, 4, 1, True),
     Preset("medium", "Medium", "Balanced quality and speed",
-           4.0, 32, 1, 1024, 16, 12, 3),
+           4.0, 32, 1, 1024, 16, 12, 3, 3, 8, 1, True),
     Preset("high", "High", "Larger shadow maps and softer filtering",
-           8.0, 32, 2, 2048, 32, 16, 4),
+           8.0, 32, 2, 2048, 32, 16, 4, 4, 12, 2, False),
     Preset("ultra", "Ultra", "Closest to Cycles, slowest",
-           16.0, 32, 2, 4096, 64, 32, 4),
+           16.0, 32, 2, 4096, 64, 32, 4, 8, 16, 3, False),
 )}
 DEFAULT = "medium"
 

@@ -12,11 +12,21 @@ distant light travelling along the camera's view direction, E = 2.5 W/m2) plus a
 uniform grey dome of radiance 0.2 W/(sr m2): a white Lambert surface facing the camera
 reads 2.5/pi + 0.2 ~ 1.0.
 
-Dome: order-2 spherical harmonics irradiance, computed here with numpy; lat-long
-mapping as Hydra Storm's: in the dome's frame +Y is up (image top), u = (atan2(z, x) +
-pi/2) / 2pi."""
+Dome: order-2 spherical harmonics irradiance, computed here with numpy in the dome's
+own frame (the shaders turn the normal into it); lat-long mapping as UsdLux's (the
+stage contract, "World"): in the dome's frame +Y is up (image top), u = (atan2(z, x)
++ pi/2) / 2pi.
+
+Split-sum specular (Karis 2013, Filament's form with multiple scattering): dfg_lut
+tabulates, over n.v and perceptual roughness, the GGX directional albedo with F = 1
+(its second channel) and the part of it weighted by Schlick's (1 - v.h)^5 (its
+first), so a lobe of Schlick reflectance (f0, f90) reflects
+    E = f0 (dfg.y - dfg.x) + f90 dfg.x
+of a uniform world, and 1 + f0 (1 / dfg.y - 1) scales it for the energy single
+scattering loses at high roughness (Kulla and Conty 2017, as Filament does)."""
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -89,12 +99,17 @@ def uniform_sh(radiance) -> np.ndarray:
     return sh
 
 
-def load_latlong(path: str) -> np.ndarray:
-    from .textures import read_image_linear
-    img = read_image_linear(path, "auto")[..., :3]
-    # A few thousand samples are plenty for order-2 harmonics.
-    step = max(1, img.shape[1] // 256)
-    return img[::step, ::step].astype(np.float64)
+def downsample_latlong(img: np.ndarray, width: int = 256) -> np.ndarray:
+    """Box-average a lat-long image to at most `width` texels across (so a small sun
+    keeps its energy): order-2 harmonics need no more."""
+    h, w = img.shape[:2]
+    f = max(1, w // width)
+    if f == 1:
+        return img.astype(np.float64)
+    rows = np.add.reduceat(img.astype(np.float64), np.arange(0, h, f), axis=0)
+    blocks = np.add.reduceat(rows, np.arange(0, w, f), axis=1)
+    counts = np.outer(np.diff(np.r_[np.arange(0, h, f), h]), np.diff(np.r_[np.arange(0, w, f), w]))
+    return blocks / counts[..., None]
 
 
 def latlong_dirs(h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
@@ -107,10 +122,78 @@ def latlong_dirs(h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
     return d, dw
 
 
-def latlong_sh(img: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+def latlong_sh(img: np.ndarray) -> np.ndarray:
+    """(9, 3) irradiance harmonics of a lat-long radiance image (H, W, >=3), in the
+    dome's own frame. Each texel is weighted by its exact solid angle (the band
+    between its latitudes), so a uniform image gives exactly uniform_sh."""
+    img = downsample_latlong(np.asarray(img)[..., :3])
     h, w = img.shape[:2]
-    d, dw = latlong_dirs(h, w)
-    d = d @ rotation.T
+    d, _ = latlong_dirs(h, w)
+    edges = np.cos(np.arange(h + 1) / h * math.pi)
+    dw = np.broadcast_to(((edges[:-1] - edges[1:]) * 2 * math.pi / w)[:, None], (h, w))
     Y = sh_basis(d)                                   # (h, w, 9)
     L = np.einsum("hwk,hwc,hw->kc", Y, img, dw)       # projection of radiance
     return L * _A[:, None]
+
+
+# --- split-sum specular ------------------------------------------------------------
+DFG_SIZE = 32          # n.v x roughness texels; the table is smooth, sampled bilinearly
+DFG_SAMPLES = 1024
+
+
+def ggx_alpha(roughness):
+    """GGX alpha of a perceptual roughness, as shaders/lib.glsl's ggx_alpha."""
+    return np.maximum(np.asarray(roughness, float) ** 2, 2e-3)
+
+
+def _hammersley(n: int) -> tuple[np.ndarray, np.ndarray]:
+    i = np.arange(n, dtype=np.uint32)
+    bits = i.copy()
+    bits = ((bits << 16) | (bits >> 16)) & 0xFFFFFFFF
+    bits = ((bits & 0x55555555) << 1) | ((bits & 0xAAAAAAAA) >> 1)
+    bits = ((bits & 0x33333333) << 2) | ((bits & 0xCCCCCCCC) >> 2)
+    bits = ((bits & 0x0F0F0F0F) << 4) | ((bits & 0xF0F0F0F0) >> 4)
+    bits = ((bits & 0x00FF00FF) << 8) | ((bits & 0xFF00FF00) >> 8)
+    return (i + 0.5) / n, bits.astype(np.float64) / 2.0 ** 32
+
+
+def dfg_terms(nov, roughness, samples: int = DFG_SAMPLES) -> np.ndarray:
+    """(..., 2): the GGX integrals (sum of Fc G_vis, sum of G_vis) for n.v and
+    perceptual roughness (broadcast), by importance sampling D (height-correlated
+    Smith visibility, lib.glsl's v_smith)."""
+    nov, roughness = np.broadcast_arrays(np.asarray(nov, float), np.asarray(roughness, float))
+    shape = nov.shape
+    nov = np.clip(nov.reshape(-1, 1), 1e-4, 1.0)
+    a = ggx_alpha(roughness.reshape(-1, 1))
+    u1, u2 = _hammersley(samples)
+    phi = 2 * math.pi * u1[None, :]
+    cos_h = np.sqrt((1 - u2[None, :]) / (1 + (a * a - 1) * u2[None, :]))
+    sin_h = np.sqrt(1 - cos_h * cos_h)
+    vx, vz = np.sqrt(1 - nov * nov), nov                     # v in the xz plane
+    voh = vx * sin_h * np.cos(phi) + vz * cos_h
+    nol = 2 * voh * cos_h - vz
+    a2 = a * a
+    gv = nol * np.sqrt(nov * nov * (1 - a2) + a2)
+    gl = nov * np.sqrt(np.maximum(nol, 0) ** 2 * (1 - a2) + a2)
+    vis = 0.5 / np.maximum(gv + gl, 1e-12)
+    weight = np.where(nol > 0, 4 * vis * nol * voh / cos_h, 0.0)
+    fc = (1 - voh) ** 5
+    out = np.stack([(weight * fc).mean(axis=1), weight.mean(axis=1)], axis=-1)
+    return out.reshape(shape + (2,))
+
+
+@functools.lru_cache(maxsize=1)
+def dfg_lut(size: int = DFG_SIZE) -> np.ndarray:
+    """(size, size, 2) float32, row j = roughness (j + 0.5) / size, column i = n.v
+    (i + 0.5) / size: the table the shaders read (texel centres at those values).
+    Computed once per process."""
+    c = (np.arange(size) + 0.5) / size
+    return np.stack([dfg_terms(c, r) for r in c]).astype(np.float32)   # row by row: cache-sized
+
+
+def specular_albedo(f0, f90, nov, roughness) -> np.ndarray:
+    """Directional albedo of a Schlick-GGX lobe with multiple scattering, as the
+    shaders compute it from the table: what it reflects of a uniform world."""
+    x, y = np.moveaxis(dfg_terms(nov, roughness), -1, 0)
+    f0 = np.asarray(f0, float)
+    return (f0 * (y - x) + f90 * x) * (1 + f0 * (1 / y - 1))

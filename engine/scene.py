@@ -37,6 +37,8 @@ class Material:
     emissive: tuple = (0.0, 0.0, 0.0)
     opacity: float = 1.0
     opacity_threshold: float = 0.0
+    clearcoat: float = 0.0         # the coat lobe's weight (white, F0 0.04)
+    clearcoat_roughness: float = 0.01
     # input name ('diffuseColor', 'normal', ...) -> TextureRef
     maps: dict = field(default_factory=dict)
     uv_name: str | None = None     # primvar the material's reader asks for
@@ -193,9 +195,10 @@ class Light:
 class Dome:
     name: str
     radiance: np.ndarray           # uniform colour x intensity (also the map's multiplier)
-    sh: np.ndarray                 # (9, 3) irradiance SH coefficients, see lighting.dome_sh
+    sh: np.ndarray                 # (9, 3) irradiance harmonics of the uniform colour (lighting.uniform_sh)
     texture: str | None = None     # lat-long image shown as the background
     rotation: np.ndarray = field(default_factory=lambda: np.eye(3))  # dome local -> world
+    ao_distance: float | None = None  # lantern:aoDistance (Blender's AO distance); None: unset
 
 
 @dataclass

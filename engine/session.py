@@ -12,6 +12,7 @@ view change reads and uploads nothing but the view's draw order. USD is read on 
 caller's thread; every GL call runs on the engine's GL thread."""
 from __future__ import annotations
 
+import math
 import time
 import weakref
 from dataclasses import dataclass, field
@@ -43,6 +44,41 @@ class RenderSettings:
     # Render passes (AOVs) to compute besides Combined, by Blender's names
     # (core/passes.py): only these are computed and read back.
     passes: frozenset = frozenset()
+    # Shading (issue 10). Ambient occlusion of the dome's light (the preset sets its
+    # rays and steps); off: the dome lights every surface unoccluded.
+    ambient_occlusion: bool = True
+    # 8-bit sRGB textures: "encoded" filters the stored values and decodes after (as
+    # Cycles does); "linear" decodes, then filters (as EEVEE and GL's sRGB formats do).
+    srgb_filtering: str = "encoded"
+    # Anti-aliasing: supersampling, the image drawn k times wider and taller and
+    # filtered down with Cycles' pixel filter (None: the preset's; high and ultra
+    # supersample, for F12 and the command line; an interactive viewport may ask for
+    # 1), and FXAA on images not supersampled (None: the preset's).
+    supersample: int | None = None
+    fxaa: bool | None = None
+    # The post chain, on the scene-linear image (engine/gpu/passes/post.py): exposure
+    # in stops, a Gaussian blur of `blur` pixels (sigma), grayscale (Rec. 709
+    # luminance), mirror "x", "y" or "xy". All off by default: inside Blender the image
+    # stays as rendered and Blender's colour management applies.
+    exposure: float = 0.0
+    blur: float = 0.0
+    grayscale: bool = False
+    mirror: str = ""
+
+    def __post_init__(self):
+        if self.supersample is not None and (int(self.supersample) != self.supersample
+                                             or not 1 <= self.supersample <= 8):
+            raise ValueError(f"supersample must be a whole number from 1 to 8, not "
+                             f"{self.supersample!r}")
+        if not (self.blur >= 0.0 and math.isfinite(self.blur)):
+            raise ValueError(f"blur must be a finite sigma >= 0 (pixels), not {self.blur!r}")
+        if not math.isfinite(self.exposure):
+            raise ValueError(f"exposure must be finite, not {self.exposure!r}")
+        if self.mirror not in ("", "x", "y", "xy"):
+            raise ValueError(f"mirror must be '', 'x', 'y' or 'xy', not {self.mirror!r}")
+        if self.srgb_filtering not in ("encoded", "linear"):
+            raise ValueError(f"srgb_filtering must be 'encoded' or 'linear', not "
+                             f"{self.srgb_filtering!r}")
 
 
 @dataclass
@@ -64,7 +100,7 @@ class Session:
         self.size = usd_camera.resolution(stage, settings.width, settings.height)
         self._reader = StageReader(stage)
         self._camera = None          # (key, Camera) of the stage camera last read
-        renderer = run_gl(lambda gl: Renderer(gl, self._preset))
+        renderer = run_gl(lambda gl: Renderer(gl, self._preset, settings.srgb_filtering))
         self._renderer = renderer
         # A session dropped without close() still frees its GPU state; at exit the
         # process's context goes with the process.
@@ -94,7 +130,7 @@ class Session:
         t_load = time.perf_counter() - t0
         scene, size, s = self._reader.scene, self.size, self.settings
         rgba, aovs, stats, timings = run_gl(lambda gl: self._renderer.render(
-            scene, changes, camera, size, s.transparent, s.cull_backfaces, self._passes))
+            scene, changes, camera, size, s.transparent, s.cull_backfaces, self._passes, s))
         stats["prims_read"] = changes.prims_read + read
         timings["load"] = t_load
         timings["total"] = time.perf_counter() - t0

@@ -158,6 +158,7 @@ class WorldRecord:
     intensity: float = 1.0
     texture: str | None = None  # absolute path of a lat-long image
     rotation: tuple = (0.0, 0.0, 0.0)  # the texture's Mapping node rotation, Euler XYZ radians
+    ao_distance: float | None = None   # world.light_settings.distance (scene units)
 
 
 @dataclass

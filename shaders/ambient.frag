@@ -1,8 +1,12 @@
 #version 330 core
 #include "lib.glsl"
-// Full screen, once: dome lighting (environment.glsl), emission, and the dome as the
-// background where nothing was drawn. Positions are camera-relative (lib.glsl): the
-// viewer is at the origin.
+#include "environment.glsl"
+// Full screen, once: the dome's light (environment.glsl dome_light: harmonics for
+// diffuse, the prefiltered cube and the split-sum table for the specular lobe and the
+// coat), emission, and the dome as the background where nothing was drawn. Ambient
+// occlusion (HAS_AO) dims the dome's diffuse light, and its specular light by
+// Lagarde's specular occlusion; it never touches emission or the lights. Positions are camera-relative (lib.glsl):
+// the viewer is at the origin.
 uniform sampler2D g_base;
 uniform sampler2D g_normal;
 uniform sampler2D g_mat;
@@ -11,26 +15,47 @@ uniform sampler2D g_depth;
 uniform mat4 inv_view_proj;
 uniform vec3 cam_forward;
 uniform bool cam_ortho;
-uniform bool transparent;
-#include "environment.glsl"
 
-out vec4 frag;
+uniform bool transparent;
+#ifdef HAS_AO
+uniform sampler2D ao_tex;
+#endif
+
+layout(location = 0) out vec4 frag;
+#ifdef WRITE_AOVS
+// Render passes (engine/gpu/passes/ambient.py): the dome's diffuse and glossy light
+// (added to by the light pass), the background, and the occlusion.
+layout(location = 1) out vec4 aov_diffuse;
+layout(location = 2) out vec4 aov_glossy;
+layout(location = 3) out vec4 aov_env;
+#endif
 
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(g_depth, px, 0).r;
     vec2 uv = (vec2(px) + 0.5) / vec2(textureSize(g_depth, 0));
+    vec3 diffuse = vec3(0.0), glossy = vec3(0.0), background = vec3(0.0), emitted = vec3(0.0);
     if (is_background(depth)) {
-        vec3 bg = vec3(0.0);
         if (has_dome && !transparent)
-            bg = dome(pixel_ray(uv, inv_view_proj, cam_ortho, cam_forward));
-        frag = vec4(finite(bg), 0.0);
-        return;
+            background = dome_background(pixel_ray(uv, inv_view_proj, cam_ortho, cam_forward));
+    } else {
+        vec3 p = position_from_depth(uv, depth, inv_view_proj);
+        vec4 nrm = texelFetch(g_normal, px, 0);
+        vec3 n = normalize(nrm.xyz);
+        vec3 v = cam_ortho ? -cam_forward : normalize(-p);
+        Surface s = make_surface(p, n, v, texelFetch(g_base, px, 0), texelFetch(g_mat, px, 0), nrm.w);
+        emitted = texelFetch(g_emit, px, 0).rgb;
+        float ao = 1.0;
+#ifdef HAS_AO
+        ao = texelFetch(ao_tex, px, 0).r;
+#endif
+        dome_light(s, ao, diffuse, glossy);
     }
-    vec3 p = position_from_depth(uv, depth, inv_view_proj);
-    vec3 n = normalize(texelFetch(g_normal, px, 0).xyz);
-    vec3 v = cam_ortho ? -cam_forward : normalize(-p);
-    Surface s = make_surface(p, n, v, texelFetch(g_base, px, 0), texelFetch(g_mat, px, 0));
-    vec3 c = texelFetch(g_emit, px, 0).rgb + environment_radiance(s);
-    frag = vec4(finite(c), 0.0);
+    // Alpha: coverage (resolve.frag), averaged by anti-aliasing.
+    frag = vec4(finite(diffuse + glossy + background + emitted), is_background(depth) ? 0.0 : 1.0);
+#ifdef WRITE_AOVS
+    aov_diffuse = vec4(finite(diffuse), 0.0);
+    aov_glossy = vec4(finite(glossy), 0.0);
+    aov_env = vec4(finite(background), 0.0);
+#endif
 }

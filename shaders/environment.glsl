@@ -1,44 +1,60 @@
-// The dome (the world light): what it reflects off a surface and what a ray sees.
-// Shared by the ambient pass (opaque surfaces, the background) and the transparency
-// pass, so both are lit by the same environment term. Include after lib.glsl.
-// Uniforms: engine/gpu/passes/ambient.py set_environment.
-uniform bool has_dome;
-uniform vec3 dome_sh[9];
-uniform vec3 dome_radiance;
+// The dome's light, as engine/gpu/environment.py binds it: irradiance from order-2
+// harmonics (in the dome's frame), reflections from the prefiltered cube (a level per
+// roughness, lod = L r (2 - r)), the background from the lat-long map itself. A
+// uniform dome (no HAS_DOME_MAP) is exact: a constant radiance everywhere.
+uniform vec3 dome_sh[9];         // irradiance, radiance scale included
+uniform vec3 dome_radiance;      // colour x intensity (the map's multiplier)
+uniform mat3 dome_to_local;      // world -> the dome's frame
 #ifdef HAS_DOME_MAP
-uniform sampler2D dome_map;
-uniform mat3 dome_to_local;    // world -> dome frame
+uniform sampler2D latlong;
+uniform samplerCube env_specular;
+uniform float env_lod_max;
 #endif
 
-// Karis' mobile env-BRDF fit, with F90 (not 1) on the second term so f0 = 0 gives 0.
-vec3 env_brdf(vec3 f0, vec3 f90, float roughness, float NoV) {
-    const vec4 c0 = vec4(-1.0, -0.0275, -0.572, 0.022);
-    const vec4 c1 = vec4(1.0, 0.0425, 1.04, -0.04);
-    vec4 r = roughness * c0 + c1;
-    float a004 = min(r.x * r.x, exp2(-9.28 * NoV)) * r.x + r.y;
-    vec2 ab = vec2(-1.04, 1.04) * a004 + r.zw;
-    return f0 * ab.x + f90 * ab.y;
-}
-
-// The dome's radiance along world direction d.
-vec3 dome(vec3 d) {
+vec3 dome_background(vec3 d) {
 #ifdef HAS_DOME_MAP
     vec3 l = normalize(dome_to_local * d);
     vec2 uv = vec2((atan(l.z, l.x) + 0.5 * PI) / (2.0 * PI), acos(clamp(l.y, -1.0, 1.0)) / PI);
-    return textureLod(dome_map, uv, 0.0).rgb * dome_radiance;
+    return textureLod(latlong, uv, 0.0).rgb * dome_radiance;
 #else
     return dome_radiance;
 #endif
 }
 
-// What the dome reflects off surface s (0 without a dome).
-vec3 environment_radiance(Surface s) {
-    if (!has_dome) return vec3(0.0);
-    vec3 irradiance = max(sh_irradiance(dome_sh, s.n), vec3(0.0));
-    vec3 c = brdf_diffuse(s) * irradiance;
-    // Specular radiance: the irradiance-weighted average around the reflection
-    // direction, E(r)/pi (exact for a uniform dome).
+// Irradiance on a surface of normal n.
+vec3 dome_irradiance(vec3 n) {
+    return max(sh_irradiance(dome_sh, dome_to_local * n), vec3(0.0));
+}
+
+// Radiance prefiltered with the GGX lobe of perceptual roughness r about direction d.
+vec3 dome_specular(vec3 d, float r) {
+#ifdef HAS_DOME_MAP
+    return textureLod(env_specular, dome_to_local * d, env_lod_max * r * (2.0 - r)).rgb * dome_radiance;
+#else
+    return dome_radiance;
+#endif
+}
+
+// --- What the dome reflects off a surface: the ambient pass (opaque surfaces) and the
+// transparency pass (blended ones) both call this, so both are lit alike.
+uniform bool has_dome;
+
+// Lagarde and de Rousiers 2014: the visible share of a specular lobe, from AO.
+float specular_occlusion(float NoV, float ao, float roughness) {
+    return clamp(pow(NoV + ao, exp2(-16.0 * roughness - 1.0)) - 1.0 + ao, 0.0, 1.0);
+}
+
+// The dome's light leaving surface s, diffuse and glossy (the base lobe and the coat),
+// its ambient occlusion `ao` applied; 0 without a dome.
+void dome_light(Surface s, float ao, out vec3 diffuse, out vec3 glossy) {
+    diffuse = vec3(0.0);
+    glossy = vec3(0.0);
+    if (!has_dome) return;
+    diffuse = brdf_diffuse(s) * dome_irradiance(s.n) * ao;
     vec3 r = reflect(-s.v, s.n);
-    vec3 spec_l = max(sh_irradiance(dome_sh, r), vec3(0.0)) / PI;
-    return c + env_brdf(s.f0, s.f90, s.roughness, max(dot(s.n, s.v), 1e-4)) * spec_l;
+    glossy = s.under_coat * s.spec_albedo * dome_specular(r, s.roughness)
+           * specular_occlusion(s.NoV, ao, s.roughness);
+    if (s.coat > 0.0)
+        glossy += s.coat_albedo * dome_specular(r, s.coat_roughness)
+                * specular_occlusion(s.NoV, ao, s.coat_roughness);
 }

@@ -1,7 +1,8 @@
 #version 330 core
 #include "lib.glsl"
-// G-buffer: RT0 base colour + alpha, RT1 world normal, RT2 metallic / roughness /
-// dielectric F0 / 1, RT3 emission. The material itself is material.glsl's.
+// G-buffer: RT0 base colour + alpha, RT1 world normal + clearcoat roughness, RT2
+// metallic / roughness / dielectric F0 / clearcoat, RT3 emission. The material itself
+// is material.glsl's.
 in vec3 v_normal;
 in vec2 v_uv;
 in vec4 v_tangent;
@@ -24,8 +25,8 @@ void main() {
     if (u_opacity_threshold > 0.0 && alpha < u_opacity_threshold) discard;
     MaterialSample m = material_sample(v_uv, v_normal, v_tangent, gl_FrontFacing);
     rt_base = vec4(m.base, alpha);
-    rt_normal = vec4(m.n, 1.0);
-    rt_mat = vec4(m.metallic, m.roughness, m.f0, 1.0);
+    rt_normal = vec4(m.n, m.coat_roughness);
+    rt_mat = m.mat;
     rt_emit = vec4(m.emissive, 1.0);
 #ifdef WRITE_INDEX
     rt_index = vec2(v_object_index, u_material_index);

@@ -1,4 +1,4 @@
-// Shared by every pass: constants, the BRDF, the depth convention, SH irradiance.
+// Shared by every pass: constants, the depth convention, the BRDF, SH irradiance.
 const float PI = 3.14159265358979;
 const float BIG = 1e30;
 
@@ -28,6 +28,7 @@ vec3 pixel_ray(vec2 uv, mat4 inv_view_proj, bool ortho, vec3 forward) {
     return ortho ? forward : normalize(position_from_depth(uv, 1.0, inv_view_proj));
 }
 
+// --- BRDF (Filament's model, layered as Cycles' Principled BSDF) ----------------
 // GGX / Trowbridge-Reitz, alpha = roughness^2.
 float d_ggx(float NoH, float a) {
     float a2 = a * a;
@@ -43,8 +44,31 @@ float v_smith(float NoV, float NoL, float a) {
     return 0.5 / max(gv + gl, 1e-8);
 }
 
+float ggx_alpha(float roughness) {
+    return max(roughness * roughness, 2e-3);
+}
+
+// The split-sum table (engine/lighting.py dfg_lut): x = integral of Fc G_vis, y =
+// integral of G_vis (the GGX albedo with F = 1), by n.v (s) and perceptual roughness
+// (t), texel centres at (i + 0.5) / size. Every program that shades a Surface binds it.
+uniform sampler2D dfg_lut;
+vec2 dfg(float NoV, float roughness) { return texture(dfg_lut, vec2(NoV, roughness)).xy; }
+
+// A Schlick-GGX lobe's albedo of a uniform world, single scattering, and the factor
+// that restores the energy single scattering loses (Kulla-Conty, Filament).
+vec3 lobe_albedo(vec2 t, vec3 f0, vec3 f90) { return f0 * (t.y - t.x) + f90 * t.x; }
+vec3 lobe_energy(vec2 t, vec3 f0) { return 1.0 + f0 * (1.0 / max(t.y, 1e-4) - 1.0); }
+
+const float COAT_F0 = 0.04;   // UsdPreviewSurface's clearcoat: IOR 1.5, white
+
+// A shaded point and its layers, top down (Cycles' Principled BSDF): an optional
+// clearcoat (white GGX, F0 0.04, on the base normal) takes its directional albedo
+// E_coat(n.v) and passes on 1 - E_coat; the base's specular lobe (dielectric F0 from
+// the IOR, metals their base colour) takes E_spec(n.v) of what reaches it, and the
+// Lambert layer gets the rest, (1 - metallic)(1 - E_dielectric). Albedos include
+// multiple scattering, so a white dielectric in a white furnace reflects exactly 1.
 struct Surface {
-    vec3 p;       // world position
+    vec3 p;       // camera-relative position
     vec3 n;       // world normal
     vec3 v;       // towards the viewer
     vec3 base;
@@ -52,35 +76,82 @@ struct Surface {
     float roughness;
     vec3 f0;      // specular colour at normal incidence
     vec3 f90;     // clamp(50 f0): f0 = 0 means no specular at all
+    float NoV;
+    vec3 spec_energy;   // multiple-scattering factor of the base lobe
+    vec3 spec_albedo;   // the base lobe's albedo at n.v (multiple scattering included)
+    vec3 diffuse;       // Lambert albedo left to the diffuse layer
+    float coat;         // coat weight
+    float coat_roughness;
+    float coat_energy;
+    float coat_albedo;  // coat weight x its albedo at n.v
+    float under_coat;   // 1 - coat_albedo: what the layers below receive
 };
 
-Surface make_surface(vec3 p, vec3 n, vec3 v, vec4 base, vec4 mat) {
+// mat = (metallic, roughness, dielectric F0, clearcoat), as the G-buffer stores it.
+Surface make_surface(vec3 p, vec3 n, vec3 v, vec4 base, vec4 mat, float coat_roughness) {
     Surface s;
     s.p = p; s.n = n; s.v = v;
-    s.base = base.rgb;
-    s.metallic = mat.x;
+    s.base = max(base.rgb, vec3(0.0));
+    s.metallic = clamp(mat.x, 0.0, 1.0);
     s.roughness = clamp(mat.y, 0.0, 1.0);
-    s.f0 = mix(vec3(mat.z), s.base, s.metallic);
+    float f0_d = mat.z;
+    float f90_d = clamp(50.0 * f0_d, 0.0, 1.0);
+    s.f0 = mix(vec3(f0_d), s.base, s.metallic);
     s.f90 = clamp(50.0 * s.f0, 0.0, 1.0);
+    s.NoV = clamp(dot(n, v), 1e-4, 1.0);
+    vec2 t = dfg(s.NoV, s.roughness);
+    s.spec_energy = lobe_energy(t, s.f0);
+    s.spec_albedo = lobe_albedo(t, s.f0, s.f90) * s.spec_energy;
+    float e_d = (f0_d * (t.y - t.x) + f90_d * t.x) * (1.0 + f0_d * (1.0 / max(t.y, 1e-4) - 1.0));
+    s.coat = clamp(mat.w, 0.0, 1.0);
+    s.coat_roughness = clamp(coat_roughness, 0.0, 1.0);
+    s.coat_energy = 1.0;
+    s.coat_albedo = 0.0;
+    if (s.coat > 0.0) {
+        vec2 tc = dfg(s.NoV, s.coat_roughness);
+        s.coat_energy = lobe_energy(tc, vec3(COAT_F0)).x;
+        s.coat_albedo = s.coat * lobe_albedo(tc, vec3(COAT_F0), vec3(1.0)).x * s.coat_energy;
+    }
+    s.under_coat = 1.0 - s.coat_albedo;
+    s.diffuse = s.base * (1.0 - s.metallic) * (1.0 - e_d) * s.under_coat;
     return s;
 }
 
-vec3 brdf_diffuse(Surface s) {
-    return s.base * (1.0 - s.metallic) / PI;
+Surface make_surface(vec3 p, vec3 n, vec3 v, vec4 base, vec4 mat) {
+    return make_surface(p, n, v, base, mat, 0.0);
 }
 
+// Lambert, after the layers above took their share.
+vec3 brdf_diffuse(Surface s) {
+    return s.diffuse / PI;
+}
+
+float schlick_weight(float VoH) {
+    float x = 1.0 - VoH;
+    float x2 = x * x;
+    return x2 * x2 * x;
+}
+
+// The base's specular lobe towards l (alpha a: a light's size may widen it), under
+// the coat, with multiple scattering.
 vec3 brdf_specular(Surface s, vec3 l, float a) {
     vec3 h = normalize(l + s.v);
     float NoL = max(dot(s.n, l), 0.0);
-    float NoV = max(dot(s.n, s.v), 1e-4);
     float NoH = max(dot(s.n, h), 0.0);
     float VoH = max(dot(s.v, h), 0.0);
-    vec3 F = s.f0 + (s.f90 - s.f0) * pow(1.0 - VoH, 5.0);
-    return F * d_ggx(NoH, a) * v_smith(NoV, NoL, a);
+    vec3 F = s.f0 + (s.f90 - s.f0) * schlick_weight(VoH);
+    return s.under_coat * s.spec_energy * F * d_ggx(NoH, a) * v_smith(s.NoV, NoL, a);
 }
 
-float ggx_alpha(float roughness) {
-    return max(roughness * roughness, 2e-3);
+// The clearcoat lobe towards l (alpha a).
+vec3 brdf_coat(Surface s, vec3 l, float a) {
+    if (s.coat <= 0.0) return vec3(0.0);
+    vec3 h = normalize(l + s.v);
+    float NoL = max(dot(s.n, l), 0.0);
+    float NoH = max(dot(s.n, h), 0.0);
+    float VoH = max(dot(s.v, h), 0.0);
+    float F = COAT_F0 + (1.0 - COAT_F0) * schlick_weight(VoH);
+    return vec3(s.coat * s.coat_energy * F * d_ggx(NoH, a) * v_smith(s.NoV, NoL, a));
 }
 
 // Irradiance from order-2 SH whose coefficients already include the cosine-lobe
@@ -91,6 +162,12 @@ vec3 sh_irradiance(vec3 sh[9], vec3 d) {
         + sh[4] * 1.092548 * d.x * d.y + sh[5] * 1.092548 * d.y * d.z
         + sh[6] * 0.315392 * (3.0 * d.z * d.z - 1.0)
         + sh[7] * 1.092548 * d.x * d.z + sh[8] * 0.546274 * (d.x * d.x - d.y * d.y);
+}
+
+// The sRGB transfer function, decoded (IEC 61966-2-1), as Cycles decodes 8-bit images.
+vec3 srgb_to_linear(vec3 c) {
+    bvec3 low = lessThanEqual(c, vec3(0.04045));
+    return mix(pow((c + 0.055) / 1.055, vec3(2.4)), c / 12.92, vec3(low));
 }
 
 // Never hand NaN or Inf on to the blend unit.

@@ -26,7 +26,13 @@ const float HDR_MAX = 65000.0;
 #include "shadow_lookup.glsl"
 #endif
 
-out vec4 frag;
+layout(location = 0) out vec4 frag;
+#ifdef WRITE_AOVS
+// Render passes (engine/gpu/passes/ambient.py LIGHTING_AOVS), added like the light.
+layout(location = 1) out vec4 aov_diffuse;
+layout(location = 2) out vec4 aov_glossy;
+layout(location = 3) out vec4 aov_shadow;   // luminance with shadows, without
+#endif
 
 void main() {
 #ifdef LIGHTS_INSTANCED
@@ -39,22 +45,31 @@ void main() {
     if (is_background(depth)) discard;
     vec2 uv = (vec2(px) + 0.5) / vec2(textureSize(g_depth, 0));
     vec3 p = position_from_depth(uv, depth, inv_view_proj);   // camera-relative
-    vec3 n = normalize(texelFetch(g_normal, px, 0).xyz);
+    vec4 nrm = texelFetch(g_normal, px, 0);
+    vec3 n = normalize(nrm.xyz);
     vec3 v = cam_ortho ? -cam_forward : normalize(-p);
-    Surface s = make_surface(p, n, v, texelFetch(g_base, px, 0), texelFetch(g_mat, px, 0));
-    vec3 radiance = vec3(0.0);
+    Surface s = make_surface(p, n, v, texelFetch(g_base, px, 0), texelFetch(g_mat, px, 0), nrm.w);
+    vec3 diffuse, glossy;        // what the light reflects diffusely, and specularly
 #ifdef LIGHT_DISTANT
-    radiance = distant_radiance(s);
+    distant_light(s, diffuse, glossy);
 #endif
 #ifdef LIGHT_SPHERE
-    radiance = sphere_radiance(s);
+    sphere_light(s, diffuse, glossy);
 #endif
 #ifdef LIGHT_AREA
-    radiance = area_radiance(s);
+    area_light(s, diffuse, glossy);
 #endif
+    vec3 radiance = diffuse + glossy;
     if (max(radiance.r, max(radiance.g, radiance.b)) <= 0.0) discard;
+    float lit = 1.0;
 #ifdef HAS_SHADOW
-    radiance *= light_shadow(p, n, dot(p, cam_forward));
+    lit = light_shadow(p, n, dot(p, cam_forward));
 #endif
-    frag = vec4(min(finite(radiance), vec3(HDR_MAX)), 0.0);
+    frag = vec4(min(finite(radiance * lit), vec3(HDR_MAX)), 0.0);
+#ifdef WRITE_AOVS
+    aov_diffuse = vec4(finite(diffuse * lit), 0.0);
+    aov_glossy = vec4(finite(glossy * lit), 0.0);
+    float luminance = dot(finite(radiance), vec3(0.2126, 0.7152, 0.0722));
+    aov_shadow = vec4(luminance * lit, luminance, 0.0, 0.0);
+#endif
 }

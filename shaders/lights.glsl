@@ -49,10 +49,11 @@ void load_light(int row, vec3 view_forward) {
     n_poly = int(t6.x); light_area = t6.y;
 }
 
-// --- What the loaded light reflects off a surface, unshadowed. The light pass's
-// variants (one kind each) call their kind's function; the transparency pass calls
-// light_radiance, any kind by its row. 0 wherever the light adds nothing (beyond its
-// range, behind an area light, below the horizon).
+// --- What the loaded light reflects off a surface, unshadowed, as its diffuse and
+// glossy (base lobe and clearcoat) parts. The light pass's variants (one kind each)
+// call their kind's function; the transparency pass calls light_reflected, any kind
+// by its row. 0 wherever the light adds nothing (beyond its range, behind an area
+// light, below the horizon).
 
 #define MAX_VERTS 32
 
@@ -112,36 +113,43 @@ float spot_mask(vec3 p, vec3 l, float d) {
     return mask;
 }
 
-vec3 distant_radiance(Surface s) {
+void distant_light(Surface s, out vec3 diffuse, out vec3 glossy) {
+    diffuse = glossy = vec3(0.0);
     vec3 l = -light_axis;
     float NoL = dot(s.n, l);
-    if (NoL <= 0.0) return vec3(0.0);
+    if (NoL <= 0.0) return;
     vec3 E = light_color * NoL;
-    return E * (light_diffuse * brdf_diffuse(s)
-                + light_specular * brdf_specular(s, l, ggx_alpha(s.roughness)));
+    float a = ggx_alpha(s.roughness), ac = ggx_alpha(s.coat_roughness);
+    diffuse = E * light_diffuse * brdf_diffuse(s);
+    glossy = E * light_specular * (brdf_specular(s, l, a) + brdf_coat(s, l, ac));
 }
 
-vec3 sphere_radiance(Surface s) {
+void sphere_light(Surface s, out vec3 diffuse, out vec3 glossy) {
+    diffuse = glossy = vec3(0.0);
     vec3 to_light = light_pos - s.p;
     float d2 = dot(to_light, to_light);
     float d = sqrt(d2);
-    if (d > light_range) return vec3(0.0);
+    if (d > light_range) return;
     // A light sitting on the surface: take it as straight overhead, never 0/0.
     vec3 l = d > 1e-6 ? to_light / d : s.n;
     float NoL = dot(s.n, l);
-    if (NoL <= 0.0) return vec3(0.0);
+    if (NoL <= 0.0) return;
     float falloff = soft_falloff ? d2 + light_radius * light_radius : d2;
     vec3 E = light_color * NoL / max(falloff, 1e-8);
     if (is_spot) E *= spot_mask(s.p, l, d);
     // A sphere source widens the highlight (Karis 2013); a point keeps alpha.
-    float a_spec = min(1.0, ggx_alpha(s.roughness) + light_radius / max(2.0 * d, 1e-6));
-    return E * (light_diffuse * brdf_diffuse(s) + light_specular * brdf_specular(s, l, a_spec));
+    float a = ggx_alpha(s.roughness), ac = ggx_alpha(s.coat_roughness);
+    float widen = light_radius / max(2.0 * d, 1e-6);
+    diffuse = E * light_diffuse * brdf_diffuse(s);
+    glossy = E * light_specular * (brdf_specular(s, l, min(1.0, a + widen))
+                                   + brdf_coat(s, l, min(1.0, ac + widen)));
 }
 
-vec3 area_radiance(Surface s) {
+void area_light(Surface s, out vec3 diffuse, out vec3 glossy) {
+    diffuse = glossy = vec3(0.0);
     vec3 rel = s.p - light_pos;
-    if (dot(rel, light_axis) <= 0.0) return vec3(0.0);   // one-sided
-    if (length(rel) > light_range) return vec3(0.0);
+    if (dot(rel, light_axis) <= 0.0) return;   // one-sided
+    if (length(rel) > light_range) return;
     vec3 E = light_color * polygon_irradiance_factor(s.p, s.n);
     // Specular: a representative point, the reflection ray's hit on the light plane
     // clamped to the shape, with roughness widened by the light's size.
@@ -163,14 +171,16 @@ vec3 area_radiance(Surface s) {
     vec3 lq = q - s.p;
     float dq = length(lq);
     vec3 l = dq > 1e-6 ? lq / dq : s.n;
-    float a_spec = min(1.0, ggx_alpha(s.roughness) + sqrt(light_area / PI) / max(2.0 * dq, 1e-6));
-    return E * light_diffuse * brdf_diffuse(s)
-         + E * light_specular * brdf_specular(s, l, a_spec) * step(0.0, dot(s.n, l));
+    float a = ggx_alpha(s.roughness), ac = ggx_alpha(s.coat_roughness);
+    float widen = sqrt(light_area / PI) / max(2.0 * dq, 1e-6);
+    diffuse = E * light_diffuse * brdf_diffuse(s);
+    glossy = E * light_specular * step(0.0, dot(s.n, l)) * (brdf_specular(s, l, min(1.0, a + widen))
+                                                            + brdf_coat(s, l, min(1.0, ac + widen)));
 }
 
 // Any kind, by the loaded row's flags.
-vec3 light_radiance(Surface s) {
-    if (is_distant) return distant_radiance(s);
-    if (n_poly > 0) return area_radiance(s);
-    return sphere_radiance(s);
+void light_reflected(Surface s, out vec3 diffuse, out vec3 glossy) {
+    if (is_distant) distant_light(s, diffuse, glossy);
+    else if (n_poly > 0) area_light(s, diffuse, glossy);
+    else sphere_light(s, diffuse, glossy);
 }

@@ -16,6 +16,7 @@ uniform float far;
 #ifdef ALPHA_TEST
 in vec2 v_uv;
 uniform int u_object;          // the caster (objects.glsl): its own thresholds
+#include "lib.glsl"
 #include "material.glsl"
 
 // The thresholds of a blended caster: in every 4 x 4 block of map texels, the 16

@@ -41,15 +41,16 @@ void main() {
     MaterialSample m = material_sample(v_uv, v_normal, v_tangent, gl_FrontFacing);
     vec3 p = position_from_depth(gl_FragCoord.xy / u_size, gl_FragCoord.z, inv_view_proj);
     vec3 v = cam_ortho ? -cam_forward : normalize(-p);
-    Surface s = make_surface(p, m.n, v, vec4(m.base, alpha),
-                             vec4(m.metallic, m.roughness, m.f0, 1.0));
-    vec3 c = vec3(0.0);
+    Surface s = make_surface(p, m.n, v, vec4(m.base, alpha), m.mat, m.coat_roughness);
+    vec3 c = vec3(0.0), diffuse, glossy;
 #ifdef AMBIENT
-    c += m.emissive + environment_radiance(s);
+    dome_light(s, 1.0, diffuse, glossy);      // no ambient occlusion: it is screen space
+    c += m.emissive + diffuse + glossy;
 #endif
     for (int i = 0; i < n_lights; ++i) {
         load_light(light_rows[i], cam_forward);
-        vec3 r = light_radiance(s);
+        light_reflected(s, diffuse, glossy);
+        vec3 r = diffuse + glossy;
 #ifdef HAS_SHADOW
         if (max(r.r, max(r.g, r.b)) > 0.0)
             r *= light_shadow(p, m.n, dot(p, cam_forward));

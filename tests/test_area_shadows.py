@@ -32,8 +32,9 @@ def _renders(name):
     from lantern.exporters import stage_from_depsgraph
     scene = penumbra_scenes.build(name)
     width, height = penumbra_scenes.SIZE
+    # Point-sampled references: no FXAA (as tests/test_shadows_vs_cycles.py).
     settings = RenderSettings(width=width, height=height, preset="medium",
-                              frame=scene.frame_current)
+                              frame=scene.frame_current, fxaa=False)
     images = []
     for shadow in (True, False):
         for light in bpy.data.lights:

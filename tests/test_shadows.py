@@ -53,7 +53,9 @@ def near_an_edge(mask, px):
 
 
 def render(stage, w, h, preset="medium"):
-    result = render_stage(stage, RenderSettings(width=w, height=h, preset=preset))
+    # Pixel-exact checks of light and shadow: no anti-aliasing blends edges into them.
+    result = render_stage(stage, RenderSettings(width=w, height=h, preset=preset, fxaa=False,
+                                                supersample=1))
     assert np.isfinite(result.rgba).all()
     return result
 

@@ -158,16 +158,19 @@ def _screen_quad_mask(corners, shape, margin=2.0):
 def _cutout_coverage(image, cycles):
     """Shadowed area of the cutout_shadow scene in Lantern's image and in Cycles', in
     pixels: the sum of each floor pixel's lost fraction of the sunlight, over the floor
-    pixels (Lantern's coverage, so not the background) not showing the plate. A sum is
+    around the plate's shadow (not the background, nor the plate itself). A sum is
     what a pixel filter keeps (Cycles integrates each pixel over its 1.5 px filter,
     Lantern samples its centre). Fractions under 0.15 are left out: Cycles' plate also
     hides a little of the dim world from the floor around it (up to 0.07 here),
     which Lantern leaves to ambient occlusion (the shading branch's)."""
     lit = 0.8 * (3.0 * math.cos(math.radians(40)) / math.pi + 0.05)   # Lambert 0.8
     dark = 0.8 * 0.05                                                  # the world only
-    plate = _screen_quad_mask([(-1.8, -1, 1), (0.2, -1, 1), (0.2, 1, 1), (-1.8, 1, 1)],
-                              cycles.shape[:2])
-    floor = (image[..., 3] > 0.999) & ~plate
+    shape = cycles.shape[:2]
+    plate = _screen_quad_mask([(-1.8, -1, 1), (0.2, -1, 1), (0.2, 1, 1), (-1.8, 1, 1)], shape)
+    # The plate's shadow falls 1 m x tan(40 deg) towards -x: [-2.64, -0.64] x [-1, 1].
+    around = _screen_quad_mask([(-3.2, -1.5, 0), (-0.1, -1.5, 0), (-0.1, 1.5, 0),
+                                (-3.2, 1.5, 0)], shape, margin=0.0)
+    floor = (image[..., 3] > 0.999) & around & ~plate
 
     def shadowed(img):
         lost = np.clip((lit - img[..., :3].mean(-1)) / (lit - dark), 0, 1)[floor]
@@ -176,7 +179,10 @@ def _cutout_coverage(image, cycles):
 
 
 def test_cutout_shadow_coverage_matches_cycles_within_2_percent():
-    result, cycles = look("cutout_shadow", transparent=True)
+    """With Cycles' pixel filter (supersample=2 filters with the same Blackman-Harris),
+    so that the shapes are compared, not point sampling against area sampling (+1.5 to
+    1.9% at one sample a pixel, by preset)."""
+    result, cycles = look("cutout_shadow", transparent=True, supersample=2)
     ours, theirs = _cutout_coverage(result.rgba, cycles)
     holes = reference_scenes.cutout_mask()[..., 3] == 0
     print(f"cut-out shadow coverage: Lantern {ours:.1f}, Cycles {theirs:.1f} pixels "
@@ -188,8 +194,8 @@ def test_cutout_shadow_coverage_matches_cycles_within_2_percent():
 # --- against Cycles ---------------------------------------------------------------------
 
 # Measured 2026-11-23 (medium preset, llvmpipe), plus about 25%.
-FLIP_BOUND = {"transparency_planes": 0.064, "cutout_shadow": 0.066, "01_alpha_blend": 0.136,
-              "01_alpha_mask": 0.057}
+FLIP_BOUND = {"transparency_planes": 0.063, "cutout_shadow": 0.067, "01_alpha_blend": 0.059,
+              "01_alpha_mask": 0.038}
 
 
 @pytest.mark.parametrize("name", sorted(FLIP_BOUND))

@@ -28,10 +28,12 @@ from ...core.passes import PASSES
 # Render targets by name: their pool format, at the frame's size.
 TARGETS = {
     "g_base": "rgba16f",       # base colour, alpha
-    "g_normal": "rgba16f",     # world normal
-    "g_mat": "rgba16f",        # metallic, roughness, dielectric F0
+    "g_normal": "rgba16f",     # world normal, clearcoat roughness
+    "g_mat": "rgba16f",        # metallic, roughness, dielectric F0, clearcoat
     "g_emit": "rgba16f",       # emission
     "g_depth": "depth",         # 32-bit float, reversed (engine/view.py)
+    "ao_raw": "r32f",          # ambient occlusion before its blur
+    "ao": "r32f",              # ambient occlusion of the dome's light
     "hdr": "rgba16f",          # light accumulation
     "depth_stencil": "depth_stencil",  # scene depth copy and light-volume marks
     "output": "rgba32f",
@@ -40,7 +42,32 @@ TARGETS = {
     "aov_depth": "r32f",       # view-axis distance (the AOV pass)
     "aov_normal": "rgba32f",   # world normal
     "aov_emit": "rgba32f",     # emission
+    "aov_ao": "rgba32f",       # ambient occlusion (the AO pass)
+    "aov_diffuse": "rgba32f",  # diffuse light (the ambient and light passes)
+    "aov_glossy": "rgba32f",   # specular and coat light (the same)
+    "aov_env": "rgba32f",      # the dome seen directly (the ambient pass)
+    "aov_shadow": "rgba32f",   # light reaching surfaces: with, without shadows (lights)
 }
+
+
+@dataclass(frozen=True)
+class FrameOptions:
+    """What a render asks of the shading and post passes (from RenderSettings; see
+    engine/session.py for each)."""
+    ambient_occlusion: bool = True
+    supersample: int | None = None   # None: the preset's
+    fxaa: bool | None = None         # None: the preset's
+    exposure: float = 0.0
+    blur: float = 0.0
+    grayscale: bool = False
+    mirror: str = ""
+
+    @staticmethod
+    def of(settings) -> "FrameOptions":
+        if settings is None:
+            return FrameOptions()
+        return FrameOptions(**{name: getattr(settings, name) for name in
+                               FrameOptions.__dataclass_fields__ if hasattr(settings, name)})
 
 
 @dataclass
@@ -53,6 +80,16 @@ class Frame:
     transparent: bool = False
     aovs: frozenset = frozenset()  # render passes asked for (core/passes.py names)
     camera: object = None          # None: the view pass frames the default view
+    options: FrameOptions = field(default_factory=FrameOptions)
+    # Anti-aliasing (passes/antialias.py): drawn `supersample` times wider and taller
+    # than `output_size`, the image's; `size` is what the passes draw at now.
+    supersample: int = 1
+    output_size: tuple | None = None
+
+    @property
+    def fxaa(self) -> bool:
+        o = self.options.fxaa
+        return bool(self.preset.fxaa if o is None else o)
     stats: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
 
@@ -63,6 +100,7 @@ class Frame:
 class Pass:
     name = ""
     reads: tuple = ()
+    optional: tuple = ()   # entries read when a pass before wrote them this frame
     writes: tuple = ()
     aovs: dict = {}     # render pass name -> (target, first channel) this pass can write
 
@@ -88,7 +126,7 @@ class FrameGraph:
         written = set()
         self.producers = {}         # render pass name -> the pass that writes it
         for p in self.passes:
-            missing = [r for r in p.reads if r not in written]
+            missing = [r for r in p.reads + p.optional if r not in written]
             if missing:
                 raise ValueError(f"pass {p.name} reads {missing} before any pass writes them")
             written |= set(p.writes)
@@ -111,7 +149,7 @@ class FrameGraph:
         kept = {t for p in live for t in p.aov_targets(frame)}   # read back at the end
         last_use = {}
         for i, p in enumerate(live):
-            for name in p.reads + writes[p]:
+            for name in p.reads + p.optional + writes[p]:
                 if name in TARGETS and name not in kept:
                     last_use[name] = i
         frame.stats["passes"] = [p.name for p in live]
@@ -126,8 +164,8 @@ class FrameGraph:
                 t0 = time.perf_counter()
                 p.execute(frame, board)
                 self.ctx.finish()            # so each pass's time is its own
-                frame.timings[p.name] = time.perf_counter() - t0
-                for name in [n for n, last in last_use.items() if last == i]:
+                frame.timings[p.name] = frame.timings.get(p.name, 0.0) + time.perf_counter() - t0
+                for name in [n for n, last in last_use.items() if last == i and n in board]:
                     self.pool.release(board.pop(name))
             board["aovs"] = {aov: self._read_back(board, *self.producers[aov].aovs[aov], aov)
                              for aov in sorted(frame.aovs)}

@@ -10,13 +10,17 @@ import numpy as np
 
 from .context import Features
 from .depth import DepthConvention
-from .framegraph import Frame, FrameGraph
+from .environment import Environment
+from .framegraph import Frame, FrameGraph, FrameOptions
 from .geometry import Geometry
 from .lights import LightTable
 from .passes.ambient import AmbientPass
+from .passes.antialias import SupersamplePass, centre_samples, downsample
+from .passes.ao import AoPass
 from .passes.aovs import AovPass
 from .passes.gbuffer import GBufferPass
 from .passes.lights import LightPass
+from .passes.post import PostPass
 from .passes.resolve import ResolvePass
 from .passes.shadows import ShadowPass
 from .passes.skinning import SkinningPass
@@ -26,6 +30,26 @@ from .resources import TargetPool, Uploads
 from .stencil import Stencil
 from .textures import MaterialTextures
 
+# Render passes that are data, not light: never filtered.
+DATA_PASSES = {"Depth", "Normal", "IndexOB", "IndexMA"}
+
+
+def shadow_ratio(sums: np.ndarray) -> np.ndarray:
+    """The Shadow pass from its sums (light with shadows, without): their ratio, grey,
+    1 where no light reaches."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(sums[..., 1] > 0, sums[..., 0] / sums[..., 1], 1.0)
+    return np.repeat(np.clip(ratio, 0.0, 1.0)[..., None], 3, axis=2).astype(np.float32)
+
+
+def supersample_factor(frame, size, max_texture: int) -> int:
+    """The preset's (or the settings') supersampling, as far as GL's texture size
+    allows."""
+    o = frame.options.supersample
+    k = max(int(frame.preset.supersample if o is None else o), 1)
+    return max(1, min(k, int(max_texture) // max(max(size), 1)))
+
+
 # Every counter a render reports, zero when nothing of the kind happened.
 COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow_maps",
             "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
@@ -34,7 +58,7 @@ COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow
 
 
 class Renderer:
-    def __init__(self, gl, preset):
+    def __init__(self, gl, preset, srgb_filtering: str = "encoded"):
         ctx = gl.ctx
         self.ctx = ctx
         self.preset = preset
@@ -46,7 +70,8 @@ class Renderer:
         programs = gl.programs
         self.geometry = Geometry(ctx, self.uploads, programs, self.features)
         self.lights = LightTable(self.uploads, preset.disk_sides)
-        self.textures = MaterialTextures(ctx, self.uploads, preset.anisotropy)
+        self.textures = MaterialTextures(ctx, self.uploads, preset.anisotropy, srgb_filtering)
+        self.environment = Environment(ctx, self.uploads, programs, gl.proc)
         self.skinning = SkinningPass(ctx, self.uploads, programs, self.geometry, gl.scratch)
         self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights, preset,
                                   self.depth, self.textures)
@@ -56,11 +81,14 @@ class Renderer:
             self.shadows,
             GBufferPass(ctx, self.pool, programs, self.geometry, self.textures, self.depth),
             AovPass(ctx, self.pool, programs),
-            AmbientPass(ctx, self.pool, programs, self.textures),
+            AoPass(ctx, self.pool, programs),
+            AmbientPass(ctx, self.pool, programs, self.environment),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
-                      self.geometry, preset),
+                      self.geometry, preset, self.environment),
             TransparencyPass(ctx, self.pool, programs, self.geometry, self.textures,
-                             self.lights, self.depth, preset),
+                             self.lights, self.environment, self.depth, preset),
+            SupersamplePass(ctx, self.pool, programs),
+            PostPass(ctx, self.pool, programs),
             ResolvePass(ctx, self.pool, programs),
         ])
         self._cull_backfaces = None
@@ -80,20 +108,31 @@ class Renderer:
         return meshes
 
     def render(self, scene, changes, camera, size, transparent, cull_backfaces,
-               aovs=frozenset()):
+               aovs=frozenset(), settings=None):
         """(rgba float32 (H, W, 4), {render pass: float32 (H, W, C)}, stats, timings)
-        of one frame; `aovs`: the render passes asked for (core/passes.py)."""
+        of one frame; `aovs`: the render passes asked for (core/passes.py);
+        `settings`: the session's RenderSettings (shading and post options)."""
         t0 = time.perf_counter()
         frame = Frame(scene=scene, changes=changes, size=tuple(size), preset=self.preset,
                       transparent=transparent, aovs=frozenset(aovs), camera=camera,
-                      stats={name: 0 for name in COUNTERS})
+                      stats={name: 0 for name in COUNTERS},
+                      options=FrameOptions.of(settings))
         frame.stats["meshes_uploaded"] = self.update(scene, changes, cull_backfaces)
         frame.timings["upload"] = time.perf_counter() - t0
+        k = supersample_factor(frame, size, self.ctx.info.get("GL_MAX_TEXTURE_SIZE", 16384))
+        frame.supersample, frame.output_size = k, tuple(size)
+        frame.size = (size[0] * k, size[1] * k)
         self.depth.begin()
         try:
             board = self.graph.run(frame)
         finally:
             self.depth.end()
+        # Render passes were drawn at the supersampled size too: light is filtered as
+        # the image is, data (depth, normals, indices) keeps the centre sub-pixel.
+        board["aovs"] = {name: (centre_samples(a, k) if name in DATA_PASSES else downsample(a, k))
+                         for name, a in board["aovs"].items()}
+        if "Shadow" in board["aovs"]:
+            board["aovs"]["Shadow"] = shadow_ratio(board["aovs"]["Shadow"])
         uploaded = self.uploads.take()
         frame.stats["bytes_uploaded"] = int(sum(uploaded.values()))
         frame.stats["bytes_by_kind"] = dict(uploaded)
@@ -144,6 +183,7 @@ class Renderer:
     def release(self):
         self.graph.release()
         self.textures.release()
+        self.environment.release()
         self.lights.release()
         self.geometry.release()
         self.pool.release_all()

@@ -50,10 +50,10 @@ class Uploads:
             self._count(kind, len(data))
         return self.ctx.texture(size, components, data, dtype=dtype, **kw)
 
-    def write_texture(self, texture, data, *, kind: str, viewport=None):
+    def write_texture(self, texture, data, *, kind: str, viewport=None, level=0):
         data = _bytes(data)
         self._count(kind, len(data))
-        texture.write(data, viewport=viewport)
+        texture.write(data, viewport=viewport, level=level)
 
     def float_texture(self, texels, *, kind: str):
         """(h, w, 4) float32 -> an RGBA32F texture, nearest, for texelFetch."""

@@ -1,7 +1,25 @@
-"""Material images as GL textures, kept for the session and uploaded once.
+"""Material images as GL textures, kept for the session and uploaded once, in the
+file's own precision:
 
-sRGB data goes up as GL_SRGB8_ALPHA8 so the sampler decodes to linear before
-filtering (and mips are built in linear light); float images go up as float16.
+  8-bit         sRGB colour: by default as Cycles filters it. Cycles interpolates the
+                stored (encoded) bytes bilinearly at each sample and decodes after, and
+                its pixel filter averages many such samples; a 0/1 checker's cell edges
+                therefore blend darker than in linear light, also far away (0.477, not
+                0.5, on the grazing checker). Here the image goes up as
+                GL_SRGB8_ALPHA8 with its own mip chain (cycles_srgb_mips): level 1 is
+                the average, over each texel, of Cycles' decoded bilinear lookup of
+                level 0, and deeper levels average in linear light. Magnified, the
+                shader interpolates the encoded texels itself and decodes
+                (gbuffer.frag bilinear_encoded); minified, GL filters those mips
+                (trilinear, anisotropic); between levels 0 and 1 the two blend.
+                RenderSettings.srgb_filtering = "linear" takes EEVEE's (and GL's) way:
+                decoded, then filtered, mips averaged in linear light.
+                Other 8-bit data: RGBA8, as stored.
+  16-bit        RGBA16 (normalized), every level of the file kept; sRGB colour is
+                decoded on upload into float32 (Cycles converts such images to linear
+                when it loads them).
+  half / float  RGBA16F / RGBA32F as the file stores them: nothing is clamped, 4.0
+                stays 4.0.
 Trilinear filtering with anisotropy, wrap modes via samplers (mirror and black are
 finished in the shader, see gbuffer.frag sample_map). Reading the files is
 engine/textures.py's job; an image that cannot be read (corrupt, truncated, empty,
@@ -11,21 +29,81 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..textures import is_srgb, read_image_linear, read_rgba, srgb_to_linear
+from ..textures import is_srgb, read_rgba, srgb_to_linear
 
 GL_SRGB8_ALPHA8 = 0x8C43
+SRGB_FILTERING = ("encoded", "linear")   # Cycles' way (the default), EEVEE's way
+
+
+def linear_to_srgb(x):
+    x = np.clip(x, 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055)
+
+
+def _encode(lin: np.ndarray) -> np.ndarray:
+    out = np.empty(lin.shape, np.uint8)
+    out[..., :3] = np.round(linear_to_srgb(lin[..., :3]) * 255.0)
+    out[..., 3] = np.round(np.clip(lin[..., 3], 0.0, 1.0) * 255.0)
+    return out
+
+
+def _half(lin: np.ndarray) -> np.ndarray:
+    """2x2 box average, sizes halved and floored as GL's levels are."""
+    h, w = lin.shape[:2]
+    if h > 1:
+        lin = 0.5 * (lin[0:h // 2 * 2:2] + lin[1:h // 2 * 2:2])
+    if w > 1:
+        lin = 0.5 * (lin[:, 0:w // 2 * 2:2] + lin[:, 1:w // 2 * 2:2])
+    return lin
+
+
+def cycles_srgb_mips(img: np.ndarray) -> list:
+    """The mip chain (uint8 RGBA, sRGB-encoded, level 0 first) whose level 1 holds,
+    per texel, the mean of Cycles' lookup (bilinear of the encoded bytes, then decoded)
+    over its 2x2 footprint of level 0 (a 4x4 grid of lookups; at the image's edges
+    the edge texels repeat, as GL's own mips never wrap), and whose deeper levels are
+    box averages in linear light."""
+    levels = [img]
+    if img.shape[0] < 2 and img.shape[1] < 2:
+        return levels
+    e = img.astype(np.float32) / 255.0
+    # Lookups at texel offsets +-0.25 from every texel centre: bilinear weights 3/4, 1/4.
+    for ax in (0, 1):
+        n = e.shape[ax]
+        prev = np.take(e, np.r_[0, 0:n - 1], axis=ax)
+        nxt = np.take(e, np.r_[1:n, n - 1], axis=ax)
+        lo = 0.75 * e + 0.25 * prev                      # a quarter texel back
+        hi = 0.75 * e + 0.25 * nxt                       # a quarter texel on
+        e = np.stack([lo, hi], axis=ax + 1).reshape(
+            e.shape[:ax] + (2 * e.shape[ax],) + e.shape[ax + 1:])
+    lin = e.astype(np.float64)
+    lin[..., :3] = srgb_to_linear(lin[..., :3])
+    # 4x4 lookups per level-1 texel (the 2x upsampled grid, box-averaged twice).
+    lin = _half(_half(lin)) if img.shape[0] > 1 and img.shape[1] > 1 else _half(lin)
+    h1, w1 = max(img.shape[0] // 2, 1), max(img.shape[1] // 2, 1)
+    lin = lin[:h1, :w1]
+    levels.append(_encode(lin))
+    while lin.shape[0] > 1 or lin.shape[1] > 1:
+        lin = _half(lin)
+        levels.append(_encode(lin))
+    return levels
 
 
 class MaterialTextures:
-    def __init__(self, ctx, uploads, anisotropy: float):
+    def __init__(self, ctx, uploads, anisotropy: float, srgb_filtering: str = "encoded"):
+        if srgb_filtering not in SRGB_FILTERING:
+            raise ValueError(f"srgb_filtering must be one of {', '.join(SRGB_FILTERING)}, "
+                             f"not {srgb_filtering!r}")
         self.ctx, self.uploads = ctx, uploads
         self.anisotropy = anisotropy
+        self.srgb_filtering = srgb_filtering
         self._tex = {}
         self._samplers = {}
-        self._dome = None              # (path, texture)
         self.failed = {}               # path -> warning: images that could not be read
 
     def get(self, path: str, colorspace: str):
+        """(texture, cycles_srgb): whether the shader filters it as Cycles filters an
+        8-bit sRGB image (gbuffer.frag sample_map)."""
         key = (path, colorspace)
         if key not in self._tex:
             self._tex[key] = self._upload(path, colorspace)
@@ -52,61 +130,58 @@ class MaterialTextures:
         img = np.ascontiguousarray(img[::-1])  # GL's t = 0 is the bottom row, as USD st
         h, w = img.shape[:2]
         srgb = is_srgb(img, colorspace)
+        decode = False
+        mips = True
         if img.dtype == np.uint8:
-            fmt = GL_SRGB8_ALPHA8 if srgb else None
+            decode = srgb and self.srgb_filtering == "encoded"
             tex = self.uploads.texture((w, h), 4, img, kind="textures", dtype="f1",
-                                       internal_format=fmt)
+                                       internal_format=GL_SRGB8_ALPHA8 if srgb else None)
+            if decode:
+                tex.build_mipmaps()                  # allocates the levels, then:
+                for level, data in enumerate(cycles_srgb_mips(img)[1:], 1):
+                    self.uploads.write_texture(tex, np.ascontiguousarray(data),
+                                               kind="textures", level=level)
+                mips = False
+        elif img.dtype == np.uint16 and not srgb:
+            tex = self.uploads.texture((w, h), 4, img, kind="textures", dtype="nu2")
+        elif img.dtype == np.float16 and not srgb:
+            tex = self.uploads.texture((w, h), 4, img, kind="textures", dtype="f2")
         else:
             f = img.astype(np.float32)
             if img.dtype.kind in "ui":
                 f /= np.iinfo(img.dtype).max
             if srgb:
                 f[..., :3] = srgb_to_linear(f[..., :3])
-            tex = self.uploads.texture((w, h), 4, f.astype(np.float16), kind="textures", dtype="f2")
-        tex.build_mipmaps()
+            tex = self.uploads.texture((w, h), 4, f, kind="textures", dtype="f4")
+        if mips:
+            tex.build_mipmaps()
         tex.filter = (self.ctx.LINEAR_MIPMAP_LINEAR, self.ctx.LINEAR)
         tex.anisotropy = self.anisotropy
-        return tex
+        return tex, decode
 
     def sampler(self, wrap_s: str, wrap_t: str):
         """Repeat for repeat/mirror (mirror folds st in the shader), clamp-to-edge for
         clamp/black (black masks outside [0,1] in the shader)."""
         key = (wrap_s in ("repeat", "mirror"), wrap_t in ("repeat", "mirror"))
         if key not in self._samplers:
-            self._samplers[key] = self.ctx.sampler(
+            sampler = self._samplers[key] = self.ctx.sampler(
                 repeat_x=key[0], repeat_y=key[1],
                 filter=(self.ctx.LINEAR_MIPMAP_LINEAR, self.ctx.LINEAR),
                 anisotropy=self.anisotropy, compare_func="")
         return self._samplers[key]
 
-    def dome(self, path: str):
-        """The environment's lat-long image, linear float32, kept while it is the dome's."""
-        if self._dome is not None and self._dome[0] == path:
-            return self._dome[1]
-        if self._dome is not None:
-            self._dome[1].release()
-        img = np.ascontiguousarray(read_image_linear(path, "auto"), np.float32)
-        tex = self.uploads.texture((img.shape[1], img.shape[0]), 4, img, kind="textures", dtype="f4")
-        tex.filter = (self.ctx.LINEAR, self.ctx.LINEAR)
-        tex.repeat_y = False
-        self._dome = (path, tex)
-        return tex
-
     def prune(self, materials):
         """Releases the images no material uses any more."""
         used = {(ref.path, ref.colorspace) for m in materials for ref in m.maps.values()}
         for key in [k for k in self._tex if k not in used]:
-            self._tex.pop(key).release()
+            self._tex.pop(key)[0].release()
             if not any(k[0] == key[0] for k in self._tex):
                 self.failed.pop(key[0], None)
 
     def release(self):
-        for t in self._tex.values():
-            t.release()
+        for tex, _ in self._tex.values():
+            tex.release()
         for s in self._samplers.values():
             s.release()
-        if self._dome is not None:
-            self._dome[1].release()
         self._tex.clear()
         self._samplers.clear()
-        self._dome = None

@@ -23,7 +23,8 @@ Light forms evaluated in the shaders (Blender's, exactly):
               times the same irradiance. An approximation, not exact.
 
 Dome: uniform colour x intensity, or a lat-long `inputs:texture:file` (times colour x
-intensity); engine/lighting.py computes its irradiance harmonics.
+intensity). A map's irradiance harmonics and prefiltered reflections are made once
+per map on the GL side (engine/gpu/environment.py), not here at every read.
 
 Stage metersPerUnit does not scale lighting: like Cycles, distances are taken in scene
 units."""
@@ -36,7 +37,7 @@ import numpy as np
 from pxr import Usd, UsdLux
 
 from ...core.lights import DISK, POINT, RECT, SPOT, SUN, kind_of_usd
-from ..lighting import latlong_sh, load_latlong, uniform_sh
+from ..lighting import uniform_sh
 from ..scene import Dome, Light
 
 
@@ -190,13 +191,11 @@ def read_dome(prim, world, radiance, time, warnings) -> Dome:
         else:
             warnings.append(f"{path}: dome texture {asset.path!r} not found; "
                             f"using the uniform colour")
-    sh = uniform_sh(radiance)
-    if tex is not None:
-        try:
-            img = load_latlong(tex)
-            sh = latlong_sh(img, rot) * radiance[None, :]
-        except Exception as exc:  # unreadable image: same fallback as missing
-            warnings.append(f"{path}: dome texture {tex!r} unreadable ({exc}); "
-                            f"using the uniform colour")
-            tex = None
-    return Dome(name=path, radiance=np.asarray(radiance, float), sh=sh, texture=tex, rotation=rot)
+    distance = _get(prim, "lantern:aoDistance", None, time)
+    if distance is not None and not (math.isfinite(float(distance)) and float(distance) > 0):
+        warnings.append(f"{path}: lantern:aoDistance {distance!r} is not a positive number; "
+                        f"using the default")
+        distance = None
+    return Dome(name=path, radiance=np.asarray(radiance, float), sh=uniform_sh(radiance),
+                texture=tex, rotation=rot,
+                ao_distance=float(distance) if distance is not None else None)

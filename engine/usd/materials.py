@@ -1,6 +1,7 @@
 """UsdPreviewSurface networks -> Material records, named by the Material prim's path.
 
-Each input is a constant or a UsdUVTexture output (connections are followed through
+Each input is a constant or a UsdUVTexture output (clearcoat and clearcoatRoughness:
+constants only, as the exporter writes them) (connections are followed through
 material interface inputs with GetValueProducingAttributes). A texture whose file is
 missing gives a warning naming the material and the path, and the input keeps its
 constant value (or the UsdPreviewSurface default)."""
@@ -17,10 +18,12 @@ from ..scene import Material, TextureRef
 DEFAULTS = {
     "diffuseColor": (0.18, 0.18, 0.18), "metallic": 0.0, "roughness": 0.5, "ior": 1.5,
     "emissiveColor": (0.0, 0.0, 0.0), "opacity": 1.0, "opacityThreshold": 0.0,
+    "clearcoat": 0.0, "clearcoatRoughness": 0.01,
 }
 FIELDS = {"diffuseColor": "diffuse", "metallic": "metallic", "roughness": "roughness",
           "ior": "ior", "emissiveColor": "emissive", "opacity": "opacity",
-          "opacityThreshold": "opacity_threshold"}
+          "opacityThreshold": "opacity_threshold", "clearcoat": "clearcoat",
+          "clearcoatRoughness": "clearcoat_roughness"}
 MAPPABLE = ("diffuseColor", "metallic", "roughness", "emissiveColor", "opacity", "normal")
 
 

@@ -44,6 +44,9 @@ def _mapping_rotation(env, owner, warn):
 def gather_world(world, warn, texture_dir=None):
     owner = f"world '{world.name}'"
     rec = WorldRecord(name=world.name, color=tuple(float(c) for c in world.color))
+    settings = getattr(world, "light_settings", None)
+    if settings is not None and math.isfinite(settings.distance) and settings.distance > 0:
+        rec.ao_distance = float(settings.distance)    # Blender's AO distance
     tree = world.node_tree
     if tree is None:
         return rec

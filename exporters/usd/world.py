@@ -10,7 +10,7 @@ rotation. See docs/stage_contract.md, "World"."""
 import math
 
 import numpy as np
-from pxr import Gf, UsdGeom, UsdLux
+from pxr import Gf, Sdf, UsdGeom, UsdLux
 
 from .light import write_common
 from .names import set_blender_name
@@ -45,5 +45,9 @@ def write_world(stage, path, rec, asset_path):
         m = np.identity(4)
         m[:3, :3] = dome_matrix(rec.rotation).T     # USD matrices act on row vectors
         UsdGeom.Xformable(dome).AddTransformOp().Set(Gf.Matrix4d(*m.ravel().tolist()))
+    if rec.ao_distance is not None:
+        # Blender's AO distance: how far the engine's ambient occlusion looks.
+        dome.GetPrim().CreateAttribute("lantern:aoDistance", Sdf.ValueTypeNames.Float).Set(
+            float(rec.ao_distance))
     set_blender_name(dome.GetPrim(), rec.name)
     return dome

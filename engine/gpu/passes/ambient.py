@@ -1,17 +1,37 @@
 """The ambient pass: the light that is everywhere, once, full screen: the dome
-(spherical-harmonics irradiance for diffuse, an analytic environment BRDF for
-specular), emission (added here and only here), and the dome as the background.
-It starts the HDR target.
+(spherical-harmonics irradiance for diffuse, the prefiltered environment and the
+split-sum table for the specular lobe and the coat; engine/gpu/environment.py keeps
+them per map), emission (added here and only here), and the dome as the background.
+Ambient occlusion, when the AO pass ran, dims the dome's light only. It starts the
+HDR target.
 
-reads: g_base, g_normal, g_mat, g_emit, g_depth, view   writes: hdr"""
+reads: g_base, g_normal, g_mat, g_emit, g_depth, view, ao (optional)   writes: hdr
+render passes (with the light pass): DiffDir, GlossDir, Env, Shadow: see LIGHTING_AOVS"""
 from __future__ import annotations
-
-import numpy as np
 
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
+from .ao import occludes
 
 GBUFFER = ("g_base", "g_normal", "g_mat", "g_emit", "g_depth")
+
+# The lighting render passes (core/passes.py), all four targets made together when one
+# is asked for (the shaders write them as one set of outputs). The ambient pass starts
+# them, the light pass adds to them:
+#   DiffDir   diffuse light leaving the surface, albedo included: the dome's (its
+#             occlusion applied) and every light's (its shadow applied)
+#   GlossDir  the same for the specular lobe and the clearcoat
+#   Env       the dome seen directly where nothing is drawn; 0 on surfaces
+#   Shadow    light reaching the surface with shadows over light without, summed over
+#             the lights (Rec. 709 luminance, grey; 1 where no light reaches)
+# With neither FXAA nor post, Combined = DiffDir + GlossDir + Env + Emit.
+LIGHTING_AOVS = {"DiffDir": ("aov_diffuse", 0), "GlossDir": ("aov_glossy", 0),
+                 "Env": ("aov_env", 0), "Shadow": ("aov_shadow", 0)}
+LIGHTING_TARGETS = ("aov_diffuse", "aov_glossy", "aov_env", "aov_shadow")
+
+
+def lighting_aovs(frame) -> bool:
+    return any(name in frame.aovs for name in LIGHTING_AOVS)
 
 
 def bind_gbuffer(board, prog, view):
@@ -25,43 +45,50 @@ def bind_gbuffer(board, prog, view):
 class AmbientPass(Pass):
     name = "ambient"
     reads = GBUFFER + ("view",)
+    optional = ("ao",)
     writes = ("hdr",)
+    aovs = LIGHTING_AOVS
 
-    def __init__(self, ctx, pool, programs, textures):
-        self.ctx, self.pool, self.programs, self.textures = ctx, pool, programs, textures
-        self._vao = None
+    def aov_targets(self, frame):
+        return LIGHTING_TARGETS if lighting_aovs(frame) else ()
+
+    def __init__(self, ctx, pool, programs, environment):
+        self.ctx, self.pool, self.programs, self.environment = ctx, pool, programs, environment
 
     def execute(self, frame, board):
         ctx = self.ctx
-        fbo = self.pool.framebuffer([board["hdr"]])
+        dome = frame.scene.dome
+        env = self.environment.prepare(dome)    # draws into its own targets: first
+        if dome is not None and dome.texture in self.environment.failed:
+            warnings = frame.scene.warnings.setdefault(dome.name, [])
+            line = (f"{dome.name}: dome texture {dome.texture!r} unreadable "
+                    f"({self.environment.failed[dome.texture]}); using the uniform colour")
+            if line not in warnings:
+                warnings.append(line)
+        aovs = lighting_aovs(frame)
+        for name in LIGHTING_TARGETS if aovs else ():
+            clear = self.pool.framebuffer([board[name]])
+            clear.use()
+            clear.clear(0.0, 0.0, 0.0, 0.0)
+        fbo = self.pool.framebuffer([board["hdr"]] + ([board[n] for n in LIGHTING_TARGETS[:3]]
+                                                       if aovs else []))
         fbo.use()
         fbo.clear(0.0, 0.0, 0.0, 0.0)
         ctx.disable(ctx.DEPTH_TEST | ctx.CULL_FACE)
         ctx.enable(ctx.BLEND)
         ctx.blend_func = ctx.ONE, ctx.ONE
         ctx.blend_equation = ctx.FUNC_ADD
-        prog = self.programs.get("fullscreen.vert", "ambient.frag",
-                                 environment_defines(frame.scene))
+        # The AO pass may run only for its render pass; the image uses it when the
+        # preset has occlusion.
+        ao = board.get("ao") if occludes(frame) else None
+        defines = (["HAS_DOME_MAP"] if env is not None else []) + (["HAS_AO"] if ao else []) + \
+            (["WRITE_AOVS"] if aovs else [])
+        prog = self.programs.get("fullscreen.vert", "ambient.frag", defines)
         bind_gbuffer(board, prog, board["view"])
+        self.environment.bind(prog, dome, env)
+        if ao is not None:
+            ao.use(UNITS["ao_tex"])
+        set_uniform(prog, "has_dome", dome is not None)
         set_uniform(prog, "transparent", bool(frame.transparent))
-        set_environment(prog, frame.scene, self.textures)
         self.programs.fullscreen(prog)
         ctx.disable(ctx.BLEND)
-
-
-def environment_defines(scene) -> list:
-    """The variant of a program including shaders/environment.glsl."""
-    dome = scene.dome
-    return ["HAS_DOME_MAP"] if dome is not None and dome.texture else []
-
-
-def set_environment(prog, scene, textures):
-    """The dome's uniforms of shaders/environment.glsl (every pass lit by the dome)."""
-    dome = scene.dome
-    set_uniform(prog, "has_dome", dome is not None)
-    if dome is not None:
-        set_uniform(prog, "dome_sh", np.asarray(dome.sh, "f4"))
-        set_uniform(prog, "dome_radiance", dome.radiance)
-        if dome.texture:
-            textures.dome(dome.texture).use(UNITS["dome_map"])
-            set_uniform(prog, "dome_to_local", dome.rotation.T)

@@ -9,8 +9,9 @@ draw here only their opaque texels, and not at all without an opacity map: the
 transparency pass draws the rest.
 
 reads: skinned (posed geometry), view
-writes: g_base (base colour + alpha), g_normal (world normal), g_mat (metallic,
-        roughness, dielectric F0), g_emit (emission), all RGBA16F; g_depth (32-bit
+writes: g_base (base colour + alpha), g_normal (world normal, clearcoat roughness),
+        g_mat (metallic, roughness, dielectric F0, clearcoat), g_emit (emission), all
+        RGBA16F; g_depth (32-bit
         float, reversed: cleared to 0, tested GREATER; engine/view.py)
 render passes: IndexOB, IndexMA into g_index (RG32F), only when asked for (a
         shader variant with a fifth output)"""
@@ -92,13 +93,17 @@ def set_material(prog, mat, textures, threshold):
     set_uniform(prog, "u_emissive", mat.emissive)
     set_uniform(prog, "u_opacity", mat.opacity)
     set_uniform(prog, "u_opacity_threshold", threshold)
+    set_uniform(prog, "u_clearcoat", mat.clearcoat)
+    set_uniform(prog, "u_clearcoat_roughness", mat.clearcoat_roughness)
     set_uniform(prog, "u_material_index", float(mat.pass_index))
     for name, short, _ in MAP_SLOTS:
         ref = mat.maps.get(name)
         if ref is None:
             continue
         unit = UNITS[f"t_{short}"]
-        textures.get(ref.path, ref.colorspace).use(unit)
+        tex, decode = textures.get(ref.path, ref.colorspace)
+        tex.use(unit)
+        set_uniform(prog, f"m_{short}.srgb", bool(decode))
         textures.sampler(ref.wrap_s, ref.wrap_t).use(unit)
         set_uniform(prog, f"m_{short}.wrap", (WRAP.get(ref.wrap_s, 0), WRAP.get(ref.wrap_t, 0)))
         set_uniform(prog, f"m_{short}.scale", tuple(ref.scale))

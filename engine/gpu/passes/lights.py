@@ -16,7 +16,8 @@ Shadow-casting lights read their map from the shadow pass. Volumes are placed
 relative to the camera (positions are camera-relative, as the surfaces they light).
 
 reads: g_base, g_normal, g_mat, g_emit, g_depth, hdr, view, shadow_maps (optional)
-writes: hdr, depth_stencil"""
+writes: hdr, depth_stencil
+render passes: adds to DiffDir, GlossDir, Shadow (passes/ambient.py LIGHTING_AOVS)"""
 from __future__ import annotations
 
 import math
@@ -27,7 +28,7 @@ from ....core.lights import KINDS, POINT, SPOT, SUN
 from ...view import translate
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
-from .ambient import GBUFFER, bind_gbuffer
+from .ambient import GBUFFER, LIGHTING_AOVS, LIGHTING_TARGETS, bind_gbuffer, lighting_aovs
 
 CONE_SIDES = 24
 CONE_MAX_HALF_ANGLE = 75.0   # wider spots use the sphere
@@ -92,21 +93,30 @@ class LightPass(Pass):
     reads = GBUFFER + ("hdr", "view", "shadow_maps")
     writes = ("hdr", "depth_stencil")
 
-    def __init__(self, ctx, pool, programs, uploads, stencil, table, geometry, preset):
+    def __init__(self, ctx, pool, programs, uploads, stencil, table, geometry, preset, environment):
         self.ctx, self.pool, self.programs, self.uploads = ctx, pool, programs, uploads
+        self.environment = environment      # the split-sum table every BRDF reads
         self.stencil, self.table, self.geometry, self.preset = stencil, table, geometry, preset
         self._sphere = None
         self._cones = {}            # light path -> (cone params, vertex buffer, vertices)
         self._instances = None      # (light rows, instance buffer) of the batched draw
         self._vaos = {}
 
+    aovs = LIGHTING_AOVS
+
+    def aov_targets(self, frame):
+        return LIGHTING_TARGETS if lighting_aovs(frame) else ()
+
     def needed(self, frame):
-        return bool(frame.scene.lights)
+        return bool(frame.scene.lights) or lighting_aovs(frame)
 
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]
         shadow_maps = board.get("shadow_maps", {})
-        fbo = self.pool.framebuffer([board["hdr"]], depth_stencil=board["depth_stencil"])
+        self._aovs = lighting_aovs(frame)
+        colors = [board["hdr"]] + ([board["aov_diffuse"], board["aov_glossy"], board["aov_shadow"]]
+                                   if self._aovs else [])
+        fbo = self.pool.framebuffer(colors, depth_stencil=board["depth_stencil"])
         fbo.depth_mask = True
         fbo.use()
         self.stencil.clear()
@@ -127,6 +137,7 @@ class LightPass(Pass):
         ctx.blend_func = ctx.ONE, ctx.ONE
         ctx.blend_equation = ctx.FUNC_ADD
         self.table.texture.use(UNITS["u_lights"])
+        self.environment.lut.use(UNITS["dfg_lut"])
 
         has_casters = any(d.ranges for d in self.geometry.draws.values())
         batched = []
@@ -185,7 +196,8 @@ class LightPass(Pass):
                 self._drop_vaos(self._instances[1])
                 self._instances[1].release()
             self._instances = (rows, self.uploads.buffer(rows, kind="lights"))
-        prog = self.programs.get("volume.vert", "light.frag", ["LIGHT_SPHERE", "LIGHTS_INSTANCED"])
+        prog = self.programs.get("volume.vert", "light.frag", ["LIGHT_SPHERE", "LIGHTS_INSTANCED"]
+                                 + (["WRITE_AOVS"] if self._aovs else []))
         bind_gbuffer(board, prog, view)
         set_uniform(prog, "mvp", view.view_proj)
         ctx.enable(ctx.BLEND)
@@ -203,7 +215,8 @@ class LightPass(Pass):
         frame.count("batched_lights", len(paths))
 
     def _program(self, board, view, vert, variant, row, sm):
-        prog = self.programs.get(vert, "light.frag", [variant] + (["HAS_SHADOW"] if sm else []))
+        prog = self.programs.get(vert, "light.frag", [variant] + (["HAS_SHADOW"] if sm else [])
+                                 + (["WRITE_AOVS"] if self._aovs else []))
         bind_gbuffer(board, prog, view)
         set_uniform(prog, "light_index", row)
         if sm is not None:

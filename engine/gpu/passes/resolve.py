@@ -1,7 +1,8 @@
 """The resolve pass: the HDR accumulation into a float32 image, read back top row
-first. Alpha is 1, or coverage when the render is transparent.
+first. Alpha is 1, or coverage when the render is transparent (the HDR target's
+alpha: 1 where a surface was drawn, filtered by anti-aliasing).
 
-reads: hdr, g_depth   writes: output, rgba (the image, numpy)"""
+reads: hdr   writes: output, rgba (the image, numpy)"""
 from __future__ import annotations
 
 import numpy as np
@@ -12,7 +13,7 @@ from ..programs import UNITS, set_uniform
 
 class ResolvePass(Pass):
     name = "resolve"
-    reads = ("hdr", "g_depth")
+    reads = ("hdr",)
     writes = ("output", "rgba")
 
     def __init__(self, ctx, pool, programs):
@@ -25,7 +26,6 @@ class ResolvePass(Pass):
         ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
         prog = self.programs.get("fullscreen.vert", "resolve.frag")
         board["hdr"].use(UNITS["hdr"])
-        board["g_depth"].use(UNITS["g_depth"])
         set_uniform(prog, "transparent", bool(frame.transparent))
         self.programs.fullscreen(prog)
         data = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32)

@@ -38,7 +38,6 @@ from ....core.lights import SUN
 from ...scene import OPAQUE_ALPHA
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
-from .ambient import environment_defines, set_environment
 from .gbuffer import map_defines, set_material
 
 MAX_FORWARD_LIGHTS = 32       # shaders/transparent.frag
@@ -49,10 +48,11 @@ class TransparencyPass(Pass):
     reads = ("hdr", "g_depth", "view", "shadow_maps")
     writes = ("hdr",)
 
-    def __init__(self, ctx, pool, programs, geometry, textures, lights, depth, preset):
+    def __init__(self, ctx, pool, programs, geometry, textures, lights, environment, depth,
+                 preset):
         self.ctx, self.pool, self.programs = ctx, pool, programs
         self.geometry, self.textures, self.lights = geometry, textures, lights
-        self.depth, self.preset = depth, preset
+        self.environment, self.depth, self.preset = environment, depth, preset
 
     def needed(self, frame) -> bool:
         blended = blended_materials(frame.scene)
@@ -75,9 +75,11 @@ class TransparencyPass(Pass):
         self.geometry.bind_objects(UNITS["u_objects"])
         self.lights.texture.use(UNITS["u_lights"])
         shadow_maps = board.get("shadow_maps", {})
+        dome = frame.scene.dome
+        env = self.environment.prepare(dome)     # the ambient pass's, kept for the session
         try:
             for d, lo, hi in layers:
-                self._draw_object(frame, view, d, lo, hi, shadow_maps)
+                self._draw_object(frame, view, d, lo, hi, shadow_maps, (dome, env))
         finally:
             fbo.depth_mask = True
             ctx.front_face = "ccw"
@@ -101,7 +103,7 @@ class TransparencyPass(Pass):
                        key=lambda i: (-far[i], draws[pick[i]].path))
         return [(draws[pick[i]], lo[i], hi[i]) for i in order]
 
-    def _draw_object(self, frame, view, d, lo, hi, shadow_maps):
+    def _draw_object(self, frame, view, d, lo, hi, shadow_maps, environment):
         ctx = self.ctx
         materials = frame.scene.materials
         store = self.geometry.meshes[d.mesh_key][0]
@@ -118,10 +120,10 @@ class TransparencyPass(Pass):
                           for i in range(0, len(lit), MAX_FORWARD_LIGHTS)] or [[]]
                 for k, rows in enumerate(chunks):
                     self._draw(frame, view, d, store, mat, first, count, rows, None,
-                               ambient=(k == 0))
+                               environment, ambient=(k == 0))
                 for row, sm in shadowed:
                     self._draw(frame, view, d, store, mat, first, count, [row], sm,
-                               ambient=False)
+                               environment, ambient=False)
 
     def _lights_reaching(self, scene, lo, hi, shadow_maps):
         """(rows of unshadowed lights, [(row, shadow map)]) that reach the box."""
@@ -142,9 +144,11 @@ class TransparencyPass(Pass):
                 shadowed.append((row, sm))
         return lit, shadowed
 
-    def _draw(self, frame, view, d, store, mat, first, count, rows, sm, ambient):
+    def _draw(self, frame, view, d, store, mat, first, count, rows, sm, environment,
+              ambient):
         ctx = self.ctx
-        defines = map_defines(mat) + environment_defines(frame.scene) + \
+        dome, env = environment
+        defines = map_defines(mat) + (["HAS_DOME_MAP"] if env is not None else []) + \
             (["AMBIENT"] if ambient else []) + (["HAS_SHADOW"] if sm is not None else [])
         prog = self.programs.get("gbuffer.vert", "transparent.frag", defines)
         set_uniform(prog, "view_proj", view.view_proj)
@@ -153,8 +157,8 @@ class TransparencyPass(Pass):
         set_uniform(prog, "u_size", tuple(float(s) for s in frame.size))
         set_material(prog, mat, self.textures, 0.0)
         set_uniform(prog, "u_opaque_alpha", OPAQUE_ALPHA if "opacity" in mat.maps else 2.0)
-        if ambient:
-            set_environment(prog, frame.scene, self.textures)
+        self.environment.bind(prog, dome, env)    # and the split-sum table every draw needs
+        set_uniform(prog, "has_dome", dome is not None)
         if "light_rows" in prog:
             prog["light_rows"].value = [int(r) for r in rows] + \
                 [0] * (MAX_FORWARD_LIGHTS - len(rows))

@@ -1,0 +1,137 @@
+#version 330 core
+#include "lib.glsl"
+// Screen-space ambient occlusion (seed 002), the fraction of a surface's cosine-
+// weighted hemisphere that sees the dome within `radius` (Blender's AO distance), by
+// a horizon search (GTAO, Jimenez et al. 2016): per slice through the view vector,
+// the highest horizon on each side within the radius, and the cosine-weighted
+// visible arc between them, integrated in closed form about the normal projected into
+// the slice. `slices` directions (the preset's rays) x `steps` depth samples per side,
+// rotated per pixel over a 4x4 tile (a Bayer pattern) that the bilateral blur
+// (ao_blur.frag) then averages away. Depth is read through lib.glsl's helpers.
+uniform sampler2D g_depth;
+uniform sampler2D g_normal;
+uniform mat4 inv_view_proj;
+uniform vec3 cam_forward;
+uniform bool cam_ortho;
+uniform float radius;        // world units
+uniform float pixel_scale;   // pixels per world unit at view depth 1 (orthographic: at any)
+uniform float max_pixels;    // the search never reaches further across the screen
+uniform int slices;
+uniform int steps;
+out float ao;
+
+// A 4x4 Bayer index in [0, 16): the tile's 16 pixels take 16 evenly spaced slice
+// rotations, so the blur's average is a stratified quadrature over the half circle
+// (random rotations over-weight some slice directions: -1.6 % on a grazing plane).
+float bayer4(ivec2 p) {
+    const int b[16] = int[16](0, 8, 2, 10, 12, 4, 14, 6, 3, 11, 1, 9, 15, 7, 13, 5);
+    return float(b[(p.y & 3) * 4 + (p.x & 3)]);
+}
+
+// The surface seen at window position w (pixels), on the camera ray through w itself,
+// so every sample of a slice lies in the slice's plane: a texel centre off the line,
+// or a texel's depth placed on it, lifts a grazing plane's horizon (-6 % on a floor).
+// Window depth is affine in screen space on a plane, so the bilinear depth of the four
+// texels around w is exact there; where one of them is the background, the texel w
+// falls in.
+vec3 position_at(vec2 w, out bool drawn) {
+    vec2 f = w - 0.5;
+    ivec2 b = clamp(ivec2(floor(f)), ivec2(0), textureSize(g_depth, 0) - 2);
+    vec2 t = clamp(f - vec2(b), 0.0, 1.0);
+    vec4 q = vec4(texelFetch(g_depth, b, 0).r, texelFetch(g_depth, b + ivec2(1, 0), 0).r,
+                  texelFetch(g_depth, b + ivec2(0, 1), 0).r, texelFetch(g_depth, b + ivec2(1, 1), 0).r);
+    float d = mix(mix(q.x, q.y, t.x), mix(q.z, q.w, t.x), t.y);
+    if (is_background(q.x) || is_background(q.y) || is_background(q.z) || is_background(q.w))
+        d = texelFetch(g_depth, ivec2(w), 0).r;
+    drawn = !is_background(d);
+    return position_from_depth(w / vec2(textureSize(g_depth, 0)), d, inv_view_proj);
+}
+
+// The geometric normal at px from the depth buffer (the neighbour on each axis whose
+// depth is closer, so edges do not bend it): the normal of the facet the samples lie
+// on. The interpolated shading normal would put neighbouring facets of a smooth,
+// faceted surface above its tangent plane (a sphere darkened 5 % at its rim).
+vec3 depth_normal(ivec2 px, vec3 p, vec3 fallback) {
+    ivec2 size = textureSize(g_depth, 0);
+    bool drawn;
+    vec3 best[2];
+    for (int axis = 0; axis < 2; ++axis) {
+        ivec2 e = axis == 0 ? ivec2(1, 0) : ivec2(0, 1);
+        float sgn = 1.0;
+        vec3 a = position_at(vec2(clamp(px + e, ivec2(0), size - 1)) + 0.5, drawn) - p;
+        if (!drawn) a = vec3(BIG);
+        vec3 b = p - position_at(vec2(clamp(px - e, ivec2(0), size - 1)) + 0.5, drawn);
+        if (!drawn) b = vec3(BIG);
+        best[axis] = dot(a, a) < dot(b, b) ? a : b;
+        if (dot(best[axis], best[axis]) >= BIG || dot(best[axis], best[axis]) == 0.0) return fallback;
+    }
+    vec3 n = cross(best[0], best[1]);
+    float len = length(n);
+    if (len < 1e-20) return fallback;
+    n /= len;
+    return dot(n, fallback) < 0.0 ? -n : n;
+}
+
+void main() {
+    ivec2 px = ivec2(gl_FragCoord.xy);
+    ivec2 size = textureSize(g_depth, 0);
+    float depth = texelFetch(g_depth, px, 0).r;
+    ao = 1.0;
+    if (is_background(depth)) return;
+    vec2 uv = (vec2(px) + 0.5) / vec2(size);
+    vec3 p = position_from_depth(uv, depth, inv_view_proj);
+    vec3 v = cam_ortho ? -cam_forward : normalize(-p);
+    vec3 n = depth_normal(px, p, normalize(texelFetch(g_normal, px, 0).xyz));
+    // A normal turned away from the viewer (a back face seen at a silhouette) has no
+    // visible hemisphere to search: take it as unoccluded.
+    if (dot(n, v) <= 0.0) return;
+    float z = cam_ortho ? 1.0 : max(dot(p, cam_forward), 1e-6);
+    float r_px = min(radius * pixel_scale / z, max_pixels);
+    if (r_px < 1.0) return;
+    float rotation = (bayer4(px) + 0.5) / 16.0;
+    float jitter = (bayer4(px.yx + ivec2(1, 2)) + 0.5) / 16.0;
+    float visible = 0.0;
+    for (int s = 0; s < slices; ++s) {
+        float phi = (float(s) + rotation) * PI / float(slices);
+        vec2 dir = vec2(cos(phi), sin(phi));
+        // The slice's screen direction as a 3D vector, and the normal projected into it.
+        vec3 along = position_from_depth(uv + dir / vec2(size), depth, inv_view_proj) - p;
+        vec3 ortho = along - dot(along, v) * v;
+        vec3 axis = normalize(cross(ortho, v));
+        vec3 proj_n = n - axis * dot(n, axis);
+        float proj_len = length(proj_n);
+        if (proj_len < 1e-4) { visible += 1.0; continue; }
+        float cos_n = clamp(dot(proj_n, v) / proj_len, -1.0, 1.0);
+        float angle_n = sign(dot(ortho, proj_n)) * acos(cos_n);
+        vec2 horizon = vec2(-1.0);          // cos of the highest horizon, + and - side
+        for (int side = 0; side < 2; ++side) {
+            vec2 d = side == 0 ? dir : -dir;
+            for (int j = 0; j < steps; ++j) {
+                // Steps crowd near the pixel, where small occluders are.
+                float t = (float(j) + jitter) / float(steps);
+                float offset = max(t * t * r_px, float(j) + 1.0);
+                if (offset > r_px) break;
+                vec2 w = gl_FragCoord.xy + d * offset;
+                if (any(lessThan(w, vec2(0.0))) || any(greaterThanEqual(w, vec2(size)))) break;
+                bool drawn;
+                vec3 delta = position_at(w, drawn) - p;
+                if (!drawn) continue;
+                float dist = length(delta);
+                if (dist < 1e-6) continue;
+                float c = clamp(dot(delta, v) / dist, -1.0, 1.0);
+                // Occluders fade out over the last fifth of the radius.
+                float fade = clamp((radius - dist) / (0.2 * radius), 0.0, 1.0);
+                horizon[side] = max(horizon[side], mix(-1.0, c, fade));
+            }
+        }
+        float h1 = angle_n + min(acos(horizon.x) - angle_n, 0.5 * PI);
+        float h0 = angle_n + max(-acos(horizon.y) - angle_n, -0.5 * PI);
+        float sin_n = sin(angle_n);
+        float arc = 0.25 * (cos_n + 2.0 * h0 * sin_n - cos(2.0 * h0 - angle_n))
+                  + 0.25 * (cos_n + 2.0 * h1 * sin_n - cos(2.0 * h1 - angle_n));
+        visible += proj_len * arc;
+    }
+    // Not clamped: with few slices one pixel's estimate may pass 1 (a grazing plane's
+    // steep slices weigh more than 1); the blur averages it to the true value first.
+    ao = visible / float(slices);
+}

@@ -1,0 +1,48 @@
+#version 330 core
+#include "lib.glsl"
+// Depth-aware (bilateral) blur of the raw occlusion over the 4x4 tile its noise
+// repeats on (ao.frag): neighbours on another surface (depth off the centre's plane
+// by more than a few percent, or a normal turned away) weigh nothing, so occlusion
+// never bleeds across edges.
+uniform sampler2D ao_tex;      // raw occlusion
+uniform sampler2D g_depth;
+uniform sampler2D g_normal;
+uniform mat4 inv_view_proj;
+layout(location = 0) out float ao;
+#ifdef WRITE_AOV
+layout(location = 1) out vec4 aov_ao;     // the AO render pass, grey
+#endif
+
+void main() {
+    ivec2 px = ivec2(gl_FragCoord.xy);
+    ivec2 size = textureSize(g_depth, 0);
+    float depth = texelFetch(g_depth, px, 0).r;
+    if (is_background(depth)) {
+        ao = 1.0;
+#ifdef WRITE_AOV
+        aov_ao = vec4(1.0);
+#endif
+        return;
+    }
+    vec3 p = position_from_depth((vec2(px) + 0.5) / vec2(size), depth, inv_view_proj);
+    vec3 n = normalize(texelFetch(g_normal, px, 0).xyz);
+    float scale = max(length(p), 1e-6);
+    float sum = 0.0, weight = 0.0;
+    for (int y = -2; y < 2; ++y) {
+        for (int x = -2; x < 2; ++x) {
+            ivec2 q = clamp(px + ivec2(x, y), ivec2(0), size - 1);
+            float dq = texelFetch(g_depth, q, 0).r;
+            if (is_background(dq)) continue;
+            vec3 pq = position_from_depth((vec2(q) + 0.5) / vec2(size), dq, inv_view_proj);
+            vec3 nq = normalize(texelFetch(g_normal, q, 0).xyz);
+            float plane = abs(dot(pq - p, n)) / scale;       // distance off p's plane
+            float w = exp(-plane * plane / (2.0 * 0.02 * 0.02)) * max(dot(n, nq), 0.0);
+            sum += texelFetch(ao_tex, q, 0).r * w;
+            weight += w;
+        }
+    }
+    ao = clamp(weight > 1e-6 ? sum / weight : texelFetch(ao_tex, px, 0).r, 0.0, 1.0);
+#ifdef WRITE_AOV
+    aov_ao = vec4(vec3(ao), 1.0);
+#endif
+}
