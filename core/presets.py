@@ -35,14 +35,14 @@ class Preset:
 
 
 PRESETS = {p.name: p for p in (
-    Preset("low", "Low", "Fastest: smallest shadow maps and fewest filter taps",
+    Preset("low", "Low", "Fastest: smallest shadow maps, fewest filter taps, light occlusion, FXAA",
            1.0, 16, 1, 512, 8, 8, 2, 2, 4, 1, True),
-    Preset("medium", "Medium", "Balanced quality and speed",
+    Preset("medium", "Medium", "Balanced quality and speed, FXAA",
            4.0, 32, 1, 1024, 16, 12, 3, 3, 8, 1, True),
-    Preset("high", "High", "Larger shadow maps and softer filtering",
-           8.0, 32, 2, 2048, 32, 16, 4, 4, 12, 2, False),
-    Preset("ultra", "Ultra", "Closest to Cycles, slowest",
-           16.0, 32, 2, 4096, 64, 32, 4, 8, 16, 3, False),
+    Preset("high", "High", "Larger shadow maps, 2x2 supersampling (F12 and command line)",
+           8.0, 32, 2, 2048, 16, 12, 4, 4, 12, 2, False),
+    Preset("ultra", "Ultra", "Closest to Cycles, slowest: 3x3 supersampling",
+           16.0, 32, 2, 4096, 32, 16, 4, 8, 16, 3, False),
 )}
 DEFAULT = "medium"
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 import time
 import weakref
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -106,6 +106,21 @@ class Session:
         # process's context goes with the process.
         self._finalizer = weakref.finalize(self, _release, renderer, self._reader)
         self._finalizer.atexit = False
+
+    def configure(self, **fields):
+        """Changes settings for the renders that follow (size, transparent, passes,
+        camera, ...), keeping the session's state; the preset is the session's own
+        (a different one needs another Session)."""
+        new = replace(self.settings, **fields)
+        if new.preset != self.settings.preset:
+            raise ValueError("a session keeps its preset; open another for "
+                             f"{new.preset!r}")
+        self._passes = render_passes.check(new.passes)
+        if (new.width, new.height) != (self.settings.width, self.settings.height):
+            self.size = usd_camera.resolution(self.stage, new.width, new.height)
+        if new.camera != self.settings.camera:
+            self._camera = None
+        self.settings = new
 
     @property
     def scene(self):

@@ -52,10 +52,10 @@ void main() {
         dome_light(s, ao, diffuse, glossy);
     }
     // Alpha: coverage (resolve.frag), averaged by anti-aliasing.
-    frag = vec4(finite(diffuse + glossy + background + emitted), is_background(depth) ? 0.0 : 1.0);
+    frag = vec4(diffuse + glossy + background + emitted, is_background(depth) ? 0.0 : 1.0);
 #ifdef WRITE_AOVS
-    aov_diffuse = vec4(finite(diffuse), 0.0);
-    aov_glossy = vec4(finite(glossy), 0.0);
-    aov_env = vec4(finite(background), 0.0);
+    aov_diffuse = vec4(diffuse, 0.0);
+    aov_glossy = vec4(glossy, 0.0);
+    aov_env = vec4(background, 0.0);
 #endif
 }

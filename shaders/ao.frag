@@ -52,6 +52,7 @@ vec3 position_at(vec2 w, out bool drawn) {
 // on. The interpolated shading normal would put neighbouring facets of a smooth,
 // faceted surface above its tangent plane (a sphere darkened 5 % at its rim).
 vec3 depth_normal(ivec2 px, vec3 p, vec3 fallback) {
+    const float BIG = 1e30;      // a neighbour that is not there: never the nearer one
     ivec2 size = textureSize(g_depth, 0);
     bool drawn;
     vec3 best[2];
@@ -63,7 +64,7 @@ vec3 depth_normal(ivec2 px, vec3 p, vec3 fallback) {
         vec3 b = p - position_at(vec2(clamp(px - e, ivec2(0), size - 1)) + 0.5, drawn);
         if (!drawn) b = vec3(BIG);
         best[axis] = dot(a, a) < dot(b, b) ? a : b;
-        if (dot(best[axis], best[axis]) >= BIG || dot(best[axis], best[axis]) == 0.0) return fallback;
+        if (!(dot(best[axis], best[axis]) < BIG) || dot(best[axis], best[axis]) == 0.0) return fallback;
     }
     vec3 n = cross(best[0], best[1]);
     float len = length(n);
@@ -117,7 +118,7 @@ void main() {
                 vec3 delta = position_at(w, drawn) - p;
                 if (!drawn) continue;
                 float dist = length(delta);
-                if (dist < 1e-6) continue;
+                if (dist < 1e-6 * length(p)) continue;
                 float c = clamp(dot(delta, v) / dist, -1.0, 1.0);
                 // Occluders fade out over the last fifth of the radius.
                 float fade = clamp((radius - dist) / (0.2 * radius), 0.0, 1.0);

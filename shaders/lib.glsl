@@ -1,6 +1,5 @@
 // Shared by every pass: constants, the depth convention, the BRDF, SH irradiance.
 const float PI = 3.14159265358979;
-const float BIG = 1e30;
 
 // --- Depth: read it only through these (engine/view.py states the convention) ----
 // Depth is a 32-bit float, reversed: 1 at the near plane, towards 0 far away (an
@@ -170,8 +169,5 @@ vec3 srgb_to_linear(vec3 c) {
     return mix(pow((c + 0.055) / 1.055, vec3(2.4)), c / 12.92, vec3(low));
 }
 
-// Never hand NaN or Inf on to the blend unit.
-vec3 finite(vec3 c) {
-    bvec3 bad = bvec3(isnan(c.x) || isinf(c.x), isnan(c.y) || isinf(c.y), isnan(c.z) || isinf(c.z));
-    return min(mix(c, vec3(0.0), bvec3(bad)), vec3(BIG));
-}
+// No shader hides NaN or Inf: the resolve pass counts the pixels that hold them and
+// names the prims they lie on (engine/gpu/passes/resolve.py).

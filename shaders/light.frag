@@ -19,9 +19,6 @@ flat in int v_light;        // many shadowless sphere lights in one draw (volume
 uniform int light_index;
 #endif
 
-// The HDR target is RGBA16F: one light never writes more than it holds.
-const float HDR_MAX = 65000.0;
-
 #ifdef HAS_SHADOW
 #include "shadow_lookup.glsl"
 #endif
@@ -65,11 +62,11 @@ void main() {
 #ifdef HAS_SHADOW
     lit = light_shadow(p, n, dot(p, cam_forward));
 #endif
-    frag = vec4(min(finite(radiance * lit), vec3(HDR_MAX)), 0.0);
+    frag = vec4(radiance * lit, 0.0);   // NaN or Inf goes through: the resolve pass counts it
 #ifdef WRITE_AOVS
-    aov_diffuse = vec4(finite(diffuse * lit), 0.0);
-    aov_glossy = vec4(finite(glossy * lit), 0.0);
-    float luminance = dot(finite(radiance), vec3(0.2126, 0.7152, 0.0722));
+    aov_diffuse = vec4(diffuse * lit, 0.0);
+    aov_glossy = vec4(glossy * lit, 0.0);
+    float luminance = dot(radiance, vec3(0.2126, 0.7152, 0.0722));
     aov_shadow = vec4(luminance * lit, luminance, 0.0, 0.0);
 #endif
 }

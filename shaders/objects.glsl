@@ -1,18 +1,23 @@
 // Per-object data (engine/gpu/geometry.py ObjectTable): 8 texels per object in a flat
 // RGBA32F texture OBJECT_TEX_W wide: the model matrix's columns (the fourth holding
-// the translation's hi float), the normal matrix's columns (the first one's w holds
-// the object's pass index), the translation's lo float. The object is an instanced
-// attribute read at each indirect command's
+// the translation's hi float), the normal matrix's columns (the first one's w holding
+// the object's render-pass index), the translation's lo float. The object is an
+// instanced attribute read at each indirect command's
 // baseInstance (OBJECT_ATTRIBUTE, the GL 4.3 multi-draw path) or a uniform set per
-// draw (the GL 3.3 path).
+// draw (the GL 3.3 path). The instances of an instanced draw (a PointInstancer's)
+// have consecutive ids: the attribute steps per instance, the uniform adds
+// gl_InstanceID.
 #include "origin.glsl"
 uniform sampler2D u_objects;
-#ifdef OBJECT_ATTRIBUTE
+#if defined(OBJECT_SINGLE)
+uniform int u_object;           // one object, whatever the instancing (point sprites)
+#define OBJECT_ID u_object
+#elif defined(OBJECT_ATTRIBUTE)
 in int in_object;
 #define OBJECT_ID in_object
 #else
 uniform int u_object;
-#define OBJECT_ID u_object
+#define OBJECT_ID (u_object + gl_InstanceID)
 #endif
 const int OBJECT_TEX_W = 4096;
 vec4 object_texel(int k) {

@@ -191,11 +191,13 @@ float plane_ref(vec3 w, vec3 q, vec3 n, vec3 c) {
     return min(ref, 0.999 * shadow_far);
 }
 
-// The map's raw distance along the ray from c through w; BIG outside the map.
+const float NO_SURFACE = 1e30;
+
+// The map's raw distance along the ray from c through w; NO_SURFACE outside the map.
 float map_distance(vec3 w, vec3 c) {
     vec2 uv;
     float z;
-    if (!shadow_uv(w, c, 0, uv, z)) return BIG;
+    if (!shadow_uv(w, c, 0, uv, z)) return NO_SURFACE;
     return texture(shadow_raw, uv).r * shadow_far;
 }
 
@@ -227,7 +229,7 @@ float area_shadow_factor(vec3 p, vec3 n, vec3 c, vec3 x, vec3 y, vec2 half_exten
     float ign = fract(52.9829189 * fract(dot(gl_FragCoord.xy, vec2(0.06711056, 0.00583715))));
     vec2 jitter = vec2(ign, fract(ign * 1.6180340 + 0.5));
 
-    float blockers = 0.0, block_sum = 0.0, nearest = BIG, farthest = 0.0;
+    float blockers = 0.0, block_sum = 0.0, nearest = NO_SURFACE, farthest = 0.0;
     for (int i = 0; i < blocker_taps; ++i) {
         vec2 s = shape_point(lattice(i, blocker_taps, jitter), disk);
         vec3 w = q + (ex * s.x + ey * s.y) * AREA_SEARCH;

@@ -31,8 +31,6 @@ uniform float u_opaque_alpha;   // texels at or above it are the G-buffer's (Mat
 uniform int n_lights;
 uniform int light_rows[MAX_FORWARD_LIGHTS];
 
-const float HDR_MAX = 65000.0;  // as light.frag: one draw never writes more than float16 holds
-
 out vec4 frag;
 
 void main() {
@@ -55,9 +53,9 @@ void main() {
         if (max(r.r, max(r.g, r.b)) > 0.0)
             r *= light_shadow(p, m.n, dot(p, cam_forward));
 #endif
-        c += min(finite(r), vec3(HDR_MAX));
+        c += r;
     }
-    c = min(finite(c), vec3(HDR_MAX));
+    // NaN or Inf goes through, as the light pass lets it: the resolve pass counts it.
 #ifdef AMBIENT
     frag = vec4(alpha * c, alpha);
 #else

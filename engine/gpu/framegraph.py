@@ -34,7 +34,8 @@ TARGETS = {
     "g_depth": "depth",         # 32-bit float, reversed (engine/view.py)
     "ao_raw": "r32f",          # ambient occlusion before its blur
     "ao": "r32f",              # ambient occlusion of the dome's light
-    "hdr": "rgba16f",          # light accumulation
+    "hdr": "rgba32f",          # light accumulation: float32, 1e-38..3e38 (a 1e-6 W and a
+                               # 1e6 W light alike; float16 underflowed and overflowed)
     "depth_stencil": "depth_stencil",  # scene depth copy and light-volume marks
     "output": "rgba32f",
     # Render passes (AOVs), only when asked for (core/passes.py).

@@ -53,8 +53,8 @@ def supersample_factor(frame, size, max_texture: int) -> int:
 # Every counter a render reports, zero when nothing of the kind happened.
 COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow_maps",
             "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
-            "light_volumes", "stencil_marks", "batched_lights", "transparent_objects",
-            "transparent_draws")
+            "light_volumes", "stencil_marks", "batched_lights", "instances_drawn",
+            "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws")
 
 
 class Renderer:
@@ -75,6 +75,7 @@ class Renderer:
         self.skinning = SkinningPass(ctx, self.uploads, programs, self.geometry, gl.scratch)
         self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights, preset,
                                   self.depth, self.textures)
+        self.resolve = ResolvePass(ctx, self.pool, programs, self.geometry, self.depth)
         self.graph = FrameGraph(ctx, self.pool, [
             self.skinning,
             ViewPass(self.geometry, self.depth),
@@ -89,7 +90,7 @@ class Renderer:
                              self.lights, self.environment, self.depth, preset),
             SupersamplePass(ctx, self.pool, programs),
             PostPass(ctx, self.pool, programs),
-            ResolvePass(ctx, self.pool, programs),
+            self.resolve,
         ])
         self._cull_backfaces = None
 
@@ -142,9 +143,9 @@ class Renderer:
         return board["rgba"], board["aovs"], frame.stats, frame.timings
 
     def warnings(self) -> list:
-        """What the GL side could not use (images it could not read), as of the last
-        render."""
-        return list(self.textures.failed.values())
+        """What the GL side could not use (images it could not read) and the last
+        render's non-finite pixels, named by the prims they lie on."""
+        return list(self.textures.failed.values()) + self.resolve.warnings
 
     def skinned_points(self, scene, changes) -> dict:
         """{mesh path: (points, normals)} of every skinned mesh at this sync's time,

@@ -111,16 +111,14 @@ class MaterialTextures:
 
     def _image(self, path):
         """The file's pixels, or a magenta texel when it cannot be read: the one place
-        the engine's image-reading errors are caught (the reader's own error types vary
-        with the library: ValueError, OSError, SyntaxError from a broken PNG, ...)."""
+        the engine's image-reading errors are caught (engine/image_io raises ImageError,
+        a ValueError, naming the file; the file system raises OSError)."""
         try:
             img = read_rgba(path)
             if img.ndim != 3 or img.shape[0] < 1 or img.shape[1] < 1:
                 raise ValueError(f"an image of shape {img.shape}")
             return img
-        except ImportError:
-            raise                     # a reader missing is the installation's fault, not the file's
-        except Exception as exc:  # noqa: BLE001 (any reader failure is this file's fault)
+        except (ValueError, OSError) as exc:
             reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
             self.failed[path] = f"{path}: cannot be read as an image ({reason}); magenta used"
             return np.array([[[255, 0, 255, 255]]], np.uint8)

@@ -88,6 +88,8 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None) -> MeshData:
         raise MeshError("missing points, faceVertexCounts or faceVertexIndices")
     pts = np.asarray(pts, np.float64)
     counts = np.asarray(counts, np.int64)
+    if not len(counts):
+        raise MeshError(f"no faces ({len(pts)} points only)")
     idx = np.asarray(idx, np.int64)
     if counts.sum() != len(idx):
         raise MeshError(f"faceVertexCounts sum {counts.sum()} != {len(idx)} indices")

@@ -351,7 +351,10 @@ def blend_weights(skel_query, sq, bsq_cache, prim, time):
         return []
     mapper = sq.GetBlendShapeMapper()
     if mapper and not mapper.IsNull() and not mapper.IsIdentity():
-        w = mapper.Remap(w, Vt.FloatArray(), 1, 0.0)
+        # The animation's blend shapes in the mesh's order (float weights: a Python
+        # 0.0 default would be a double, which UsdSkel refuses); shapes the animation
+        # lacks get 0.
+        w = mapper.Remap(Vt.FloatArray(w))
     key = str(prim.GetPath())
     bsq = bsq_cache.get(key)
     if bsq is None:

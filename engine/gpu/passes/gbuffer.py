@@ -77,10 +77,33 @@ class GBufferPass(Pass):
                 ctx.disable(ctx.CULL_FACE)
             self.geometry.draw_batch(batch, prog)
             frame.count("draw_calls", batch.count)
+            frame.count("instances_drawn", batch.instances)
         ctx.front_face = "ccw"
-        ctx.disable(ctx.CULL_FACE | ctx.DEPTH_TEST)
+        ctx.disable(ctx.CULL_FACE)
+        if self.geometry.points.clouds:
+            self._points(frame, view, materials)
+        ctx.disable(ctx.DEPTH_TEST)
         self.depth.far_clip(False)
 
+    def _points(self, frame, view, materials):
+        """Points prims: spheres facing the camera (points.vert), depth-tested with
+        the meshes."""
+        cam = view.camera
+
+        def setup(prog, cloud):
+            set_uniform(prog, "view_proj", view.view_proj)
+            set_uniform(prog, "u_window", view.window)
+            set_uniform(prog, "u_far", view.far_clip)
+            set_uniform(prog, "u_face_axis", bool(cam.ortho))
+            set_uniform(prog, "u_axis", cam.forward)
+            view.set_origin(prog)
+            mat = materials[cloud.material]
+            set_material(prog, mat, self.textures, mat.opacity_threshold)
+
+        draws, points = self.geometry.points.draw(
+            self.programs, "gbuffer", setup, lambda lo, hi: not view.outside(lo[None], hi[None])[0])
+        frame.count("draw_calls", draws)
+        frame.count("points_drawn", points)
 
 
 def set_material(prog, mat, textures, threshold):

@@ -139,7 +139,7 @@ class LightPass(Pass):
         self.table.texture.use(UNITS["u_lights"])
         self.environment.lut.use(UNITS["dfg_lut"])
 
-        has_casters = any(d.ranges for d in self.geometry.draws.values())
+        has_casters = self.geometry.has_casters()
         batched = []
         for path, light in frame.scene.lights.items():
             R = self.table.ranges[path]

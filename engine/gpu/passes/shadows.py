@@ -262,7 +262,7 @@ class ShadowPass(Pass):
         self._see_through = None   # what the kept maps' see-through casters were drawn with
 
     def needed(self, frame):
-        has_casters = any(d.ranges for d in self.geometry.draws.values())
+        has_casters = self.geometry.has_casters()
         wanted = has_casters and any(
             casts(light, self.lights.ranges.get(path, 0.0))
             for path, light in frame.scene.lights.items())
@@ -352,6 +352,9 @@ class ShadowPass(Pass):
             set_uniform(prog, "view_proj", clip @ sm.mats[i])
             frame.count("shadow_draws", self.geometry.draw_casters(prog))
             sm.stochastic |= self._draw_see_through(frame, sm, light, clip @ sm.mats[i])
+            if self.geometry.points.clouds:
+                frame.count("shadow_draws", self._draw_points(sm, light, clip @ sm.mats[i],
+                                                              BIAS @ sm.mats[i]))
         ctx.scissor = None
         ctx.disable(ctx.DEPTH_TEST)
 
@@ -359,7 +362,7 @@ class ShadowPass(Pass):
         """Ranges of cut-out and blended materials, each testing its opacity
         (shadow.frag ALPHA_TEST), one draw per range; returns whether any was blended."""
         blended = False
-        for store, name, first, count, oid in self.geometry.alpha_casters():
+        for store, name, first, count, oid, n in self.geometry.alpha_casters():
             mat = frame.scene.materials[name]
             prog = self.programs.get("shadow.vert", "shadow.frag", ["ALPHA_TEST"] + (
                 ["HAS_OPACITY_MAP"] if "opacity" in mat.maps else []))
@@ -371,10 +374,26 @@ class ShadowPass(Pass):
             set_material(prog, mat, self.textures,
                          mat.opacity_threshold if mat.alpha == "clip" else 0.0)
             prog["u_object"].value = int(oid)
-            store.vao(prog).render(self.ctx.TRIANGLES, vertices=int(count), first=int(first))
+            store.vao(prog).render(self.ctx.TRIANGLES, vertices=int(count), first=int(first),
+                                   instances=int(n))
             frame.count("shadow_draws")
             blended |= mat.alpha == "blend"
         return blended
+
+    def _draw_points(self, sm, light, view_proj, window) -> int:
+        """Point clouds into a tile: spheres facing the light (radial maps) or across
+        the sun's direction, writing the same depth as meshes do."""
+        def setup(prog, cloud):
+            set_uniform(prog, "view_proj", view_proj)
+            set_uniform(prog, "u_window", window)
+            set_uniform(prog, "u_far", 1e30)
+            set_uniform(prog, "radial", sm.radial)
+            set_uniform(prog, "far", sm.far)
+            set_uniform(prog, "u_face_axis", not sm.radial)
+            set_uniform(prog, "u_axis", np.asarray(light.direction, np.float64))
+            set_origin(prog, sm.anchor)
+        draws, _ = self.geometry.points.draw(self.programs, "shadow", setup)
+        return draws
 
     def _drop(self, paths):
         for path in paths:

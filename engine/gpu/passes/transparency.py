@@ -170,7 +170,8 @@ class TransparencyPass(Pass):
         else:
             ctx.blend_func = ctx.ONE, ctx.ONE
         prog["u_object"].value = int(d.oid)
-        store.vao(prog).render(ctx.TRIANGLES, vertices=int(count), first=int(first))
+        store.vao(prog).render(ctx.TRIANGLES, vertices=int(count), first=int(first),
+                               instances=int(d.n))
         frame.count("transparent_draws")
 
 

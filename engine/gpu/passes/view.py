@@ -25,6 +25,7 @@ class View:
     camera: object
     origin: np.ndarray             # the eye, world, float64: what positions are relative to
     view_proj: np.ndarray          # camera-relative -> clip, reversed depth (what draws use)
+    window: np.ndarray             # camera-relative -> (x, y in [0, 1], window depth, w)
     inv_view_proj: np.ndarray      # (x, y in [0, 1], window depth) -> camera-relative
     cull_view_proj: np.ndarray     # camera-relative -> clip with the camera's finite far
     planes: np.ndarray             # frustum planes of cull_view_proj, camera-relative
@@ -63,10 +64,10 @@ def set_origin(prog, origin):
 def make_view(camera, zero_to_one, boxes=None, bounds=None) -> View:
     rel = relative_view(camera)
     cull = np.array(camera.proj, np.float64) @ rel
+    window = window_matrix(camera)
     return View(camera, np.array(camera.position, np.float64),
-                render_projection(camera, zero_to_one) @ rel,
-                np.linalg.inv(window_matrix(camera)), cull, frustum_planes(cull),
-                boxes, bounds)
+                render_projection(camera, zero_to_one) @ rel, window,
+                np.linalg.inv(window), cull, frustum_planes(cull), boxes, bounds)
 
 
 class ViewPass(Pass):
@@ -81,8 +82,7 @@ class ViewPass(Pass):
         posed = board.get("skinned")
         local_of = (lambda d: posed.boxes.get(d.path, d.local)) if posed else None
         boxes = self.geometry.world_boxes(local_of)
-        _, lo, hi = boxes
-        bounds = (lo.min(axis=0), hi.max(axis=0)) if len(lo) else None
+        bounds = _union(boxes, self.geometry.points.boxes())
         camera = frame.camera
         if camera is None:
             w, h = frame.size
@@ -92,5 +92,12 @@ class ViewPass(Pass):
     def _drawn_bounds(self, posed):
         """The world box of what is drawn, skinned meshes by their skinned vertices."""
         local_of = (lambda d: posed.exact_box(d) if d.skinned else d.local) if posed else None
-        _, lo, hi = self.geometry.world_boxes(local_of)
-        return (lo.min(axis=0), hi.max(axis=0)) if len(lo) else None
+        return _union(self.geometry.world_boxes(local_of), self.geometry.points.boxes())
+
+
+def _union(boxes, clouds):
+    """(lo, hi) of the objects' world boxes and the point clouds', or None."""
+    _, lo, hi = boxes
+    lo = list(lo) + [c[1] for c in clouds]
+    hi = list(hi) + [c[2] for c in clouds]
+    return (np.min(lo, axis=0), np.max(hi, axis=0)) if lo else None

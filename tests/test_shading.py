@@ -1,0 +1,198 @@
+"""The shading parts of issue 10 against independent answers: the split-sum table
+against brute-force integration, the dome's harmonics against a function they hold
+exactly, a uniform world's exact hemisphere term, clearcoat read from USD, the sRGB
+mip chain, supersampling's GPU filter against the same filter in numpy, the post
+chain's operations, and the lighting render passes adding up to the image."""
+import math
+
+import numpy as np
+import pytest
+from pxr import Gf, Sdf, UsdLux, UsdShade
+
+import shadow_scenes as ss
+from lantern.engine import RenderSettings, render_stage
+from test_shadows import top_down_camera
+
+
+# --- the split-sum table ----------------------------------------------------------------
+
+def brute_force_albedo(nov, roughness, f0, n=400):
+    """Directional albedo of the Schlick-GGX lobe (height-correlated Smith), single
+    scattering, by midpoint integration over the hemisphere (no importance sampling)."""
+    a = max(roughness * roughness, 2e-3)
+    theta = (np.arange(n) + 0.5) / n * math.pi / 2
+    phi = (np.arange(2 * n) + 0.5) / (2 * n) * 2 * math.pi
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    l = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], -1)
+    v = np.array([math.sqrt(1 - nov * nov), 0.0, nov])
+    h = l + v
+    h /= np.linalg.norm(h, axis=-1, keepdims=True)
+    nol, noh, voh = l[..., 2], h[..., 2], h @ v
+    d = a * a / (math.pi * (noh * noh * (a * a - 1) + 1) ** 2)
+    gv = nol * np.sqrt(nov * nov * (1 - a * a) + a * a)
+    gl = nov * np.sqrt(nol * nol * (1 - a * a) + a * a)
+    f = f0 + (1 - f0) * (1 - voh) ** 5
+    integrand = d * (0.5 / (gv + gl)) * f * nol * np.sin(t)
+    return float(integrand.sum() * (math.pi / 2 / n) * (2 * math.pi / (2 * n)))
+
+
+@pytest.mark.parametrize("nov, roughness", [(0.9, 0.3), (0.5, 0.5), (0.3, 0.8), (0.7, 1.0)])
+def test_dfg_table_matches_brute_force_integration(nov, roughness):
+    from lantern.engine.lighting import dfg_terms
+    x, y = dfg_terms(nov, roughness)
+    for f0 in (0.04, 1.0):
+        want = brute_force_albedo(nov, roughness, f0)
+        got = f0 * (y - x) + x
+        assert abs(got - want) <= 0.01 * want + 1e-3, (f0, got, want)
+
+
+def test_multiple_scattering_restores_a_white_metal():
+    """A white furnace: f0 = 1 reflects everything at any roughness once the energy
+    factor is applied (Kulla-Conty as Filament uses it)."""
+    from lantern.engine.lighting import specular_albedo
+    for r in (0.0, 0.5, 1.0):
+        assert specular_albedo(1.0, 1.0, 0.6, r) == pytest.approx(1.0, abs=1e-6)
+
+
+# --- the dome ---------------------------------------------------------------------------
+
+def test_harmonics_of_a_linear_sky_are_exact():
+    """L(d) = 1 + d.y lies in the first two bands: irradiance pi + (2 pi / 3) n.y."""
+    from lantern.engine.lighting import latlong_dirs, latlong_sh, sh_basis, uniform_sh
+    d, _ = latlong_dirs(64, 128)
+    img = (1.0 + d[..., 1:2]) * np.ones(3)
+    sh = latlong_sh(img)
+    for n in (np.array([0, 1.0, 0]), np.array([0, -1.0, 0]), np.array([0.6, 0.0, 0.8])):
+        assert sh_basis(n) @ sh[:, 0] == pytest.approx(math.pi + 2 * math.pi / 3 * n[1], rel=2e-3)
+    # A uniform map: the constant term exactly (each texel's true solid angle), the
+    # others at the quadrature's 1e-3 of it.
+    flat = latlong_sh(np.ones((32, 64, 3)))
+    assert flat[0] == pytest.approx(uniform_sh(np.ones(3))[0], rel=1e-9)
+    assert np.abs(flat[1:]).max() < 1e-3 * flat[0, 0]
+
+
+def uniform_dome_stage(radiance, albedo):
+    stage = ss.new_stage()
+    mat = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/white/surface"))
+    mat.GetInput("diffuseColor").Set(Gf.Vec3f(albedo, albedo, albedo))
+    dome = UsdLux.DomeLight.Define(stage, "/root/dome")
+    dome.CreateIntensityAttr(radiance)
+    top_down_camera(stage, 8.0)
+    return stage
+
+
+def test_a_uniform_world_gives_the_hemisphere_term_exactly():
+    """A Lambert plane of albedo 0.5 under a uniform dome of radiance 2 reflects
+    0.5 x 2 (irradiance pi x 2, over pi), with nothing to occlude it."""
+    r = render_stage(uniform_dome_stage(2.0, 0.5), RenderSettings(width=32, height=32))
+    assert np.allclose(r.rgba[..., :3], 1.0, rtol=2e-3)
+
+
+# --- materials --------------------------------------------------------------------------
+
+def test_clearcoat_is_read_from_usd_preview_surface():
+    from lantern.engine.usd.materials import read_material
+    stage, other = ss.new_stage(), ss.new_stage()
+    sh = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/white/surface"))
+    sh.CreateInput("clearcoat", Sdf.ValueTypeNames.Float).Set(0.75)
+    sh.CreateInput("clearcoatRoughness", Sdf.ValueTypeNames.Float).Set(0.2)
+    mat = read_material(UsdShade.Material(stage.GetPrimAtPath("/root/_materials/white")), 0, [])
+    assert (mat.clearcoat, mat.clearcoat_roughness) == pytest.approx((0.75, 0.2))
+    bare = read_material(UsdShade.Material(other.GetPrimAtPath("/root/_materials/white")), 0, [])
+    assert (bare.clearcoat, bare.clearcoat_roughness) == (0.0, 0.01)   # the schema's defaults
+
+
+def test_a_coat_adds_a_white_lobe_and_takes_from_the_base():
+    """Under a uniform white dome a coated grey plane: the coat reflects more at
+    grazing angles (brighter there than the uncoated plane) while at normal incidence
+    it takes from the base about what it reflects (within 1 %)."""
+    def plane(coat):
+        stage = uniform_dome_stage(1.0, 0.5)
+        sh = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/white/surface"))
+        sh.CreateInput("clearcoat", Sdf.ValueTypeNames.Float).Set(coat)
+        return render_stage(stage, RenderSettings(width=16, height=16, ambient_occlusion=False))
+    bare, coated = plane(0.0).rgba[8, 8, 0], plane(1.0).rgba[8, 8, 0]
+    # Straight down: coat albedo ~0.04, base 0.5 -> 0.04 + 0.96 * 0.5 = 0.52.
+    assert coated == pytest.approx(0.04 + 0.96 * 0.5, abs=0.01) and coated > bare
+
+
+# --- textures ---------------------------------------------------------------------------
+
+def test_srgb_mip_chain_averages_cycles_lookups_in_linear_light():
+    """A 0/255 two-texel image: its level-1 texel is the mean of Cycles' lookups
+    (bilinear of the bytes, then decoded) over it, not decode(mean byte)."""
+    from lantern.engine.gpu.textures import cycles_srgb_mips, linear_to_srgb
+    from lantern.engine.textures import srgb_to_linear
+    img = np.zeros((2, 2, 4), np.uint8)
+    img[:, 1, :3] = 255
+    img[..., 3] = 255
+    level1 = cycles_srgb_mips(img)[1]
+    # Lookups at x = 0.25, 0.75, 1.25, 1.75: bytes 0, 0.25, 0.75, 1 (edges repeat).
+    expected = np.mean([0.0, srgb_to_linear(0.25), srgb_to_linear(0.75), 1.0])
+    assert level1.shape == (1, 1, 4)
+    assert level1[0, 0, 0] == round(float(linear_to_srgb(expected)) * 255)
+    assert level1[0, 0, 0] != 188            # what averaging in linear light alone gives
+
+
+# --- anti-aliasing ----------------------------------------------------------------------
+
+def box_stage():
+    stage = ss.new_stage()
+    ss.add_box(stage, center=(0.3, 0.2, 0.5))
+    ss.add_light(stage, "sun", shadow=True, dir=(1.0, 0.6, -1.0))
+    ss.add_camera(stage, eye=(4.0, -5.0, 3.5), target=(0.0, 0.0, 0.4))
+    return stage
+
+
+def test_supersampling_filters_as_the_numpy_filter():
+    """The GPU's down-sample of a 2x image equals Cycles' filter applied in numpy to
+    the same 2x image (float16 light: 1e-3 relative)."""
+    from lantern.engine.gpu.passes.antialias import downsample
+    stage = box_stage()
+    big = render_stage(stage, RenderSettings(width=96, height=54, supersample=1, fxaa=False)).rgba
+    small = render_stage(stage, RenderSettings(width=48, height=27, supersample=2)).rgba
+    assert np.allclose(small[..., :3], downsample(big[..., :3], 2), rtol=2e-3, atol=2e-4)
+
+
+# --- post -------------------------------------------------------------------------------
+
+def test_post_operations():
+    stage = box_stage()
+    base = dict(width=48, height=27, fxaa=False)
+    plain = render_stage(stage, RenderSettings(**base)).rgba
+    mirrored = render_stage(stage, RenderSettings(**base, mirror="x")).rgba
+    assert np.array_equal(mirrored, plain[:, ::-1])
+    flipped = render_stage(stage, RenderSettings(**base, mirror="xy")).rgba
+    assert np.array_equal(flipped, plain[::-1, ::-1])
+    grey = render_stage(stage, RenderSettings(**base, grayscale=True)).rgba
+    luma = plain[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
+    assert np.allclose(grey[..., 0], luma, rtol=2e-3) and np.array_equal(grey[..., 0], grey[..., 2])
+    brighter = render_stage(stage, RenderSettings(**base, exposure=1.0)).rgba
+    assert np.allclose(brighter[..., :3], 2 * plain[..., :3], rtol=2e-3)
+    blurred = render_stage(stage, RenderSettings(**base, blur=2.0)).rgba
+    assert blurred[..., :3].std() < 0.9 * plain[..., :3].std()
+    assert blurred[..., :3].mean() == pytest.approx(plain[..., :3].mean(), rel=0.03)
+
+
+@pytest.mark.parametrize("bad", [dict(mirror="z"), dict(blur=-1.0), dict(supersample=0),
+                                 dict(srgb_filtering="gamma"), dict(exposure=float("nan"))])
+def test_bad_settings_are_refused(bad):
+    with pytest.raises(ValueError):
+        RenderSettings(**bad)
+
+
+# --- lighting render passes -------------------------------------------------------------
+
+def test_lighting_passes_add_up_to_the_image():
+    stage = box_stage()
+    UsdLux.DomeLight.Define(stage, "/root/dome").CreateIntensityAttr(0.3)
+    names = ["DiffDir", "GlossDir", "Env", "Emit", "Shadow", "AO"]
+    r = render_stage(stage, RenderSettings(width=64, height=36, fxaa=False, passes=frozenset(names)))
+    total = sum(r.passes[n] for n in ("DiffDir", "GlossDir", "Env", "Emit"))
+    assert np.allclose(total, r.rgba[..., :3], rtol=2e-3, atol=1e-4)
+    shadow, ao = r.passes["Shadow"], r.passes["AO"]
+    assert shadow.min() == 0.0 and shadow.max() == 1.0 and (shadow[..., 0] < 0.5).sum() > 10
+    assert 0.0 < ao.min() < 0.8 and ao.max() == 1.0
+    # Asking for them changes nothing in the image.
+    plain = render_stage(stage, RenderSettings(width=64, height=36, fxaa=False)).rgba
+    assert np.array_equal(plain, r.rgba)
