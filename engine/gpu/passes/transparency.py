@@ -5,12 +5,14 @@ maps (shaders/transparent.frag calls the same shader functions as the ambient an
 light passes, never a copy).
 
 Compositing is premultiplied "over": rgb' = alpha * L + (1 - alpha) * rgb and
-a' = alpha + (1 - alpha) * a, so the HDR target's alpha ends as 1 - prod(1 - alpha)
-of the blended layers, which the resolve pass combines with the opaque coverage
-for a transparent film. A surface's light is split over draws: the first (dome,
-emission, up to MAX_FORWARD_LIGHTS unshadowed lights) blends "over", then each
-shadowed light (with its map) and any further unshadowed ones add; "over" is linear
-in its source, so the sum composites as one draw would.
+a' = alpha + (1 - alpha) * a, alpha scaling everything the surface sends (Cycles
+mixes the whole Principled BSDF, emission included, with a transparent BSDF). The
+HDR target's alpha, the opaque coverage the ambient pass wrote, so ends as
+1 - (1 - coverage) prod(1 - alpha): a transparent film's alpha. A surface's light is
+split over draws: the first (dome, emission, up to MAX_FORWARD_LIGHTS unshadowed
+lights) blends "over", then each shadowed light (with its map) and any further
+unshadowed ones add; "over" is linear in its source, so the sum composites as one
+draw would.
 
 Depth: tested against the opaque depth (reversed: nearer is GREATER), never
 written, so blended surfaces hide behind opaque ones and leave the AOVs (Depth,
@@ -23,8 +25,9 @@ drawn before its front faces (double-sided meshes), each in index order: a close
 convex mesh (a glass box, a bubble) is then right from any view. What a sort per
 object cannot order is left as EEVEE's Blended mode leaves it: two meshes that
 intersect, or one whose own surfaces overlap in depth beyond back-before-front (a
-mesh folded over itself), blend in that order and not per pixel. Opaque texels of
-blended materials with an opacity map are the G-buffer's, ordered exactly by depth.
+mesh folded over itself), blend in that order and not per pixel; a PointInstancer's
+instances sort as one object (their union box). Opaque texels of blended materials
+with an opacity map are the G-buffer's, ordered exactly by depth.
 
 Nothing is drawn, and nothing allocated, when no visible object has a blended
 material.
@@ -45,7 +48,8 @@ MAX_FORWARD_LIGHTS = 32       # shaders/transparent.frag
 
 class TransparencyPass(Pass):
     name = "transparency"
-    reads = ("hdr", "g_depth", "view", "shadow_maps")
+    reads = ("hdr", "g_depth", "view")
+    optional = ("shadow_maps",)
     writes = ("hdr",)
 
     def __init__(self, ctx, pool, programs, geometry, textures, lights, environment, depth,
