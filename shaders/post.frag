@@ -29,8 +29,10 @@ uniform vec2 tap[64];
 const vec3 LUMA = vec3(0.2126, 0.7152, 0.0722);
 
 #ifdef POST_FXAA
-// FXAA 3.11 (Lottes), quality 12 steps, on a perceptual luma: the image is scene
-// linear and unbounded, so edges are found on sqrt(L / (1 + L)).
+// FXAA 3.11 (Lottes), quality 12 steps, on the log of luminance: the image is scene
+// linear, unbounded and of no set exposure, so edges are contrasts (ratios), and the
+// result scales with the light exactly (a 1 mW and a 1 MW light give the same image
+// over their power).
 // Only at geometric edges: textures are already filtered (mips, anisotropy), and
 // FXAA would take a texture edge lying between two pixel rows, a checker's, for a
 // staircase and smear it (the demo's floor: FLIP 0.070 -> 0.097 with it everywhere).
@@ -60,7 +62,7 @@ float luma_at(ivec2 p) {
     ivec2 s = textureSize(post_src, 0);
     vec3 c = texelFetch(post_src, clamp(p, ivec2(0), s - 1), 0).rgb;
     float l = max(dot(c, LUMA), 0.0);
-    return sqrt(l / (1.0 + l));
+    return log2(max(l, 1e-18));
 }
 // Bilinear between texels (the pooled targets are nearest-filtered), edges clamped.
 vec4 fetch(vec2 uv) {
@@ -95,7 +97,7 @@ vec4 fxaa(ivec2 px) {
     float lo = min(m, min(min(n, s), min(e, w)));
     float range = hi - lo;
     vec4 centre = texelFetch(post_src, px, 0);
-    if (range < max(0.0833, hi * 0.166)) return centre;
+    if (range < 0.3) return centre;      // under ~23 % contrast: no edge (FXAA's high-quality threshold)
     float ne = luma_at(px + ivec2(1, 1)), nw = luma_at(px + ivec2(-1, 1));
     float se = luma_at(px + ivec2(1, -1)), sw = luma_at(px + ivec2(-1, -1));
     // Sub-pixel aliasing: how far the centre stands out from its neighbourhood.
@@ -142,7 +144,7 @@ vec4 fxaa(ivec2 px) {
     float offset = max(good ? pixel_offset : 0.0, sub_blend);
     vec2 final_uv = uv;
     if (is_horizontal) final_uv.y += offset * step_len; else final_uv.x += offset * step_len;
-    return vec4(fetch(final_uv).rgb, centre.a);
+    return fetch(final_uv);       // alpha too: coverage and premultiplied colour blend alike
 }
 #endif
 

@@ -217,7 +217,8 @@ def test_render_skinned_equals_render_baked(method):
     assert not UsdSkel.BindingAPI(baked.GetPrimAtPath("/root/mesh")).GetJointIndicesPrimvar().HasValue() \
         or SkelBindings(baked).get("/root/mesh") is None
     for t in (1, 3):
-        s = RenderSettings(width=96, height=64, frame=t)
+        # Geometry against geometry: no screen-space effect spreads float rounding.
+        s = RenderSettings(width=96, height=64, frame=t, ambient_occlusion=False, fxaa=False)
         a = render_stage(stage, s).rgba
         b = render_stage(baked, s).rgba
         diff = np.abs(a - b).max()
@@ -283,7 +284,8 @@ def test_skinned_meshes_cast_posed_shadows():
     look(stage, (2, -8, 5), (2, 0, -1))
     baked = skinned_stage(stage)
     for t in (1, 3):
-        s = RenderSettings(width=96, height=64, frame=t)
+        # Geometry against geometry: no screen-space effect spreads float rounding.
+        s = RenderSettings(width=96, height=64, frame=t, ambient_occlusion=False, fxaa=False)
         a = render_stage(stage, s)
         b = render_stage(baked, s)
         assert a.stats["shadow_maps"] == 1

@@ -294,7 +294,10 @@ def test_border_scale_and_orthographic(viewport):
     assert bordered.rect == (16, 18, 32, 18) and bordered.size == (32, 18)
     part, frame = vp.frame(bordered)
     assert frame.tag == (16, 18, 32, 18)
-    np.testing.assert_allclose(part, full[0:18, 16:48], atol=2e-3)
+    # Ambient occlusion and FXAA see only the rendered rectangle: a few pixels may
+    # differ from the whole view's; everything else is that part of it.
+    off = np.abs(part - full[0:18, 16:48]).max(axis=-1)
+    assert (off > 2e-3).mean() <= 0.01 and off.max() <= 0.05
     half = _camera_view(scene, depsgraph, scale=0.5)
     small, _ = vp.frame(half)
     assert small.shape[:2] == (18, 32) and half.rect == (0, 0, W, H)

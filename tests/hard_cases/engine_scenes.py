@@ -60,7 +60,10 @@ def far_scene(offset=(0.0, 0.0, 0.0), scale=1.0, point=True, sun=True):
         S.add_light(stage, "sun", strength=1.5, dir=(0.7, 0.5, -0.6), angle=2.0)
     if point:
         S.add_light(stage, "point", pos=(1.5, -1.5, 2.5), power=300.0 * scale ** 2, radius=0.1)
-    UsdLux.DomeLight.Define(stage, "/root/dome").CreateIntensityAttr(0.1)
+    dome = UsdLux.DomeLight.Define(stage, "/root/dome")
+    dome.CreateIntensityAttr(0.1)
+    # Blender's AO distance is a length too: the scaled scene's is scaled with it.
+    dome.GetPrim().CreateAttribute("lantern:aoDistance", Sdf.ValueTypeNames.Float).Set(10.0 * scale)
     root = UsdGeom.Xformable(stage.GetPrimAtPath("/root"))
     root.AddTranslateOp().Set(Gf.Vec3d(*offset))
     root.AddScaleOp().Set(Gf.Vec3d(scale, scale, scale))

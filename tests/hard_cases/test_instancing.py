@@ -268,7 +268,9 @@ def test_instances_render_like_the_same_objects_made_real(empty_scene, hard_case
     meshes = [p for p in real.Traverse() if p.GetTypeName() == "Mesh"]
     assert len(meshes) == len(copies) > 34
     assert not any(p.IsA(UsdGeom.PointInstancer) for p in real.Traverse())
-    settings = RenderSettings(width=96, height=54)
+    # Without ambient occlusion or FXAA: they read their neighbours, so the few pixels
+    # decided by the last bit of depth (below) would spread into their surroundings.
+    settings = RenderSettings(width=96, height=54, ambient_occlusion=False, fxaa=False)
     a = render_stage(stage, settings)
     b = render_stage(real, settings)
     assert np.isfinite(a.rgba).all() and not a.warnings

@@ -35,9 +35,6 @@ def _load_beside(name):
 E = _load_beside("engine_scenes")
 S = E.S
 W, H = 64, 36
-TEXTURE_PRECISION = "issue 10 texture precision"
-
-
 def write_png16(path, rgb):
     """A 16-bit RGB PNG with the standard library."""
     rgb = np.asarray(rgb, ">u2")
@@ -132,7 +129,6 @@ def test_float_exr_emission_keeps_its_values(tmp_path, hard_case):
               float((np.abs(got - values) / values).max()), 1e-3)
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=TEXTURE_PRECISION)
 def test_float_exr_base_colour_above_one_is_not_clamped(tmp_path, hard_case):
     from lantern.engine.image_io import write_image
     img = np.full((8, 8, 4), 2.0, np.float32)
@@ -145,7 +141,6 @@ def test_float_exr_base_colour_above_one_is_not_clamped(tmp_path, hard_case):
               float(np.abs(out[..., :3] / 2.0 - 1.0).max()), 1e-3)
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=TEXTURE_PRECISION)
 def test_constant_base_colour_above_one_is_not_clamped(tmp_path, hard_case):
     from lantern.engine.image_io import write_image
     white = np.ones((2, 2, 4), np.float32)
