@@ -1,9 +1,12 @@
-"""Anti-aliasing, error per millisecond: FXAA, jittered accumulation (the engine's
-`samples`) and supersampling (the same scene drawn k times larger in one drawing,
-down-sampled with Cycles' pixel filter: Blackman-Harris reaching 1.5 px either side)
-on the corpus reference scenes, mean HDR-FLIP against Cycles and the warm render time
-(median of 3; supersampling's down-sample runs on the CPU here and is not timed, the
-GPU would do it in well under a millisecond). Prints a table; asserts nothing.
+"""Anti-aliasing, error per millisecond on the corpus reference scenes: none, FXAA,
+and supersampling k x k (the engine's `supersample`: drawn k times wider and taller,
+filtered down on the GPU with Cycles' pixel filter, Blackman-Harris reaching 1.5 px
+either side), at the medium preset otherwise; mean HDR-FLIP against Cycles and the
+warm render time (median of 3). Prints a table; asserts nothing.
+
+Jittered accumulation (a still's TAA: k x k drawings with sub-pixel offsets, averaged
+with the same filter) was measured with this script at commit a9b91f4, where the
+engine had it as `samples`, before supersampling replaced it (README, "Anti-aliasing").
 
     .venv/bin/python bench/bench_antialias.py
 """
@@ -22,25 +25,11 @@ import numpy as np  # noqa: E402
 import reference_scenes  # noqa: E402
 from image_metrics import mean_flip  # noqa: E402
 from lantern.engine import RenderSettings, Session, read_exr  # noqa: E402
-from lantern.engine.gpu.passes.antialias import blackman_harris  # noqa: E402
 from lantern.exporters import stage_from_depsgraph  # noqa: E402
 
 SCENES = ["02_suzanne", "01_principled_material", "09_tex_wrapping_mirror", "01_alpha_blend",
           "01_alpha_mask", "demo", "environment_mirror", "cutout_shadow"]
 LOOKS = TESTS / "references" / "looks"
-
-
-def downsample(image, k):
-    """A k-times larger image -> its size / k, each pixel the Blackman-Harris weighted
-    sum of the sub-pixels within 1.5 px of its centre (Cycles' film filter)."""
-    h, w = image.shape[0] // k, image.shape[1] // k
-    sub = (np.arange(-2 * k, 3 * k) + 0.5) / k - 0.5     # sub-pixel centres, in pixels
-    weights = blackman_harris(sub)
-    weights /= weights.sum()
-    pad = np.pad(image, ((2 * k, 2 * k), (2 * k, 2 * k), (0, 0)), mode="edge")
-    rows = sum(weights[i] * pad[i:i + h * k:k] for i in range(len(sub)))[:h]
-    rows = np.pad(rows, ((0, 0), (0, 0), (0, 0)))
-    return sum(weights[i] * rows[:, i:i + w * k:k] for i in range(len(sub)))[:, :w]
 
 
 def timed(stage, settings, frame):
@@ -56,10 +45,9 @@ def timed(stage, settings, frame):
 
 def main():
     workdir = pathlib.Path(tempfile.mkdtemp(prefix="lantern-aa-"))
-    configs = [("none", dict(samples=1, fxaa=False), 1), ("FXAA", dict(samples=1, fxaa=True), 1)]
-    configs += [(f"accumulate {n}", dict(samples=n), 1) for n in (4, 9, 16)]
-    configs += [(f"supersample {k}x{k}", dict(samples=1, fxaa=False), k) for k in (2, 3, 4)]
-    print(f"{'scene':<24}" + "".join(f"{name:>22}" for name, _, _ in configs))
+    configs = [("none", dict(supersample=1, fxaa=False)), ("FXAA", dict(supersample=1, fxaa=True))]
+    configs += [(f"supersample {k}x{k}", dict(supersample=k)) for k in (2, 3, 4)]
+    print(f"{'scene':<24}" + "".join(f"{name:>22}" for name, _ in configs))
     for name in SCENES:
         reference_scenes.build(name, workdir)
         stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
@@ -67,11 +55,9 @@ def main():
         w, h = reference_scenes.SCENES[name].size
         frame = 13.0 if name == "demo" else None
         row = f"{name:<24}"
-        for _, options, k in configs:
-            rgba, ms = timed(stage, RenderSettings(width=w * k, height=h * k, preset="medium",
-                                                   **options), frame)
-            if k > 1:
-                rgba = downsample(rgba, k)
+        for _, options in configs:
+            rgba, ms = timed(stage, RenderSettings(width=w, height=h, preset="medium", **options),
+                             frame)
             row += f"{mean_flip(rgba, ref):>12.4f} {ms:>7.0f}ms"
         print(row, flush=True)
 
