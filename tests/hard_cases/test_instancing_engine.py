@@ -17,22 +17,7 @@ from pxr import Gf, Sdf, Usd, UsdGeom, Vt
 
 from lantern.engine import RenderSettings, Session, render_stage
 
-
-def _load_beside(name):
-    """engine_scenes.py beside this file, loaded by path (as test_malformed_usd does)."""
-    import importlib.util
-    import pathlib
-    import sys
-    key = f"lantern_hard_cases_{name}"
-    if key not in sys.modules:
-        spec = importlib.util.spec_from_file_location(
-            key, pathlib.Path(__file__).with_name(f"{name}.py"))
-        sys.modules[key] = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(sys.modules[key])
-    return sys.modules[key]
-
-
-E = _load_beside("engine_scenes")
+from hard_cases import engine_scenes as E  # tests/ is on sys.path (conftest.py)
 S = E.S
 W, H = 160, 90
 
