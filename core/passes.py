@@ -28,6 +28,9 @@ Values, as Blender's (docs/stage_contract.md, "Render passes"):
   Shadow   light reaching surfaces with shadows over without, summed over the lights
            (luminance, grey): 1 lit or unlit by any light, 0 in full shadow
   Without FXAA or post, Combined = DiffDir + GlossDir + Env + Emit.
+Transparent pixels: blended surfaces (docs/stage_contract.md, "Transparency") are in
+Combined only; every pass above holds the opaque surface behind them, so with blended
+surfaces in view Combined is no longer that sum there.
 """
 from __future__ import annotations
 

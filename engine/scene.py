@@ -43,10 +43,44 @@ class Material:
     maps: dict = field(default_factory=dict)
     uv_name: str | None = None     # primvar the material's reader asks for
     pass_index: int = 0            # lantern:passIndex: render pass IndexMA
+    alpha_mode: str = ""           # lantern:alphaMode: "hashed" (Blender's Dithered), or ""
 
     @property
     def has_normal_map(self) -> bool:
         return "normal" in self.maps
+
+    @property
+    def alpha(self) -> str:
+        """How the material's opacity is drawn (docs/stage_contract.md, "Material"):
+          opaque  opacity 1, no opacity map
+          clip    a cut-out (opacityThreshold > 0): the G-buffer and the shadow casters
+                  discard below the threshold
+          blend   see-through (an opacity below 1 or an opacity map, no threshold):
+                  Blender's Blended and Dithered (hashed) alike, since Cycles renders
+                  both as the same continuous transparency. Its opaque texels (alpha >=
+                  OPAQUE_ALPHA) go in the G-buffer like a cut-out's; the rest is drawn
+                  by the transparency pass, blended, and casts transparent shadows."""
+        if self.opacity_threshold > 0.0:
+            return "clip"
+        if "opacity" in self.maps or self.opacity < 1.0:
+            return "blend"
+        return "opaque"
+
+    @property
+    def gbuffer_threshold(self) -> float | None:
+        """The G-buffer's alpha test: discard below it (0: none); None: not drawn there
+        at all (a blend material with no opacity map has no opaque texel)."""
+        alpha = self.alpha
+        if alpha == "clip":
+            return self.opacity_threshold
+        if alpha == "blend":
+            return OPAQUE_ALPHA if "opacity" in self.maps else None
+        return 0.0
+
+
+# At or above this alpha a blended texel is opaque (an 8-bit 255 and its filtered
+# neighbours): drawn in the G-buffer, where depth orders it exactly.
+OPAQUE_ALPHA = 1.0 - 1.0 / 1024.0
 
 
 @dataclass

@@ -47,6 +47,7 @@ class MaterialRecord:
     inputs: dict = field(default_factory=dict)
     backface_culling: bool = False
     pass_index: int = 0         # Blender's material pass index (render pass IndexMA)
+    alpha_mode: str = ""        # "hashed" (Dithered and see-through), else "" (contract)
 
 
 @dataclass

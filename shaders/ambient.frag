@@ -1,11 +1,11 @@
 #version 330 core
 #include "lib.glsl"
 #include "environment.glsl"
-// Full screen, once: the dome's light (harmonics for diffuse, the prefiltered cube
-// and the split-sum table for the specular lobe and the coat), emission, and the
-// dome as the background where nothing was drawn. Ambient occlusion (HAS_AO) dims
-// the dome's diffuse light, and its specular light by Lagarde's specular occlusion;
-// it never touches emission or the lights. Positions are camera-relative (lib.glsl):
+// Full screen, once: the dome's light (environment.glsl dome_light: harmonics for
+// diffuse, the prefiltered cube and the split-sum table for the specular lobe and the
+// coat), emission, and the dome as the background where nothing was drawn. Ambient
+// occlusion (HAS_AO) dims the dome's diffuse light, and its specular light by
+// Lagarde's specular occlusion; it never touches emission or the lights. Positions are camera-relative (lib.glsl):
 // the viewer is at the origin.
 uniform sampler2D g_base;
 uniform sampler2D g_normal;
@@ -16,7 +16,6 @@ uniform mat4 inv_view_proj;
 uniform vec3 cam_forward;
 uniform bool cam_ortho;
 
-uniform bool has_dome;
 uniform bool transparent;
 #ifdef HAS_AO
 uniform sampler2D ao_tex;
@@ -30,11 +29,6 @@ layout(location = 1) out vec4 aov_diffuse;
 layout(location = 2) out vec4 aov_glossy;
 layout(location = 3) out vec4 aov_env;
 #endif
-
-// Lagarde and de Rousiers 2014: the visible share of a specular lobe, from AO.
-float specular_occlusion(float NoV, float ao, float roughness) {
-    return clamp(pow(NoV + ao, exp2(-16.0 * roughness - 1.0)) - 1.0 + ao, 0.0, 1.0);
-}
 
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
@@ -51,19 +45,11 @@ void main() {
         vec3 v = cam_ortho ? -cam_forward : normalize(-p);
         Surface s = make_surface(p, n, v, texelFetch(g_base, px, 0), texelFetch(g_mat, px, 0), nrm.w);
         emitted = texelFetch(g_emit, px, 0).rgb;
-        if (has_dome) {
-            float ao = 1.0;
+        float ao = 1.0;
 #ifdef HAS_AO
-            ao = texelFetch(ao_tex, px, 0).r;
+        ao = texelFetch(ao_tex, px, 0).r;
 #endif
-            diffuse = brdf_diffuse(s) * dome_irradiance(n) * ao;
-            vec3 r = reflect(-v, n);
-            glossy = s.under_coat * s.spec_albedo * dome_specular(r, s.roughness)
-                   * specular_occlusion(s.NoV, ao, s.roughness);
-            if (s.coat > 0.0)
-                glossy += s.coat_albedo * dome_specular(r, s.coat_roughness)
-                        * specular_occlusion(s.NoV, ao, s.coat_roughness);
-        }
+        dome_light(s, ao, diffuse, glossy);
     }
     // Alpha: coverage (resolve.frag), averaged by anti-aliasing.
     frag = vec4(diffuse + glossy + background + emitted, is_background(depth) ? 0.0 : 1.0);

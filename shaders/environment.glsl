@@ -34,3 +34,27 @@ vec3 dome_specular(vec3 d, float r) {
     return dome_radiance;
 #endif
 }
+
+// --- What the dome reflects off a surface: the ambient pass (opaque surfaces) and the
+// transparency pass (blended ones) both call this, so both are lit alike.
+uniform bool has_dome;
+
+// Lagarde and de Rousiers 2014: the visible share of a specular lobe, from AO.
+float specular_occlusion(float NoV, float ao, float roughness) {
+    return clamp(pow(NoV + ao, exp2(-16.0 * roughness - 1.0)) - 1.0 + ao, 0.0, 1.0);
+}
+
+// The dome's light leaving surface s, diffuse and glossy (the base lobe and the coat),
+// its ambient occlusion `ao` applied; 0 without a dome.
+void dome_light(Surface s, float ao, out vec3 diffuse, out vec3 glossy) {
+    diffuse = vec3(0.0);
+    glossy = vec3(0.0);
+    if (!has_dome) return;
+    diffuse = brdf_diffuse(s) * dome_irradiance(s.n) * ao;
+    vec3 r = reflect(-s.v, s.n);
+    glossy = s.under_coat * s.spec_albedo * dome_specular(r, s.roughness)
+           * specular_occlusion(s.NoV, ao, s.roughness);
+    if (s.coat > 0.0)
+        glossy += s.coat_albedo * dome_specular(r, s.coat_roughness)
+                * specular_occlusion(s.NoV, ao, s.coat_roughness);
+}

@@ -1,14 +1,22 @@
 #version 330 core
-// Shadow casters: positions only. Skinned meshes arrive posed (the skinning pass ran
-// once this frame), so a posed character casts its posed shadow. Positions are
-// relative to the map's anchor (the light, or the sun's anchor: origin.glsl), so a
-// map's precision does not depend on the distance to the world origin.
+// Shadow casters: positions only (and UVs for the alpha test). Skinned meshes arrive
+// posed (the skinning pass ran once this frame), so a posed character casts its posed
+// shadow. Positions are relative to the map's anchor (the light, or the sun's anchor:
+// origin.glsl), so a map's precision does not depend on the distance to the world
+// origin.
 #include "objects.glsl"
 in vec3 in_pos;
 uniform mat4 view_proj;
 out vec3 v_world;              // anchor-relative
+#ifdef ALPHA_TEST
+in vec2 in_uv;
+out vec2 v_uv;
+#endif
 void main() {
     vec4 w = object_model() * vec4(in_pos, 1.0);
     v_world = w.xyz;
+#ifdef ALPHA_TEST
+    v_uv = in_uv;
+#endif
     gl_Position = view_proj * w;
 }

@@ -1,5 +1,6 @@
-// Shadow lookup for light.frag (variant HAS_SHADOW); the maps are made by
-// engine/shadows.py, which documents the layouts.
+// Shadow lookup for light.frag and transparent.frag (variant HAS_SHADOW; include
+// after lights.glsl); the maps are made by engine/gpu/passes/shadows.py, which
+// documents the layouts.
 //
 // Bias, in three parts (seed 000 §8.5.1, surface acne):
 //  * normal offset: the receiver is moved off its surface by ~1 texel, more at grazing
@@ -11,7 +12,8 @@
 //    the bilinear compare footprint, plus 1e-4 relative for float precision.
 // Soft shadows (PCSS): a blocker search over the region that can occlude the light,
 // then PCF with a kernel of the penumbra width: radius * (d_recv - d_block) / d_block
-// for sphere/area lights, (d_recv - d_block) * tan(angle / 2) for the sun.
+// for sphere lights, (d_recv - d_block) * tan(angle / 2) for the sun. Area lights
+// (rect, disk) filter over their own extent: area_shadow_factor below.
 uniform sampler2DShadow shadow_cmp;
 uniform sampler2D shadow_raw;
 uniform bool shadow_radial;
@@ -24,6 +26,10 @@ uniform vec4 shadow_splits;     // sun: far view depth of each cascade
 uniform vec4 shadow_ranges;     // sun: world depth range of each cascade
 uniform vec4 shadow_texels;     // sun: world texel size of each cascade
 uniform float shadow_size;      // light radius, or tan(sun half angle)
+// A map with blended casters (stochastic: shadow.frag): the filter spans at least a
+// screen pixel's footprint, (x * view depth + y) world units, so a pixel averages
+// the texels it covers; (0, 0) otherwise.
+uniform vec2 shadow_footprint;
 uniform int pcf_taps;
 uniform int blocker_taps;
 
@@ -112,7 +118,7 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
         }
         if (blockers == 0.0) return 1.0;
     }
-    float kernel = texel * 1.5;
+    float kernel = max(texel * 1.5, 0.75 * (shadow_footprint.x * view_depth + shadow_footprint.y));
     if (blockers > 0.0) {
         float d_block = max(block_sum / blockers, 1e-6);
         float pen = shadow_radial ? shadow_size * (ref - d_block) / d_block
@@ -131,4 +137,154 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
         lit += texture(shadow_cmp, vec3(uv, (plane - bias) / scale));
     }
     return lit / float(pcf_taps);
+}
+
+// --- Area lights (rect, disk): PCSS over the light's extent ------------------------
+// Every tap, of the blocker search and of the filter, stands for a point l of the
+// light itself (a jittered Fibonacci lattice over [-1, 1]^2 for a rect, over the unit
+// disk for a disk). The ray from the receiver q to l crosses the distance d (from the
+// light's centre c, the map's origin) where the map's ray from c through
+// q + (l - c)(D - d) / d does (D = |q - c|): so the taps are the light's own shape,
+// scaled by (D - d) / d and laid in the light's own plane, and the penumbra has the
+// light's size, shape and orientation, foreshortened as the receiver sees it. Each
+// tap is weighted by what its point of the light sends the receiver (the cosines at
+// both ends over the squared distance), so the result is the visible fraction of the
+// light's irradiance, the quantity Cycles integrates.
+//  1. Blocker search over the shape scaled by AREA_SEARCH (blockers from halfway to
+//     the receiver on): their mean distance d_b, or fully lit without any.
+//  2. Per tap, PCSS at d_b; where its ray meets an occluder at z, the tap looks again
+//     at z's own scale (z, not d_b, is where that occluder crosses the segment to l),
+//     so an occluder seen at the wrong depth (a floor beside a wall) does not shadow.
+//  3. A tap still lit is marched: AREA_MARCH_STEPS points of the segment q -> l
+//     between the blockers' nearest and farthest distances; a point up to one step
+//     behind the surface the map holds there is inside an occluder. This finds what
+//     one mean depth misses: contact shadows, occluders at several depths.
+// Compares are against the receiver's tangent plane along each ray (receiver-plane
+// depth, exact for a planar receiver), never beyond the map's range.
+const float AREA_SEARCH = 1.0;
+const int AREA_MARCH_STEPS = 4;
+
+vec2 lattice(int i, int n, vec2 jitter) {          // [0, 1)^2
+    return fract(vec2((float(i) + 0.5) / float(n), float(i) * 0.6180340) + jitter);
+}
+
+vec2 shape_point(vec2 u, bool disk) {              // [-1, 1]^2, or the unit disk
+    if (disk) {
+        float r = sqrt(u.x), a = 6.2831853 * u.y;
+        return r * vec2(cos(a), sin(a));
+    }
+    return 2.0 * u - 1.0;
+}
+
+// The depth to compare a map texel with, along the map's ray from c through w: where
+// that ray meets the receiver's tangent plane (through q, normal n), less the depth a
+// texel spans there at that slope (and 1e-4 relative), and never beyond the map's
+// range, whose cleared texels (nothing drawn) are then never blockers. 0 when the
+// ray never reaches the plane: nothing there to shadow.
+float plane_ref(vec3 w, vec3 q, vec3 n, vec3 c) {
+    vec3 d = w - c;
+    float cos_r = -dot(d, n) / max(length(d), 1e-12);
+    if (cos_r <= 1e-4) return 0.0;
+    float dist = dot(c - q, n) / cos_r;
+    float tan_r = min(sqrt(max(1.0 - cos_r * cos_r, 0.0)) / cos_r, 20.0);
+    float ref = dist - shadow_texel * dist * (1.0 + tan_r) - 1e-4 * dist;
+    return min(ref, 0.999 * shadow_far);
+}
+
+const float NO_SURFACE = 1e30;
+
+// The map's raw distance along the ray from c through w; NO_SURFACE outside the map.
+float map_distance(vec3 w, vec3 c) {
+    vec2 uv;
+    float z;
+    if (!shadow_uv(w, c, 0, uv, z)) return NO_SURFACE;
+    return texture(shadow_raw, uv).r * shadow_far;
+}
+
+// The filtered (bilinear compare) visibility along the ray from c through w.
+float map_visible(vec3 w, vec3 q, vec3 n, vec3 c) {
+    vec2 uv;
+    float z;
+    if (!shadow_uv(w, c, 0, uv, z)) return 1.0;
+    return texture(shadow_cmp, vec3(uv, plane_ref(w, q, n, c) / shadow_far));
+}
+
+// 1 = lit, 0 = shadowed, for the area light centred at c (camera-relative) with unit
+// axes x, y in its plane, half extents `half_extent` (a disk: its radius twice),
+// emitting along `axis`. p, n: the receiver; view_depth: its depth along the camera
+// axis (the footprint of a map with blended casters).
+float area_shadow_factor(vec3 p, vec3 n, vec3 c, vec3 x, vec3 y, vec2 half_extent,
+                         bool disk, vec3 axis, float view_depth) {
+    float dist = length(p - c);
+    if (dist < 1e-5) return 1.0;
+    vec3 dir = (p - c) / dist;
+    float texel = shadow_texel * dist;
+    float NoL = clamp(-dot(n, dir), 0.0, 1.0);
+    if (NoL <= 0.0) return 1.0;                // facing away from the centre: unshadowed
+    float sin_t = sqrt(max(1.0 - NoL * NoL, 0.0));
+    float tan_t = min(sin_t / max(NoL, 1e-3), 20.0);
+    vec3 q = p + n * texel * (0.5 + 1.5 * sin_t);
+    float D = length(q - c);
+    vec3 ex = x * half_extent.x, ey = y * half_extent.y;
+    float ign = fract(52.9829189 * fract(dot(gl_FragCoord.xy, vec2(0.06711056, 0.00583715))));
+    vec2 jitter = vec2(ign, fract(ign * 1.6180340 + 0.5));
+
+    float blockers = 0.0, block_sum = 0.0, nearest = NO_SURFACE, farthest = 0.0;
+    for (int i = 0; i < blocker_taps; ++i) {
+        vec2 s = shape_point(lattice(i, blocker_taps, jitter), disk);
+        vec3 w = q + (ex * s.x + ey * s.y) * AREA_SEARCH;
+        float d = map_distance(w, c);
+        if (d < plane_ref(w, q, n, c)) {
+            blockers += 1.0;
+            block_sum += d;
+            nearest = min(nearest, d);
+            farthest = max(farthest, d);
+        }
+    }
+    if (blockers == 0.0) return 1.0;
+    float d_block = max(block_sum / blockers, 1e-6);
+    float k = max(D - d_block, 0.0) / d_block;
+    // At least a screen pixel's footprint over blended casters (shadow_footprint).
+    float least = 0.75 * (shadow_footprint.x * view_depth + shadow_footprint.y);
+    k = max(k, least / max(max(half_extent.x, half_extent.y), 1e-9));
+    float lo = 0.9 * nearest, hi = min(1.1 * farthest, 0.99 * D);
+    float step = max(hi - lo, 0.0) / float(AREA_MARCH_STEPS);
+    float thickness = 1.5 * step + 0.01 * D;
+    float offset = fract(ign * 7.0 + 0.5);
+
+    float lit = 0.0, total = 0.0;
+    vec2 jitter2 = fract(jitter + vec2(0.7548777, 0.5698403));
+    for (int i = 0; i < pcf_taps; ++i) {
+        vec2 s = shape_point(lattice(i, pcf_taps, jitter2), disk);
+        vec3 e = ex * s.x + ey * s.y;          // the light's point, from its centre
+        vec3 l = c + e;
+        vec3 to_l = l - p;
+        float d2 = max(dot(to_l, to_l), 1e-12);
+        float wgt = max(dot(n, to_l), 0.0) * max(-dot(axis, to_l), 0.0) / (d2 * d2);
+        if (wgt <= 0.0) continue;
+        total += wgt;
+        vec3 w = q + e * k;
+        float z0 = map_distance(w, c);
+        if (z0 < plane_ref(w, q, n, c))
+            w = q + e * (max(D - z0, 0.0) / max(z0, 1e-6));
+        float v = map_visible(w, q, n, c);
+        for (int j = 0; j < AREA_MARCH_STEPS && v > 0.0; ++j) {
+            vec3 m = l + (q - l) * ((lo + (float(j) + offset) * step) / D);
+            float r = length(m - c);
+            float surface = map_distance(m, c);
+            if (surface + shadow_texel * r * (1.0 + tan_t) + 1e-4 * r <= r && r <= surface + thickness)
+                v = 0.0;
+        }
+        lit += wgt * v;
+    }
+    return total > 0.0 ? lit / total : 1.0;
+}
+
+// The loaded light's shadow (lights.glsl's globals), whatever its kind.
+float light_shadow(vec3 p, vec3 n, float view_depth) {
+    if (n_poly > 0)
+        return area_shadow_factor(p, n, light_pos, light_x, light_y,
+                                  is_disk ? vec2(half_size.x) : half_size, is_disk,
+                                  light_axis, view_depth);
+    return shadow_factor(p, n, light_pos, light_axis, view_depth);
 }

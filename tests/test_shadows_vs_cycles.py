@@ -5,6 +5,9 @@ from references/make_cycles_references.py box) and by Lantern at the medium pres
 The thresholds are the measured mean HDR-FLIP (2026-11-21, llvmpipe) plus about 25%,
 so a regression in lights or shadows fails here:
     sun 0.0006, point 0.0034, spot 0.0501, area 0.0073.
+Area lights filter over their own extent since issue 10 (shaders/shadow_lookup.glsl):
+area 0.0043 (2026-11-23; 0.0060 with issue 10's shading alone), its threshold
+tightened to match.
 The spot's figure is the largest: its cone edge, softened by the light's radius, is
 approximated by a 7-point average over the light's disk (shaders/light.frag)."""
 import pathlib
@@ -16,7 +19,7 @@ import calibration
 from image_metrics import mean_flip, psnr
 
 REFERENCES = pathlib.Path(__file__).resolve().parent / "references"
-THRESHOLDS = {"sun": 0.00075, "point": 0.0043, "spot": 0.063, "area": 0.0092}
+THRESHOLDS = {"sun": 0.00075, "point": 0.0043, "spot": 0.063, "area": 0.0054}
 
 
 @pytest.mark.parametrize("kind", sorted(calibration.BOX_LIGHTS))

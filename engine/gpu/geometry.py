@@ -28,7 +28,8 @@ prim path so any session draws in the same order as a fresh one.
                   command's baseInstance.
   GL 3.3 path     one glDrawElements per command with the object id as a uniform.
 Shadow casters draw every object once (all of its ranges, one command) from a
-buffer made with the commands.
+buffer made with the commands, but for ranges of see-through materials (cut-outs,
+blended), whose casters test their opacity: those are listed apart (alpha_casters).
 
 Measured (bench/bench_session.py, 320x180, llvmpipe, 2026-11-22): a view of 1,000
 separate cubes takes 1.13-1.23x the time of the same cubes merged into one mesh (e.g.
@@ -291,6 +292,8 @@ class Geometry:
         self._ids = None                         # object-id attribute buffer (multi-draw)
         self._stale()
         self._casters = {}                       # store name -> (draws, commands, buffer)
+        self._see_through = frozenset()          # materials whose casters test opacity
+        self._alpha_casters = []                 # their ranges (alpha_casters)
         self._static_boxes = None                # world boxes while nothing moves
         self._gathered = None                    # the order in the indirect buffer
         self._all = self._indirect = self._order = None
@@ -479,12 +482,24 @@ class Geometry:
         index = {k: i for i, k in enumerate(distinct)}
         self._cmd_batch = np.array([index[k] for k in self._cmd_key], np.int64)
         self._casters = {}
+        self._alpha_casters = []
         for store in (self.static, self.dynamic):
             if store is None:
                 continue
             sel = [d for d in draws if self.meshes[d.mesh_key][0] is store]
-            cast = np.array([(sum(r[2] for r in d.ranges), d.n, d.ranges[0][1], 0, d.oid)
-                             for d in sel], np.uint32).reshape(-1, COMMAND_UINTS)
+            rows = []
+            for d in sel:
+                joined = False             # an object's consecutive solid ranges: one command
+                for material, first, count in d.ranges:
+                    if material in self._see_through:
+                        self._alpha_casters.append((store, material, first, count, d.oid, d.n))
+                        joined = False
+                    elif joined and rows[-1][2] + rows[-1][0] == first:
+                        rows[-1][0] += count
+                    else:
+                        rows.append([count, d.n, first, 0, d.oid])
+                        joined = True
+            cast = np.array(rows, np.uint32).reshape(-1, COMMAND_UINTS)
             buf = self.uploads.buffer(cast, kind="commands") \
                 if self.multi_draw and len(cast) else None
             self._casters[store.name] = (sel, cast, buf)
@@ -572,8 +587,22 @@ class Geometry:
             prog["u_object"].value = int(oid)
             vao.render(self.ctx.TRIANGLES, vertices=int(count), first=int(first), instances=int(n))
 
+    def set_see_through(self, materials):
+        """Materials whose shadow casters test their opacity (cut-outs, blended): their
+        ranges leave the casters' commands and are drawn one by one (alpha_casters)."""
+        materials = frozenset(materials)
+        if materials != self._see_through:
+            self._see_through = materials
+            self._stale()
+
+    def alpha_casters(self) -> list:
+        """[(store, material, first index, count, first object id, instances)] of
+        see-through materials."""
+        self.ensure_commands()
+        return self._alpha_casters
+
     def draw_casters(self, prog) -> int:
-        """Every object's triangles with `prog`; returns the commands drawn."""
+        """Every object's opaque triangles with `prog`; returns the commands drawn."""
         self.ensure_commands()
         n = 0
         for store in (self.static, self.dynamic):

@@ -8,7 +8,8 @@ Row layout (texels, must match shaders/lights.glsl):
   4 x axis, half width (disk: r)     5 y axis, half height
   6 polygon vertices, area           7 position (lo)
   8.. polygon vertices about the position (rect 4, disk an N-gon)
-flags: 1 soft falloff, 2 spot, 4 disk, 8 headlight (shines along the view).
+flags: 1 soft falloff, 2 spot, 4 disk, 8 headlight (shines along the view), 16 distant
+(a sun: shaders/lights.glsl's light_radiance picks the kind by these).
 The position is a double split in two floats: shaders make it camera-relative
 (shaders/origin.glsl), so the table does not change when the view does."""
 from __future__ import annotations
@@ -17,7 +18,7 @@ import math
 
 import numpy as np
 
-from ...core.lights import DISK, RECT, SPOT
+from ...core.lights import DISK, RECT, SPOT, SUN
 from ..lighting import disk_polygon, rect_polygon, volume_radius
 from ..view import split_double
 
@@ -33,7 +34,8 @@ def pack(light, R: float, disk_sides: int) -> np.ndarray:
     row[1] = [*np.asarray(light.color, float), light.radius]
     row[2] = [*light.direction, light.cos_half]
     flags = (1 if light.soft_falloff else 0) | (2 if light.kind == SPOT else 0) | \
-        (4 if light.kind == DISK else 0) | (8 if light.headlight else 0)
+        (4 if light.kind == DISK else 0) | (8 if light.headlight else 0) | \
+        (16 if light.kind == SUN else 0)
     row[3] = [light.cone_softness, light.diffuse, light.specular, flags]
     if light.kind in (RECT, DISK):
         if light.kind == RECT:

@@ -24,6 +24,7 @@ from .passes.post import PostPass
 from .passes.resolve import ResolvePass
 from .passes.shadows import ShadowPass
 from .passes.skinning import SkinningPass
+from .passes.transparency import TransparencyPass
 from .passes.view import ViewPass
 from .resources import TargetPool, Uploads
 from .stencil import Stencil
@@ -53,7 +54,7 @@ def supersample_factor(frame, size, max_texture: int) -> int:
 COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow_maps",
             "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
             "light_volumes", "stencil_marks", "batched_lights", "instances_drawn",
-            "points_drawn", "nonfinite_pixels")
+            "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws")
 
 
 class Renderer:
@@ -73,7 +74,7 @@ class Renderer:
         self.environment = Environment(ctx, self.uploads, programs, gl.proc)
         self.skinning = SkinningPass(ctx, self.uploads, programs, self.geometry, gl.scratch)
         self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights, preset,
-                                  self.depth)
+                                  self.depth, self.textures)
         self.resolve = ResolvePass(ctx, self.pool, programs, self.geometry, self.depth)
         self.graph = FrameGraph(ctx, self.pool, [
             self.skinning,
@@ -85,6 +86,8 @@ class Renderer:
             AmbientPass(ctx, self.pool, programs, self.environment),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
                       self.geometry, preset, self.environment),
+            TransparencyPass(ctx, self.pool, programs, self.geometry, self.textures,
+                             self.lights, self.environment, self.depth, preset),
             SupersamplePass(ctx, self.pool, programs),
             PostPass(ctx, self.pool, programs),
             self.resolve,
@@ -97,6 +100,8 @@ class Renderer:
             self.geometry.set_culling(scene, cull_backfaces)
         self._cull_backfaces = cull_backfaces
         meshes = self.geometry.update(scene, changes, cull_backfaces)
+        self.geometry.set_see_through(name for name, m in scene.materials.items()
+                                      if m.alpha != "opaque")
         self.lights.update(scene, changes.lights)
         if changes.materials or changes.dropped_meshes:
             self.textures.prune(scene.materials.values())

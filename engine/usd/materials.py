@@ -79,6 +79,9 @@ def read_material(mat: UsdShade.Material, time, warnings: list) -> Material:
     index = mat.GetPrim().GetAttribute("lantern:passIndex")
     if index and index.HasAuthoredValue():
         out.pass_index = int(index.Get())        # render pass IndexMA
+    mode = mat.GetPrim().GetAttribute("lantern:alphaMode")
+    if mode and mode.HasAuthoredValue():
+        out.alpha_mode = str(mode.Get())         # see Material.alpha
     surface = mat.ComputeSurfaceSource()[0]
     if not surface or _shader_id(surface) != "UsdPreviewSurface":
         warnings.append(f"{path}: no UsdPreviewSurface surface; using the default material")

@@ -316,4 +316,17 @@ def gather_material(material, warn, texture_dir=None):
             inputs.update(found)
     return MaterialRecord(key=material.name_full, name=material.name, inputs=inputs,
                           backface_culling=bool(material.use_backface_culling),
-                          pass_index=int(material.pass_index))
+                          pass_index=int(material.pass_index),
+                          alpha_mode=alpha_mode(material, inputs))
+
+
+def alpha_mode(material, inputs) -> str:
+    """"hashed" for a material that is see-through and set to Blender's Dithered render
+    method (EEVEE's hashed alpha, Blender 4.2+'s default), else "". UsdPreviewSurface
+    itself says the rest: `opacityThreshold` > 0 is a cut-out (clip), an opacity below 1
+    or from a texture without a threshold is blended (Blender's Blended render method)."""
+    opacity = inputs.get("opacity", 1.0)
+    see_through = isinstance(opacity, TexInput) or opacity < 1.0
+    if not see_through or inputs.get("opacityThreshold", 0.0) > 0.0:
+        return ""
+    return "hashed" if getattr(material, "surface_render_method", "DITHERED") == "DITHERED" else ""

@@ -10,6 +10,9 @@ INPUT_TYPES = {
     "normal": Sdf.ValueTypeNames.Normal3f,
 }
 OUTPUT_TYPES = {"rgb": Sdf.ValueTypeNames.Float3}
+# How a see-through material is drawn when UsdPreviewSurface alone cannot say (the
+# stage contract, "Material"): "hashed" for Blender's Dithered render method.
+ALPHA_MODE = "lantern:alphaMode"
 
 
 def write_material(stage, path, rec, default_uv, asset_path):
@@ -61,4 +64,7 @@ def write_material(stage, path, rec, default_uv, asset_path):
             inp.Set(Gf.Vec3f(*value))
         else:
             inp.Set(float(value))
+    if rec.alpha_mode:
+        material.GetPrim().CreateAttribute(ALPHA_MODE, Sdf.ValueTypeNames.Token,
+                                           custom=True).Set(rec.alpha_mode)
     return material

@@ -98,8 +98,6 @@ def test_sun_shadows_do_not_change_with_the_scale(scale, hard_case):
               np.abs(img - ref).max(), 1e-3)
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError,
-                   reason="issue 10 cut-out shadows: the shadow pass ignores alpha clip")
 def test_an_alpha_zero_clipped_surface_casts_no_shadow(hard_case):
     def scene(with_card):
         stage = S.new_stage(half=5.0)

@@ -8,6 +8,9 @@ threshold 0.
 - box: a box on the plane, shadows on (calibration.build_box_scene), 2048 spp,
   near-point pixel filter, cycles_box_<light>.exr. Lantern had no anti-aliasing then,
   so these measure light, not edges;
+- penumbra (issue 10, area-light shadows): penumbra_scenes.SCENES (a box under a
+  rect and under a disk light, the demo lit by its area light only), 2048 spp,
+  near-point pixel filter, penumbra/<scene>.exr;
 - looks (issue 10): the scenes of reference_scenes.SCENES, each at its own size and
   samples, with Cycles' default pixel filter (Blackman-Harris, 1.5 px): the images a
   user compares against, anti-aliased edges included. 8 transparent bounces (blended
@@ -25,7 +28,7 @@ main as it was before issue 10 (commit a55bdc4) first on the import path:
 and EXPORTER.md with this branch (the exporter half of issue 10, the engine unchanged).
 
 Run from the repository root (no argument: all sets):
-    .venv/bin/python tests/references/make_cycles_references.py [calibration|box|looks] [NAME ...]
+    .venv/bin/python tests/references/make_cycles_references.py [calibration|box|penumbra|looks] [NAME ...]
     .venv/bin/python tests/references/make_cycles_references.py before [--label TEXT] [--out FILE.md] [NAME ...]
 """
 import pathlib
@@ -40,6 +43,7 @@ import lantern.exporters  # noqa: F401,E402  (Blender's pxr first)
 import bpy  # noqa: E402
 
 import calibration  # noqa: E402
+import penumbra_scenes  # noqa: E402
 import reference_scenes  # noqa: E402
 
 LOOKS = HERE / "looks"
@@ -48,6 +52,7 @@ WORKDIR = pathlib.Path(tempfile.gettempdir()) / "lantern-reference-textures"
 SETS = {
     "calibration": (calibration.build_scene, calibration.LIGHTS, "cycles_{}.exr", 4096),
     "box": (calibration.build_box_scene, calibration.BOX_LIGHTS, "cycles_box_{}.exr", 2048),
+    "penumbra": (penumbra_scenes.build, penumbra_scenes.SCENES, "penumbra/{}.exr", 2048),
 }
 
 
@@ -84,6 +89,7 @@ def write_exr(scene, path, half=False, rgb=False):
 def render(build, kind, filename, samples):
     scene = build(kind)
     configure_cycles(scene, samples, point_filter=True)
+    (HERE / filename.format(kind)).parent.mkdir(exist_ok=True)
     write_exr(scene, HERE / filename.format(kind))
 
 

@@ -4,7 +4,9 @@ Objects outside the view's frustum are culled; the rest draw as state batches
 (material variant, culling, winding), front to back within a batch (see
 engine/gpu/geometry.py for the GL 4.3 and GL 3.3 paths). A material's shader variant
 has only the maps it uses (feature bits, as Filament's); its constants are uniforms
-and its images stay on the GPU for the session.
+and its images stay on the GPU for the session. Blended materials (Material.alpha)
+draw here only their opaque texels, and not at all without an opacity map: the
+transparency pass draws the rest.
 
 reads: skinned (posed geometry), view
 writes: g_base (base colour + alpha), g_normal (world normal, clearcoat roughness),
@@ -57,13 +59,16 @@ class GBufferPass(Pass):
         materials = frame.scene.materials
         for batch in batches:
             mat = materials[batch.material]
-            defines = [flag for name, _, flag in MAP_SLOTS if name in mat.maps] + \
-                self.geometry.object_defines() + (["WRITE_INDEX"] if index else [])
+            threshold = mat.gbuffer_threshold
+            if threshold is None:
+                continue                   # wholly see-through: the transparency pass's
+            defines = map_defines(mat) + self.geometry.object_defines() + \
+                (["WRITE_INDEX"] if index else [])
             prog = self.programs.get("gbuffer.vert", "gbuffer.frag", defines)
             set_uniform(prog, "view_proj", view.view_proj)
             set_uniform(prog, "u_far", view.far_clip)
             view.set_origin(prog)
-            self._material(prog, mat)
+            set_material(prog, mat, self.textures, threshold)
             # A mirroring transform turns counter-clockwise triangles clockwise.
             ctx.front_face = "cw" if batch.mirrored else "ccw"
             if batch.cull:
@@ -92,34 +97,43 @@ class GBufferPass(Pass):
             set_uniform(prog, "u_face_axis", bool(cam.ortho))
             set_uniform(prog, "u_axis", cam.forward)
             view.set_origin(prog)
-            self._material(prog, materials[cloud.material])
+            mat = materials[cloud.material]
+            set_material(prog, mat, self.textures, mat.opacity_threshold)
 
         draws, points = self.geometry.points.draw(
             self.programs, "gbuffer", setup, lambda lo, hi: not view.outside(lo[None], hi[None])[0])
         frame.count("draw_calls", draws)
         frame.count("points_drawn", points)
 
-    def _material(self, prog, mat):
-        set_uniform(prog, "u_diffuse", mat.diffuse)
-        set_uniform(prog, "u_metallic", mat.metallic)
-        set_uniform(prog, "u_roughness", mat.roughness)
-        set_uniform(prog, "u_ior", mat.ior)
-        set_uniform(prog, "u_emissive", mat.emissive)
-        set_uniform(prog, "u_opacity", mat.opacity)
-        set_uniform(prog, "u_opacity_threshold", mat.opacity_threshold)
-        set_uniform(prog, "u_clearcoat", mat.clearcoat)
-        set_uniform(prog, "u_clearcoat_roughness", mat.clearcoat_roughness)
-        set_uniform(prog, "u_material_index", float(mat.pass_index))
-        for name, short, _ in MAP_SLOTS:
-            ref = mat.maps.get(name)
-            if ref is None:
-                continue
-            unit = UNITS[f"t_{short}"]
-            tex, decode = self.textures.get(ref.path, ref.colorspace)
-            tex.use(unit)
-            set_uniform(prog, f"m_{short}.srgb", bool(decode))
-            self.textures.sampler(ref.wrap_s, ref.wrap_t).use(unit)
-            set_uniform(prog, f"m_{short}.wrap", (WRAP.get(ref.wrap_s, 0), WRAP.get(ref.wrap_t, 0)))
-            set_uniform(prog, f"m_{short}.scale", tuple(ref.scale))
-            set_uniform(prog, f"m_{short}.bias", tuple(ref.bias))
-            set_uniform(prog, f"m_{short}.channel", CHANNEL.get(ref.channel, -1))
+
+def set_material(prog, mat, textures, threshold):
+    """A material's uniforms and maps (shaders/material.glsl); `threshold`: the alpha
+    test, discarding below it (0: none)."""
+    set_uniform(prog, "u_diffuse", mat.diffuse)
+    set_uniform(prog, "u_metallic", mat.metallic)
+    set_uniform(prog, "u_roughness", mat.roughness)
+    set_uniform(prog, "u_ior", mat.ior)
+    set_uniform(prog, "u_emissive", mat.emissive)
+    set_uniform(prog, "u_opacity", mat.opacity)
+    set_uniform(prog, "u_opacity_threshold", threshold)
+    set_uniform(prog, "u_clearcoat", mat.clearcoat)
+    set_uniform(prog, "u_clearcoat_roughness", mat.clearcoat_roughness)
+    set_uniform(prog, "u_material_index", float(mat.pass_index))
+    for name, short, _ in MAP_SLOTS:
+        ref = mat.maps.get(name)
+        if ref is None:
+            continue
+        unit = UNITS[f"t_{short}"]
+        tex, decode = textures.get(ref.path, ref.colorspace)
+        tex.use(unit)
+        set_uniform(prog, f"m_{short}.srgb", bool(decode))
+        textures.sampler(ref.wrap_s, ref.wrap_t).use(unit)
+        set_uniform(prog, f"m_{short}.wrap", (WRAP.get(ref.wrap_s, 0), WRAP.get(ref.wrap_t, 0)))
+        set_uniform(prog, f"m_{short}.scale", tuple(ref.scale))
+        set_uniform(prog, f"m_{short}.bias", tuple(ref.bias))
+        set_uniform(prog, f"m_{short}.channel", CHANNEL.get(ref.channel, -1))
+
+
+def map_defines(mat) -> list:
+    """The variant of a program including shaders/material.glsl for this material."""
+    return [flag for name, _, flag in MAP_SLOTS if name in mat.maps]

@@ -45,6 +45,7 @@ from ....core.transforms import aabb_corners, frustum, look_at, ortho
 from ...view import boxes_outside, frustum_planes, relative_view, translate
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
+from .gbuffer import set_material
 from .view import set_origin
 
 BORDER = 2                 # cube tiles: texels beyond 90 deg on each side
@@ -87,6 +88,8 @@ class ShadowMap:
         self.size = size            # radial: light radius; ortho: tan(half angle)
         self.atlas = atlas          # texture size
         self.inputs = None          # (light record, casters' bounds) it was planned for
+        self.stochastic = False     # drawn with blended casters (shadow.frag)
+        self.footprint = (0.0, 0.0)  # their filter's least width: a screen pixel's (lookup)
         self.texture = self.cmp = self.raw = None
 
     def same_layout(self, other) -> bool:
@@ -121,6 +124,7 @@ class ShadowMap:
             set_uniform(prog, "shadow_splits", pad(self.splits, -1.0))
             set_uniform(prog, "shadow_ranges", pad(self.ranges, 1.0))
             set_uniform(prog, "shadow_texels", pad(self.texel, 1.0))
+        set_uniform(prog, "shadow_footprint", self.footprint if self.stochastic else (0.0, 0.0))
         set_uniform(prog, "pcf_taps", int(preset.pcf_taps))
         set_uniform(prog, "blocker_taps", int(preset.blocker_taps))
 
@@ -250,11 +254,12 @@ class ShadowPass(Pass):
     reads = ("skinned", "view")
     writes = ("shadow_maps",)
 
-    def __init__(self, ctx, pool, programs, geometry, lights, preset, depth):
+    def __init__(self, ctx, pool, programs, geometry, lights, preset, depth, textures):
         self.ctx, self.pool, self.programs = ctx, pool, programs
         self.geometry, self.lights, self.preset = geometry, lights, preset
-        self.depth = depth
+        self.depth, self.textures = depth, textures
         self.maps = {}             # light path -> ShadowMap, kept across frames
+        self._see_through = None   # what the kept maps' see-through casters were drawn with
 
     def needed(self, frame):
         has_casters = self.geometry.has_casters()
@@ -268,6 +273,10 @@ class ShadowPass(Pass):
     def execute(self, frame, board):
         scene, view = frame.scene, board["view"]
         moved = self.geometry.moved
+        see_through = _see_through(scene)
+        if see_through != self._see_through:
+            self._drop(list(self.maps))  # a cut-out or blended material changed: all again
+            self._see_through = see_through
         for path in [p for p in self.maps if p not in scene.lights or p in frame.changes.lights]:
             self._drop([path])           # stale: drawn again below if it still casts
         out = {}
@@ -297,6 +306,10 @@ class ShadowPass(Pass):
             frame.count("shadow_maps_rendered")
             frame.count("shadow_passes", len(tiles))
         frame.count("shadow_maps", len(out))
+        # A screen pixel's width per unit of view depth (perspective) or in all (ortho).
+        pixel = 2.0 / (abs(float(view.camera.proj[1][1])) * frame.size[1])
+        for sm in out.values():
+            sm.footprint = (0.0, pixel) if view.camera.ortho else (pixel, 0.0)
         board["shadow_maps"] = out
 
     def _render(self, frame, sm, old, light, tiles):
@@ -338,11 +351,34 @@ class ShadowPass(Pass):
             ctx.depth_func = "<"
             set_uniform(prog, "view_proj", clip @ sm.mats[i])
             frame.count("shadow_draws", self.geometry.draw_casters(prog))
+            sm.stochastic |= self._draw_see_through(frame, sm, light, clip @ sm.mats[i])
             if self.geometry.points.clouds:
                 frame.count("shadow_draws", self._draw_points(sm, light, clip @ sm.mats[i],
                                                               BIAS @ sm.mats[i]))
         ctx.scissor = None
         ctx.disable(ctx.DEPTH_TEST)
+
+    def _draw_see_through(self, frame, sm, light, view_proj):
+        """Ranges of cut-out and blended materials, each testing its opacity
+        (shadow.frag ALPHA_TEST), one draw per range; returns whether any was blended."""
+        blended = False
+        for store, name, first, count, oid, n in self.geometry.alpha_casters():
+            mat = frame.scene.materials[name]
+            prog = self.programs.get("shadow.vert", "shadow.frag", ["ALPHA_TEST"] + (
+                ["HAS_OPACITY_MAP"] if "opacity" in mat.maps else []))
+            set_uniform(prog, "radial", sm.radial)
+            set_uniform(prog, "light_pos", np.asarray(light.position, float) - sm.anchor)
+            set_uniform(prog, "far", sm.far)
+            set_origin(prog, sm.anchor)
+            set_uniform(prog, "view_proj", view_proj)
+            set_material(prog, mat, self.textures,
+                         mat.opacity_threshold if mat.alpha == "clip" else 0.0)
+            prog["u_object"].value = int(oid)
+            store.vao(prog).render(self.ctx.TRIANGLES, vertices=int(count), first=int(first),
+                                   instances=int(n))
+            frame.count("shadow_draws")
+            blended |= mat.alpha == "blend"
+        return blended
 
     def _draw_points(self, sm, light, view_proj, window) -> int:
         """Point clouds into a tile: spheres facing the light (radial maps) or across
@@ -374,6 +410,12 @@ class ShadowPass(Pass):
 
     def release(self):
         self._drop(list(self.maps))
+
+
+def _see_through(scene) -> tuple:
+    """What the see-through casters' shadows depend on: their materials' opacity."""
+    return tuple(sorted((name, m.alpha, m.opacity, m.opacity_threshold, m.maps.get("opacity"))
+                        for name, m in scene.materials.items() if m.alpha != "opaque"))
 
 
 def _key(bounds):

@@ -1,0 +1,59 @@
+"""Area-light shadows against Cycles (issue 10): penumbrae sized by the light's shape
+and size (PCSS over the light's extent, shaders/shadow_lookup.glsl).
+
+The scenes are penumbra_scenes' (a white box under a 2 x 1 m rect and under a 1.6 m
+disk light, the demo lit by its 2 m area light only), rendered once by Cycles (2048
+spp, bounces 0, point-sampled) and by Lantern at the medium preset. The penumbra is
+where Cycles shades between 10% and 90% of the unshadowed light (Lantern's own
+unshadowed render, which matches Cycles' light to 1e-4: tests/test_light_calibration);
+its ratio is Lantern's light there over Cycles'. Bounds: the measured figures
+(2026-11-23, llvmpipe) plus about 25% for FLIP (the demo's: 10%, so below its figure
+before issue 10), and the ratios within 5% of 1 for the boxes (before issue 10: 0.89
+and 0.84). The demo's ratio is printed: its 2 m light
+over several occluders at once is where one shadow map from the light's centre is
+furthest from Cycles (README, "Transparency and area-light shadows")."""
+import pathlib
+
+import pytest
+
+import penumbra_scenes
+from image_metrics import mean_flip
+
+REFERENCES = pathlib.Path(__file__).resolve().parent / "references" / "penumbra"
+# (FLIP bound, FLIP before issue 10, penumbra ratio bound or None)
+BOUNDS = {"rect": (0.053, 0.0664, 0.05), "disk": (0.062, 0.0986, 0.05),
+          "demo": (0.255, 0.2657, None)}
+
+
+def _renders(name):
+    """(shadowed, unshadowed) Lantern renders of the scene, and Cycles'."""
+    import bpy
+    from lantern.engine import RenderSettings, read_exr, render_stage
+    from lantern.exporters import stage_from_depsgraph
+    scene = penumbra_scenes.build(name)
+    width, height = penumbra_scenes.SIZE
+    # Point-sampled references: no FXAA (as tests/test_shadows_vs_cycles.py).
+    settings = RenderSettings(width=width, height=height, preset="medium",
+                              frame=scene.frame_current, fxaa=False)
+    images = []
+    for shadow in (True, False):
+        for light in bpy.data.lights:
+            light.use_shadow = shadow
+        stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+        images.append(render_stage(stage, settings))
+    return images[0], images[1], read_exr(str(REFERENCES / f"{name}.exr"))
+
+
+@pytest.mark.parametrize("name", penumbra_scenes.SCENES)
+def test_area_light_penumbra_against_cycles(name):
+    shadowed, unshadowed, cycles = _renders(name)
+    assert shadowed.stats["shadow_maps"] == 1
+    flip = mean_flip(shadowed.rgba, cycles)
+    mask, ratio = penumbra_scenes.penumbra(shadowed.rgba, cycles, unshadowed.rgba)
+    bound, was, ratio_bound = BOUNDS[name]
+    print(f"{name}: mean HDR-FLIP {flip:.4f} (before issue 10 {was:.4f}, bound {bound}); "
+          f"penumbra {int(mask.sum())} px, light vs Cycles there {ratio:.3f}")
+    assert mask.sum() > 500
+    assert flip < bound
+    if ratio_bound is not None:
+        assert abs(ratio - 1.0) < ratio_bound
