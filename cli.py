@@ -134,6 +134,10 @@ def _build_parser():
     render.add_argument("--camera", default=None, metavar="PRIM",
                         help="the camera prim to render through (default: the stage's "
                              "render settings camera, else the first camera)")
+
+    from .compare.command import add_parser as add_compare_parser
+    add_compare_parser(commands, [common], _parse_size, EXIT_STATUSES,
+                       argparse.RawDescriptionHelpFormatter)
     return parser
 
 
@@ -143,6 +147,9 @@ def main(argv=None):
     # handler from printing each a second time.
     logging.getLogger("lantern").addHandler(logging.NullHandler())
     try:
+        if args.command == "compare":
+            from .compare.command import run as compare
+            return compare(args, _usage, CommandError)
         return _export(args) if args.command == "export" else _render(args)
     except CommandError as error:
         _fail(args, str(error))
