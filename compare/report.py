@@ -184,6 +184,30 @@ def _render_label(render):
     return f"{LABELS[render['renderer']]} {render['samples']} spp"
 
 
+def _winner_text(row, clock):
+    text = LABELS[row[f"winner_{clock}"]]
+    if row[f"winner_{clock}"] == "lantern" and row["better_at_cheapest"]:
+        text += (" (but " + " and ".join(LABELS[n] for n in row["better_at_cheapest"]) +
+                 " at its fewest samples is already more accurate)")
+    return text
+
+
+def _scored(render, mode):
+    return ((render["metrics"].get(mode) or {}).get("all") or {}).get("hdr_flip") is not None
+
+
+def _equal_time_pairs(renders, mode):
+    """(Lantern preset, the Cycles sweep image nearest to its warm time in log time)."""
+    sweep = [r for r in renders if r["renderer"] == "cycles" and r.get("mode") == mode
+             and _scored(r, mode) and r["seconds"] > 0]
+    pairs = []
+    for lantern in (r for r in renders if r["renderer"] == "lantern" and _scored(r, mode)):
+        if sweep and lantern["seconds"] > 0:
+            nearest = min(sweep, key=lambda r: abs(math.log(r["seconds"] / lantern["seconds"])))
+            pairs.append((lantern, nearest))
+    return pairs
+
+
 def _mode_section(results, mode, plot_file):
     renders = results["renders"]
     rows = []
@@ -196,7 +220,7 @@ def _mode_section(results, mode, plot_file):
                      _equal_cell(row["cycles"], "cycles"),
                      _equal_cell(row["cycles_denoised"], "cycles_denoised"),
                      _equal_cell(row["eevee"], "eevee"),
-                     _e(LABELS[row["winner_warm"]]), _e(LABELS[row["winner_cold"]])])
+                     _e(_winner_text(row, "warm")), _e(_winner_text(row, "cold"))])
     parts = [f"<h2>Against the {mode} reference</h2>"]
     reference = results["references"][mode]
     parts.append(f"<p>Reference: Cycles {reference['samples']} spp, seed {reference['seed']}"
@@ -211,6 +235,14 @@ def _mode_section(results, mode, plot_file):
         parts.append("<p class=bad>No Lantern image could be scored against this reference.</p>")
     if plot_file:
         parts.append(f'<p><img class=plot src="{_e(plot_file)}" alt="error against time, {mode}"></p>')
+    pairs = _equal_time_pairs(renders, mode)
+    if pairs:
+        parts.append("<h3>Equal time: each Lantern preset beside the Cycles image closest "
+                     "to it in time</h3>")
+        parts.append("<div class=grid>" + "".join(
+            _figure(r["png"], f"{_render_label(r)}: {_s(r['seconds'])}, FLIP "
+                              f"{_n(r['metrics'][mode]['all']['hdr_flip'], 3)}")
+            for pair in pairs for r in pair) + "</div>")
     figures = []
     if reference.get("png"):
         figures.append(_figure(reference["png"], f"reference, Cycles {reference['samples']} spp"))

@@ -223,6 +223,11 @@ def _equal_error(renders, modes, presets):
                     for clock in ("warm", "cold"):
                         entry[f"ratio_{clock}"] = seconds / row[f"lantern_{clock}_seconds"]
                     row[name] = entry
+            # Lantern can win at its own error while a renderer's cheapest image is
+            # already better: say so beside the winner.
+            row["better_at_cheapest"] = [
+                name for name, result in found.items() if result.status == "already_below"
+                and result.bound_seconds > row["lantern_warm_seconds"]]
             for clock in ("warm", "cold"):
                 times = {"lantern": (row[f"lantern_{clock}_seconds"],) * 2}
                 times |= {name: _bounds(result) for name, result in found.items()

@@ -136,6 +136,19 @@ def test_equal_error_uses_each_renderers_own_curve():
     assert rows[0]["cycles_denoised"] is None
 
 
+def test_a_faster_lantern_at_a_worse_error_is_said_so():
+    """Cycles at 1 spp (0.5 s) is already below Lantern's FLIP but slower than Lantern
+    (0.21 s): Lantern is fastest at its own error, and the row says Cycles' cheapest
+    image is better."""
+    renders = [_render("lantern", 0.21, 0.5, preset="high", cold_seconds=1.9)]
+    renders += [_render("cycles", seconds, flip, samples=s, mode="direct")
+                for s, seconds, flip in power_law_curve(per_sample=0.5)]
+    row = _equal_error(renders, ("direct",), ("high",))[0]
+    assert row["winner_warm"] == "lantern" and row["better_at_cheapest"] == ["cycles"]
+    assert row["winner_cold"] == "cycles"          # 0.5 s < 1.9 s cold
+    assert _equal_error(_renders(0.071), ("direct",), ("high",))[0]["better_at_cheapest"] == []
+
+
 # --- metrics ----------------------------------------------------------------------
 
 def _image(seed=0, shape=(36, 64)):
