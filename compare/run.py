@@ -305,7 +305,7 @@ def _summary(equal, renders, modes):
         return "no Lantern image could be scored (see the report's failures)"
     best = min(rows, key=lambda r: (r["flip"], r["lantern_warm_seconds"]))
     text = (f"Lantern {best['preset']}: {best['lantern_warm_seconds']:.3g} s warm "
-            f"({best['lantern_cold_seconds']:.3g} s cold), FLIP {best['flip']:.3f}")
+            f"({best['lantern_cold_seconds']:.3g} s cold), FLIP {best['flip']:.2g}")
     cycles = best["cycles"]
     if cycles is None:
         text += "; no Cycles curve"
@@ -323,7 +323,7 @@ def _summary(equal, renders, modes):
     if eevee:
         first = min(eevee, key=lambda r: r["samples"])
         text += (f"; EEVEE {first['samples']} spp {first['seconds']:.3g} s, "
-                 f"FLIP {first['metrics'][modes[0]]['all']['hdr_flip']:.3f}")
+                 f"FLIP {first['metrics'][modes[0]]['all']['hdr_flip']:.2g}")
     return text
 
 

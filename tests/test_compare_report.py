@@ -18,8 +18,9 @@ from lantern.compare import metrics, report
 
 TINY = ["--size", "64x36", "--cycles-samples", "1,4", "--reference-samples", "16",
         "--presets", "low"]
-SUMMARY = re.compile(r"^Lantern low: [\d.e-]+ s warm \([\d.e-]+ s cold\), FLIP [\d.]+; Cycles .*"
-                     r"; EEVEE 1 spp [\d.e-]+ s, FLIP [\d.]+$")
+NUMBER = r"[\d.]+(?:e-\d+)?"
+SUMMARY = re.compile(rf"^Lantern low: {NUMBER} s warm \({NUMBER} s cold\), FLIP {NUMBER}; Cycles .*"
+                     rf"; EEVEE 1 spp {NUMBER} s, FLIP {NUMBER}$")
 CHROMIUM = "/usr/bin/chromium"
 
 
