@@ -34,21 +34,24 @@ compare: setup
 	$(VPY) bench/compare_suite.py
 
 # The Blender extension zip, built and validated by Blender's own extension tool. The
-# wheels the manifest names (ModernGL and glcontext, every platform, cp311 and cp313) are
+# wheels the manifest names (ModernGL, glcontext and mapbox-earcut, every platform, cp311
+# and cp313; Blender 4.2+ needs glibc 2.28, so manylinux_2_28 wheels qualify; `+` joins
+# the platform tags one download accepts) are
 # downloaded once into ./wheels; a wheel the manifest names but pip did not fetch fails
 # the build.
 BLENDER_EXT     := $(VENV)/lib/python3.11/site-packages/bpy/5.0/scripts/addons_core/bl_pkg/cli/blender_ext.py
 EXT_VERSION     := $(shell sed -n 's/^version = "\(.*\)"/\1/p' blender_manifest.toml)
 EXT_ZIP         := dist/lantern-$(EXT_VERSION).zip
-WHEEL_PINS      := moderngl==5.12.0 glcontext==3.0.0
+WHEEL_PINS      := moderngl==5.12.0 glcontext==3.0.0 mapbox-earcut==2.1.0
 WHEEL_PYTHONS   := 3.11 3.13
-WHEEL_PLATFORMS := manylinux2014_x86_64 win_amd64 macosx_11_0_arm64 macosx_11_0_x86_64
+WHEEL_PLATFORMS := manylinux2014_x86_64+manylinux_2_28_x86_64 win_amd64 macosx_11_0_arm64 macosx_11_0_x86_64
 WHEEL_STAMP     := wheels/.downloaded
 
 $(WHEEL_STAMP): blender_manifest.toml | $(STAMP)
 	for py in $(WHEEL_PYTHONS); do for plat in $(WHEEL_PLATFORMS); do \
 	  $(VPY) -m pip download -q --no-deps --only-binary=:all: --python-version $$py \
-	    --platform $$plat -d wheels $(WHEEL_PINS) || exit 1; done; done
+	    $$(printf -- '--platform %s ' $$(echo $$plat | tr + ' ')) -d wheels $(WHEEL_PINS) \
+	    || exit 1; done; done
 	touch $@
 
 extension: setup $(WHEEL_STAMP)

@@ -134,6 +134,11 @@ def _build_parser():
     render.add_argument("--camera", default=None, metavar="PRIM",
                         help="the camera prim to render through (default: the stage's "
                              "render settings camera, else the first camera)")
+    # Blender's colour management for .png/.gif outputs (an .exr stays scene linear).
+    render.add_argument("--view", default="Standard",
+                        help="view transform: Standard, AgX, Filmic, Khronos PBR Neutral, ...")
+    render.add_argument("--look", default=None, help="a look of that view, e.g. Punchy")
+    render.add_argument("--exposure", type=float, default=0.0, help="exposure in stops")
 
     from .compare.command import add_parser as add_compare_parser
     add_compare_parser(commands, [common], _parse_size, EXIT_STATUSES,
@@ -349,6 +354,7 @@ def _render(args):
     if is_blend:
         from . import exporters  # noqa: F401  (Blender's pxr before the engine's)
     _check_preset(args.preset)
+    args.colour = _colour(args)
 
     stage = _stage_from_blend(args.scene) if is_blend else _open_usd(args.scene)
     _check_camera(stage, args)
@@ -357,11 +363,18 @@ def _render(args):
     return _render_sequence(stage, args)
 
 
-def _check_preset(name):
+def _colour(args):
+    """The view settings for image writers; an unknown view or look is a usage error."""
+    from .engine.color import ColorManagementError, check
     try:
-        from .core.presets import PRESETS  # where the table lives once issue 9 lands
-    except ImportError:
-        from .engine.renderer import PRESETS
+        check(args.view, args.look, args.exposure)
+    except ColorManagementError as error:
+        raise _usage(str(error))
+    return dict(view=args.view, look=args.look, exposure=args.exposure)
+
+
+def _check_preset(name):
+    from .core.presets import PRESETS
     if name not in PRESETS:
         raise _usage(f"unknown --preset {name!r}; valid presets: {', '.join(PRESETS)}")
 
@@ -435,7 +448,7 @@ def _render_frame(stage, args):
     from .engine.image_io import write_image
     result = _rendered(args.scene, lambda: render_stage(stage, _settings(args, args.frame)))
     _print_warnings(result.warnings, set())
-    _write(args.output, lambda: write_image(args.output, result.rgba))
+    _write(args.output, lambda: write_image(args.output, result.rgba, **args.colour))
     height_px, width_px = result.rgba.shape[:2]
     print(f"{args.scene} -> {args.output} ({width_px}x{height_px}, "
           f"{result.timings.get('total', 0.0) * 1000:.1f} ms)")
@@ -479,12 +492,12 @@ def _render_sequence(stage, args):
             images.append(result.rgba)
             continue
         path = _frame_path(args.output, frame)
-        _write(path, lambda: write_image(path, result.rgba))
+        _write(path, lambda: write_image(path, result.rgba, **args.colour))
         print(f"{args.scene} frame {frame:g} -> {path} "
               f"({result.timings.get('total', 0.0) * 1000:.1f} ms)")
     if gif:
         fps = stage.GetFramesPerSecond() or 24.0
-        _write(args.output, lambda: write_animation(args.output, images, fps))
+        _write(args.output, lambda: write_animation(args.output, images, fps, **args.colour))
         print(f"{args.scene} frames {args.frames[0]:g}:{args.frames[-1]:g} -> {args.output}")
     return 0
 

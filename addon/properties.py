@@ -5,20 +5,15 @@ the light defaults are the exporter's LightRecord defaults (both mean "not autho
 """
 import bpy
 
-from ..engine.renderer import PRESETS
+from ..core.presets import DEFAULT, PRESETS as QUALITY
 from ..exporters.ir import LightRecord
 
-
-def _preset_items():
-    return tuple((name, name.title(),
-                  f"{p['shadow_size']} px shadow maps, {p['pcf_taps']} filter taps, "
-                  f"{p['cascades']} sun cascades, {p['anisotropy']:g}x anisotropic textures")
-                 for name, p in PRESETS.items())
+PRESETS = tuple((p.name, p.label, p.description) for p in QUALITY.values())
 
 
 class LanternSceneSettings(bpy.types.PropertyGroup):
     preset: bpy.props.EnumProperty(
-        name="Quality", items=_preset_items(), default="medium",
+        name="Quality", items=PRESETS, default=DEFAULT,
         description="Trades render time for error against Cycles")
 
 

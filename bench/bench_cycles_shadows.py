@@ -16,9 +16,8 @@ import numpy as np  # noqa: E402
 import calibration  # noqa: E402
 from image_metrics import mean_flip, psnr  # noqa: E402
 from lantern.engine import RenderSettings, read_exr, render_stage  # noqa: E402
+from lantern.core.presets import PRESETS  # noqa: E402
 from lantern.exporters import stage_from_depsgraph  # noqa: E402
-
-PRESETS = ("low", "medium", "high", "ultra")
 
 
 def main():

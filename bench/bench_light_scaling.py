@@ -2,7 +2,7 @@
 
 Fragments outside a light's volume are not shaded, so many small lights should cost
 about what one light covering the view costs (target: 256 lights <= 2x). "Small":
-0.002 W each, whose volume (engine/lights.py: where a white Lambert surface would
+0.002 W each, whose volume (engine/lighting.py: where a white Lambert surface would
 reflect less than 1e-4 W/(sr m2)) reaches about 0.7 m. Shadows off: shadowless point
 lights share one instanced draw. Reported twice: the render (G-buffer, lights,
 resolve) and the total with reading the stage, which costs Python time per light prim.

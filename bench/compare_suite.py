@@ -7,14 +7,17 @@ Scenes, built or copied into a temporary folder by a Blender process (`--build`)
   their bounds apply here too: one light of each type over a white plane
   (tests/calibration.build_scene, 48x48, 4096 spp) and a box on the plane per light
   type, shadows on (calibration.build_box_scene, 96x54, 2048 spp); both point-sampled
-  (pixel filter 0.01) like tests/references, since Lantern shades pixel centres;
+  (pixel filter 0.01) like their references in tests/references;
 - glossy spheres, metallic, roughness 0.1 to 1, under an area light; a plane with a
   normal map (the corpus's 08_normal_ribs.png, read in place);
 - every .blend of ../shared/corpus/blender, copied with its relative links remapped
-  to the corpus (nothing copied), and its broken links repaired in the copy: each
-  repair is listed in the scene's report and in the summary;
+  to the corpus (nothing copied), and its broken links repaired in the copy as
+  reference_scenes.py repairs them in memory: each repair is listed in the scene's
+  report and in the summary;
 - the 16-character rigged crowd of bench_skel_export.py, lit, at frame 25.
-PENDING lists the calibration scenes another branch builds; they join at merge.
+- from tests/reference_scenes.py (issue 10): the environment-lit spheres (diffuse and
+  mirror), the AO corner under a uniform world and the grazing MIP checker, at their
+  own sizes and samples;
 
     .venv/bin/python bench/compare_suite.py [--out out/compare] [--only NAME ...]
 """
@@ -40,12 +43,10 @@ REFERENCE_SAMPLES = 1024       # 4x the sweep's last point; calibration scenes u
 EEVEE_SAMPLES = (1, 4, 16)     # 64 would double the suite's time on 2 cores
 CROWD_FRAME = 25
 POINT_SAMPLED = 0.01           # pixel filter width of the calibration references
-# The calibration scenes the Cycles-matching branch (issue 10) builds; wired in at merge.
-PENDING = {
-    "env_spheres": "an environment-lit pair of spheres (issue 10, looks branch)",
-    "ao_corner": "an AO corner under a uniform world (issue 10, looks branch)",
-    "mip_checker": "a grazing MIP checker (issue 10, looks branch)",
-}
+# Calibration scenes of issue 10 (tests/reference_scenes.py builds them, at their own
+# size and samples, for its committed Cycles references): the environment-lit spheres
+# (diffuse and mirror), the AO corner, the grazing MIP checker.
+LOOKS_SCENES = ("environment_diffuse", "environment_mirror", "ao_corner", "tex_grazing_checker")
 # What "keep the bounds set by the pipeline issues" means for each calibration kind:
 # the preset and the test that set the bound.
 PLANE_BOUND = {"preset": "medium", "metric": "mean relative error, lit area",
@@ -166,128 +167,35 @@ def build_crowd():
     return scene
 
 
-def _stand_in_sky(path):
-    """A 64x32 lat-long sky (scene-linear EXR): blue-white above the horizon, brighter
-    towards the zenith, a darker ground below; the same file for every repaired scene."""
-    import numpy as np
-
-    from lantern.engine.image_io import write_image
-    height, width = 32, 64
-    elevation = (0.5 - (np.arange(height) + 0.5) / height) * np.pi   # row 0: zenith
-    sky = np.zeros((height, width, 4), np.float32)
-    up = np.clip(np.sin(elevation), 0.0, 1.0)[:, None]
-    sky[..., 0] = np.where(elevation[:, None] > 0, 0.55 + 0.25 * up, 0.25)
-    sky[..., 1] = np.where(elevation[:, None] > 0, 0.65 + 0.25 * up, 0.22)
-    sky[..., 2] = np.where(elevation[:, None] > 0, 0.85 + 0.15 * up, 0.18)
-    sky[..., 3] = 1.0
-    write_image(str(path), sky)
-    return path
-
-
-def _linked(socket):
-    return socket.links[0].from_socket if socket.is_linked else None
-
-
-def _replace_gltf_group(material, node, repairs):
-    """The glTF importer's "glTF Metallic Roughness" group (its library is not in the
-    corpus) becomes the Principled BSDF it stood for, wired by glTF's rules: base
-    colour = BaseColor x BaseColorFactor, metallic/roughness = the blue/green
-    channels of MetallicRoughness x their factors, a tangent-space normal map of
-    strength NormalScale, emission = Emissive x EmissiveFactor, alpha."""
-    tree = material.node_tree
-    nodes, links = tree.nodes, tree.links
-    inputs = {socket.name: socket for socket in node.inputs}
-    bsdf = nodes.new("ShaderNodeBsdfPrincipled")
-    bsdf.location = node.location
-
-    def value(name):
-        return inputs[name].default_value if name in inputs else None
-
-    factor = tuple(value("BaseColorFactor") or (1, 1, 1, 1))
-    base = _linked(inputs["BaseColor"])
-    if base is None:
-        colour = value("BaseColor")
-        bsdf.inputs["Base Color"].default_value = tuple(c * f for c, f in zip(colour, factor))
-    elif factor[:3] == (1.0, 1.0, 1.0):
-        links.new(base, bsdf.inputs["Base Color"])
-    else:
-        multiply = nodes.new("ShaderNodeMix")
-        multiply.data_type, multiply.blend_type = "RGBA", "MULTIPLY"
-        multiply.inputs["Factor"].default_value = 1.0
-        links.new(base, multiply.inputs[6])
-        multiply.inputs[7].default_value = factor
-        links.new(multiply.outputs[2], bsdf.inputs["Base Color"])
-    orm = _linked(inputs["MetallicRoughness"])
-    metallic, roughness = value("MetallicFactor"), value("RoughnessFactor")
-    if orm is None:
-        channels = value("MetallicRoughness")
-        bsdf.inputs["Metallic"].default_value = channels[2] * metallic
-        bsdf.inputs["Roughness"].default_value = channels[1] * roughness
-    else:
-        separate = nodes.new("ShaderNodeSeparateColor")
-        links.new(orm, separate.inputs["Color"])
-        for channel, target, scale in (("Blue", "Metallic", metallic),
-                                       ("Green", "Roughness", roughness)):
-            if scale == 1.0:
-                links.new(separate.outputs[channel], bsdf.inputs[target])
-                continue
-            times = nodes.new("ShaderNodeMath")
-            times.operation = "MULTIPLY"
-            links.new(separate.outputs[channel], times.inputs[0])
-            times.inputs[1].default_value = scale
-            links.new(times.outputs[0], bsdf.inputs[target])
-    normal = _linked(inputs["Normal"])
-    if normal is not None:
-        normal_map = nodes.new("ShaderNodeNormalMap")
-        normal_map.inputs["Strength"].default_value = value("NormalScale")
-        links.new(normal, normal_map.inputs["Color"])
-        links.new(normal_map.outputs["Normal"], bsdf.inputs["Normal"])
-    emission = tuple(value("EmissiveFactor") or (0, 0, 0, 1))
-    if any(emission[:3]):
-        if _linked(inputs["Emissive"]) is not None:
-            links.new(_linked(inputs["Emissive"]), bsdf.inputs["Emission Color"])
-        bsdf.inputs["Emission Color"].default_value = emission
-        bsdf.inputs["Emission Strength"].default_value = 1.0
-    alpha = _linked(inputs["Alpha"])
-    if alpha is not None:
-        links.new(alpha, bsdf.inputs["Alpha"])
-    else:
-        bsdf.inputs["Alpha"].default_value = value("Alpha")
-    for link in list(node.outputs["Shader"].links):
-        links.new(bsdf.outputs["BSDF"], link.to_socket)
-    nodes.remove(node)
-    repairs.append(f"material '{material.name}': the node group 'glTF Metallic Roughness' "
-                   "(library //../pbr_node/glTF2.blend, not in the corpus) replaced by the "
-                   "Principled BSDF it stands for, wired by glTF's rules")
-
-
-def repair_copy(source, target, sky):
-    """Opens a corpus .blend, repairs its broken links, saves the copy; returns the
-    repairs made (strings)."""
+def repair_copy(source, target, workdir):
+    """Opens a corpus .blend, repairs its broken links as tests/reference_scenes.py does
+    for the Cycles references of issue 10 (one repair, shared), saves the copy; returns
+    the repairs made (strings)."""
     import bpy
+    import reference_scenes
     bpy.ops.wm.open_mainfile(filepath=str(source), load_ui=False)
     repairs = []
-    for image in bpy.data.images:
-        path = bpy.path.abspath(image.filepath, library=image.library)
-        if image.source != "FILE" or image.packed_file is not None or os.path.isfile(path):
-            continue
-        users = [w.name for w in bpy.data.worlds if w.node_tree and any(
-            getattr(n, "image", None) == image for n in w.node_tree.nodes)]
-        if not users:
-            continue  # a missing image outside the world: left, and reported by compare
-        old = image.filepath
-        image.filepath = str(sky)
-        image.reload()
-        repairs.append(f"world '{', '.join(users)}': environment image {old} is not in the "
-                       f"corpus; relinked to a stand-in sky ({sky.name}: 64x32 lat-long, "
-                       "blue-white above the horizon, grey-brown ground)")
+    for world in bpy.data.worlds:
+        for node in (world.node_tree.nodes if world.node_tree else ()):
+            image = getattr(node, "image", None)
+            if node.bl_idname != "ShaderNodeTexEnvironment" or image is None \
+                    or image.packed_file is not None \
+                    or os.path.isfile(bpy.path.abspath(image.filepath, library=image.library)):
+                continue
+            node.image = bpy.data.images.load(reference_scenes.write_sky(workdir))
+            repairs.append(f"world '{world.name}': environment image {image.filepath} is not in "
+                           "the corpus; shows reference_scenes.py's asymmetric lat-long sky "
+                           "(the one issue 10's references use) instead")
     for material in bpy.data.materials:
-        if not material.node_tree:
-            continue
-        for node in list(material.node_tree.nodes):
-            group = getattr(node, "node_tree", None) if node.bl_idname == "ShaderNodeGroup" else None
-            if group is not None and group.is_missing and group.name == "glTF Metallic Roughness":
-                _replace_gltf_group(material, node, repairs)
+        groups = [n for n in (material.node_tree.nodes if material.node_tree else ())
+                  if n.bl_idname == "ShaderNodeGroup" and n.node_tree is not None
+                  and n.node_tree.is_missing and n.node_tree.name == "glTF Metallic Roughness"]
+        if groups:
+            reference_scenes._principled_for_gltf_group(material)
+            repairs.append(f"material '{material.name}': the node group 'glTF Metallic "
+                           "Roughness' (library //../pbr_node/glTF2.blend, not in the corpus) "
+                           "replaced by the Principled BSDF network Blender's glTF importer "
+                           "makes (reference_scenes._principled_for_gltf_group)")
     for light in bpy.data.lights:
         tree = light.node_tree if light.use_nodes else None
         if tree and any(n.bl_idname == "ShaderNodeGroup" and n.node_tree and n.node_tree.is_missing
@@ -343,21 +251,25 @@ def build(folder, only):
         if wanted(name):
             builder()
             save(name, "calibration")
+    import reference_scenes
+    for name in LOOKS_SCENES:
+        if wanted(name):
+            reference_scenes.build(name, folder / "looks")
+            spec = reference_scenes.SCENES[name]
+            save(name, "calibration", size=list(spec.size), reference_samples=spec.samples)
     if wanted("crowd_16"):
         build_crowd()
         save("crowd_16", "crowd", frame=CROWD_FRAME)
-    sky = None
     for source in sorted(CORPUS.glob("*.blend")):
         name = source.stem
         if not wanted(name):
             continue
         corpus = folder / "corpus"
         corpus.mkdir(exist_ok=True)
-        sky = sky or _stand_in_sky(corpus / "field_standin.exr")
         target = corpus / source.name
         scenes[name] = {"blend": str(target), "group": "corpus",
                         "source": os.path.relpath(source, REPO),
-                        "repairs": repair_copy(source, target, sky)}
+                        "repairs": repair_copy(source, target, str(corpus))}
     with open(folder / "manifest.json", "w") as f:
         json.dump(scenes, f, indent=2)
 
@@ -479,7 +391,7 @@ def write_summary(out, scenes, args, seconds):
     import html
 
     from lantern.compare.files import write_json, write_text
-    write_json(str(out / "summary.json"), {"scenes": scenes, "pending": PENDING,
+    write_json(str(out / "summary.json"), {"scenes": scenes,
                                            "seconds": seconds, "settings": vars(args)})
     write_text(str(out / "summary.md"), markdown(summary_rows(scenes)))
     e = html.escape
@@ -507,8 +419,6 @@ def write_summary(out, scenes, args, seconds):
     for scene in scenes:
         for link in scene.get("broken_links", []):
             body.append(f"<li>{e(scene['name'])}: {e(link['kind'])} {e(link['path'])}</li>")
-    body.append("</ul><h2>Not in this suite yet</h2><ul>")
-    body += [f"<li>{e(name)}: {e(what)}</li>" for name, what in PENDING.items()]
     body.append("</ul></body></html>\n")
     write_text(str(out / "index.html"), "\n".join(body))
 

@@ -103,4 +103,7 @@ def describe(scene) -> dict:
                            max(1, round(render.resolution_y * scale))],
             "film_transparent": bool(render.film_transparent),
             "camera": scene.camera.name if scene.camera else None,
+            "view": {"transform": scene.view_settings.view_transform,
+                     "look": None if scene.view_settings.look == "None" else scene.view_settings.look,
+                     "exposure": float(scene.view_settings.exposure)},
             "blender": bpy.app.version_string}

@@ -2,10 +2,12 @@
 
 Cold: from the moment the parent process spawned this worker to Lantern's first
 image in memory. It holds the process start, the imports (bpy among them), opening
-the .blend, the export to an in-memory USD stage, the GL context, shader compilation
-and the first render: what `lantern render scene.blend` costs from a shell.
-Warm: the median of several renders after a warm-up render, the stage already
-exported: what a viewport or an F12 that keeps its renderer costs per image."""
+the .blend, the export to an in-memory USD stage, the Session (stage read, GL context,
+uploads), shader compilation and the first render: what `lantern render scene.blend`
+costs from a shell.
+Warm: the median of several renders of one engine.Session after a warm-up render:
+what a viewport or an F12 that keeps its renderer costs per image (nothing changed,
+so the Session reads and uploads nothing)."""
 from __future__ import annotations
 
 import dataclasses
@@ -19,7 +21,7 @@ def time_lantern(blend, frame, size, preset, transparent, spawned_at, warm_runs,
     just before it started this process. Returns the image (float RGBA), the times,
     the warnings, and with `coverage` Lantern's coverage (alpha) for foreground masks."""
     from .. import exporters  # Blender's pxr before the engine imports any
-    from ..engine import RenderSettings, render_stage
+    from ..engine import RenderSettings, Session
     from .blender_scene import open_scene
 
     notes = open_scene(blend, frame, size)
@@ -29,25 +31,19 @@ def time_lantern(blend, frame, size, preset, transparent, spawned_at, warm_runs,
     export_seconds = time.perf_counter() - start
     settings = RenderSettings(width=size[0], height=size[1], frame=frame, preset=preset,
                               transparent=transparent)
-    first = render_stage(stage, settings)
-    cold_seconds = time.time() - spawned_at
-
-    # TODO(merge, issue 9): until engine.Session is on this branch, "warm" is
-    # render_stage in a loop, which also re-reads the stage (USD to scene records) on
-    # every call. At merge, time s.render() inside one
-    #     with Session(stage, settings) as s:
-    # after one warm-up s.render(), and delete this comment.
-    render_stage(stage, settings)  # warm-up
-    runs, result = [], first
-    for _ in range(max(1, warm_runs)):
-        start = time.perf_counter()
-        result = render_stage(stage, settings)
-        runs.append(time.perf_counter() - start)
-
+    with Session(stage, settings) as session:
+        first = session.render()
+        cold_seconds = time.time() - spawned_at
+        session.render()  # warm-up
+        runs, result = [], first
+        for _ in range(max(1, warm_runs)):
+            start = time.perf_counter()
+            result = session.render()
+            runs.append(time.perf_counter() - start)
     alpha = None
     if coverage:
-        covered = render_stage(stage, dataclasses.replace(settings, transparent=True))
-        alpha = covered.rgba[..., 3]
+        with Session(stage, dataclasses.replace(settings, transparent=True)) as session:
+            alpha = session.render().rgba[..., 3]
     return {"rgba": result.rgba, "coverage": alpha, "cold_seconds": cold_seconds,
             "warm_seconds": statistics.median(runs), "warm_runs": runs,
             "first_render_seconds": first.timings.get("total"),

@@ -20,14 +20,15 @@ LABELS = {"cycles": "Cycles", "cycles_denoised": "Cycles + denoiser", "eevee": "
 
 # --- images -------------------------------------------------------------------------
 
-def display_png(path: str, rgba) -> str:
-    """Scene-linear RGBA to the 8-bit PNG shown in the report: the one place the
-    report's images are tone-mapped (today Blender's Standard view, through
-    engine.image_io.write_image; the view transform is passed here once colour
-    management lands in write_image). Returns `path`."""
+def display_png(path: str, rgba, view: dict) -> str:
+    """Scene-linear RGBA to the 8-bit PNG shown in the report, through the scene's own
+    colour management (view = {"transform", "look", "exposure"}, as Blender's Color
+    Management panel sets them): the one place the report's images are tone-mapped.
+    Returns `path`."""
     from ..engine.image_io import write_image
     os.makedirs(os.path.dirname(path), exist_ok=True)
-    write_image(path, rgba)
+    write_image(path, rgba, view=view["transform"], look=view["look"],
+                exposure=view["exposure"])
     return path
 
 
@@ -298,6 +299,9 @@ def html_page(results: dict, plots: dict) -> str:
              ["seeds", _e(f"reference {settings['seeds']['reference']}, "
                           f"sweep {settings['seeds']['sweep']}")],
              ["foreground mask", _e(results["mask"]["source"])],
+             ["images shown through", _e(f"view {scene['view']['transform']}, look "
+                                         f"{scene['view']['look'] or 'none'}, exposure "
+                                         f"{scene['view']['exposure']:g}")],
              ["machine", _e(f"{results['machine']['cpus']} CPUs, {results['machine']['platform']}, "
                             f"Blender {results['machine']['blender']}, "
                             f"Lantern {results['machine']['lantern']}")],

@@ -32,10 +32,7 @@ RENDERERS = ("cycles", "cycles_denoised", "eevee")
 
 def preset_names():
     """The engine's quality presets, in their table's order."""
-    try:
-        from ..core.presets import PRESETS  # where the table lives once issue 9 lands
-    except ImportError:
-        from ..engine.renderer import PRESETS
+    from ..core.presets import PRESETS
     return tuple(PRESETS)
 
 
@@ -237,7 +234,7 @@ def _equal_error(renders, modes, presets):
     return rows
 
 
-def _score(options, out, references, jobs, film_transparent):
+def _score(options, out, references, jobs, film_transparent, view):
     """Every render's entry in results.json, its metrics against each mode's reference
     written in, its display image and FLIP heat maps written out."""
     from ..engine.image_io import read_exr
@@ -252,7 +249,7 @@ def _score(options, out, references, jobs, film_transparent):
         if mode in loaded:
             reference["flip_parameters"] = metrics.flip_parameters(loaded[mode])
             reference["png"] = _rel(out, report.display_png(
-                report.png_path(out, reference["image"]), loaded[mode]))
+                report.png_path(out, reference["image"]), loaded[mode], view))
     renders = []
     for job in jobs:
         renderer = job.extra.get("renderer")
@@ -280,7 +277,7 @@ def _score(options, out, references, jobs, film_transparent):
         for entry in entries:
             image = read_exr(entry["image"])
             entry["png"] = _rel(out, report.display_png(report.png_path(out, entry["image"]),
-                                                        image))
+                                                        image, view))
             entry["metrics"] = {}
             entry["problems"] = metrics.problems(image)
             for mode, reference in loaded.items():
@@ -296,6 +293,18 @@ def _score(options, out, references, jobs, film_transparent):
                                           "heatmap": heatmap}
             renders.append(entry)
     return renders, mask_info
+
+
+def _view(view):
+    """The scene's view transform, look and exposure for the report's images, or
+    Standard (with a note) when this machine's OpenColorIO config cannot apply them."""
+    from ..engine.color import ColorManagementError, check
+    try:
+        check(view["transform"], view["look"], view["exposure"])
+    except ColorManagementError as error:
+        return ({"transform": "Standard", "look": None, "exposure": 0.0},
+                [f"the report's images use the Standard view: {error}"])
+    return view, []
 
 
 def _summary(equal, renders, modes):
@@ -329,12 +338,13 @@ def _summary(equal, renders, modes):
 
 def _timing_notes(options):
     notes = {
-        "lantern_warm": (f"median of {options.warm_runs} renders after one warm-up render, "
-                         "the stage already exported, in one process; today each render is "
-                         "a render_stage call, which also re-reads the USD stage"),
+        "lantern_warm": (f"median of {options.warm_runs} renders of one engine.Session after "
+                         "a warm-up render, the stage exported and read once (nothing "
+                         "changes between renders, so nothing is read or uploaded again)"),
         "lantern_cold": ("from the parent starting the worker process to Lantern's first "
                          "image in memory: process start, imports (bpy), opening the .blend, "
-                         "the export to USD, the GL context, shader compilation, first render"),
+                         "the export to USD, the Session (stage read, GL context, uploads), "
+                         "shader compilation, first render"),
         "cycles": ("wall time of bpy.ops.render.render(): the scene sync (geometry, BVH, "
                    "shaders, images) and the path tracing, not writing the file; after one "
                    "untimed 1-sample render in the same process; renders under 0.5 s are "
@@ -371,11 +381,12 @@ def compare(options: Options) -> dict:
     jobs, references = _plan(options, out, scan, size, frame)
     jobs = run_jobs(jobs, options.jobs, log_dir, quiet=options.quiet)
     _store_references(references)
+    view, view_note = _view(scan["scene"]["view"])
     renders, mask_info = _score(options, out, references, jobs,
-                                scan["scene"]["film_transparent"])
+                                scan["scene"]["film_transparent"], view)
     equal = _equal_error(renders, options.modes, options.presets)
 
-    warnings = list(dict.fromkeys([*options.extra_notes, *scan["notes"],
+    warnings = list(dict.fromkeys([*options.extra_notes, *scan["notes"], *view_note,
                                    *(w for r in renders for w in r.get("warnings", []))]))
     results = {
         "schema": "lantern-compare/1",
@@ -384,7 +395,7 @@ def compare(options: Options) -> dict:
                   "sha256": reference_cache.file_sha256(options.scene),
                   "name": scan["scene"]["name"], "frame": frame, "size": list(size),
                   "film_transparent": scan["scene"]["film_transparent"],
-                  "camera": scan["scene"]["camera"]},
+                  "camera": scan["scene"]["camera"], "view": view},
         "machine": {"cpus": os.cpu_count(), "platform": platform.platform(),
                     "blender": scan["scene"]["blender"], "lantern": _version()},
         "settings": {"presets": list(options.presets), "modes": list(options.modes),

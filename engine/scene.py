@@ -1,8 +1,13 @@
-"""Plain records of what gets drawn. No pxr, no GL: the reader fills them, the
-renderer consumes them.
+"""Plain records of what gets drawn, kept by the USD side (engine/usd/) and drawn by
+the GL side (engine/gpu/). No pxr, no GL: dataclasses and numpy arrays only, so each
+side can be read, tested and replaced without the other.
 
-Matrices are numpy float64 4x4 in column-vector convention (p' = M @ p), so a
-matrix goes to GLSL as `M.T` bytes (column-major)."""
+Matrices are numpy float64 4x4 in column-vector convention (p' = M @ p), so a matrix
+goes to GLSL as `M.T` bytes (column-major).
+
+A Scene lives as long as its Session: records are keyed by prim path and replaced
+when their prim changes; `Changes` says what one sync replaced, so the GL side
+uploads only that."""
 from __future__ import annotations
 
 import math
@@ -24,7 +29,7 @@ class TextureRef:
 
 @dataclass
 class Material:
-    name: str
+    name: str                      # the Material prim's path, or <default ...>
     diffuse: tuple = (0.18, 0.18, 0.18)
     metallic: float = 0.0
     roughness: float = 0.5
@@ -43,26 +48,39 @@ class Material:
 
 @dataclass
 class MeshData:
-    """De-indexed triangle soup, sorted by material. vertices: (N, 12) float32 =
-    position 3, normal 3, uv 2, tangent 4 (w = handedness)."""
+    """Indexed triangles sorted by material. vertices: (V, 12) float32 = position 3,
+    normal 3, uv 2, tangent 4 (w = handedness); indices: (3T,) uint32 into vertices.
+    A vertex is one face corner, or one point when every attribute is per point."""
     key: tuple
     vertices: np.ndarray
-    ranges: list                   # [(material_index, first_vertex, vertex_count)]
-    materials: list                # [Material], indexed by ranges
+    indices: np.ndarray
+    ranges: list                   # [(material index, first index, index count)]
+    materials: list                # [Material name], indexed by ranges: Scene.materials keys
     double_sided: bool = True
-    point_index: np.ndarray | None = None  # (N,) int32: soup vertex -> mesh point
-    skin: "SkinData | None" = None          # UsdSkel binding (engine/skinning.py)
+    backface_culling: bool = False  # lantern:backfaceCulling: culling was asked for
+    point_of_vertex: np.ndarray | None = None  # (V,) int32: vertex -> mesh point
+    skin: "SkinData | None" = None            # UsdSkel binding
+    bounds: tuple | None = None    # (lo, hi) float64 of the vertex positions
+
+    def __post_init__(self):
+        if self.bounds is None and len(self.vertices):
+            p = self.vertices[:, :3].astype(np.float64)
+            self.bounds = (p.min(axis=0), p.max(axis=0))
+
+    @property
+    def index_count(self) -> int:
+        return int(len(self.indices))
 
 
 @dataclass
 class SkinData:
-    """A mesh's static UsdSkel binding, per soup vertex. Joint indices are in the
-    skeleton's order (the binding's joint mapper already applied); index n_joints is
-    an identity joint for mesh joints the skeleton lacks."""
+    """A mesh's static UsdSkel binding, per vertex of its MeshData. Joint indices are
+    in the skeleton's order (the binding's joint mapper already applied); index
+    n_joints is an identity joint for mesh joints the skeleton lacks."""
     skel_key: str = ""
     n_points: int = 0
-    joints: np.ndarray | None = None       # (N, 4g) int32, or None: blend shapes only
-    weights: np.ndarray | None = None      # (N, 4g) float32
+    joints: np.ndarray | None = None       # (V, 4g) int32, or None: blend shapes only
+    weights: np.ndarray | None = None      # (V, 4g) float32
     # More than 8 influences: per point, g texel pairs (joints, weights), read by in_point.
     point_influences: np.ndarray | None = None
     geom_bind: np.ndarray = field(default_factory=lambda: np.eye(4))
@@ -82,10 +100,11 @@ class SkinData:
 
 
 @dataclass
-class DrawItem:
+class Instance:
+    """One Mesh prim drawn: its MeshData (shared by prims with the same data) where."""
+    path: str
     mesh_key: tuple
-    world: np.ndarray              # 4x4 (skinned: the skeleton's local-to-world)
-    prim_path: str = ""
+    world: np.ndarray              # 4x4 (skinned with joints: the skeleton's local-to-world)
     # This frame's blend shapes: [(sub-shape index, weight)], zero weights left out.
     shapes: list = field(default_factory=list)
 
@@ -100,9 +119,9 @@ class SkelPose:
 
 @dataclass
 class Light:
-    """kind: sphere | spot | distant | rect | disk. `color` is already radiometric:
-    radiant intensity I [W/sr] for sphere/spot, radiance L [W/(sr m2)] for rect/disk,
-    irradiance E [W/m2] for distant."""
+    """kind: a core.lights kind. `color` is already radiometric: radiant intensity I
+    [W/sr] for point/spot, radiance L [W/(sr m2)] for rect/disk, irradiance E [W/m2]
+    for sun. A headlight shines along the camera's view, wherever it looks."""
     kind: str
     name: str
     color: np.ndarray
@@ -121,6 +140,7 @@ class Light:
     specular: float = 1.0
     shadow: bool = True
     shadow_resolution: int = 0     # lantern:shadowResolution; 0 = the preset's
+    headlight: bool = False
 
     @property
     def direction(self) -> np.ndarray:
@@ -137,7 +157,7 @@ class Light:
 class Dome:
     name: str
     radiance: np.ndarray           # uniform colour x intensity (also the map's multiplier)
-    sh: np.ndarray                 # (9, 3) irradiance SH coefficients, see lights.dome_sh
+    sh: np.ndarray                 # (9, 3) irradiance SH coefficients, see lighting.dome_sh
     texture: str | None = None     # lat-long image shown as the background
     rotation: np.ndarray = field(default_factory=lambda: np.eye(3))  # dome local -> world
 
@@ -156,13 +176,37 @@ class Camera:
 
 @dataclass
 class Scene:
+    """Everything a stage draws, keyed by prim path, in the stage's traversal order."""
     meshes: dict = field(default_factory=dict)     # key -> MeshData
-    draws: list = field(default_factory=list)      # [DrawItem]
-    lights: list = field(default_factory=list)
+    instances: dict = field(default_factory=dict)  # mesh prim path -> Instance
+    materials: dict = field(default_factory=dict)  # material name -> Material
+    lights: dict = field(default_factory=dict)     # light prim path -> Light
     dome: Dome | None = None
-    camera: Camera | None = None
-    warnings: list = field(default_factory=list)
+    skeletons: dict = field(default_factory=dict)  # skel key -> SkelPose
+    warnings: dict = field(default_factory=dict)   # prim path -> [message]
     meters_per_unit: float = 1.0
     up_axis: str = "Z"
-    bounds: tuple | None = None                    # (min xyz, max xyz) world
-    skeletons: dict = field(default_factory=dict)  # skel key -> SkelPose
+
+    def warning_list(self) -> list:
+        return [w for ws in self.warnings.values() for w in ws]
+
+
+@dataclass
+class Changes:
+    """What one sync of the stage replaced, for the GL side to upload: only that."""
+    meshes: set = field(default_factory=set)            # mesh keys built or rebuilt
+    dropped_meshes: set = field(default_factory=set)
+    instances: set = field(default_factory=set)         # paths added, moved or re-meshed
+    dropped_instances: set = field(default_factory=set)
+    shapes: set = field(default_factory=set)            # paths with new blend-shape weights
+    skeletons: set = field(default_factory=set)         # skel keys posed anew
+    materials: set = field(default_factory=set)         # material names re-read
+    lights: set = field(default_factory=set)            # light paths added, changed or dropped
+    cameras: set = field(default_factory=set)           # camera paths added, edited or dropped
+    dome: bool = False
+    prims_read: int = 0
+
+    def __bool__(self):
+        return bool(self.meshes or self.dropped_meshes or self.instances or
+                    self.dropped_instances or self.shapes or self.skeletons or
+                    self.materials or self.lights or self.cameras or self.dome)

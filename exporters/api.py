@@ -1,13 +1,13 @@
 """Public entry points: export a depsgraph into a stage, or a .blend into a file."""
 import logging
 import os
-import tempfile
 import time
 from dataclasses import dataclass, field
 
 import bpy
 from pxr import Usd
 
+from ..core.files import atomic_write
 from .errors import ExportError
 from .gather.scene import gather_scene
 from .usd.assets import asset_resolver
@@ -124,21 +124,12 @@ def export_depsgraph_to_file(depsgraph, out_path, options=None):
     report = _export(depsgraph, stage, options, out_path)
 
     # A temp file beside the target, then a rename: readers never see half a file.
-    folder = os.path.dirname(out_path)
-    os.makedirs(folder, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix="." + os.path.basename(out_path) + ".", suffix=ext)
-    os.close(fd)
-    try:
+    os.makedirs(os.path.dirname(out_path), exist_ok=True)
+
+    def write(tmp):
         if not stage.GetRootLayer().Export(tmp):
             raise ExportError(f"{out_path}: USD could not write the layer")
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, out_path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
+    atomic_write(out_path, write, suffix=ext, keep_mode=True)
     report.path = out_path
     return report
 

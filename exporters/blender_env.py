@@ -23,14 +23,16 @@ def use_blenders_usd():
     site = _blender_site_packages()
     if not os.path.isdir(os.path.join(site, "pxr")):
         return  # a full Blender install: its pxr is already importable
-    loaded = sys.modules.get("pxr")
-    if loaded is not None:
+    # The same holds for Blender's OpenImageIO and PyOpenColorIO (PyPI has its own).
+    for name in ("pxr", "OpenImageIO", "PyOpenColorIO"):
+        loaded = sys.modules.get(name)
+        if loaded is None:
+            continue
         origin = os.path.dirname(os.path.abspath(loaded.__file__))
         if not origin.startswith(os.path.abspath(site)):
             raise ImportError(
-                f"pxr was imported from {origin} before bpy; in a Blender process only "
-                f"Blender's own USD ({site}) may be loaded. Import lantern.exporters first.")
-        return
+                f"{name} was imported from {origin} before bpy; in a Blender process only "
+                f"Blender's own ({site}) may be loaded. Import lantern.exporters first.")
     if site not in sys.path:
         sys.path.insert(0, site)
 

@@ -118,7 +118,7 @@ class SkeletonRecord:
 
 @dataclass
 class LightRecord:
-    kind: str                   # point / spot / sun / area
+    kind: str                   # core.lights: point / spot / sun / rect / disk
     color: tuple[float, float, float]
     intensity: float            # USD inputs:intensity, with normalize = true
     shadow: bool
@@ -129,7 +129,6 @@ class LightRecord:
     cone_angle: float = 90.0    # degrees, half angle
     cone_softness: float = 0.0
     angle: float = 0.0          # sun, degrees
-    shape: str = "rect"         # area: rect / disk
     width: float = 1.0
     height: float = 1.0
     # Lantern's own shadow settings (`light.lantern` in Blender); the defaults are the
@@ -156,6 +155,7 @@ class WorldRecord:
     color: tuple[float, float, float] = (0.05, 0.05, 0.05)
     intensity: float = 1.0
     texture: str | None = None  # absolute path of a lat-long image
+    rotation: tuple = (0.0, 0.0, 0.0)  # the texture's Mapping node rotation, Euler XYZ radians
 
 
 @dataclass

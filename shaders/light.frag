@@ -2,8 +2,8 @@
 #include "lib.glsl"
 // One light, added into the HDR target (blend ONE, ONE). Variants: LIGHT_DISTANT
 // (full-screen), LIGHT_SPHERE (point and spot, drawn as a light volume), LIGHT_AREA
-// (rect and disk as a polygon, drawn as a light volume). See engine/lights.py for the
-// light forms.
+// (rect and disk as a polygon, drawn as a light volume). See engine/usd/lights.py for
+// the light forms; the light itself comes from the light table (lights.glsl).
 uniform sampler2D g_base;
 uniform sampler2D g_normal;
 uniform sampler2D g_mat;
@@ -13,48 +13,14 @@ uniform vec3 cam_pos;
 uniform vec3 cam_forward;
 uniform bool cam_ortho;
 
+#include "lights.glsl"
 #ifdef LIGHTS_INSTANCED
-// Many shadowless sphere lights in one draw: each fragment's light comes from its
-// instance (shaders/volume.vert); the names below are those of the one-light path.
-flat in vec4 v_pos_range;
-flat in vec4 v_color_radius;
-flat in vec4 v_axis_cos;
-flat in vec4 v_params;
-#define light_pos v_pos_range.xyz
-#define light_range v_pos_range.w
-#define light_color v_color_radius.rgb
-#define light_radius v_color_radius.w
-#define light_axis v_axis_cos.xyz
-#define cos_half v_axis_cos.w
-#define spot_blend v_params.x
-#define light_diffuse v_params.y
-#define light_specular v_params.z
-#define soft_falloff ((int(v_params.w) & 1) != 0)
-#define is_spot ((int(v_params.w) & 2) != 0)
+flat in int v_light;        // many shadowless sphere lights in one draw (volume.vert)
 #else
-uniform vec3 light_color;      // I [W/sr], L [W/(sr m2)] or E [W/m2]
-uniform vec3 light_pos;
-uniform vec3 light_axis;       // direction of emission (light's -Z)
-uniform float light_diffuse;
-uniform float light_specular;
-uniform float light_range;     // volume radius: nothing is added beyond it
-#ifdef LIGHT_SPHERE
-uniform float light_radius;
-uniform bool soft_falloff;
-uniform bool is_spot;
-uniform float cos_half;
-uniform float spot_blend;
-#endif
+uniform int light_index;
 #endif
 #ifdef LIGHT_AREA
 #define MAX_VERTS 32
-uniform vec3 poly[MAX_VERTS];  // world-space vertices, in order
-uniform int n_poly;
-uniform vec3 light_x;
-uniform vec3 light_y;
-uniform vec2 half_size;        // rect half extents; disk: (radius, 0)
-uniform bool is_disk;
-uniform float light_area;
 #endif
 
 // The HDR target is RGBA16F: one light never writes more than it holds.
@@ -72,10 +38,10 @@ out vec4 frag;
 float polygon_irradiance_factor(vec3 p, vec3 n) {
     vec3 clipped[MAX_VERTS + 1];
     int m = 0;
-    vec3 prev = poly[n_poly - 1] - p;
+    vec3 prev = light_poly(n_poly - 1) - p;
     float dprev = dot(prev, n);
     for (int i = 0; i < n_poly; ++i) {
-        vec3 cur = poly[i] - p;
+        vec3 cur = light_poly(i) - p;
         float dcur = dot(cur, n);
         if ((dprev >= 0.0) != (dcur >= 0.0)) {
             float t = dprev / (dprev - dcur);
@@ -127,6 +93,11 @@ float spot_mask(vec3 p, vec3 l, float d) {
 #endif
 
 void main() {
+#ifdef LIGHTS_INSTANCED
+    load_light(v_light, cam_forward);
+#else
+    load_light(light_index, cam_forward);
+#endif
     ivec2 px = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(g_depth, px, 0).r;
     if (depth >= 1.0) discard;

@@ -1,19 +1,15 @@
-// UsdSkel deformation for any vertex shader (G-buffer, shadows, readback):
-// call skin_vertex(p, n, t) on the mesh's own position, normal and tangent; the
-// results are in skeleton space (draw with the skeleton's local-to-world).
+// UsdSkel deformation, for the skinning pass (skin.vert) only: call skin_vertex(p, n, t)
+// on the mesh's own position, normal and tangent; the results are in skeleton space
+// (drawn with the skeleton's local-to-world).
 // Variant defines, only for what a mesh uses:
 //   SKIN_SHAPES   blend shapes, offsets texture indexed by (block * points + point)
 //   SKIN_JOINTS   joint influences (4 per vertex; SKIN_JOINTS8: 8; SKIN_JOINTS_TEX:
 //                 any number, read per point from the influence texture)
 //   SKIN_DQS      dual-quaternion skinning instead of linear blend
-// Joint texture: one row per joint, see engine/skinning.py joint_texels.
-#if defined(SKIN_SHAPES) || defined(SKIN_JOINTS)
-#define SKINNED 1
-#endif
-
+// Joint texture: one row per joint, see engine/skin.py joint_texels.
 #if defined(SKIN_SHAPES) || defined(SKIN_JOINTS_TEX)
 in int in_point;
-const int FLAT_TEX_W = 4096;   // engine/skinning.py SHAPE_TEX_W
+const int FLAT_TEX_W = 4096;   // engine/skin.py FLAT_TEX_W
 vec4 flat_texel(sampler2D tex, int i) { return texelFetch(tex, ivec2(i % FLAT_TEX_W, i / FLAT_TEX_W), 0); }
 #endif
 

@@ -94,7 +94,7 @@ def test_point_light_outside_volume_is_cut_at_range():
     res = render(stage)
     P = pixel_points()
     exp = point_expected(P, pos, intensity / 4, 0.0, True)
-    from lantern.engine.lights import VOLUME_THRESHOLD
+    from lantern.engine.lighting import VOLUME_THRESHOLD
     R = math.sqrt(intensity / 4 / (math.pi * VOLUME_THRESHOLD))
     dist = np.linalg.norm(P - np.asarray(pos), axis=-1)
     assert compare(res.rgba, exp, dist < 0.9 * R) < TOL
@@ -108,7 +108,7 @@ def test_camera_inside_point_volume():
     sphere(stage, pos, 0.01, 0.1)
     res = render(stage)
     P = pixel_points(cam_z=2.0)
-    from lantern.engine.lights import VOLUME_THRESHOLD
+    from lantern.engine.lighting import VOLUME_THRESHOLD
     R = math.sqrt(0.01 / 4 / (math.pi * VOLUME_THRESHOLD))
     assert np.linalg.norm(np.array([0, 0, 2.0]) - pos) < R  # the camera is inside
     exp = point_expected(P, pos, 0.01 / 4, 0.1, True)

@@ -7,7 +7,7 @@ import pytest
 from pxr import Gf, Usd, UsdGeom
 
 from lantern.engine import RenderSettings, render_stage
-from lantern.engine.gl_thread import run_gl
+from lantern.engine.gpu.context import run_gl
 
 W, H = 64, 48
 
@@ -120,4 +120,4 @@ def test_gl_runs_on_its_own_thread_and_errors_propagate():
         raise RuntimeError("boom")
     with pytest.raises(RuntimeError, match="boom"):
         run_gl(boom)
-    assert run_gl(lambda ctx: ctx.version_code) >= 330
+    assert run_gl(lambda gl: gl.version) >= 330

@@ -1,10 +1,14 @@
-"""Principled BSDF -> UsdPreviewSurface, textures, warnings."""
+"""Principled BSDF -> UsdPreviewSurface, textures, warnings; the world's dome."""
+import math
+import os
+
 import bpy
+import numpy as np
 import pytest
-from pxr import UsdShade
+from pxr import Gf, Usd, UsdGeom, UsdLux, UsdShade
 
 from _export_helpers import cube_object, export_current
-from lantern.exporters.gather.material import principled_ior
+from lantern.exporters.gather.material import normal_map_scale_bias, principled_ior
 
 
 def principled_material(name):
@@ -110,7 +114,7 @@ def test_image_textures_wrap_and_colour_space(empty_scene, tmp_path):
     assert report.warnings == []
 
 
-def test_normal_map(empty_scene, tmp_path):
+def test_normal_map_strength_one(empty_scene, tmp_path):
     mat, tree, bsdf = principled_material("Bumpy")
     tex = tree.nodes.new("ShaderNodeTexImage")
     tex.image = saved_image(tmp_path, "normal", "Non-Color")
@@ -161,3 +165,378 @@ def test_backface_culling_makes_single_sided(empty_scene):
     stage, _ = export_current()
     assert stage.GetPrimAtPath("/root/C/C_mesh").GetAttribute("doubleSided").Get() is False
     assert stage.GetPrimAtPath("/root/D/D_mesh").GetAttribute("doubleSided").Get() is True
+
+
+# --- normal-map strength ------------------------------------------------------------------
+
+def test_normal_map_strength_is_cycles_tangent_space_weighting():
+    """n = 2c - 1 weighted as Cycles' svm_node_normal_map (tangent space):
+    (s n.x, s n.y, 1 + clamp(s, 0, 1) (n.z - 1))."""
+    c = np.array([0.8, 0.3, 0.7, 1.0])
+    n = 2 * c[:3] - 1
+    for s in (0.0, 0.5, 1.0, 2.0, 3.5):
+        scale, bias = normal_map_scale_bias(s)
+        k = min(max(s, 0.0), 1.0)
+        expected = (s * n[0], s * n[1], 1 + k * (n[2] - 1))
+        assert tuple(np.array(scale)[:3] * c[:3] + np.array(bias)[:3]) == pytest.approx(expected)
+        assert scale[3] == 1.0 and bias[3] == 0.0
+    assert normal_map_scale_bias(1.0) == ((2, 2, 2, 1), (-1, -1, -1, 0))
+
+
+def _normal_mapped_plane(name, colour, strength):
+    """A 2x2 plane (UVs along x and y) whose normal map is a constant float colour."""
+    image = bpy.data.images.new(name + "_n", 4, 4, float_buffer=True)
+    image.colorspace_settings.name = "Non-Color"
+    image.pixels.foreach_set(np.tile(np.array([*colour, 1.0], np.float32), 16))
+    image.pack()
+    mat, tree, bsdf = principled_material(name)
+    bsdf.inputs["Base Color"].default_value = (1, 1, 1, 1)
+    bsdf.inputs["Roughness"].default_value = 1.0
+    bsdf.inputs["Specular IOR Level"].default_value = 0.0
+    tex = tree.nodes.new("ShaderNodeTexImage")
+    tex.image = image
+    nmap = tree.nodes.new("ShaderNodeNormalMap")
+    nmap.inputs["Strength"].default_value = strength
+    tree.links.new(tex.outputs["Color"], nmap.inputs["Color"])
+    tree.links.new(nmap.outputs["Normal"], bsdf.inputs["Normal"])
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata([(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], [], [(0, 1, 2, 3)])
+    mesh.uv_layers.new(name="UVMap").data.foreach_set("uv", [0, 0, 1, 0, 1, 1, 0, 1])
+    mesh.materials.append(mat)
+    ob = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(ob)
+    return ob
+
+
+@pytest.mark.parametrize("strength", [0.5, 2.0])
+def test_exported_normal_strength_shades_as_cycles(empty_scene, tmp_path, strength):
+    """Cycles renders a plane with a constant normal map under a sun of irradiance pi
+    straight down: each pixel is cos(normal, up). The exported scale and bias, then
+    normalised (as a renderer does), must give that cosine."""
+    scene = bpy.context.scene
+    colour = (0.85, 0.3, 0.8)
+    _normal_mapped_plane("Bent", colour, strength)
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
+    sun.data.energy, sun.data.angle = math.pi, 0.0
+    scene.collection.objects.link(sun)
+    cam = bpy.data.objects.new("Cam", bpy.data.cameras.new("Cam"))
+    cam.data.type, cam.data.ortho_scale = "ORTHO", 1.0
+    cam.location = (0, 0, 3)
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    scene.world = bpy.data.worlds.new("Black")
+    scene.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
+    scene.render.engine = "CYCLES"
+    scene.cycles.samples, scene.cycles.max_bounces, scene.cycles.use_denoising = 4, 0, False
+    scene.render.resolution_x = scene.render.resolution_y = 4
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.render.filepath = str(tmp_path / "cycles.exr")
+    bpy.ops.render.render(write_still=True)
+    from lantern.engine.image_io import read_image
+    cycles = float(read_image(str(tmp_path / "cycles.exr"))[..., 0].mean())
+
+    stage, _ = export_current()
+    tex, _ = source(surface(stage, "Bent"), "normal")
+    # Unauthored means UsdUVTexture's fallback: scale (1, 1, 1, 1), bias (0, 0, 0, 0).
+    scale = np.array(tex.GetInput("scale").Get() if tex.GetInput("scale") else (1, 1, 1, 1))[:3]
+    bias = np.array(tex.GetInput("bias").Get() if tex.GetInput("bias") else (0, 0, 0, 0))[:3]
+    n = scale * np.array(colour) + bias
+    assert n[2] / np.linalg.norm(n) == pytest.approx(cycles, abs=2e-3)
+    # The strength matters here: strength 1 would shade differently.
+    n1 = 2 * np.array(colour) - 1
+    assert abs(n1[2] / np.linalg.norm(n1) - cycles) > 0.02
+
+
+# --- the output node ---------------------------------------------------------------------
+
+def _two_outputs(name, first_target, second_target, second_active=False):
+    """Output 1 (first_target) <- red Principled; output 2 (second_target) <- green Diffuse."""
+    mat, tree, bsdf = principled_material(name)
+    bsdf.inputs["Base Color"].default_value = (1, 0, 0, 1)
+    first = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    first.target = first_target
+    first.name = "Out A"
+    diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
+    diffuse.inputs["Color"].default_value = (0, 1, 0, 1)
+    second = tree.nodes.new("ShaderNodeOutputMaterial")
+    second.target = second_target
+    second.name = "Out B"
+    tree.links.new(diffuse.outputs["BSDF"], second.inputs["Surface"])
+    if second_active:
+        second.is_active_output = True
+    return mat
+
+
+def test_output_node_eevee_and_cycles_exports_cycles_with_a_warning(empty_scene):
+    """No All output: Lantern exports what Cycles renders, and says the targets differ."""
+    cube_object("C").data.materials.append(_two_outputs("Split", "EEVEE", "CYCLES"))
+    stage, report = export_current()
+    assert tuple(surface(stage, "Split").GetInput("diffuseColor").Get()) == pytest.approx((0, 1, 0))
+    assert any("Split" in w and "Out A" in w and "Out B" in w for w in report.warnings), report.warnings
+
+
+def test_output_node_all_wins_as_in_blenders_usd_exporter(empty_scene):
+    """An All output and a Cycles output: Blender's USD exporter takes All (as
+    ntreeShaderOutputNode(tree, SHD_OUTPUT_ALL)); the difference is a warning."""
+    cube_object("C").data.materials.append(_two_outputs("AllAndCycles", "ALL", "CYCLES"))
+    cube_object("D").data.materials.append(_two_outputs("TwoAll", "ALL", "ALL", second_active=True))
+    stage, report = export_current()
+    assert tuple(surface(stage, "AllAndCycles").GetInput("diffuseColor").Get()) == pytest.approx((1, 0, 0))
+    assert any("AllAndCycles" in w for w in report.warnings)
+    # Two All outputs: the active one, and no warning (every engine renders it).
+    assert tuple(surface(stage, "TwoAll").GetInput("diffuseColor").Get()) == pytest.approx((0, 1, 0))
+    assert not any("TwoAll" in w for w in report.warnings)
+
+
+# --- emission -----------------------------------------------------------------------------
+
+def test_emission_adds_up_and_mix_factors_weight_it(empty_scene, tmp_path):
+    mat, tree, bsdf = principled_material("Glow")
+    bsdf.inputs["Emission Color"].default_value = (1.0, 0.5, 0.25, 1.0)
+    bsdf.inputs["Emission Strength"].default_value = 2.0
+    emit = tree.nodes.new("ShaderNodeEmission")
+    emit.inputs["Color"].default_value = (0.0, 0.2, 1.0, 1.0)
+    emit.inputs["Strength"].default_value = 5.0
+    mix = tree.nodes.new("ShaderNodeMixShader")
+    mix.inputs["Fac"].default_value = 0.25
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    tree.links.new(bsdf.outputs["BSDF"], mix.inputs[1])
+    tree.links.new(emit.outputs["Emission"], mix.inputs[2])
+    tree.links.new(mix.outputs["Shader"], out.inputs["Surface"])
+    cube_object("C").data.materials.append(mat)
+
+    mat2, tree2, bsdf2 = principled_material("Added")
+    bsdf2.inputs["Emission Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    bsdf2.inputs["Emission Strength"].default_value = 0.5
+    emit2 = tree2.nodes.new("ShaderNodeEmission")
+    emit2.inputs["Strength"].default_value = 3.0
+    add = tree2.nodes.new("ShaderNodeAddShader")
+    out2 = next(n for n in tree2.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    tree2.links.new(bsdf2.outputs["BSDF"], add.inputs[0])
+    tree2.links.new(emit2.outputs["Emission"], add.inputs[1])
+    tree2.links.new(add.outputs["Shader"], out2.inputs["Surface"])
+    cube_object("D").data.materials.append(mat2)
+
+    mat3, tree3, bsdf3 = principled_material("TexGlow")
+    tex = tree3.nodes.new("ShaderNodeTexImage")
+    tex.image = saved_image(tmp_path, "glow", "sRGB")
+    tree3.links.new(tex.outputs["Color"], bsdf3.inputs["Emission Color"])
+    bsdf3.inputs["Emission Strength"].default_value = 3.0
+    cube_object("E").data.materials.append(mat3)
+    stage, report = export_current()
+
+    # 0.75 x (1, .5, .25) x 2 + 0.25 x (0, .2, 1) x 5
+    assert tuple(surface(stage, "Glow").GetInput("emissiveColor").Get()) == \
+        pytest.approx((1.5, 1.0, 1.625), rel=1e-6)
+    assert any("Glow" in w and "Mix" in w for w in report.warnings)
+    assert tuple(surface(stage, "Added").GetInput("emissiveColor").Get()) == pytest.approx((3.5, 3.5, 3.5))
+    shader, _ = source(surface(stage, "TexGlow"), "emissiveColor")
+    assert tuple(shader.GetInput("scale").Get()) == (3, 3, 3, 1)
+
+
+# --- clearcoat ------------------------------------------------------------------------------
+
+def test_coat_weight_and_roughness_are_clearcoat(empty_scene, tmp_path):
+    mat, tree, bsdf = principled_material("Coated")
+    bsdf.inputs["Coat Weight"].default_value = 0.7
+    bsdf.inputs["Coat Roughness"].default_value = 0.2
+    mat2, tree2, bsdf2 = principled_material("CoatMap")
+    tex = tree2.nodes.new("ShaderNodeTexImage")
+    tex.image = saved_image(tmp_path, "coat", "Non-Color")
+    tree2.links.new(tex.outputs["Color"], bsdf2.inputs["Coat Weight"])
+    bsdf2.inputs["Coat IOR"].default_value = 1.8
+    mat3, _, _ = principled_material("Uncoated")
+    for name, m in (("A", mat), ("B", mat2), ("C", mat3)):
+        cube_object(name).data.materials.append(m)
+    stage, report = export_current()
+    s = surface(stage, "Coated")
+    assert s.GetInput("clearcoat").Get() == pytest.approx(0.7)
+    assert s.GetInput("clearcoatRoughness").Get() == pytest.approx(0.2)
+    shader, out = source(surface(stage, "CoatMap"), "clearcoat")
+    assert out == "r" and shader.GetInput("sourceColorSpace").Get() == "raw"
+    assert any("CoatMap" in w and "Coat IOR" in w for w in report.warnings)
+    assert surface(stage, "Uncoated").GetInput("clearcoat").Get() == 0.0
+    assert not any("Coated" in w or "Uncoated" in w for w in report.warnings)
+
+
+# --- packed and generated images --------------------------------------------------------
+
+def _packed_and_generated(tmp_path):
+    """A packed PNG (its file deleted) and a generated float image on two materials."""
+    from lantern.engine.image_io import read_image
+    src = saved_image(tmp_path, "packme", "sRGB")
+    src.pixels.foreach_set(np.tile(np.array([0.2, 0.4, 0.6, 1.0], np.float32), 16))
+    src.save()
+    expected_png = read_image(str(tmp_path / "packme.png"))
+    src.pack()
+    os.remove(tmp_path / "packme.png")
+    gen = bpy.data.images.new("made", 3, 2, float_buffer=True)
+    values = np.arange(24, dtype=np.float32).reshape(2, 3, 4) / 4.0   # above 1 too
+    gen.pixels.foreach_set(values.ravel())
+    for name, image in (("Packed", src), ("Generated", gen)):
+        mat, tree, bsdf = principled_material(name)
+        tex = tree.nodes.new("ShaderNodeTexImage")
+        tex.image = image
+        tree.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+        cube_object(name).data.materials.append(mat)
+    return expected_png, values[::-1]          # Blender's rows run bottom-up
+
+
+def _texture_file(stage, name):
+    shader, _ = source(surface(stage, name), "diffuseColor")
+    return shader.GetInput("file").Get().resolvedPath
+
+
+def test_packed_and_generated_images_are_copied_with_the_file(empty_scene, tmp_path):
+    from lantern.engine.image_io import read_image
+    from lantern.exporters import ExportOptions, export_depsgraph_to_file
+    png, floats = _packed_and_generated(tmp_path)
+    out = tmp_path / "out" / "scene.usda"
+    report = export_depsgraph_to_file(bpy.context.evaluated_depsgraph_get(), str(out),
+                                      ExportOptions(textures="copy"))
+    assert not [w for w in report.warnings if "packme" in w or "made" in w], report.warnings
+    stage = Usd.Stage.Open(str(out))
+    packed, generated = _texture_file(stage, "Packed"), _texture_file(stage, "Generated")
+    assert os.path.dirname(packed) == os.path.dirname(generated) == str(tmp_path / "out" / "scene_textures")
+    assert np.array_equal(read_image(packed), png)
+    assert np.array_equal(read_image(generated), floats)
+
+
+def test_packed_and_generated_images_render_from_memory(empty_scene, tmp_path):
+    """An in-memory stage (rendering a .blend, F12): the images are written once per
+    content into this process's temporary folder, readable by the engine."""
+    from lantern.engine.image_io import read_image
+    from lantern.exporters.gather.image import memory_texture_dir
+    png, floats = _packed_and_generated(tmp_path)
+    stage, report = export_current()
+    assert not [w for w in report.warnings if "packme" in w or "made" in w], report.warnings
+    packed, generated = _texture_file(stage, "Packed"), _texture_file(stage, "Generated")
+    assert os.path.dirname(packed) == memory_texture_dir()
+    assert np.array_equal(read_image(packed), png)
+    assert np.array_equal(read_image(generated), floats)
+    before = sorted(os.listdir(memory_texture_dir()))
+    again, _ = export_current()
+    assert _texture_file(again, "Packed") == packed
+    assert sorted(os.listdir(memory_texture_dir())) == before   # nothing new written
+
+
+def test_generated_byte_image_keeps_its_bytes(empty_scene, tmp_path):
+    """Not through save_render: the scene's view transform must not be baked in."""
+    from lantern.engine.image_io import read_image
+    bpy.context.scene.view_settings.view_transform = "AgX"
+    img = bpy.data.images.new("grid", 8, 8, alpha=True)
+    img.generated_type = "COLOR_GRID"
+    mat, tree, bsdf = principled_material("Grid")
+    tex = tree.nodes.new("ShaderNodeTexImage")
+    tex.image = img
+    tree.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+    cube_object("C").data.materials.append(mat)
+    stage, _ = export_current()
+    pixels = np.empty(8 * 8 * 4, np.float32)
+    img.pixels.foreach_get(pixels)
+    expected = np.round(pixels.reshape(8, 8, 4)[::-1] * 255).astype(np.uint8)
+    assert np.array_equal(read_image(_texture_file(stage, "Grid")), expected)
+
+
+def test_packed_texture_renders_in_09_tex_wrapping_mirror(corpus):
+    """09_tex_wrapping_mirror's texture is packed: before this fix `lantern render
+    scene.blend` lost it (the quads took the socket colour). Textured area against
+    the Cycles reference: see tests/references/looks/BEFORE.md for the figures."""
+    import reference_scenes
+    from lantern.engine import RenderSettings, read_exr, render_stage
+    from lantern.exporters import stage_from_depsgraph
+    import tempfile
+    reference_scenes.build("09_tex_wrapping_mirror", tempfile.mkdtemp())
+    stage, report = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+    assert not [w for w in report.warnings if "Black" in w], report.warnings
+    width, height = reference_scenes.SCENES["09_tex_wrapping_mirror"].size
+    ours = render_stage(stage, RenderSettings(width=width, height=height)).rgba[..., :3]
+    cycles = read_exr(str(reference_scenes.REPO / "tests" / "references" / "looks"
+                          / "09_tex_wrapping_mirror.exr"))[..., :3]
+    background = cycles[0, 0]
+    textured = np.abs(cycles - background).max(-1) > 0.5 * background.max()
+    assert textured.mean() > 0.2
+    lantern_mean, cycles_mean = ours[textured].mean(), cycles[textured].mean()
+    print(f"textured area: Lantern {lantern_mean:.5f}, Cycles {cycles_mean:.5f}")
+    assert abs(lantern_mean - cycles_mean) <= 0.1 * background.max()
+
+
+# --- the world ------------------------------------------------------------------------------
+
+def _world_with_map(path, rotation=None):
+    world = bpy.data.worlds.new("Sky")
+    nodes, links = world.node_tree.nodes, world.node_tree.links
+    env = nodes.new("ShaderNodeTexEnvironment")
+    env.image = bpy.data.images.load(str(path))
+    links.new(env.outputs["Color"], nodes["Background"].inputs["Color"])
+    if rotation is not None:
+        mapping = nodes.new("ShaderNodeMapping")
+        mapping.inputs["Rotation"].default_value = rotation
+        coords = nodes.new("ShaderNodeTexCoord")
+        links.new(coords.outputs["Generated"], mapping.inputs["Vector"])
+        links.new(mapping.outputs["Vector"], env.inputs["Vector"])
+    bpy.context.scene.world = world
+    return world
+
+
+def blender_direction(u, v, rotation):
+    """The world direction Blender's Environment Texture shows texel (u, v) at (v = 0 the
+    top row): Cycles' equirectangular_to_direction, then the Mapping node's inverse
+    rotation (it looks the texture up at R d)."""
+    from mathutils import Euler, Vector
+    phi, theta = math.pi - 2 * math.pi * u, math.pi * v
+    b = Vector((math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi), math.cos(theta)))
+    return np.array(Euler(rotation, "XYZ").to_matrix().inverted() @ b)
+
+
+def usdlux_direction(stage, u, v):
+    """The world direction the stage's DomeLight shows texel (u, v) at, by UsdLux's
+    documented convention (the OpenEXR lat-long in the light's frame, +Y up):
+    longitude pi - 2 pi u, latitude pi/2 - pi v, local (cos lat sin lon, sin lat,
+    cos lat cos lon), then the prim's local-to-world transform. pxr math only."""
+    dome = UsdLux.DomeLight(stage.GetPrimAtPath("/root/_world"))
+    assert dome.GetTextureFormatAttr().Get() == "latlong"
+    lon, lat = math.pi - 2 * math.pi * u, math.pi / 2 - math.pi * v
+    local = Gf.Vec3d(math.cos(lat) * math.sin(lon), math.sin(lat), math.cos(lat) * math.cos(lon))
+    world = UsdGeom.Xformable(dome).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
+    return np.array(world.TransformDir(local).GetNormalized())
+
+
+@pytest.mark.parametrize("rotation", [None, (0.3, -0.5, 1.2)])
+def test_dome_shows_each_texel_where_blender_does(empty_scene, tmp_path, rotation):
+    """An asymmetric map with marked texels: for each, the direction Blender's world
+    shows it at equals the direction the exported DomeLight shows it at."""
+    from lantern.engine.image_io import write_image
+    h, w = 16, 32
+    marks = [(3, 5), (8, 8), (8, 16), (8, 24), (12, 29), (0, 0), (15, 31)]
+    sky = np.zeros((h, w, 4), np.float32)
+    sky[..., 3] = 1.0
+    for i, (r, c) in enumerate(marks):
+        sky[r, c, :3] = (1.0 + i, 0.5, 0.25)
+    write_image(str(tmp_path / "marks.exr"), sky)
+    _world_with_map(tmp_path / "marks.exr", rotation)
+    stage, report = export_current()
+    assert report.warnings == []
+    for r, c in marks:
+        u, v = (c + 0.5) / w, (r + 0.5) / h
+        expected = blender_direction(u, v, rotation or (0.0, 0.0, 0.0))
+        assert usdlux_direction(stage, u, v) == pytest.approx(expected, abs=1e-6), (r, c)
+    # The image centre looks along +X, a quarter in along +Y, the top row up (+Z).
+    assert usdlux_direction(stage, 0.5, 0.5) == pytest.approx(blender_direction(0.5, 0.5, rotation or (0, 0, 0)), abs=1e-6)
+    if rotation is None:
+        assert usdlux_direction(stage, 0.5, 0.5) == pytest.approx((1, 0, 0), abs=1e-6)
+        assert usdlux_direction(stage, 0.25, 0.5) == pytest.approx((0, 1, 0), abs=1e-6)
+        assert usdlux_direction(stage, 0.5, 0.0) == pytest.approx((0, 0, 1), abs=1e-6)
+
+
+def test_packed_environment_image_is_exported(empty_scene, tmp_path):
+    from lantern.engine.image_io import read_image, write_image
+    sky = np.full((4, 8, 4), 2.5, np.float32)
+    write_image(str(tmp_path / "sky.exr"), sky)
+    world = _world_with_map(tmp_path / "sky.exr")
+    world.node_tree.nodes["Environment Texture"].image.pack()
+    os.remove(tmp_path / "sky.exr")
+    stage, report = export_current()
+    assert report.warnings == []
+    dome = UsdLux.DomeLight(stage.GetPrimAtPath("/root/_world"))
+    assert np.array_equal(read_image(dome.GetTextureFileAttr().Get().resolvedPath), sky)

@@ -101,4 +101,4 @@ def test_cli_frames_to_an_animated_gif(tmp_path):
     single = render_stage(stage, RenderSettings(width=32, height=24, frame=2)).rgba
     # GIF palettes quantise colours: compare loosely against the exact sRGB frame.
     assert np.abs(frames[1][..., :3].astype(int) - to_srgb8(single)[..., :3].astype(int)).mean() < 3
-    assert not any(p.name.startswith(".lantern-") for p in tmp_path.iterdir())
+    assert not any(p.name.startswith(".") for p in tmp_path.iterdir())

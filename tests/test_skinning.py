@@ -5,9 +5,8 @@ import numpy as np
 import pytest
 from pxr import Gf, Usd, UsdGeom, UsdLux, UsdSkel, Vt
 
-from lantern.engine import RenderSettings, render_stage
-from lantern.engine.api import skinned_points
-from lantern.engine.usd_reader import StageCache
+from lantern.engine import RenderSettings, Session, render_stage, skinned_points
+from lantern.engine.usd.skel import SkelBindings
 from _export_helpers import skinned_stage  # UsdSkel.BakeSkinning on an in-memory copy
 
 SKEL = "usdskel/usd/usdSkel/testenv/testUsdSkelBakeSkinning"
@@ -24,7 +23,7 @@ def world_points(stage, path, t):
 def test_gpu_skinning_matches_usd_baked_baseline(corpus, name):
     stage = Usd.Stage.Open(str(corpus / SKEL / f"{name}.usda"))
     base = Usd.Stage.Open(str(corpus / SKEL / "baseline" / f"{name}.baked.usda"))
-    cache = StageCache(stage)
+    session = Session(stage, RenderSettings(width=1, height=1))
     times = set()
     moved = 0.0
     for prim in base.Traverse():
@@ -34,7 +33,7 @@ def test_gpu_skinning_matches_usd_baked_baseline(corpus, name):
     assert times
     worst = {}
     for t in sorted(times):
-        got = skinned_points(stage, t, cache)
+        got = session.skinned_points(t)
         assert got, "no skinned mesh read"
         for path, (pts, nrm) in got.items():
             ref = world_points(base, path, t)
@@ -50,6 +49,7 @@ def test_gpu_skinning_matches_usd_baked_baseline(corpus, name):
                 rn /= np.linalg.norm(rn, axis=1, keepdims=True)
                 gn = nrm / np.linalg.norm(nrm, axis=1, keepdims=True)
                 assert np.abs(gn - rn).max() < 1e-4, (path, t, "normals")
+    session.close()
     print(name, {p: f"{e:.2e}" for p, e in worst.items()})
     if name != "blendshapesWithNormals":      # that file only moves normals
         assert moved > 1e-3                    # the baselines do deform the rest pose
@@ -61,13 +61,14 @@ def test_gpu_skinning_matches_usd_baked_baseline(corpus, name):
     "usdskel/usd/usdSkel/doxygen/skinnedArm.usda"])
 def test_gpu_skinning_matches_usdskel_cpu(corpus, rel):
     stage = Usd.Stage.Open(str(corpus / rel))
-    cache = StageCache(stage)
+    bindings = SkelBindings(stage)
     t0, t1 = stage.GetStartTimeCode(), stage.GetEndTimeCode()
-    for t in np.linspace(t0, t1, 4):
-        got = skinned_points(stage, float(t), cache)
+    with Session(stage, RenderSettings(width=1, height=1)) as session:
+        frames = [(t, session.skinned_points(float(t))) for t in np.linspace(t0, t1, 4)]
+    for t, got in frames:
         assert got
         for path, (pts, _) in got.items():
-            skel_query, sq = cache.skel.get(path)
+            skel_query, sq = bindings.get(path)
             prim = stage.GetPrimAtPath(path)
             ref = Vt.Vec3fArray(UsdGeom.Mesh(prim).GetPointsAttr().Get(t))
             xforms = skel_query.ComputeSkinningTransforms(t)
@@ -132,8 +133,8 @@ def skel_stage(n_joints=3, method=None, scale=None, influences=2, grid=6, rot_de
     return stage
 
 
-def cpu_skinned(stage, cache, path, t):
-    skel_query, sq = cache.skel.get(path)
+def cpu_skinned(stage, bindings, path, t):
+    skel_query, sq = bindings.get(path)
     pts = Vt.Vec3fArray(UsdGeom.Mesh(stage.GetPrimAtPath(path)).GetPointsAttr().Get())
     assert sq.ComputeSkinnedPoints(skel_query.ComputeSkinningTransforms(t), pts, t)
     return np.array(pts, np.float64)
@@ -143,20 +144,20 @@ def cpu_skinned(stage, cache, path, t):
 def test_non_uniform_scale_matches_usdskel(method):
     """DQS splits off the joints' scale the way UsdSkel.SkinPoints does."""
     stage = skel_stage(4, method=method, scale=(1.5, 0.7, 1.2), influences=3)
-    cache = StageCache(stage)
+    bindings = SkelBindings(stage)
     for t in (1, 2, 3):
-        got = skinned_points(stage, t, cache)["/root/mesh"][0]
-        ref = cpu_skinned(stage, cache, "/root/mesh", t)
+        got = skinned_points(stage, t)["/root/mesh"][0]
+        ref = cpu_skinned(stage, bindings, "/root/mesh", t)
         diag = np.linalg.norm(ref.max(0) - ref.min(0))
         assert np.abs(got - ref).max() / diag <= 1e-5, (method, t)
 
 
 def test_thousand_joints():
     stage = skel_stage(1200, influences=8, grid=200)
-    cache = StageCache(stage)
-    assert len(cache.skel.get("/root/mesh")[0].GetJointOrder()) == 1200
-    got = skinned_points(stage, 3, cache)["/root/mesh"][0]
-    ref = cpu_skinned(stage, cache, "/root/mesh", 3)
+    bindings = SkelBindings(stage)
+    assert len(bindings.get("/root/mesh")[0].GetJointOrder()) == 1200
+    got = skinned_points(stage, 3)["/root/mesh"][0]
+    ref = cpu_skinned(stage, bindings, "/root/mesh", 3)
     diag = np.linalg.norm(ref.max(0) - ref.min(0))
     assert np.abs(got - ref).max() / diag <= 1e-5
     res = render_stage(stage, RenderSettings(width=48, height=32, frame=3))
@@ -167,17 +168,16 @@ def test_thousand_joints():
 def test_more_than_eight_influences_all_kept_and_exact(influences):
     """Past 8 influences the weights come from a per-point texture: none dropped."""
     stage = skel_stage(24, influences=influences)
-    cache = StageCache(stage)
-    from lantern.engine.usd_reader import read_stage
-    scene = read_stage(stage, Usd.TimeCode(2), 1.0, cache=cache)
-    skin = scene.meshes[("skinned", "/root/mesh")].skin
+    bindings = SkelBindings(stage)
+    with Session(stage, RenderSettings(width=1, height=1)) as session:
+        got = {t: session.skinned_points(t)["/root/mesh"][0] for t in (1, 2, 3)}
+        skin = session.scene.meshes[("skinned", "/root/mesh")].skin
     assert skin.point_influences is not None
     assert skin.joints.shape[1] >= influences
     for t in (1, 2, 3):
-        got = skinned_points(stage, t, cache)["/root/mesh"][0]
-        ref = cpu_skinned(stage, cache, "/root/mesh", t)
+        ref = cpu_skinned(stage, bindings, "/root/mesh", t)
         diag = np.linalg.norm(ref.max(0) - ref.min(0))
-        assert np.abs(got - ref).max() / diag <= 1e-5, t
+        assert np.abs(got[t] - ref).max() / diag <= 1e-5, t
     res = render_stage(stage, RenderSettings(width=32, height=24, frame=2))
     assert not res.warnings and np.isfinite(res.rgba).all()
 
@@ -215,7 +215,7 @@ def test_render_skinned_equals_render_baked(method):
     look(stage, (2, -8, 5), (2, 0, 0))
     baked = skinned_stage(stage)
     assert not UsdSkel.BindingAPI(baked.GetPrimAtPath("/root/mesh")).GetJointIndicesPrimvar().HasValue() \
-        or StageCache(baked).skel.get("/root/mesh") is None
+        or SkelBindings(baked).get("/root/mesh") is None
     for t in (1, 3):
         s = RenderSettings(width=96, height=64, frame=t)
         a = render_stage(stage, s).rgba
@@ -252,9 +252,10 @@ def test_culled_mesh_costs_no_draw_call():
 
 
 def test_static_meshes_get_no_skinning_code():
-    from lantern.engine import skinning
-    assert skinning.defines(None) == []
-    src = open(skinning.__file__.replace("engine/skinning.py", "shaders/skinning.glsl")).read()
+    from lantern.engine import skin
+    from lantern.engine.gpu.programs import SHADER_DIR
+    assert skin.defines(None) == []
+    src = open(f"{SHADER_DIR}/skinning.glsl").read()
     assert "#ifdef SKIN_JOINTS" in src
 
 

@@ -1,6 +1,7 @@
-"""A Blender light -> LightRecord, per the contract's light table."""
+"""A Blender light -> LightRecord, per the contract's light table (kinds: core.lights)."""
 import math
 
+from ...core.lights import DISK, POINT, RECT, SPOT, SUN, kind_of_blender
 from ..ir import LightRecord
 
 
@@ -20,28 +21,28 @@ def gather_light(light, warn):
     color = tuple(float(c) for c in light.color)
     if getattr(light, "use_temperature", False):
         color = tuple(c * float(t) for c, t in zip(color, light.temperature_color))
-    rec = LightRecord(kind=light.type.lower(), color=color, intensity=power / math.pi,
+    kind = kind_of_blender(light.type, getattr(light, "shape", None))
+    rec = LightRecord(kind=kind, color=color, intensity=power / math.pi,
                       shadow=bool(light.use_shadow),
                       diffuse=float(light.diffuse_factor), specular=float(light.specular_factor))
     if rec.shadow:
         rec.shadow_resolution, rec.shadow_bias = lantern_settings(light)
-    if light.type in {"POINT", "SPOT"}:
+    if kind in (POINT, SPOT):
         rec.radius = float(light.shadow_soft_size)
         rec.soft_falloff = bool(getattr(light, "use_soft_falloff", True))
-    if light.type == "SPOT":
+    if kind == SPOT:
         rec.cone_angle = math.degrees(float(light.spot_size)) / 2.0
         rec.cone_softness = float(light.spot_blend)
-    elif light.type == "SUN":
+    elif kind == SUN:
         rec.intensity = power  # strength is irradiance in W/m^2
         rec.angle = math.degrees(float(light.angle))
-    elif light.type == "AREA":
+    elif kind in (RECT, DISK):
         sx = float(light.size)
         sy = float(light.size_y) if light.shape in {"RECTANGLE", "ELLIPSE"} else sx
-        if light.shape in {"SQUARE", "RECTANGLE"}:
-            rec.shape, rec.width, rec.height = "rect", sx, sy
+        if kind == RECT:
+            rec.width, rec.height = sx, sy
             area = sx * sy
         else:
-            rec.shape = "disk"
             rec.radius = math.sqrt(sx * sy) / 2.0  # area-preserving for ellipses
             area = math.pi * rec.radius ** 2
             if light.shape == "ELLIPSE" and abs(sx - sy) > 1e-9:

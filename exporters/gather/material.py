@@ -1,7 +1,8 @@
 """A Blender material's node tree -> MaterialRecord (UsdPreviewSurface inputs).
 
-The walk starts at the active Material Output's Surface socket. What it cannot
-express becomes a warning naming the material and the node, and a constant."""
+The walk starts at the Surface socket of the output Blender's USD exporter would use
+(see output_node). What it cannot express becomes a warning naming the material and
+the node, and a constant."""
 import dataclasses
 import math
 
@@ -49,13 +50,47 @@ def _constant(socket, kind):
         return float(value[0])
 
 
-def _output_node(tree):
-    outputs = [n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"]
-    for targets in ({"ALL", "CYCLES"}, {"ALL", "CYCLES", "EEVEE"}):
-        for node in outputs:
-            if node.is_active_output and node.target in targets:
-                return node
-    return outputs[0] if outputs else None
+def shader_output(tree, bl_idname, target):
+    """The output node Blender's ntreeShaderOutputNode(tree, target) picks: among
+    outputs of `bl_idname`, one for exactly `target` beats one for ALL, and the active
+    output beats the others of its kind; None when no output fits."""
+    chosen = None
+    for node in tree.nodes:
+        if node.bl_idname != bl_idname:
+            continue
+        if node.target == "ALL":
+            if chosen is None or (chosen.target == "ALL" and node.is_active_output
+                                  and not chosen.is_active_output):
+                chosen = node
+        elif node.target == target:
+            if chosen is None or chosen.target == "ALL" or (node.is_active_output
+                                                            and not chosen.is_active_output):
+                chosen = node
+    return chosen
+
+
+def output_node(tree, bl_idname, owner, warn):
+    """The output to export, chosen as Blender's USD exporter chooses it (the All
+    output, as for MaterialX: ntreeShaderOutputNode(tree, SHD_OUTPUT_ALL)), else the
+    one Cycles renders. Warns, naming `owner`, when Cycles and EEVEE render different
+    outputs: the exported one cannot match both."""
+    cycles = shader_output(tree, bl_idname, "CYCLES")
+    eevee = shader_output(tree, bl_idname, "EEVEE")
+    chosen = shader_output(tree, bl_idname, "ALL") or cycles
+    if cycles is not None and eevee is not None and cycles != eevee:
+        warn(f"{owner}: Cycles renders output '{cycles.name}' and EEVEE '{eevee.name}'; "
+             f"exporting '{chosen.name}'")
+    return chosen
+
+
+def normal_map_scale_bias(strength, invert_green=False):
+    """UsdUVTexture scale and bias that turn a tangent-space normal-map texel c into
+    Cycles' strength-weighted normal before the renderer normalises it
+    (svm_node_normal_map, tangent space): n = 2c - 1, then (s n.x, s n.y,
+    1 + clamp(s, 0, 1) (n.z - 1)). Strength above 1 steepens x and y only."""
+    k = min(max(strength, 0.0), 1.0)
+    sy = -strength if invert_green else strength
+    return (2.0 * strength, 2.0 * sy, 2.0 * k, 1.0), (-strength, -sy, 1.0 - 2.0 * k, 0.0)
 
 
 class _Walker:
@@ -131,17 +166,18 @@ class _Walker:
                 tex = self.texture(src.from_node, raw=True)
                 if tex is None:
                     return None
+                if _link(node.inputs["Strength"]) is not None:
+                    self.unsupported(_link(node.inputs["Strength"]).from_node,
+                                     "on 'Strength' is not supported")
                 strength = _constant(node.inputs["Strength"], "float")
-                if abs(strength - 1.0) > 1e-6:
-                    self.warn(f"material '{self.material.name}': node '{node.name}' "
-                              f"strength {strength:g} is written as 1")
-                tex = dataclasses.replace(tex, scale=(2.0, 2.0, 2.0, 1.0),
-                                          bias=(-1.0, -1.0, -1.0, 0.0))
+                scale, bias = normal_map_scale_bias(
+                    strength, bool(getattr(node, "invert_green", False)))
+                tex = dataclasses.replace(tex, scale=scale, bias=bias)
                 return TexInput(tex, "rgb")
         self.unsupported(node, "as a normal is not supported")
         return None
 
-    def principled(self, node, inputs):
+    def principled(self, node, inputs, weight=1.0):
         get = node.inputs.get
         inputs["diffuseColor"] = self.value(get("Base Color"), "color")
         inputs["metallic"] = self.value(get("Metallic"), "float")
@@ -151,24 +187,57 @@ class _Walker:
                 self.unsupported(_link(get(name)).from_node, f"on '{name}' is not supported")
         inputs["ior"] = principled_ior(_constant(get("IOR"), "float"),
                                        _constant(get("Specular IOR Level"), "float"))
-        self.emission(get("Emission Color"), get("Emission Strength"), inputs)
+        self.emission(get("Emission Color"), get("Emission Strength"), inputs, weight)
         self.alpha(get("Alpha"), inputs)
         normal = self.normal(get("Normal"))
         if normal is not None:
             inputs["normal"] = normal
+        self.coat(node, inputs)
 
-    def emission(self, color_socket, strength_socket, inputs):
-        strength = self.value(strength_socket, "float")
-        if isinstance(strength, TexInput):
-            self.unsupported(_link(strength_socket).from_node, "on 'Emission Strength' is not supported")
-            strength = _constant(strength_socket, "float")
+    def coat(self, node, inputs):
+        """Coat Weight and Roughness -> clearcoat, clearcoatRoughness (as Blender's USD
+        exporter). UsdPreviewSurface's coat is white with IOR 1.5 and the base normal."""
+        get = node.inputs.get
+        inputs["clearcoat"] = self.value(get("Coat Weight"), "float")
+        inputs["clearcoatRoughness"] = self.value(get("Coat Roughness"), "float")
+        if inputs["clearcoat"] == 0.0:
+            return
+        if _link(get("Coat IOR")) is not None or abs(_constant(get("Coat IOR"), "float") - 1.5) > 1e-4:
+            self.warn(f"material '{self.material.name}': node '{node.name}' Coat IOR "
+                      f"{_constant(get('Coat IOR'), 'float'):g} is written as 1.5 "
+                      f"(UsdPreviewSurface's clearcoat)")
+        if _link(get("Coat Tint")) is not None or _constant(get("Coat Tint"), "color") != (1.0, 1.0, 1.0):
+            self.warn(f"material '{self.material.name}': node '{node.name}' Coat Tint is "
+                      f"not exported (UsdPreviewSurface's clearcoat is white)")
+        if _link(get("Coat Normal")) is not None:
+            self.warn(f"material '{self.material.name}': node '{node.name}' Coat Normal is "
+                      f"not exported (the coat uses the base normal)")
+
+    def emission(self, color_socket, strength_socket, inputs, weight=1.0):
+        """emissiveColor += weight x Color x Strength (Blender's emitted radiance).
+        Emissions add up across Add and Mix Shaders; a texture carries the factor in
+        its UsdUVTexture scale, and cannot be summed with another emission."""
+        strength_link = _link(strength_socket)
+        if strength_link is not None:
+            self.unsupported(strength_link.from_node, "on 'Emission Strength' is not supported")
+        factor = _constant(strength_socket, "float") * weight
+        if factor == 0.0:
+            return
         color = self.value(color_socket, "color")
+        have = inputs.get("emissiveColor", (0.0, 0.0, 0.0))
         if isinstance(color, TexInput):
-            # UsdUVTexture's scale carries the strength.
-            tex = dataclasses.replace(color.texture, scale=(strength, strength, strength, 1.0))
+            if isinstance(have, TexInput) or any(have):
+                self.warn(f"material '{self.material.name}': a textured emission cannot be "
+                          f"added to another emission; keeping the first")
+                return
+            tex = dataclasses.replace(color.texture, scale=(factor, factor, factor, 1.0))
             inputs["emissiveColor"] = TexInput(tex, color.channel)
+        elif isinstance(have, TexInput):
+            if any(color):
+                self.warn(f"material '{self.material.name}': a constant emission cannot be "
+                          f"added to a textured one; keeping the texture")
         else:
-            inputs["emissiveColor"] = tuple(c * strength for c in color)
+            inputs["emissiveColor"] = tuple(h + c * factor for h, c in zip(have, color))
 
     def alpha(self, socket, inputs):
         link = _link(socket)
@@ -184,12 +253,14 @@ class _Walker:
         if getattr(self.material, "blend_method", None) == "CLIP":
             inputs["opacityThreshold"] = float(self.material.alpha_threshold)
 
-    def shader(self, link, inputs):
-        """Fill `inputs` from the shader feeding Surface; returns False if nothing fit."""
+    def shader(self, link, inputs, weight=1.0):
+        """Fill `inputs` from the shader feeding Surface with closure weight `weight`;
+        returns False if nothing fit. Only emission is weighted exactly: a BSDF's
+        weight has no UsdPreviewSurface equivalent (one layer)."""
         node = link.from_node
         kind = node.bl_idname
         if kind == "ShaderNodeBsdfPrincipled":
-            self.principled(node, inputs)
+            self.principled(node, inputs, weight)
         elif kind == "ShaderNodeBsdfDiffuse":
             inputs["diffuseColor"] = self.value(node.inputs["Color"], "color")
             inputs["roughness"] = 1.0
@@ -197,16 +268,28 @@ class _Walker:
         elif kind == "ShaderNodeEmission":
             inputs.setdefault("diffuseColor", (0.0, 0.0, 0.0))
             inputs.setdefault("ior", 1.0)
-            self.emission(node.inputs["Color"], node.inputs["Strength"], inputs)
+            self.emission(node.inputs["Color"], node.inputs["Strength"], inputs, weight)
         elif kind in {"ShaderNodeAddShader", "ShaderNodeMixShader"}:
             shaders = [s for s in node.inputs if s.type == "SHADER"]
+            weights = [weight, weight]
             if kind == "ShaderNodeMixShader":
+                fac = node.inputs[0]
+                if _link(fac) is not None:
+                    self.warn(f"material '{self.material.name}': node '{node.name}' (Mix Shader) "
+                              f"factor is textured; both shaders are combined")
+                else:
+                    f = min(max(_constant(fac, "float"), 0.0), 1.0)
+                    weights = [weight * (1.0 - f), weight * f]
+            pairs = [(l, w) for l, w in ((_link(s), w) for s, w in zip(shaders, weights))
+                     if l is not None and w > 0.0]
+            bsdfs = [w for l, w in pairs if l.from_node.bl_idname != "ShaderNodeEmission"]
+            if kind == "ShaderNodeMixShader" and (len(bsdfs) > 1 or any(w != weight for w in bsdfs)):
                 self.warn(f"material '{self.material.name}': node '{node.name}' (Mix Shader) "
-                          f"factor is ignored; both shaders are combined")
+                          f"BSDF weights are not exported (UsdPreviewSurface has one layer); "
+                          f"emission is weighted exactly")
             # Emission last so that it adds to the BSDF rather than replacing it.
-            links = [l for l in (_link(s) for s in shaders) if l is not None]
-            links.sort(key=lambda l: l.from_node.bl_idname == "ShaderNodeEmission")
-            return any([self.shader(l, inputs) for l in links])
+            pairs.sort(key=lambda p: p[0].from_node.bl_idname == "ShaderNodeEmission")
+            return any([self.shader(l, inputs, w) for l, w in pairs])
         else:
             self.unsupported(node)
             return False
@@ -225,10 +308,10 @@ def gather_material(material, warn, texture_dir=None):
     tree = material.node_tree
     if tree is not None:
         walker = _Walker(material, warn, texture_dir)
-        output = _output_node(tree)
+        output = output_node(tree, "ShaderNodeOutputMaterial", f"material '{material.name}'", warn)
         link = _link(output.inputs["Surface"]) if output is not None else None
         if link is not None:
-            found = {}
+            found = {"emissiveColor": (0.0, 0.0, 0.0)}
             walker.shader(link, found)
             inputs.update(found)
     return MaterialRecord(key=material.name_full, name=material.name, inputs=inputs,

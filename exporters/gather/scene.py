@@ -188,7 +188,7 @@ def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir, instance
     if scene.camera is not None and scene.camera.name_full in evaluated:
         rec.settings.camera = scene.camera.name_full
     if scene.world is not None:
-        rec.world = gather_world(scene.world, warn)
+        rec.world = gather_world(scene.world, warn, texture_dir)
     return groups
 
 

@@ -1,6 +1,7 @@
 """An armature -> SkeletonRecord: joint order, rest and bind matrices, pose channels."""
 import numpy as np
 
+from ...core.transforms import SINGULAR, affine_inverse, quaternions_from_matrices
 from ..ir import SkeletonRecord
 
 # Local pose matrices that are not translate·rotate·scale (shear, from Inherit Scale
@@ -8,8 +9,6 @@ from ..ir import SkeletonRecord
 SHEAR_TOLERANCE = 1e-5
 # SkelAnimation scales are half3: a scale half precision rounds is not exact.
 HALF_TOLERANCE = 1e-6
-# A 3×3 part whose determinant is below this times its size cubed is singular.
-SINGULAR = 1e-12
 # A matrix is written as translate · orient · scale when they recompose it this closely
 # (relative to its size; Blender's matrices are float32).
 TRS_TOLERANCE = 1e-6
@@ -70,29 +69,6 @@ def pose_index(arm_ob, joint_names):
     return np.array([position[n] for n in joint_names], dtype=np.int64)
 
 
-def affine_inverse(m):
-    """Inverse of (..., 4, 4) affine matrices by the 3×3 adjugate: numpy's batched LAPACK
-    inverse costs microseconds per matrix, which dominates a crowd's export. A singular
-    matrix (a zero or degenerate scale) gets its pseudo-inverse: finite, and exact
-    wherever the matrices it is composed with collapse the same way."""
-    a = m[..., :3, :3]
-    c0 = np.cross(a[..., 1, :], a[..., 2, :])
-    c1 = np.cross(a[..., 2, :], a[..., 0, :])
-    c2 = np.cross(a[..., 0, :], a[..., 1, :])
-    det = np.sum(a[..., 0, :] * c0, axis=-1)
-    size = np.abs(a).max(axis=(-2, -1), initial=0.0)
-    singular = np.abs(det) <= SINGULAR * np.maximum(size, 1e-300) ** 3
-    safe = np.where(singular, 1.0, det)
-    inv3 = np.stack([c0, c1, c2], axis=-1) / safe[..., None, None]
-    if singular.any():
-        inv3[singular] = np.linalg.pinv(a[singular])
-    out = np.zeros_like(m)
-    out[..., :3, :3] = inv3
-    out[..., :3, 3] = -np.einsum("...ij,...j->...i", inv3, m[..., :3, 3])
-    out[..., 3, 3] = 1.0
-    return out
-
-
 def relative_matrix(parent, child):
     """parent⁻¹ · child for (..., 4, 4) world matrices, finite under a zero-scale parent."""
     return affine_inverse(parent) @ child
@@ -107,34 +83,6 @@ def local_matrices(poses, parents):
         inverse = affine_inverse(poses[:, parents[has_parent]])
         local[:, has_parent] = inverse @ poses[:, has_parent]
     return local
-
-
-def _quaternions(r):
-    """(..., 3, 3) rotation matrices -> (..., 4) unit quaternions (x, y, z, w)."""
-    m = r.reshape(-1, 3, 3)
-    q = np.empty((len(m), 4))
-    tr = m[:, 0, 0] + m[:, 1, 1] + m[:, 2, 2]
-    # Shepperd's method: pivot on the largest of w, x, y, z for stability.
-    cases = np.argmax(np.stack([tr, m[:, 0, 0], m[:, 1, 1], m[:, 2, 2]], axis=1), axis=1)
-    for case in range(4):
-        s = cases == case
-        a = m[s]
-        if case == 0:
-            t = np.sqrt(np.maximum(1.0 + tr[s], 1e-300)) * 2
-            q[s] = np.stack([(a[:, 2, 1] - a[:, 1, 2]) / t, (a[:, 0, 2] - a[:, 2, 0]) / t,
-                             (a[:, 1, 0] - a[:, 0, 1]) / t, 0.25 * t], axis=1)
-        else:
-            i = case - 1
-            j, k = (i + 1) % 3, (i + 2) % 3
-            t = np.sqrt(np.maximum(1.0 + a[:, i, i] - a[:, j, j] - a[:, k, k], 1e-300)) * 2
-            out = np.empty((len(a), 4))
-            out[:, i] = 0.25 * t
-            out[:, j] = (a[:, j, i] + a[:, i, j]) / t
-            out[:, k] = (a[:, k, i] + a[:, i, k]) / t
-            out[:, 3] = (a[:, k, j] - a[:, j, k]) / t
-            q[s] = out
-    q /= np.linalg.norm(q, axis=1, keepdims=True)
-    return q.reshape(r.shape[:-2] + (4,))
 
 
 def _complete_rotation(r, zero):
@@ -185,7 +133,7 @@ def decompose(local):
     if zero.any():
         r = _complete_rotation(r, zero)
     shear = np.abs(np.swapaxes(r, -1, -2) @ r - np.eye(3)).max(initial=0.0)
-    q = _quaternions(r)
+    q = quaternions_from_matrices(r)
     # Neighbouring frames on the same hemisphere, so interpolation takes the short way.
     for f in range(1, len(q)):
         q[f] *= np.where((q[f] * q[f - 1]).sum(-1) < 0, -1.0, 1.0)[..., None]

@@ -1,29 +1,27 @@
-"""LightRecord -> UsdLux light on the object prim."""
+"""LightRecord -> UsdLux light on the object prim (the schema from core.lights)."""
 from pxr import Gf, Sdf, UsdLux
 
+from ...core.lights import KINDS, POINT, RECT, SPOT, SUN
 from ..ir import LightRecord
 
 
 def write_light(stage, path, rec):
-    if rec.kind in {"point", "spot"}:
-        light = UsdLux.SphereLight.Define(stage, path)
+    light = getattr(UsdLux, KINDS[rec.kind].usd_schema).Define(stage, path)
+    if rec.kind in (POINT, SPOT):
         light.CreateRadiusAttr(rec.radius)
         light.CreateTreatAsPointAttr(rec.radius == 0.0)
         light.GetPrim().CreateAttribute("lantern:softFalloff", Sdf.ValueTypeNames.Bool,
                                         custom=True).Set(rec.soft_falloff)
-        if rec.kind == "spot":
+        if rec.kind == SPOT:
             shaping = UsdLux.ShapingAPI.Apply(light.GetPrim())
             shaping.CreateShapingConeAngleAttr(rec.cone_angle)
             shaping.CreateShapingConeSoftnessAttr(rec.cone_softness)
-    elif rec.kind == "sun":
-        light = UsdLux.DistantLight.Define(stage, path)
+    elif rec.kind == SUN:
         light.CreateAngleAttr(rec.angle)
-    elif rec.shape == "rect":
-        light = UsdLux.RectLight.Define(stage, path)
+    elif rec.kind == RECT:
         light.CreateWidthAttr(rec.width)
         light.CreateHeightAttr(rec.height)
     else:
-        light = UsdLux.DiskLight.Define(stage, path)
         light.CreateRadiusAttr(rec.radius)
     write_common(light, rec.color, rec.intensity, rec.shadow, rec.diffuse, rec.specular)
     _write_shadow_settings(light.GetPrim(), rec)

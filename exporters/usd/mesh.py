@@ -15,6 +15,11 @@ def write_mesh(stage, path, rec, double_sided, slot_names):
     mesh.CreateOrientationAttr(UsdGeom.Tokens.rightHanded)
     mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
     mesh.CreateDoubleSidedAttr(bool(double_sided))
+    if not double_sided:
+        # doubleSided = false alone is USD's default, which usdview draws two-sided;
+        # the marker says Blender's Backface Culling asked for culling.
+        mesh.GetPrim().CreateAttribute("lantern:backfaceCulling", Sdf.ValueTypeNames.Bool,
+                                       custom=True).Set(True)
     mesh.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(rec.normals)))
     mesh.SetNormalsInterpolation(rec.normals_interpolation)
     primvars = UsdGeom.PrimvarsAPI(mesh)

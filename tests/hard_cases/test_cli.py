@@ -157,8 +157,6 @@ def test_frames_with_a_step_and_fractional_frames(scene, tmp_path):
         ["h_01.5.exr", "h_01.exr", "h_02.exr"]
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError,
-                   reason="engine (issue 9): render through RenderSettings.camera")
 def test_camera_option_picks_the_camera(scene, tmp_path):
     """--camera /root/Other renders what the stage renders with Other as its camera."""
     from pxr import Gf, Usd, UsdGeom

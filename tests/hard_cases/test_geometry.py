@@ -222,8 +222,6 @@ def _polygon_stage(points, counts, indices):
     return stage
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError,
-                   reason="engine: build the mesh with core.triangulate (it fans today)")
 def test_engine_covers_the_concave_polygon_exactly():
     """The L rendered as one polygon covers the same pixels as the L cut by
     core.triangulate beforehand (the engine has nothing left to cut)."""

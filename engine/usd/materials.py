@@ -1,4 +1,4 @@
-"""UsdPreviewSurface networks -> Material records.
+"""UsdPreviewSurface networks -> Material records, named by the Material prim's path.
 
 Each input is a constant or a UsdUVTexture output (connections are followed through
 material interface inputs with GetValueProducingAttributes). A texture whose file is
@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import os
 
-from pxr import UsdShade
+from pxr import Usd, UsdShade
 
-from .scene import Material, TextureRef
+from ..scene import Material, TextureRef
 
 DEFAULTS = {
     "diffuseColor": (0.18, 0.18, 0.18), "metallic": 0.0, "roughness": 0.5, "ior": 1.5,
@@ -23,10 +23,12 @@ MAPPABLE = ("diffuseColor", "metallic", "roughness", "emissiveColor", "opacity",
 
 
 def default_material(display_color=None) -> Material:
-    m = Material(name="<default>")
-    if display_color is not None:
-        m.diffuse = tuple(float(c) for c in display_color)
-    return m
+    """A mesh without a bound material: UsdPreviewSurface's defaults, in the mesh's
+    displayColor when it has one (named by it, so equal colours share a record)."""
+    if display_color is None:
+        return Material(name="<default>")
+    diffuse = tuple(float(c) for c in display_color)
+    return Material(name="<displayColor %r %r %r>" % diffuse, diffuse=diffuse)
 
 
 def _shader_id(shader: UsdShade.Shader) -> str:
@@ -121,15 +123,11 @@ def _texture_ref(shader, channel, time, mat_path, warnings):
         channel=channel if channel in ("r", "g", "b", "a") else "rgb")
 
 
-class MaterialLibrary:
-    """Reads each bound material once per render."""
-
-    def __init__(self, time, warnings):
-        self.time, self.warnings = time, warnings
-        self._cache = {}
-
-    def get(self, mat: UsdShade.Material) -> Material:
-        key = str(mat.GetPath())
-        if key not in self._cache:
-            self._cache[key] = read_material(mat, self.time, self.warnings)
-        return self._cache[key]
+def might_vary(mat: UsdShade.Material) -> bool:
+    """Whether any value of the material's network may change over time (it is then
+    read again at every new time)."""
+    for prim in Usd.PrimRange(mat.GetPrim()):
+        for attr in prim.GetAuthoredAttributes():
+            if attr.ValueMightBeTimeVarying():
+                return True
+    return False

@@ -1,0 +1,159 @@
+"""The engine's GL context, living on one dedicated worker thread.
+
+ModernGL must never touch Blender's GL context (Blender may run on Vulkan or Metal,
+and making another context current on its main thread would break it). So every GL
+call, in Blender and in the CLI alike, runs as a job on this thread, which creates a
+standalone context lazily on its first job and keeps it for the process.
+
+The context is made on a glcontext backend that Lantern creates itself (EGL on Linux,
+no display needed, else GLX; CGL on macOS, which stops at GL 4.1; WGL on Windows) and
+hands to ModernGL. The backend's `load` returns GL entry points on every platform,
+for the few calls ModernGL lacks (stencil state, engine/gpu/stencil.py). Compiled
+programs belong to this context object and live as long as it does."""
+from __future__ import annotations
+
+import os
+import queue
+import sys
+import threading
+from concurrent.futures import Future
+from dataclasses import dataclass
+
+import moderngl
+
+from .programs import ProgramCache
+
+GL_FLOOR = 330
+
+
+@dataclass(frozen=True)
+class Features:
+    """The GL paths a session takes. multi_draw: GL 4.3's glMultiDrawElementsIndirect
+    with a compute shader gathering the commands; else GL 3.3's one draw per object.
+    LANTERN_MAX_GL=33 (or 330) caps a session at the GL 3.3 path, for drivers whose
+    newer paths misbehave and for testing that path on any machine."""
+    version: int
+    multi_draw: bool
+
+    @staticmethod
+    def of(version: int) -> "Features":
+        usable = min(version, _version_cap() or version)
+        return Features(version=usable, multi_draw=usable >= 430)
+
+
+def _version_cap():
+    """LANTERN_MAX_GL as a version code: 33 or 330 -> 330, 45 or 450 -> 450."""
+    text = os.environ.get("LANTERN_MAX_GL", "").strip()
+    if not text:
+        return None
+    value = int(text)
+    return value * 10 if value < 100 else value
+
+
+class GLContext:
+    def __init__(self):
+        self.backend = _backend()
+        self.ctx = moderngl.create_context(standalone=True, context=self.backend, require=GL_FLOOR)
+        self.programs = ProgramCache(self.ctx)
+        # A surfaceless context has no default framebuffer, and some draws (transform
+        # feedback with rasterisation off) fail without one: keep a 1x1 one bound.
+        self.scratch = self.ctx.simple_framebuffer((1, 1))
+
+    @property
+    def version(self) -> int:
+        return self.ctx.version_code
+
+    def proc(self, name: str) -> int:
+        """The address of a GL entry point (0 when missing)."""
+        return self.backend.load(name)
+
+    def release(self):
+        self.programs.release()
+        self.scratch.release()
+        self.ctx.release()
+
+
+def _backend():
+    """A standalone glcontext backend, GL 3.3 core or newer."""
+    import glcontext
+    if sys.platform.startswith("linux"):
+        try:
+            return glcontext.get_backend_by_name("egl")(glversion=GL_FLOOR, mode="standalone")
+        except Exception as egl_error:  # no EGL: try GLX before giving up
+            try:
+                return glcontext.default_backend()(glversion=GL_FLOOR, mode="standalone")
+            except Exception:
+                raise RuntimeError(f"no headless OpenGL 3.3 context: {egl_error}") from egl_error
+    return glcontext.default_backend()(glversion=GL_FLOOR, mode="standalone")
+
+
+class GLThread:
+    def __init__(self):
+        self._jobs: queue.Queue = queue.Queue()
+        self._gl = None
+        self._thread = threading.Thread(target=self._run, name="lantern-gl", daemon=True)
+        self._thread.start()
+
+    def _context(self) -> GLContext:
+        if self._gl is None:
+            self._gl = GLContext()
+        return self._gl
+
+    def _run(self):
+        while True:
+            fn, fut = self._jobs.get()
+            if fn is None:
+                break
+            if not fut.set_running_or_notify_cancel():
+                continue
+            try:
+                fut.set_result(fn(self._context()))
+            except BaseException as exc:  # handed to the caller, never lost here
+                fut.set_exception(exc)
+        if self._gl is not None:
+            self._gl.release()
+            self._gl = None
+
+    def submit(self, fn) -> Future:
+        """Queue fn(gl); the Future carries its result or exception."""
+        fut: Future = Future()
+        self._jobs.put((fn, fut))
+        return fut
+
+    def call(self, fn):
+        """Run fn(gl) on the GL thread and wait for its result (re-raises)."""
+        if threading.current_thread() is self._thread:
+            return fn(self._context())
+        return self.submit(fn).result()
+
+    def stop(self):
+        self._jobs.put((None, None))
+        self._thread.join()
+
+
+_lock = threading.Lock()
+_instance = None
+
+
+def gl_thread() -> GLThread:
+    global _instance
+    with _lock:
+        if _instance is None or not _instance._thread.is_alive():
+            _instance = GLThread()
+        return _instance
+
+
+def run_gl(fn):
+    """fn(gl: GLContext) on the engine's GL thread; returns its result or raises."""
+    return gl_thread().call(fn)
+
+
+def shutdown():
+    """Stops the GL thread after the jobs already queued and releases its context, with
+    the programs it compiled (the Blender add-on calls this when it is disabled; close
+    sessions first). The next job starts a new thread."""
+    global _instance
+    with _lock:
+        instance, _instance = _instance, None
+    if instance is not None and instance._thread.is_alive():
+        instance.stop()

@@ -1,0 +1,78 @@
+"""Lights on the GPU: one packed RGBA32F table, a row per light, written when a light
+changes. Every light draw, one at a time or instanced, reads its light from the table
+by index (shaders/lights.glsl), so a light's numbers go up once, not per draw.
+
+Row layout (texels, must match shaders/lights.glsl):
+  0 position, volume radius R        1 colour (I, L or E), sphere radius
+  2 emission direction, cos(cone)    3 cone softness, diffuse, specular, flags
+  4 x axis, half width (disk: r)     5 y axis, half height
+  6 polygon vertices, area           7.. polygon vertices (rect 4, disk an N-gon)
+flags: 1 soft falloff, 2 spot, 4 disk, 8 headlight (shines along the view)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...core.lights import DISK, RECT, SPOT
+from ..lighting import disk_polygon, rect_polygon, volume_radius
+
+MAX_POLY = 32
+ROW_TEXELS = 7 + MAX_POLY
+
+
+def pack(light, R: float, disk_sides: int) -> np.ndarray:
+    row = np.zeros((ROW_TEXELS, 4))
+    row[0] = [*light.position, R]
+    row[1] = [*np.asarray(light.color, float), light.radius]
+    row[2] = [*light.direction, light.cos_half]
+    flags = (1 if light.soft_falloff else 0) | (2 if light.kind == SPOT else 0) | \
+        (4 if light.kind == DISK else 0) | (8 if light.headlight else 0)
+    row[3] = [light.cone_softness, light.diffuse, light.specular, flags]
+    if light.kind in (RECT, DISK):
+        if light.kind == RECT:
+            verts = rect_polygon(light)
+            half, area = (light.width / 2, light.height / 2), light.width * light.height
+        else:
+            verts = disk_polygon(light, disk_sides)
+            half, area = (light.radius, 0.0), math.pi * light.radius ** 2
+        row[4] = [*light.x_axis, half[0]]
+        row[5] = [*light.y_axis, half[1]]
+        row[6] = [len(verts), area, 0.0, 0.0]
+        row[7:7 + len(verts), :3] = verts
+    return row.astype(np.float32)
+
+
+class LightTable:
+    def __init__(self, uploads, disk_sides: int):
+        self.uploads = uploads
+        self.disk_sides = disk_sides
+        self.texture = None
+        self.index = {}            # light path -> row
+        self.ranges = {}           # light path -> volume radius R
+
+    def update(self, scene, changed: set):
+        """Rows for the lights in `changed`; the whole table when lights were added or
+        removed (rows follow the scene's light order)."""
+        if not changed and self.texture is not None:
+            return
+        paths = list(scene.lights)
+        if paths != list(self.index) or self.texture is None:
+            self.index = {p: i for i, p in enumerate(paths)}
+            self.ranges = {p: volume_radius(scene.lights[p]) for p in paths}
+            rows = np.zeros((max(len(paths), 1), ROW_TEXELS, 4), np.float32)
+            for p, i in self.index.items():
+                rows[i] = pack(scene.lights[p], self.ranges[p], self.disk_sides)
+            self.texture = self.uploads.rewrite_float_texture(self.texture, rows, kind="lights")
+            return
+        for p in changed:
+            if p in self.index:
+                i = self.index[p]
+                self.ranges[p] = volume_radius(scene.lights[p])
+                self.uploads.write_texture(
+                    self.texture, pack(scene.lights[p], self.ranges[p], self.disk_sides),
+                    kind="lights", viewport=(0, i, ROW_TEXELS, 1))
+
+    def release(self):
+        if self.texture is not None:
+            self.texture.release()

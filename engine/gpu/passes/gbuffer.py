@@ -1,0 +1,86 @@
+"""The G-buffer pass: every visible object's material into the deferred targets.
+
+Objects outside the view's frustum are culled; the rest draw as state batches
+(material variant, culling, winding), front to back within a batch (see
+engine/gpu/geometry.py for the GL 4.3 and GL 3.3 paths). A material's shader variant
+has only the maps it uses (feature bits, as Filament's); its constants are uniforms
+and its images stay on the GPU for the session.
+
+reads: skinned (posed geometry), view
+writes: g_base (base colour + alpha), g_normal (world normal), g_mat (metallic,
+        roughness, dielectric F0), g_emit (emission), all RGBA16F; g_depth (DEPTH24)"""
+from __future__ import annotations
+
+from ..framegraph import Pass
+from ..programs import UNITS, set_uniform
+
+# Material input -> shader names and variant define.
+MAP_SLOTS = [("diffuseColor", "diffuse", "HAS_DIFFUSE_MAP"), ("metallic", "metallic", "HAS_METALLIC_MAP"),
+             ("roughness", "roughness", "HAS_ROUGHNESS_MAP"), ("emissiveColor", "emissive", "HAS_EMISSIVE_MAP"),
+             ("opacity", "opacity", "HAS_OPACITY_MAP"), ("normal", "normal", "HAS_NORMAL_MAP")]
+WRAP = {"repeat": 0, "mirror": 1, "clamp": 2, "black": 3}
+CHANNEL = {"rgb": -1, "r": 0, "g": 1, "b": 2, "a": 3}
+TARGETS = ("g_base", "g_normal", "g_mat", "g_emit", "g_depth")
+
+
+class GBufferPass(Pass):
+    name = "gbuffer"
+    reads = ("skinned", "view")
+    writes = TARGETS
+
+    def __init__(self, ctx, pool, programs, geometry, textures):
+        self.ctx, self.pool, self.programs = ctx, pool, programs
+        self.geometry, self.textures = geometry, textures
+
+    def execute(self, frame, board):
+        ctx, view = self.ctx, board["view"]
+        fbo = self.pool.framebuffer([board[n] for n in TARGETS[:4]], depth=board["g_depth"])
+        fbo.use()
+        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.depth_func = "<"
+        ctx.disable(ctx.BLEND)
+        ctx.cull_face = "back"
+        cam = view.camera
+        batches, culled = self.geometry.view_batches(view.boxes, cam.position, cam.forward,
+                                                     view.outside)
+        frame.count("culled", culled)
+        self.geometry.bind_objects(UNITS["u_objects"])
+        materials = frame.scene.materials
+        for batch in batches:
+            mat = materials[batch.material]
+            defines = [flag for name, _, flag in MAP_SLOTS if name in mat.maps] + \
+                self.geometry.object_defines()
+            prog = self.programs.get("gbuffer.vert", "gbuffer.frag", defines)
+            set_uniform(prog, "view_proj", view.view_proj)
+            self._material(prog, mat)
+            # A mirroring transform turns counter-clockwise triangles clockwise.
+            ctx.front_face = "cw" if batch.mirrored else "ccw"
+            if batch.cull:
+                ctx.enable(ctx.CULL_FACE)
+            else:
+                ctx.disable(ctx.CULL_FACE)
+            self.geometry.draw_batch(batch, prog)
+            frame.count("draw_calls", batch.count)
+        ctx.front_face = "ccw"
+        ctx.disable(ctx.CULL_FACE | ctx.DEPTH_TEST)
+
+    def _material(self, prog, mat):
+        set_uniform(prog, "u_diffuse", mat.diffuse)
+        set_uniform(prog, "u_metallic", mat.metallic)
+        set_uniform(prog, "u_roughness", mat.roughness)
+        set_uniform(prog, "u_ior", mat.ior)
+        set_uniform(prog, "u_emissive", mat.emissive)
+        set_uniform(prog, "u_opacity", mat.opacity)
+        set_uniform(prog, "u_opacity_threshold", mat.opacity_threshold)
+        for name, short, _ in MAP_SLOTS:
+            ref = mat.maps.get(name)
+            if ref is None:
+                continue
+            unit = UNITS[f"t_{short}"]
+            self.textures.get(ref.path, ref.colorspace).use(unit)
+            self.textures.sampler(ref.wrap_s, ref.wrap_t).use(unit)
+            set_uniform(prog, f"m_{short}.wrap", (WRAP.get(ref.wrap_s, 0), WRAP.get(ref.wrap_t, 0)))
+            set_uniform(prog, f"m_{short}.scale", tuple(ref.scale))
+            set_uniform(prog, f"m_{short}.bias", tuple(ref.bias))
+            set_uniform(prog, f"m_{short}.channel", CHANNEL.get(ref.channel, -1))

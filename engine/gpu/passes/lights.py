@@ -1,0 +1,313 @@
+"""The light pass: each light adds what it reflects into the HDR target (blend ONE,
+ONE), reading its numbers from the light table (engine/gpu/lights.py).
+
+  sun                      full screen.
+  point, spot, rect, disk  a light volume (a sphere, or a cone for narrow spots) with
+                           a scissor rectangle, shading only pixels whose scene surface
+                           lies inside it: two-sided stencil marking against a copy of
+                           the scene depth, then the volume's back faces where marked
+                           (engine/gpu/stencil.py). A volume crossing the far plane
+                           shades its scissored screen instead.
+  shadowless point/spot    all in one instanced draw of their spheres: per-light
+                           Python and draw calls would cost more than their few pixels.
+Shadow-casting lights read their map from the shadow pass.
+
+reads: g_base, g_normal, g_mat, g_emit, g_depth, hdr, view, shadow_maps (optional)
+writes: hdr, depth_stencil"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ....core.lights import KINDS, POINT, SPOT, SUN
+from ..framegraph import Pass
+from ..programs import UNITS, set_uniform
+from .ambient import GBUFFER, bind_gbuffer
+
+CONE_SIDES = 24
+CONE_MAX_HALF_ANGLE = 75.0   # wider spots use the sphere
+
+
+def icosphere(level: int) -> np.ndarray:
+    """Triangle soup of an icosphere whose faces circumscribe the unit sphere."""
+    t = (1 + 5 ** 0.5) / 2
+    v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t),
+         (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4),
+         (11, 10, 2), (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8),
+         (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    tris = np.array([[v[i] for i in face] for face in f], float)
+    tris /= np.linalg.norm(tris, axis=2, keepdims=True)
+    for _ in range(level):
+        a, b, c = tris[:, 0], tris[:, 1], tris[:, 2]
+        ab, bc, ca = [(x + y) / np.linalg.norm(x + y, axis=1, keepdims=True)
+                      for x, y in ((a, b), (b, c), (c, a))]
+        tris = np.concatenate([np.stack(s, 1) for s in
+                               ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
+    # Scale so the flat faces (not just the vertices) enclose the unit sphere.
+    centroid = tris.mean(axis=1)
+    normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    inradius = np.min(np.abs(np.sum(centroid * normal, axis=1)))
+    return (tris / inradius).reshape(-1, 3).astype("f4")
+
+
+def cone(light, length: float) -> np.ndarray:
+    """World-space triangle soup of a cone enclosing the spot's lit region (height
+    `length` along its axis past the light, polygon base circumscribing). A spot with
+    a radius lights from every point of its sphere, so the apex moves back until the
+    cone contains the cone of every such point: by radius / sin(half angle)."""
+    half = math.radians(light.cone_angle)
+    ax = light.direction
+    back = light.radius / max(math.sin(half), 1e-3)
+    length += back
+    r = length * math.tan(half) / math.cos(math.pi / CONE_SIDES)
+    u = np.cross(ax, [1.0, 0, 0] if abs(ax[0]) < 0.9 else [0, 1.0, 0])
+    u /= np.linalg.norm(u)
+    w = np.cross(ax, u)
+    ang = np.arange(CONE_SIDES) * 2 * math.pi / CONE_SIDES
+    apex = light.position - ax * back
+    ring = apex + ax * length + (np.outer(np.cos(ang), u) + np.outer(np.sin(ang), w)) * r
+    center = apex + ax * length
+    tris = []
+    for i in range(CONE_SIDES):
+        a, b = ring[i], ring[(i + 1) % CONE_SIDES]
+        tris += [apex, a, b, center, b, a]
+    tris = np.array(tris).reshape(-1, 3, 3)
+    # Wind every face outward (counter-clockwise seen from outside).
+    mid = apex + ax * length * 0.5
+    nrm = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    flip = np.sum(nrm * (tris.mean(axis=1) - mid), axis=1) < 0
+    tris[flip] = tris[flip][:, [0, 2, 1]]
+    return tris.reshape(-1, 3).astype("f4")
+
+
+class LightPass(Pass):
+    name = "lights"
+    reads = GBUFFER + ("hdr", "view", "shadow_maps")
+    writes = ("hdr", "depth_stencil")
+
+    def __init__(self, ctx, pool, programs, uploads, stencil, table, geometry, preset):
+        self.ctx, self.pool, self.programs, self.uploads = ctx, pool, programs, uploads
+        self.stencil, self.table, self.geometry, self.preset = stencil, table, geometry, preset
+        self._sphere = None
+        self._cones = {}            # light path -> (cone params, vertex buffer, vertices)
+        self._instances = None      # (light rows, instance buffer) of the batched draw
+        self._vaos = {}
+
+    def needed(self, frame):
+        return bool(frame.scene.lights)
+
+    def execute(self, frame, board):
+        ctx, view = self.ctx, board["view"]
+        shadow_maps = board.get("shadow_maps", {})
+        fbo = self.pool.framebuffer([board["hdr"]], depth_stencil=board["depth_stencil"])
+        fbo.depth_mask = True
+        fbo.use()
+        self.stencil.clear()
+        # Scene depth into this pass's depth buffer (the shaders sample g_depth); the
+        # HDR target already holds the ambient pass's light, so colour writes are off.
+        ctx.disable(ctx.BLEND)
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.depth_func = "1"
+        self.stencil.color_writes(False)
+        prog = self.programs.get("fullscreen.vert", "depth_copy.frag")
+        board["g_depth"].use(UNITS["g_depth"])
+        self.programs.fullscreen(prog)
+        self.stencil.color_writes(True)
+        fbo.depth_mask = False
+        fbo.use()
+        ctx.enable(ctx.BLEND)
+        ctx.blend_func = ctx.ONE, ctx.ONE
+        ctx.blend_equation = ctx.FUNC_ADD
+        self.table.texture.use(UNITS["u_lights"])
+
+        has_casters = any(d.ranges for d in self.geometry.draws.values())
+        batched = []
+        for path, light in frame.scene.lights.items():
+            R = self.table.ranges[path]
+            if light.kind != SUN and R <= 0:
+                continue
+            if self._batchable(light, R, has_casters, view):
+                batched.append(path)
+                continue
+            fbo.use()
+            ctx.enable(ctx.BLEND)
+            ctx.blend_func = ctx.ONE, ctx.ONE
+            try:
+                self._draw_light(frame, board, view, path, light, R, shadow_maps.get(path))
+            finally:
+                ctx.scissor = None
+                self.stencil.end()
+        for gone in [p for p in self._cones if p not in frame.scene.lights]:
+            self._drop_vaos(self._cones[gone][1])
+            self._cones.pop(gone)[1].release()
+        if batched:
+            fbo.use()
+            self._draw_batched(frame, board, view, batched)
+        ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
+
+    def _batchable(self, light, R, has_casters, view):
+        return (light.kind in (POINT, SPOT) and not (light.shadow and has_casters)
+                and not _crosses_far_plane(view, light.position, R * 1.3))
+
+    def _sphere_vbo(self):
+        if self._sphere is None:
+            self._sphere = self.uploads.buffer(icosphere(self.preset.ico_level), kind="lights")
+        return self._sphere
+
+    def _vao(self, prog, vbo, instances=None):
+        key = (prog.extra, id(vbo), id(instances))
+        vao = self._vaos.get(key)
+        if vao is None:
+            content = [(vbo, "3f", "in_pos")]
+            if instances is not None:
+                content.append((instances, "1i/i", "i_light"))
+            vao = self._vaos[key] = self.ctx.vertex_array(prog, content)
+        return vao
+
+    def _draw_batched(self, frame, board, view, paths):
+        """All batched lights in one draw of their sphere volumes (reads the G-buffer
+        and the scene depth). Back faces pass the depth test only where the scene
+        surface is in front of them, and the shader's distance test discards surfaces
+        in front of the volume, so only pixels inside a volume are shaded; the camera
+        may be inside one. No per-light stencil or scissor: one draw has none."""
+        ctx = self.ctx
+        rows = np.array([self.table.index[p] for p in paths], np.int32)
+        if self._instances is None or not np.array_equal(self._instances[0], rows):
+            if self._instances is not None:
+                self._drop_vaos(self._instances[1])
+                self._instances[1].release()
+            self._instances = (rows, self.uploads.buffer(rows, kind="lights"))
+        prog = self.programs.get("volume.vert", "light.frag", ["LIGHT_SPHERE", "LIGHTS_INSTANCED"])
+        bind_gbuffer(board, prog, view)
+        set_uniform(prog, "mvp", view.view_proj)
+        ctx.enable(ctx.BLEND)
+        ctx.blend_func = ctx.ONE, ctx.ONE
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.depth_func = ">="
+        ctx.enable(ctx.CULL_FACE)
+        ctx.cull_face = "front"
+        self._vao(prog, self._sphere_vbo(), self._instances[1]).render(ctx.TRIANGLES,
+                                                                       instances=len(paths))
+        ctx.disable(ctx.CULL_FACE)
+        ctx.cull_face = "back"
+        frame.count("light_volumes", len(paths))
+        frame.count("lights_drawn", len(paths))
+        frame.count("batched_lights", len(paths))
+
+    def _program(self, board, view, vert, variant, row, sm):
+        prog = self.programs.get(vert, "light.frag", [variant] + (["HAS_SHADOW"] if sm else []))
+        bind_gbuffer(board, prog, view)
+        set_uniform(prog, "light_index", row)
+        if sm is not None:
+            sm.set_uniforms(prog, self.preset)
+        return prog
+
+    def _cone_vbo(self, path, light, R):
+        params = (tuple(light.position), tuple(light.axis), light.cone_angle, light.radius, R)
+        entry = self._cones.get(path)
+        if entry is None or entry[0] != params:
+            if entry is not None:
+                self._drop_vaos(entry[1])
+                entry[1].release()
+            data = cone(light, R)
+            entry = self._cones[path] = (params, self.uploads.buffer(data, kind="lights"), data)
+        return entry[1], entry[2]
+
+    def _draw_light(self, frame, board, view, path, light, R, sm):
+        """One light into the HDR target (reads the G-buffer, depth+stencil, its
+        shadow map). Suns shade the screen; other lights shade only inside the
+        scissor rectangle of their volume and, via the stencil, only pixels whose
+        scene surface lies inside the volume."""
+        ctx = self.ctx
+        row = self.table.index[path]
+        if light.kind == SUN:
+            ctx.disable(ctx.DEPTH_TEST)
+            self.programs.fullscreen(self._program(board, view, "fullscreen.vert", "LIGHT_DISTANT",
+                                                   row, sm))
+            frame.count("lights_drawn")
+            return
+        variant = KINDS[light.kind].shader
+        use_cone = light.kind == SPOT and light.cone_angle <= CONE_MAX_HALF_ANGLE
+        if use_cone:
+            vbo, soup = self._cone_vbo(path, light, R)
+            mvp = view.view_proj
+            hull = soup.astype(float)
+        else:
+            vbo = self._sphere_vbo()
+            model = np.diag([R, R, R, 1.0])
+            model[:3, 3] = light.position
+            mvp = view.view_proj @ model
+            hull = light.position + R * 1.3 * np.array(
+                [[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+        rect = _scissor(view, frame.size, hull)
+        if rect is not None and (rect[2] <= 0 or rect[3] <= 0):
+            return                                 # wholly off screen
+        ctx.scissor = rect
+        bound = R / math.cos(math.radians(light.cone_angle)) if use_cone else R * 1.3
+        if _crosses_far_plane(view, light.position, bound):
+            # Its back faces would be clipped away: shade the (scissored) screen instead.
+            ctx.disable(ctx.DEPTH_TEST)
+            self.programs.fullscreen(self._program(board, view, "fullscreen.vert", variant, row, sm))
+            frame.count("lights_drawn")
+            return
+        # Stencil marking: depth-fail counting of both faces against the scene depth.
+        mark = self.programs.get("volume.vert", "volume_mark.frag")
+        set_uniform(mark, "mvp", mvp)
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.depth_func = "<"
+        ctx.disable(ctx.CULL_FACE)
+        self.stencil.begin_mark()
+        self._vao(mark, vbo).render(ctx.TRIANGLES)
+        frame.count("stencil_marks")
+        # Shading: back faces (present even with the camera inside), marked pixels only.
+        self.stencil.begin_shade()
+        ctx.disable(ctx.DEPTH_TEST)
+        ctx.enable(ctx.CULL_FACE)
+        ctx.cull_face = "front"
+        prog = self._program(board, view, "volume.vert", variant, row, sm)
+        set_uniform(prog, "mvp", mvp)
+        self._vao(prog, vbo).render(ctx.TRIANGLES)
+        self.stencil.end()
+        ctx.disable(ctx.CULL_FACE)
+        ctx.cull_face = "back"
+        frame.count("light_volumes")
+        frame.count("lights_drawn")
+
+    def _drop_vaos(self, buffer):
+        for key in [k for k in self._vaos if id(buffer) in k[1:]]:
+            self._vaos.pop(key).release()
+
+    def release(self):
+        for vao in self._vaos.values():
+            vao.release()
+        for entry in self._cones.values():
+            entry[1].release()
+        for obj in (self._sphere, self._instances[1] if self._instances else None):
+            if obj is not None:
+                obj.release()
+        self._vaos.clear()
+        self._cones.clear()
+
+
+def _scissor(view, size, points):
+    """Pixel rectangle (x, y, w, h) bounding the projected points, None (the whole
+    screen) when any lies behind the camera's near plane."""
+    w, h = size
+    clip = (view.view_proj @ np.c_[points, np.ones(len(points))].T).T
+    if np.any(clip[:, 3] <= view.camera.near * 0.5):
+        return None
+    ndc = clip[:, :2] / clip[:, 3:4]
+    x0, y0 = np.floor((ndc.min(axis=0) * 0.5 + 0.5) * (w, h)).astype(int) - 1
+    x1, y1 = np.ceil((ndc.max(axis=0) * 0.5 + 0.5) * (w, h)).astype(int) + 1
+    x0, x1 = max(x0, 0), min(x1, w)
+    y0, y1 = max(y0, 0), min(y1, h)
+    return (int(x0), int(y0), int(max(x1 - x0, 0)), int(max(y1 - y0, 0)))
+
+
+def _crosses_far_plane(view, center, radius):
+    cam = view.camera
+    z = float(np.dot(center - cam.position, cam.forward))
+    return z + radius >= cam.far * 0.999

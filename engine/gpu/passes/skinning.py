@@ -1,0 +1,201 @@
+"""The skinning pass: each skinned mesh (joints and/or blend shapes) is deformed once
+per frame, by transform feedback (GL 3.3), into its place in the dynamic store. The
+G-buffer and every shadow face then draw that as plain geometry, so a crowd under
+three shadowed lights is skinned once a frame, not once per pass and cube face. A
+mesh is deformed again only when its pose or blend-shape weights changed (a view
+change deforms nothing).
+
+Static inputs go up once per mesh: rest vertices, influences (vertex attributes, or a
+per-point texture past 8), blend-shape offsets. Per frame only joint matrices (one
+texture per skeleton, whatever number of meshes it drives) and the list of active
+blend shapes (a few texels per mesh) go up.
+
+reads: nothing   writes: skinned (this frame's posed boxes, and a readback)"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ....core.transforms import transform_aabbs
+from ...skin import (active_texels, defines, flat_texels, joint_texels, local_bounds,
+                     shape_texels)
+from ..framegraph import Pass
+from ..geometry import VERTEX_FORMAT
+from ..programs import UNITS, set_uniform
+
+VARYINGS = ("out_pos", "out_normal", "out_uv", "out_tangent")
+
+
+@dataclass
+class _Input:
+    """One skinned mesh's static inputs on the GPU."""
+    rest: object                 # vertex buffer in the static layout
+    attributes: object           # in_point, joints, weights
+    fmt: tuple                   # ModernGL format and names of `attributes`
+    shapes: object = None        # blend-shape offsets texture
+    influences: object = None    # per-point influences texture (past 8)
+    active: object = None        # this frame's active blend shapes
+    n_active: int = 0
+    vaos: dict = None
+
+    def release(self):
+        for obj in [self.rest, self.attributes, self.shapes, self.influences, self.active] + \
+                list((self.vaos or {}).values()):
+            if obj is not None:
+                obj.release()
+
+
+class Posed:
+    """What the skinning pass hands on: each skinned object's local box this frame
+    (joint-padded, conservative: culling and shadow fitting), and the skinned vertices
+    themselves on request (exact: the default view)."""
+
+    def __init__(self, boxes, read):
+        self.boxes = boxes
+        self._read = read
+
+    def exact_box(self, draw):
+        p = self._read(draw.mesh_key)[:, :3].astype(np.float64)
+        return (p.min(axis=0), p.max(axis=0)) if len(p) else draw.local
+
+
+class SkinningPass(Pass):
+    name = "skinning"
+    writes = ("skinned",)
+
+    def __init__(self, ctx, uploads, programs, geometry, scratch):
+        self.ctx, self.uploads, self.programs = ctx, uploads, programs
+        self.geometry, self.scratch = geometry, scratch
+        self.inputs = {}               # mesh key -> _Input
+        self.joints = {}               # skel key -> texture
+        self._fresh = set()            # mesh keys whose output is stale
+
+    def needed(self, frame):
+        return bool(self.inputs)
+
+    def update(self, scene, changes):
+        """Inputs for new and rebuilt skinned meshes; joint and blend-shape uploads for
+        what this sync posed anew; which meshes to deform."""
+        for key in list(self.inputs):
+            if key not in scene.meshes or key in changes.meshes:
+                self.inputs.pop(key).release()
+                self._fresh.discard(key)
+        for key in changes.meshes:
+            mesh = scene.meshes.get(key)
+            if mesh is not None and mesh.skin is not None:
+                self.inputs[key] = self._upload(mesh)
+                self._fresh.add(key)
+        live = {m.skin.skel_key for m in scene.meshes.values()
+                if m.skin is not None and m.skin.has_joints}
+        for key in [k for k in self.joints if k not in live]:
+            self.joints.pop(key).release()
+        for key in live:
+            if key in changes.skeletons or key not in self.joints:
+                pose = scene.skeletons[key]
+                self.joints[key] = self.uploads.rewrite_float_texture(
+                    self.joints.get(key), joint_texels(pose.xforms, pose.dqs), kind="joints")
+                self._fresh |= {k for k, m in scene.meshes.items()
+                                if k in self.inputs and m.skin.skel_key == key}
+        for path in changes.shapes | changes.instances:
+            inst = scene.instances.get(path)
+            if inst is None or inst.mesh_key not in self.inputs:
+                continue
+            skin = scene.meshes[inst.mesh_key].skin
+            if skin.shape_offsets is None:
+                continue
+            inp = self.inputs[inst.mesh_key]
+            texels, inp.n_active = active_texels(skin, inst.shapes)
+            inp.active = self.uploads.rewrite_float_texture(inp.active, texels, kind="shapes")
+            self._fresh.add(inst.mesh_key)
+
+    def _upload(self, mesh) -> _Input:
+        skin = mesh.skin
+        n = len(mesh.vertices)
+        cols, fmt, names = [mesh.point_of_vertex.astype(np.int32).reshape(n, 1).view(np.float32)], \
+            ["1i"], ["in_point"]
+        if skin.joints is not None and skin.point_influences is None:
+            for h in range(skin.joints.shape[1] // 4):
+                cols += [skin.joints[:, 4 * h:4 * h + 4].astype(np.int32).view(np.float32),
+                         skin.weights[:, 4 * h:4 * h + 4].astype(np.float32)]
+                fmt += ["4i", "4f"]
+                names += [f"in_joints{h}", f"in_weights{h}"]
+        attributes = np.ascontiguousarray(np.concatenate(cols, axis=1), np.float32)
+        inp = _Input(rest=self.uploads.buffer(mesh.vertices, kind="mesh"),
+                     attributes=self.uploads.buffer(attributes, kind="mesh"),
+                     fmt=(" ".join(fmt), *names), vaos={})
+        if skin.shape_offsets is not None:
+            inp.shapes = self.uploads.float_texture(shape_texels(skin), kind="mesh")
+        if skin.point_influences is not None:
+            inp.influences = self.uploads.float_texture(flat_texels(skin.point_influences),
+                                                        kind="mesh")
+        return inp
+
+    def execute(self, frame, board):
+        scene = frame.scene
+        self.scratch.use()   # a surfaceless context draws nothing without a framebuffer
+        boxes = {}
+        for path, inst in scene.instances.items():
+            key = inst.mesh_key
+            inp = self.inputs.get(key)
+            if inp is None:
+                continue
+            mesh = scene.meshes[key]
+            skin = mesh.skin
+            pose = scene.skeletons.get(skin.skel_key) if skin.has_joints else None
+            boxes[path] = local_bounds(skin, pose, inst.shapes, *mesh.bounds)
+            if key not in self._fresh:
+                continue
+            self._deform(mesh, inp)
+            frame.count("meshes_skinned")
+            draw = self.geometry.draws.get(path)
+            if draw is not None:
+                lo, hi = boxes[path]
+                self.geometry.note_posed(draw, _world_box(lo, hi, inst.world))
+        self._fresh.clear()
+        board["skinned"] = Posed(boxes, self.read)
+
+    def _deform(self, mesh, inp):
+        skin = mesh.skin
+        defs = tuple(sorted(defines(skin)))
+        prog = self.programs.get("skin.vert", None, defs, varyings=VARYINGS)
+        vao = inp.vaos.get(id(prog))
+        if vao is None:
+            vao = inp.vaos[id(prog)] = self.ctx.vertex_array(
+                prog, [(inp.rest, *VERTEX_FORMAT), (inp.attributes, *inp.fmt)], skip_errors=True)
+        if skin.has_joints:
+            self.joints[skin.skel_key].use(UNITS["u_joint_xforms"])
+            if inp.influences is not None:
+                inp.influences.use(UNITS["u_influences"])
+            set_uniform(prog, "u_influence_groups", int(skin.joints.shape[1] // 4))
+            set_uniform(prog, "u_geom_bind", skin.geom_bind)
+            g3 = skin.geom_bind[:3, :3]
+            set_uniform(prog, "u_geom_bind_normal", np.linalg.inv(g3).T
+                        if abs(np.linalg.det(g3)) > 1e-30 else g3)
+        if inp.shapes is not None:
+            inp.shapes.use(UNITS["u_shape_offsets"])
+            inp.active.use(UNITS["u_shape_active"])
+            set_uniform(prog, "u_shape_count", int(inp.n_active))
+            set_uniform(prog, "u_shape_points", int(skin.n_points))
+        store, slot = self.geometry.meshes[mesh.key]
+        vao.transform(store.vbo, mode=self.ctx.POINTS, vertices=slot.n_vertices,
+                      buffer_offset=slot.first_vertex * 48)
+
+    def read(self, mesh_key) -> np.ndarray:
+        """A skinned mesh's deformed vertices, (V, 12) float32, as drawn this frame."""
+        store, slot = self.geometry.meshes[mesh_key]
+        data = store.vbo.read(size=slot.n_vertices * 48, offset=slot.first_vertex * 48)
+        return np.frombuffer(data, np.float32).reshape(-1, 12)
+
+    def release(self):
+        for inp in self.inputs.values():
+            inp.release()
+        for tex in self.joints.values():
+            tex.release()
+        self.inputs.clear()
+        self.joints.clear()
+
+
+def _world_box(lo, hi, world):
+    wlo, whi = transform_aabbs(np.asarray(lo)[None], np.asarray(hi)[None], world[None])
+    return wlo[0], whi[0]

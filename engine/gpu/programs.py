@@ -1,0 +1,121 @@
+"""GLSL programs: shaders/*.glsl with a tiny `#include "file"` preprocessor, variant
+defines inserted after `#version` (Filament-style feature bits), compiled once per
+context and variant.
+
+Texture units are assigned here and only here (UNITS): a program's sampler uniforms
+are pointed at their units when it is compiled, and passes bind a texture to
+UNITS[name]. Uniforms are not buffers: set_uniform writes them directly."""
+from __future__ import annotations
+
+import os
+import re
+
+import numpy as np
+
+SHADER_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(
+    os.path.abspath(__file__)))), "shaders")
+_INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.M)
+
+# Sampler name -> texture unit, for every sampler of every program. The G-buffer and
+# the light pass share units 0-8, materials 9-14, tables and rigs the rest; GL 3.3
+# guarantees 16 units per stage and 48 in all.
+UNITS = {name: unit for unit, name in enumerate((
+    "g_base", "g_normal", "g_mat", "g_emit", "g_depth", "dome_map", "shadow_cmp", "shadow_raw",
+    "hdr",
+    "t_diffuse", "t_metallic", "t_roughness", "t_emissive", "t_opacity", "t_normal",
+    "u_objects", "u_lights",
+    "u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences"))}
+
+
+class ShaderError(RuntimeError):
+    pass
+
+
+def load_source(name: str, defines=(), _seen=None) -> str:
+    seen = set() if _seen is None else _seen
+    with open(os.path.join(SHADER_DIR, name), encoding="utf-8") as f:
+        src = f.read()
+
+    def include(m):
+        inc = m.group(1)
+        if inc in seen:
+            return ""
+        seen.add(inc)
+        return load_source(inc, (), seen)
+
+    src = _INCLUDE.sub(include, src)
+    if defines:
+        lines = src.split("\n")
+        head = [i for i, ln in enumerate(lines) if ln.strip().startswith("#version")]
+        at = head[0] + 1 if head else 0
+        lines[at:at] = [f"#define {d}" for d in defines]
+        src = "\n".join(lines)
+    return src
+
+
+class ProgramCache:
+    """Programs by (shaders, variant), compiled on first use."""
+
+    def __init__(self, ctx):
+        self.ctx = ctx
+        self._programs = {}
+        self._screen = {}           # program key -> its VAO without buffers
+
+    def get(self, vert: str, frag: str | None = None, defines=(), varyings=(), compute=False):
+        defines = tuple(sorted(set(defines)))
+        key = (vert, frag, defines, tuple(varyings), compute)
+        prog = self._programs.get(key)
+        if prog is None:
+            try:
+                if compute:
+                    prog = self.ctx.compute_shader(load_source(vert, defines))
+                elif frag is None:
+                    prog = self.ctx.program(vertex_shader=load_source(vert, defines),
+                                            varyings=list(varyings))
+                else:
+                    prog = self.ctx.program(vertex_shader=load_source(vert, defines),
+                                            fragment_shader=load_source(frag, defines))
+            except Exception as exc:
+                raise ShaderError(f"{vert} + {frag} [variant: {', '.join(defines) or 'base'}] "
+                                  f"failed to compile: {exc}") from exc
+            for name, unit in UNITS.items():
+                if name in prog:
+                    prog[name].value = unit
+            prog.extra = key
+            self._programs[key] = prog
+        return prog
+
+    def fullscreen(self, prog):
+        """Draws one triangle covering the target with `prog` (fullscreen.vert needs
+        no vertex buffer)."""
+        vao = self._screen.get(prog.extra)
+        if vao is None:
+            vao = self._screen[prog.extra] = self.ctx.vertex_array(prog, [])
+        vao.render(self.ctx.TRIANGLES, vertices=3)
+
+    def __len__(self):
+        return len(self._programs)
+
+    def release(self):
+        for vao in self._screen.values():
+            vao.release()
+        for prog in self._programs.values():
+            prog.release()
+        self._screen.clear()
+        self._programs.clear()
+
+
+def set_uniform(prog, name, value):
+    """Sets a uniform if the compiler kept it; numpy matrices go up column-major."""
+    if name not in prog:
+        return
+    u = prog[name]
+    if isinstance(value, np.ndarray):
+        if value.ndim == 2 and value.shape[0] == value.shape[1]:
+            u.write(np.ascontiguousarray(value.T, dtype="f4").tobytes())
+            return
+        if value.ndim >= 2:  # array of vectors or matrices, already laid out
+            u.write(np.ascontiguousarray(value, dtype="f4").tobytes())
+            return
+        value = tuple(float(x) for x in value)
+    u.value = value

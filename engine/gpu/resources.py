@@ -1,0 +1,165 @@
+"""GL memory: the one place bytes go up, and the pool render targets come from.
+
+Uploads: every byte the engine writes into a GL buffer or texture goes through it and
+is counted by kind (mesh, objects, commands, joints, shapes, lights, textures), so
+`bytes_uploaded` cannot drift from what really moved (tests/test_boundary.py checks
+that nothing else in engine/gpu/ writes GL memory).
+
+TargetPool: textures by (size, format), handed out for a frame's targets and for
+shadow maps and taken back, so a session's later frames allocate nothing; and the
+framebuffers made of them, cached by attachments."""
+from __future__ import annotations
+
+from collections import Counter
+
+import numpy as np
+
+KINDS = ("mesh", "objects", "commands", "joints", "shapes", "lights", "textures")
+
+
+class Uploads:
+    def __init__(self, ctx):
+        self.ctx = ctx
+        self.bytes = Counter()
+
+    def _count(self, kind, n):
+        assert kind in KINDS, kind
+        self.bytes[kind] += int(n)
+
+    def take(self) -> Counter:
+        """Bytes per kind since the last take."""
+        out, self.bytes = self.bytes, Counter()
+        return out
+
+    def buffer(self, data=None, *, kind: str, reserve: int = 0):
+        """A buffer holding `data` (bytes or an array), or `reserve` bytes unwritten."""
+        if data is None:
+            return self.ctx.buffer(reserve=max(int(reserve), 4))
+        data = _bytes(data)
+        self._count(kind, len(data))
+        return self.ctx.buffer(data)
+
+    def write(self, buffer, data, *, kind: str, offset: int = 0):
+        data = _bytes(data)
+        self._count(kind, len(data))
+        buffer.write(data, offset=offset)
+
+    def texture(self, size, components, data=None, *, kind: str, dtype="f1", **kw):
+        if data is not None:
+            data = _bytes(data)
+            self._count(kind, len(data))
+        return self.ctx.texture(size, components, data, dtype=dtype, **kw)
+
+    def write_texture(self, texture, data, *, kind: str, viewport=None):
+        data = _bytes(data)
+        self._count(kind, len(data))
+        texture.write(data, viewport=viewport)
+
+    def float_texture(self, texels, *, kind: str):
+        """(h, w, 4) float32 -> an RGBA32F texture, nearest, for texelFetch."""
+        texels = np.ascontiguousarray(texels, np.float32)
+        h, w = texels.shape[:2]
+        tex = self.texture((w, h), 4, texels, kind=kind, dtype="f4")
+        tex.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
+        return tex
+
+    def rewrite_float_texture(self, tex, texels, *, kind: str):
+        """Writes texels into `tex` in place when the size matches, else replaces it
+        (releasing the old one); returns the texture to use."""
+        texels = np.ascontiguousarray(texels, np.float32)
+        h, w = texels.shape[:2]
+        if tex is not None and tex.size == (w, h):
+            self.write_texture(tex, texels, kind=kind)
+            return tex
+        if tex is not None:
+            tex.release()
+        return self.float_texture(texels, kind=kind)
+
+
+def _bytes(data) -> bytes:
+    if isinstance(data, np.ndarray):
+        return np.ascontiguousarray(data).tobytes()
+    return bytes(data)
+
+
+# Target formats. Colour: (components, dtype). Besides these, "depth" is a sampled
+# DEPTH_COMPONENT24 texture (G-buffer depth, shadow maps) and "depth_stencil" a
+# DEPTH24_STENCIL8 renderbuffer (light volumes).
+COLOR_FORMATS = {"rgba16f": (4, "f2"), "rgba32f": (4, "f4")}
+
+
+class TargetPool:
+    def __init__(self, ctx, stencil):
+        self.ctx = ctx
+        self.stencil = stencil
+        self._free = {}            # (size, format) -> [objects]
+        self._out = {}             # id(object) -> (key, object)
+        self._fbos = {}            # (ids of attachments) -> framebuffer
+        self._wanted = set()       # keys acquired since the last trim
+
+    def acquire(self, size, fmt: str):
+        key = (tuple(int(s) for s in size), fmt)
+        self._wanted.add(key)
+        free = self._free.get(key)
+        if free:
+            obj = free.pop()
+        else:
+            obj = self._make(key[0], fmt)
+        self._out[id(obj)] = (key, obj)
+        return obj
+
+    def release(self, obj):
+        key, obj = self._out.pop(id(obj))
+        self._free.setdefault(key, []).append(obj)
+
+    def _make(self, size, fmt):
+        ctx = self.ctx
+        if fmt == "depth_stencil":
+            return self.stencil.depth_stencil(size)
+        if fmt == "depth":
+            tex = ctx.depth_texture(size)
+            tex.compare_func = ""
+        else:
+            components, dtype = COLOR_FORMATS[fmt]
+            tex = ctx.texture(size, components, dtype=dtype)
+        tex.filter = (ctx.NEAREST, ctx.NEAREST)
+        return tex
+
+    def framebuffer(self, colors=(), depth=None, depth_stencil=None):
+        """The framebuffer of these attachments (made once, kept while they live)."""
+        key = tuple(id(a) for a in colors) + (id(depth), id(depth_stencil))
+        fbo = self._fbos.get(key)
+        if fbo is None:
+            fbo = self.ctx.framebuffer(color_attachments=list(colors), depth_attachment=depth)
+            if depth_stencil is not None:
+                self.stencil.attach(fbo, depth_stencil)
+            self._fbos[key] = fbo
+        return fbo
+
+    def trim(self):
+        """Releases free objects of sizes and formats not asked for since the last
+        trim (a viewport that was resized), and their framebuffers."""
+        for key in [k for k in self._free if k not in self._wanted]:
+            for obj in self._free.pop(key):
+                self._drop_framebuffers(id(obj))
+                obj.release()
+        self._wanted = set()
+
+    def _drop_framebuffers(self, obj_id):
+        for key in [k for k in self._fbos if obj_id in k]:
+            self._fbos.pop(key).release()
+
+    def held(self) -> int:
+        """Objects currently handed out (shadow maps kept across frames)."""
+        return len(self._out)
+
+    def release_all(self):
+        for fbo in self._fbos.values():
+            fbo.release()
+        self._fbos.clear()
+        objects = [o for objs in self._free.values() for o in objs] + \
+            [o for _, o in self._out.values()]
+        for obj in objects:
+            obj.release()
+        self._free.clear()
+        self._out.clear()

@@ -1,0 +1,156 @@
+"""Session: the renderer that outlives a frame.
+
+    with Session(stage, RenderSettings(width=320, height=180)) as session:
+        result = session.render()                        # the stage's camera at settings.frame
+        result = session.render(view_matrix=V, projection_matrix=P, frame=12.0)
+
+A session reads the stage once (engine/usd/stage.py) and keeps its GPU state
+(engine/gpu/renderer.py) until `close()`. Each render first brings the scene up to
+date, reading only what the stage's edits touched (Usd.Notice) and, at a new time,
+only what varies in time; the GL side then uploads only what that replaced, and a
+view change reads and uploads nothing but the view's draw order. USD is read on the
+caller's thread; every GL call runs on the engine's GL thread."""
+from __future__ import annotations
+
+import time
+import weakref
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.presets import DEFAULT as DEFAULT_PRESET, preset as find_preset
+from .gpu.context import gl_thread, run_gl
+from .gpu.renderer import Renderer
+from .usd import camera as usd_camera
+from .usd.stage import StageReader
+from .view import camera_from_matrices
+
+
+@dataclass
+class RenderSettings:
+    width: int | None = None     # None: /Render/Settings resolution if authored, else 640x360
+    height: int | None = None
+    frame: float | None = None   # None: the stage's startTimeCode if authored, else Default
+    preset: str = DEFAULT_PRESET  # low | medium | high | ultra (core/presets.py)
+    transparent: bool = False    # alpha = coverage instead of 1
+    # An explicit view instead of the stage's camera (Blender's viewport): OpenGL
+    # world-to-view and projection matrices, column-vector convention.
+    view_matrix: np.ndarray | None = None
+    projection_matrix: np.ndarray | None = None
+    camera: str | None = None    # a camera prim; None: /Render/Settings', else the first
+    cull_backfaces: bool = False  # cull back faces of every single-sided mesh
+
+
+@dataclass
+class RenderResult:
+    rgba: np.ndarray             # float32 (H, W, 4), scene-linear, row 0 = top
+    warnings: list = field(default_factory=list)
+    timings: dict = field(default_factory=dict)  # load, per pass, total (seconds)
+    stats: dict = field(default_factory=dict)    # prims_read, bytes_uploaded, draw_calls, ...
+
+
+class Session:
+    def __init__(self, stage, settings: RenderSettings | None = None):
+        self.settings = settings = settings or RenderSettings()
+        self._preset = find_preset(settings.preset)
+        self.stage = stage
+        self.size = usd_camera.resolution(stage, settings.width, settings.height)
+        self._reader = StageReader(stage)
+        self._camera = None          # (key, Camera) of the stage camera last read
+        renderer = run_gl(lambda gl: Renderer(gl, self._preset))
+        self._renderer = renderer
+        # A session dropped without close() still frees its GPU state; at exit the
+        # process's context goes with the process.
+        self._finalizer = weakref.finalize(self, _release, renderer, self._reader)
+        self._finalizer.atexit = False
+
+    @property
+    def scene(self):
+        """The scene records as of the last render (engine/scene.py), for tools and
+        tests; the session owns them."""
+        return self._reader.scene
+
+    # --- rendering -------------------------------------------------------------------
+    def render(self, view_matrix=None, projection_matrix=None, frame=None) -> RenderResult:
+        """The stage at `frame` (None: settings.frame, else the stage's start) from the
+        given view (None: settings' view, else the stage's camera, else the default
+        view framing what is drawn)."""
+        self._check_open()
+        t0 = time.perf_counter()
+        when = self._frame(frame)
+        changes = self._reader.sync(when)
+        if self._reader.settings_changed:
+            self._reader.settings_changed = False
+            self.size = usd_camera.resolution(self.stage, self.settings.width, self.settings.height)
+            self._camera = None
+        camera, read = self._view(view_matrix, projection_matrix, when, changes)
+        t_load = time.perf_counter() - t0
+        scene, size, s = self._reader.scene, self.size, self.settings
+        rgba, stats, timings = run_gl(lambda gl: self._renderer.render(
+            scene, changes, camera, size, s.transparent, s.cull_backfaces))
+        stats["prims_read"] = changes.prims_read + read
+        timings["load"] = t_load
+        timings["total"] = time.perf_counter() - t0
+        return RenderResult(rgba=rgba, warnings=scene.warning_list(), timings=timings,
+                            stats=stats)
+
+    def skinned_points(self, frame: float) -> dict:
+        """GPU-deformed geometry read back: {mesh path: (points, normals)}, world space,
+        one row per mesh point (normals unnormalised, as skinned), for every mesh with
+        a UsdSkel binding. For tests against UsdSkel."""
+        self._check_open()
+        changes = self._reader.sync(float(frame))
+        scene = self._reader.scene
+        return run_gl(lambda gl: self._renderer.skinned_points(scene, changes))
+
+    def _frame(self, frame):
+        if frame is not None:
+            return float(frame)
+        if self.settings.frame is not None:
+            return float(self.settings.frame)
+        return usd_camera.default_time(self.stage)
+
+    def _view(self, view_matrix, projection_matrix, when, changes):
+        """(Camera or None for the default view, prims read for it)."""
+        if view_matrix is None and projection_matrix is None:
+            view_matrix, projection_matrix = self.settings.view_matrix, self.settings.projection_matrix
+        if view_matrix is not None and projection_matrix is not None:
+            return camera_from_matrices(view_matrix, projection_matrix), 0
+        path = self.settings.camera or usd_camera.settings_camera_path(self.stage)
+        if path is None:
+            cameras = self._reader.cameras()
+            path = cameras[0] if cameras else None
+        if path is None:
+            return None, 0
+        prim = self.stage.GetPrimAtPath(path)
+        if not prim or not usd_camera.is_camera(prim):
+            raise ValueError(f"{path}: not a camera prim")
+        w, h = self.size
+        if self._camera is not None and path not in changes.cameras:
+            key, cam, varies = self._camera
+            if key[:2] == (path, w / h) and (not varies or key[2] == when):
+                return cam, 0
+        cam = usd_camera.camera_from_usd(prim, usd_camera.time_code(when), w / h)
+        self._camera = ((path, w / h, when), cam, usd_camera.might_vary(prim))
+        return cam, 1
+
+    # --- lifetime --------------------------------------------------------------------
+    def _check_open(self):
+        if not self._finalizer.alive:
+            raise RuntimeError("the session is closed")
+
+    def close(self):
+        """Releases every GL resource of the session (on the GL thread) and stops
+        listening to the stage."""
+        self._finalizer()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def _release(renderer, reader):
+    reader.close()
+    gl_thread().call(lambda gl: renderer.release())

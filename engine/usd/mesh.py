@@ -1,0 +1,214 @@
+"""UsdGeom.Mesh -> MeshData: indexed triangles sorted by material.
+
+Faces are triangulated by core.triangulate (earcut for anything but triangles and convex
+quads: never a fan of a concave polygon), every attribute is gathered per triangle corner exactly as authored
+(vertex, faceVarying, uniform or constant), and corners that are the same face corner
+(or the same point, when every attribute is per point) become one vertex: indexing
+changes how many vertices are shaded, never their values. A malformed mesh raises
+MeshError naming the defect."""
+from __future__ import annotations
+
+import numpy as np
+from pxr import Sdf, Usd, UsdGeom
+
+from ...core.triangulate import triangulate
+from ..scene import MeshData
+
+
+class MeshError(ValueError):
+    pass
+
+
+def _primvar(mesh, name, time):
+    pv = UsdGeom.PrimvarsAPI(mesh).GetPrimvar(name)
+    if pv and pv.HasValue():
+        v = pv.ComputeFlattened(time)
+        if v is not None:
+            return np.asarray(v, dtype=np.float64), str(pv.GetInterpolation())
+    return None, None
+
+
+def _per_corner(values, interp, n_points, face_of_corner, vidx, n_faces, what):
+    n = len(values)
+    if interp in ("vertex", "varying"):
+        if n < n_points:
+            raise MeshError(f"{what} has {n} values for {n_points} points")
+        return values[vidx]
+    if interp == "faceVarying":
+        if n != len(vidx):
+            raise MeshError(f"{what} has {n} faceVarying values for {len(vidx)} corners")
+        return values
+    if interp == "uniform":
+        if n < n_faces:
+            raise MeshError(f"{what} has {n} uniform values for {n_faces} faces")
+        return values[face_of_corner]
+    if interp == "constant" and n >= 1:
+        return np.repeat(values[:1], len(vidx), axis=0)
+    raise MeshError(f"{what} has unsupported interpolation {interp}")
+
+
+def _per_point(interp) -> bool:
+    return interp in ("vertex", "varying", "constant")
+
+
+def _pick_uv(mesh, wanted, time):
+    names = [wanted] if wanted else []
+    names.append("st")
+    for n in names:
+        v, interp = _primvar(mesh, n, time)
+        if v is not None and v.ndim == 2 and v.shape[1] == 2:
+            return v, interp
+    for pv in UsdGeom.PrimvarsAPI(mesh).GetPrimvars():
+        if pv.GetTypeName() == Sdf.ValueTypeNames.TexCoord2fArray:
+            v = pv.ComputeFlattened(time)
+            if v is not None and len(v):
+                return np.asarray(v, np.float64), str(pv.GetInterpolation())
+    return None, None
+
+
+def build_mesh(prim, time, materials, subsets, key) -> MeshData:
+    """materials: [Material] (the prim's own first, then one per subset); subsets:
+    [(index into materials, face indices)]."""
+    mesh = UsdGeom.Mesh(prim)
+    pts = mesh.GetPointsAttr().Get(time)
+    counts = mesh.GetFaceVertexCountsAttr().Get(time)
+    idx = mesh.GetFaceVertexIndicesAttr().Get(time)
+    if pts is None or counts is None or idx is None or len(pts) == 0:
+        raise MeshError("missing points, faceVertexCounts or faceVertexIndices")
+    pts = np.asarray(pts, np.float64)
+    counts = np.asarray(counts, np.int64)
+    idx = np.asarray(idx, np.int64)
+    if counts.sum() != len(idx):
+        raise MeshError(f"faceVertexCounts sum {counts.sum()} != {len(idx)} indices")
+    if len(idx) and (idx.min() < 0 or idx.max() >= len(pts)):
+        raise MeshError(f"face vertex index out of range (max {idx.max()}, {len(pts)} points)")
+    if np.any(counts < 3):
+        raise MeshError("face with fewer than 3 vertices")
+
+    n_faces = len(counts)
+    face_of_corner = np.repeat(np.arange(n_faces), counts)
+    tri, face_of_tri = triangulate(_topology_points(mesh, pts), counts, idx)
+    if mesh.GetOrientationAttr().Get(time) == UsdGeom.Tokens.leftHanded:
+        tri = tri[:, [0, 2, 1]]  # counter-clockwise is front after this, whatever the orientation
+    corners = tri.reshape(-1)      # triangle corner -> face corner
+
+    P = pts[idx[corners]]
+    per_point = True
+    normals, interp = _primvar(mesh, "normals", time)
+    if normals is None:
+        attr = mesh.GetNormalsAttr()
+        v = attr.Get(time) if attr.HasValue() else None
+        if v is not None and len(v):
+            normals, interp = np.asarray(v, np.float64), str(mesh.GetNormalsInterpolation())
+    if normals is not None:
+        N = _per_corner(normals, interp, len(pts), face_of_corner, idx, n_faces, "normals")[corners]
+        per_point &= _per_point(interp)
+    else:
+        N = _smooth_normals(pts, idx, corners)
+
+    uv_name = next((m.uv_name for m in materials if m.uv_name), None)
+    uvs, uv_interp = _pick_uv(mesh, uv_name, time)
+    if uvs is not None:
+        UV = _per_corner(uvs, uv_interp, len(pts), face_of_corner, idx, n_faces, "uv")[corners]
+        per_point &= _per_point(uv_interp)
+    else:
+        UV = np.zeros((len(corners), 2))
+
+    tri_mat = np.zeros(len(face_of_tri), np.int64)
+    face_mat = np.zeros(n_faces, np.int64)
+    for mi, faces in subsets:
+        faces = faces[(faces >= 0) & (faces < n_faces)]
+        face_mat[faces] = mi
+    tri_mat = face_mat[face_of_tri]
+    order = np.argsort(tri_mat, kind="stable")
+
+    T = np.zeros((len(corners), 4))
+    if any(m.has_normal_map for m in materials):
+        tan, t_interp = _primvar(mesh, "tangents", time)
+        if tan is not None and tan.shape[1] in (3, 4):
+            tc = _per_corner(tan, t_interp, len(pts), face_of_corner, idx, n_faces, "tangents")[corners]
+            T[:, :tan.shape[1]] = tc
+            if tan.shape[1] == 3:
+                T[:, 3] = 1.0
+            per_point &= _per_point(t_interp)
+        elif uvs is not None:
+            T = compute_tangents(P, N, UV, idx[corners])   # a function of point and normal
+
+    soup = np.concatenate([P, N, UV, T], axis=1).reshape(-1, 3, 12)[order].reshape(-1, 12)
+    ranges = []
+    sorted_mat = tri_mat[order]
+    for mi in range(len(materials)):
+        sel = np.nonzero(sorted_mat == mi)[0]
+        if len(sel):
+            ranges.append((mi, int(sel[0]) * 3, len(sel) * 3))
+    sorted_corners = corners.reshape(-1, 3)[order].reshape(-1)
+    point_of_corner = idx[sorted_corners]
+    vertices, indices, first = _index(soup, point_of_corner if per_point else sorted_corners,
+                                      len(pts) if per_point else len(idx))
+    double = bool(mesh.GetDoubleSidedAttr().Get(time))
+    marker = prim.GetAttribute("lantern:backfaceCulling")
+    culling = bool(marker.Get(time)) if marker and marker.HasValue() else False
+    return MeshData(key=key, vertices=vertices, indices=indices, ranges=ranges,
+                    materials=[m.name for m in materials], double_sided=double,
+                    backface_culling=culling and not double,
+                    point_of_vertex=point_of_corner[first].astype(np.int32))
+
+
+def _topology_points(mesh, pts):
+    """The points a mesh is triangulated against. Topology is static data: cutting each
+    frame's quads by that frame's shape would let triangles flip as a mesh deforms, and
+    a skinned mesh and its baked twin would cut differently. The authored default
+    (the rest shape) serves, else the earliest sample."""
+    attr = mesh.GetPointsAttr()
+    for when in (Usd.TimeCode.Default(), Usd.TimeCode.EarliestTime()):
+        ref = attr.Get(when)
+        if ref is not None and len(ref) == len(pts):
+            return np.asarray(ref, np.float64)
+    return pts
+
+
+def _index(soup, keys, n_keys):
+    """Triangle corners with one key (a face corner, or a point) share one vertex:
+    (vertices, uint32 indices, the corner each vertex was taken from). Every corner
+    with a key holds the same values, so any one of them will do."""
+    first = np.full(n_keys, -1, np.int64)
+    first[keys] = np.arange(len(keys))
+    used = np.nonzero(first >= 0)[0]
+    vertex_of_key = np.zeros(n_keys, np.int64)
+    vertex_of_key[used] = np.arange(len(used))
+    taken = first[used]
+    return (np.ascontiguousarray(soup[taken], np.float32),
+            vertex_of_key[keys].astype(np.uint32), taken)
+
+
+def _smooth_normals(pts, idx, corners):
+    tri = idx[corners].reshape(-1, 3)
+    a, b, c = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
+    fn = np.cross(b - a, c - a)  # area-weighted
+    acc = np.zeros_like(pts)
+    for j in range(3):
+        np.add.at(acc, tri[:, j], fn)
+    n = acc / np.maximum(np.linalg.norm(acc, axis=1, keepdims=True), 1e-30)
+    return n[tri.reshape(-1)]
+
+
+def compute_tangents(P, N, UV, point_of_corner):
+    """Per-triangle tangents from UVs, accumulated per point, Gram-Schmidt against
+    each corner's normal; w = handedness of the UV frame."""
+    p = P.reshape(-1, 3, 3)
+    uv = UV.reshape(-1, 3, 2)
+    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    d1, d2 = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
+    det = d1[:, 0] * d2[:, 1] - d2[:, 0] * d1[:, 1]
+    r = np.where(np.abs(det) > 1e-20, 1.0 / np.where(det == 0, 1, det), 0.0)[:, None]
+    t = (e1 * d2[:, 1:2] - e2 * d1[:, 1:2]) * r
+    b = (e2 * d1[:, 0:1] - e1 * d2[:, 0:1]) * r
+    n_pts = int(point_of_corner.max()) + 1
+    tacc, bacc = np.zeros((n_pts, 3)), np.zeros((n_pts, 3))
+    np.add.at(tacc, point_of_corner, np.repeat(t, 3, axis=0))
+    np.add.at(bacc, point_of_corner, np.repeat(b, 3, axis=0))
+    tc, bc = tacc[point_of_corner], bacc[point_of_corner]
+    tc = tc - N * np.sum(N * tc, axis=1, keepdims=True)
+    tc /= np.maximum(np.linalg.norm(tc, axis=1, keepdims=True), 1e-30)
+    w = np.where(np.sum(np.cross(N, tc) * bc, axis=1) < 0, -1.0, 1.0)
+    return np.concatenate([tc, w[:, None]], axis=1)

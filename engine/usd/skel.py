@@ -1,0 +1,278 @@
+"""UsdSkel bindings, poses and blend-shape weights -> SkinData and SkelPose records
+(the convention is in engine/skin.py).
+
+Weights are used as authored (UsdSkel does not renormalise them). Up to 8
+influences per point travel as vertex attributes; a mesh with more reads all of
+them from a per-point influence texture instead, so no influence is ever dropped.
+Static data (influences, blend-shape offsets, bind transforms) is read once per
+binding; per frame only poses and blend-shape weights are."""
+from __future__ import annotations
+
+import numpy as np
+from pxr import Usd, UsdSkel, Vt
+
+from ..scene import SkelPose, SkinData
+from ..skin import MAX_ATTRIBUTE_INFLUENCES, influence_texels
+
+
+class BindingError(ValueError):
+    pass
+
+
+# --- reading ---------------------------------------------------------------------
+
+class SkelBindings:
+    """mesh path -> (SkeletonQuery, SkinningQuery) for every SkelRoot of a stage,
+    each root populated once and again only when something under it changes."""
+
+    def __init__(self, stage):
+        self.stage = stage
+        self.by_mesh = {}
+        self.roots = {}          # SkelRoot path -> its UsdSkel.Cache
+        self.refresh("/")
+
+    def refresh(self, path: str):
+        """Re-reads the bindings of every SkelRoot under `path` (and of the SkelRoot
+        above it, if any)."""
+        root = self.root_of(path) or path
+        pred = Usd.TraverseInstanceProxies()
+        for old in [r for r in self.roots if _under(r, root)]:
+            del self.roots[old]
+        for mesh in [m for m in self.by_mesh if _under(m, root)]:
+            del self.by_mesh[mesh]
+        prim = self.stage.GetPrimAtPath(root)
+        if not prim:
+            return
+        for prim in Usd.PrimRange(prim, pred):
+            if not prim.IsA(UsdSkel.Root):
+                continue
+            cache = UsdSkel.Cache()
+            skel_root = UsdSkel.Root(prim)
+            cache.Populate(skel_root, pred)
+            self.roots[str(prim.GetPath())] = cache
+            for binding in cache.ComputeSkelBindings(skel_root, pred):
+                skel_query = cache.GetSkelQuery(binding.GetSkeleton())
+                if not skel_query:
+                    continue
+                for sq in binding.GetSkinningTargets():
+                    self.by_mesh[str(sq.GetPrim().GetPath())] = (skel_query, sq)
+
+    def root_of(self, path: str):
+        """The path of the SkelRoot at or above `path`, or None."""
+        prim = self.stage.GetPrimAtPath(path)
+        while prim and not prim.IsPseudoRoot():
+            if prim.IsA(UsdSkel.Root):
+                return str(prim.GetPath())
+            prim = prim.GetParent()
+        return None
+
+    def get(self, path):
+        return self.by_mesh.get(str(path))
+
+
+def _under(path: str, root: str) -> bool:
+    return root == "/" or path == root or path.startswith(root + "/")
+
+
+def skel_key(skel_query) -> str:
+    return str(skel_query.GetPrim().GetPath())
+
+
+def _pad_influences(idx, wts):
+    """(n, k) -> (n, 4·ceil(k/4)): whole groups of four for attributes or texels."""
+    pad = -idx.shape[1] % 4
+    if pad:
+        idx = np.pad(idx, ((0, 0), (0, pad)))
+        wts = np.pad(wts, ((0, 0), (0, pad)))
+    return idx.astype(np.int32), wts.astype(np.float32)
+
+
+def _joint_influences(skel_query, sq, n_points, time, path, warnings):
+    """Per point (n_points, 4|8) skeleton-order joint indices and weights."""
+    n_skel = len(skel_query.GetJointOrder())
+    k = int(sq.GetNumInfluencesPerComponent())
+    ind_pv, wt_pv = sq.GetJointIndicesPrimvar(), sq.GetJointWeightsPrimvar()
+    ind = ind_pv.ComputeFlattened(time) if ind_pv else None
+    wts = wt_pv.ComputeFlattened(time) if wt_pv else None
+    if ind is None or wts is None:
+        raise BindingError("jointIndices or jointWeights has no value")
+    ind, wts = np.asarray(ind, np.int64), np.asarray(wts, np.float64)
+    if len(ind) != len(wts):
+        raise BindingError(f"{len(ind)} jointIndices but {len(wts)} jointWeights")
+    if k < 1 or len(ind) % k:
+        raise BindingError(f"{len(ind)} influences is not a multiple of elementSize {k}")
+    if str(sq.GetInterpolation()) == "constant":
+        if len(ind) != k:
+            raise BindingError(f"constant influences have {len(ind)} values, elementSize {k}")
+        ind, wts = np.tile(ind, n_points), np.tile(wts, n_points)
+    elif len(ind) != n_points * k:
+        raise BindingError(f"{len(ind)} influences for {n_points} points x elementSize {k}")
+    ind, wts = ind.reshape(n_points, k), wts.reshape(n_points, k)
+
+    mesh_joints = sq.GetJointOrder()
+    n_mesh = len(mesh_joints) if mesh_joints else n_skel
+    if len(ind) and (ind.min() < 0 or ind.max() >= n_mesh):
+        raise BindingError(f"joint index out of range (indices {ind.min()}..{ind.max()}, "
+                           f"{n_mesh} joints)")
+    mapper = sq.GetJointMapper()
+    if mapper and not mapper.IsNull() and not mapper.IsIdentity():
+        # The mapper carries skeleton-order data to the mesh's order; carrying the
+        # skeleton indices themselves gives mesh joint -> skeleton joint.
+        to_skel = np.asarray(mapper.Remap(Vt.IntArray(list(range(n_skel))), Vt.IntArray(),
+                                          1, n_skel), np.int64)
+        ind = to_skel[ind]          # joints the skeleton lacks -> the identity joint
+    ind = np.where(wts != 0, ind, 0)
+    return _pad_influences(ind, wts)
+
+
+def _sub_shape_normals(bsq, offsets):
+    """Normal offsets per sub-shape, in BlendShapeQuery's sub-shape order (per blend
+    shape: its inbetweens, the null shape at 0 and the primary at 1, sorted by
+    weight). None when that order does not
+    reproduce the query's own point offsets."""
+    out = []
+    for b in range(bsq.GetNumBlendShapes()):
+        shape = bsq.GetBlendShape(b)
+        entries = [(0.0, [], []),
+                   (1.0, shape.GetOffsetsAttr().Get(), shape.GetNormalOffsetsAttr().Get())]
+        for ib in shape.GetInbetweens():
+            entries.append((ib.GetWeight() or 0.0, ib.GetOffsets(), ib.GetNormalOffsets()))
+        entries.sort(key=lambda e: e[0])
+        out += [(np.asarray(p if p is not None else [], np.float64).reshape(-1, 3),
+                 np.asarray(n if n is not None else [], np.float64).reshape(-1, 3))
+                for _, p, n in entries]
+    if len(out) != len(offsets):
+        return None
+    for (p, _), ref in zip(out, offsets):
+        if p.shape != ref.shape or (len(p) and not np.allclose(p, ref)):
+            return None
+    return [n for _, n in out]
+
+
+def _blend_shapes(sq, n_points, skin, path, warnings):
+    bsq = UsdSkel.BlendShapeQuery(UsdSkel.BindingAPI(sq.GetPrim()))
+    if not bsq or bsq.GetNumSubShapes() == 0:
+        return None
+    indices = [np.asarray(i, np.int64) for i in bsq.ComputeBlendShapePointIndices()]
+    offsets = [np.asarray(o, np.float64).reshape(-1, 3) for o in bsq.ComputeSubShapePointOffsets()]
+    normals = _sub_shape_normals(bsq, offsets)
+    # sub-shape -> blend shape, from the query's own weights for each shape at 1
+    sub_owner = []
+    for b in range(bsq.GetNumBlendShapes()):
+        sub_owner += [b] * (len(bsq.GetBlendShape(b).GetInbetweens()) + 2)
+    if len(sub_owner) != len(offsets):
+        sub_owner = None
+    blocks, data, maxes = [], [], []
+
+    def dense(values, b):
+        if not len(values):
+            return None
+        pts = indices[b] if sub_owner is not None and len(indices[b]) else None
+        full = np.zeros((n_points, 3))
+        if pts is None:
+            if len(values) != n_points:
+                raise BindingError(f"blend shape has {len(values)} offsets for {n_points} points")
+            full[:] = values
+        else:
+            if len(values) != len(pts) or pts.min() < 0 or pts.max() >= n_points:
+                raise BindingError("blend shape offsets do not match its pointIndices")
+            full[pts] = values
+        if not np.any(full):
+            return None
+        data.append(full)
+        return len(data) - 1
+
+    for s, off in enumerate(offsets):
+        b = sub_owner[s] if sub_owner is not None else 0
+        if sub_owner is None and len(off) != n_points:
+            raise BindingError("cannot place sparse blend-shape offsets")
+        pb = dense(off, b)
+        nb = dense(normals[s], b) if normals is not None and len(normals[s]) else None
+        blocks.append((-1 if pb is None else pb, -1 if nb is None else nb))
+        maxes.append(float(np.linalg.norm(off, axis=1).max()) if len(off) else 0.0)
+    if not data:
+        return None
+    skin.shape_offsets = np.ascontiguousarray(np.concatenate(data), np.float32)
+    skin.shape_blocks = blocks
+    skin.shape_max = np.array(maxes)
+    return bsq
+
+
+def attach_skin(mesh_data, prim, binding, time, warnings) -> bool:
+    """Adds a SkinData (per vertex of the MeshData) to a freshly built MeshData. A
+    malformed binding leaves the mesh unskinned with a warning naming it and the
+    reason; returns whether skinned."""
+    skel_query, sq = binding
+    path = str(prim.GetPath())
+    points = np.asarray(prim.GetAttribute("points").Get(time), np.float64).reshape(-1, 3)
+    n_points = len(points)
+    skin = SkinData(skel_key=skel_key(skel_query), n_points=n_points)
+    try:
+        if sq.HasJointInfluences() and len(skel_query.GetJointOrder()):
+            joints, weights = _joint_influences(skel_query, sq, n_points, time, path, warnings)
+            pi = mesh_data.point_of_vertex
+            skin.joints, skin.weights = joints[pi], weights[pi]
+            if joints.shape[1] > MAX_ATTRIBUTE_INFLUENCES:
+                skin.point_influences = influence_texels(joints, weights)
+            skin.geom_bind = np.array(sq.GetGeomBindTransform(time), np.float64).T
+            skin.method = "dqs" if str(sq.GetSkinningMethod()) == "dualQuaternion" else "lbs"
+            # Bounds: every bound point lies within joint_radius[j] of its joint j
+            # (in bind space), which the per-frame bound moves with the joint.
+            n_j = len(skel_query.GetJointOrder())
+            bind = np.array(skel_query.GetJointWorldBindTransforms(), np.float64).reshape(-1, 4, 4)
+            centers = np.concatenate([bind[:, 3, :3], np.zeros((1, 3))])  # row-vector Gf
+            skin.joint_centers = centers
+            gp = points @ skin.geom_bind[:3, :3].T + skin.geom_bind[:3, 3]
+            radius = np.zeros(n_j + 1)
+            for c in range(joints.shape[1]):
+                used = weights[:, c] != 0
+                d = np.linalg.norm(gp[used] - centers[joints[used, c]], axis=1)
+                np.maximum.at(radius, joints[used, c], d)
+            skin.joint_radius = radius
+            skin.joint_used = np.unique(joints[weights != 0])
+        if sq.HasBlendShapes():
+            _blend_shapes(sq, n_points, skin, path, warnings)
+        if skin.joints is None and skin.shape_offsets is None:
+            return False
+    except BindingError as exc:
+        warnings.append(f"{path}: malformed skel binding ({exc}); drawn unskinned")
+        return False
+    mesh_data.skin = skin
+    return True
+
+
+def pose(skel_query, time, dqs) -> SkelPose:
+    xf = np.array(skel_query.ComputeSkinningTransforms(time), np.float64).reshape(-1, 4, 4)
+    xf = np.concatenate([xf.transpose(0, 2, 1), np.eye(4)[None]])
+    return SkelPose(xforms=xf, dqs=dqs)
+
+
+def blend_weights(skel_query, sq, bsq_cache, prim, time):
+    """[(sub-shape, weight)] with non-zero weight this frame."""
+    anim = skel_query.GetAnimQuery()
+    if not anim:
+        return []
+    w = anim.ComputeBlendShapeWeights(time)
+    if w is None or not len(w):
+        return []
+    mapper = sq.GetBlendShapeMapper()
+    if mapper and not mapper.IsNull() and not mapper.IsIdentity():
+        w = mapper.Remap(w, Vt.FloatArray(), 1, 0.0)
+    key = str(prim.GetPath())
+    bsq = bsq_cache.get(key)
+    if bsq is None:
+        bsq = bsq_cache[key] = UsdSkel.BlendShapeQuery(UsdSkel.BindingAPI(prim))
+    sub_w, _, sub_i = bsq.ComputeSubShapeWeights(w)
+    return [(int(i), float(x)) for i, x in zip(sub_i, sub_w) if x != 0.0]
+
+
+
+
+def pose_might_vary(skel_query) -> bool:
+    anim = skel_query.GetAnimQuery()
+    return bool(anim) and anim.JointTransformsMightBeTimeVarying()
+
+
+def weights_might_vary(skel_query) -> bool:
+    anim = skel_query.GetAnimQuery()
+    return bool(anim) and anim.BlendShapeWeightsMightBeTimeVarying()
