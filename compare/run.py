@@ -307,6 +307,10 @@ def _view(view):
     return view, []
 
 
+def _ratio(x):
+    return f"{x:.0f}" if x >= 100 else f"{x:.3g}"
+
+
 def _summary(equal, renders, modes):
     """The one line on stdout."""
     rows = [r for r in equal if r["mode"] == modes[0]]
@@ -320,13 +324,13 @@ def _summary(equal, renders, modes):
         text += "; no Cycles curve"
     elif cycles["status"] == "reached":
         text += (f"; Cycles needs {cycles['seconds']:.3g} s for that FLIP "
-                 f"({cycles['ratio_warm']:.3g}x)")
+                 f"({_ratio(cycles['ratio_warm'])}x)")
     elif cycles["status"] == "already_below":
         text += (f"; Cycles is already below it at {cycles['bound_samples']} spp "
-                 f"({cycles['bound_seconds']:.3g} s, {cycles['ratio_warm']:.3g}x)")
+                 f"({cycles['bound_seconds']:.3g} s, {_ratio(cycles['ratio_warm'])}x)")
     else:
         text += (f"; Cycles does not reach it by {cycles['bound_samples']} spp "
-                 f"(> {cycles['bound_seconds']:.3g} s, > {cycles['ratio_warm']:.3g}x)")
+                 f"(> {cycles['bound_seconds']:.3g} s, > {_ratio(cycles['ratio_warm'])}x)")
     eevee = [r for r in renders if r["renderer"] == "eevee"
              and ((r["metrics"].get(modes[0]) or {}).get("all") or {}).get("hdr_flip") is not None]
     if eevee:
