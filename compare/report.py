@@ -156,7 +156,8 @@ def _equal_cell(entry, name):
     ratio = entry.get("ratio_warm")
     if ratio is not None:
         prefix = {"reached": "", "already_below": "≤ ", "not_reached": "> "}[entry["status"]]
-        text += f"; {prefix}{ratio:.3g}× Lantern warm"
+        text += f"; {prefix}{ratio:.0f}× Lantern warm" if ratio >= 100 else \
+            f"; {prefix}{ratio:.3g}× Lantern warm"
     return _e(text)
 
 
