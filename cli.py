@@ -1,8 +1,10 @@
 """The `lantern` command line: export .blend files to USD, render USD (or .blend) to images.
 
 bpy is imported only for work that reads .blend files, so `lantern render scene.usd`
-runs without Blender, on usd-core. Batch export runs each file in its own process:
-a file that crashes Blender then fails alone, and the batch goes on and reports it.
+runs without Blender, on usd-core. Batch export and sequences run as tasks (farm/):
+each exported file in its own Blender process (a file that crashes Blender fails alone,
+and the batch goes on and reports it), and frames in chunks on worker processes that
+keep the stage loaded; on this machine, or on a Dask cluster with --scheduler.
 
 Every failure ends with one line naming the file, prim or option and the reason, and
 an exit status: 2 when the command line is wrong, 1 when an input cannot be read or
@@ -14,15 +16,16 @@ import logging
 import math
 import os
 import re
-import subprocess
 import sys
-import time
-from concurrent.futures import ThreadPoolExecutor
 
 USD_SUFFIXES = (".usd", ".usda", ".usdc")
 IMAGE_SUFFIXES = (".exr", ".png")
 # The largest texture side OpenGL implementations guarantee at most (llvmpipe's limit).
 MAX_SIDE = 16384
+
+# Local worker processes for a sequence: one. On 2 cores llvmpipe already draws with
+# every core, and two measured no faster and costlier in CPU (bench/bench_distributed.py).
+RENDER_PROCESSES = 1
 
 USAGE, FAILED, INTERRUPTED = 2, 1, 130
 EXIT_STATUSES = """exit status:
@@ -99,16 +102,28 @@ def _build_parser():
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--debug", action="store_true",
                         help="show the traceback of an unexpected error")
+    farm = argparse.ArgumentParser(add_help=False)
+    farm.add_argument("--scheduler", default=os.environ.get("LANTERN_SCHEDULER") or None,
+                      metavar="ADDRESS",
+                      help="run the tasks on this Dask scheduler (tcp://HOST:PORT), or on "
+                           "an embedded Dask LocalCluster ('local'); default: "
+                           "$LANTERN_SCHEDULER, else processes on this machine")
+    farm.add_argument("--collect", action="store_true",
+                      help="workers send the outputs back and this process writes them "
+                           "(for outputs on a folder the workers do not share)")
+    farm.add_argument("--resume", action="store_true",
+                      help="skip outputs that exist and are newer than their input")
     commands = parser.add_subparsers(dest="command", required=True)
 
-    export = commands.add_parser("export", parents=[common], help="export .blend files to USD",
+    export = commands.add_parser("export", parents=[common, farm],
+                                 help="export .blend files to USD",
                                  epilog=EXIT_STATUSES,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     export.add_argument("blends", nargs="+", metavar="scene.blend")
     export.add_argument("-o", "--output", required=True,
                         help="a .usd/.usda/.usdc file for one input, or a folder")
     export.add_argument("-j", "--jobs", type=int, default=max(1, (os.cpu_count() or 2) // 2),
-                        help="files exported at once in a batch")
+                        help="files exported at once in a batch on this machine")
     export.add_argument("--format", choices=("usda", "usdc", "usd"), default="usdc",
                         help="file format of a batch's outputs (default usdc)")
     export.add_argument("--textures", choices=("reference", "copy"), default="reference",
@@ -116,7 +131,7 @@ def _build_parser():
     export.add_argument("--max-influences", type=int, default=None, metavar="N",
                         help="keep the N largest joint influences per vertex (default: all)")
 
-    render = commands.add_parser("render", parents=[common],
+    render = commands.add_parser("render", parents=[common, farm],
                                  help="render a USD stage or a .blend file",
                                  epilog=EXIT_STATUSES,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -139,11 +154,25 @@ def _build_parser():
                         help="view transform: Standard, AgX, Filmic, Khronos PBR Neutral, ...")
     render.add_argument("--look", default=None, help="a look of that view, e.g. Punchy")
     render.add_argument("--exposure", type=float, default=0.0, help="exposure in stops")
+    render.add_argument("--chunk", type=int, default=None, metavar="N",
+                        help="frames per task of a sequence (default: chosen from the "
+                             "measured cold and warm render times)")
+    render.add_argument("-j", "--jobs", type=int, default=RENDER_PROCESSES,
+                        help="worker processes for a sequence on this machine "
+                             f"(default {RENDER_PROCESSES})")
 
     from .compare.command import add_parser as add_compare_parser
     add_compare_parser(commands, [common], _parse_size, EXIT_STATUSES,
                        argparse.RawDescriptionHelpFormatter)
     return parser
+
+
+def _check_farm(args):
+    if args.scheduler is not None and args.scheduler != "local" and "://" not in args.scheduler:
+        raise _usage(f"--scheduler {args.scheduler}: must be a Dask scheduler address like "
+                     "tcp://HOST:8786, or 'local'")
+    if args.jobs < 1:
+        raise _usage("-j must be at least 1")
 
 
 def main(argv=None):
@@ -241,13 +270,17 @@ def _export(args):
             raise _usage(f"{blend}: not a .blend file")
     if args.max_influences is not None and args.max_influences < 1:
         raise _usage("--max-influences must be at least 1")
-    if args.jobs < 1:
-        raise _usage("-j must be at least 1")
+    _check_farm(args)
     single = args.output.lower().endswith(USD_SUFFIXES)
+    if args.collect and args.textures == "reference":
+        raise _usage("--collect needs --textures copy: referenced images would be named "
+                     "relative to the worker's folder, not the output's")
     if single and len(args.blends) > 1:
         raise _usage(f"{args.output}: several inputs need a folder for -o")
     if not single and os.path.splitext(args.output)[1] and not os.path.isdir(args.output):
         raise _usage(f"{args.output}: -o must be a .usd, .usda or .usdc file, or a folder")
+    if single and (args.scheduler is not None or args.collect or args.resume):
+        raise _usage("--scheduler, --collect and --resume are for a batch: give -o a folder")
     if single:
         _check_output(args.output, USD_SUFFIXES)
         return _export_one(args.blends[0], args.output, args)
@@ -276,10 +309,7 @@ def _export_one(blend, out_path, args):
 
 
 def _export_batch(args):
-    from rich.console import Console
-    from rich.progress import Progress
-    from rich.table import Table
-
+    from .farm.batch import FarmError, export_batch
     jobs = []
     for blend in args.blends:
         stem = os.path.splitext(os.path.basename(blend))[0]
@@ -287,48 +317,10 @@ def _export_batch(args):
     if len({out for _, out in jobs}) != len(jobs):
         raise _usage("two inputs share a file name; their outputs would collide")
     _make_folder(args.output)
-
-    def run(job):
-        blend, out_path = job
-        start = time.perf_counter()
-        # Each file in its own process: a crash in Blender fails that file only.
-        command = [sys.executable, "-m", "lantern", "export", blend, "-o", out_path,
-                   "--textures", args.textures]
-        if args.max_influences is not None:
-            command += ["--max-influences", str(args.max_influences)]
-        proc = subprocess.run(command, capture_output=True, text=True)
-        seconds = time.perf_counter() - start
-        warnings = [line for line in proc.stderr.splitlines() if line.startswith("warning: ")]
-        if proc.returncode == 0:
-            return blend, "ok", seconds, len(warnings), out_path
-        reason = [line.removeprefix("lantern export: ") for line in proc.stderr.splitlines()
-                  if line.strip() and not line.startswith("warning: ")]
-        if proc.returncode == INTERRUPTED:
-            reason.append("interrupted")
-        elif proc.returncode < 0:
-            reason.append(f"Blender crashed (signal {-proc.returncode})")
-        return blend, "failed", seconds, len(warnings), (reason[-1] if reason else "unknown error")
-
-    results = []
-    console = Console(stderr=True)
-    with Progress(console=console, transient=True) as progress:
-        task = progress.add_task("exporting", total=len(jobs))
-        with ThreadPoolExecutor(max_workers=args.jobs) as pool:
-            for result in pool.map(run, jobs):
-                results.append(result)
-                progress.advance(task)
-
-    table = Table(title="lantern export")
-    for column in ("file", "status", "seconds", "warnings", "output / reason"):
-        table.add_column(column, overflow="fold")
-    for blend, status, seconds, n_warnings, detail in results:
-        style = "green" if status == "ok" else "red"
-        table.add_row(os.path.basename(blend), f"[{style}]{status}[/]", f"{seconds:.2f}",
-                      str(n_warnings), detail)
-    Console(width=max(120, Console().width)).print(table)
-    failed = sum(1 for r in results if r[1] != "ok")
-    print(f"{len(results) - failed} exported, {failed} failed")
-    return FAILED if failed else 0
+    try:
+        return export_batch(args, jobs)
+    except FarmError as error:
+        raise CommandError(str(error))
 
 
 # --- render -----------------------------------------------------------------------------
@@ -344,6 +336,13 @@ def _render(args):
         _check_output(args.output, IMAGE_SUFFIXES)
         if "#" not in args.output:
             raise _usage(f"{args.output}: a sequence needs '####' in an .exr/.png name, or a .gif")
+    _check_farm(args)
+    if args.frames is None and (args.scheduler is not None or args.collect or args.resume
+                                or args.chunk is not None):
+        raise _usage("--scheduler, --collect, --resume and --chunk are for a sequence "
+                     "(--frames)")
+    if args.chunk is not None and args.chunk < 1:
+        raise _usage("--chunk must be at least 1")
     if args.camera is not None and not args.camera.startswith("/"):
         raise _usage(f"--camera {args.camera}: must be an absolute prim path, like /root/Camera")
     if not os.path.isfile(args.scene):
@@ -356,11 +355,25 @@ def _render(args):
     _check_preset(args.preset)
     args.colour = _colour(args)
 
-    stage = _stage_from_blend(args.scene) if is_blend else _open_usd(args.scene)
-    _check_camera(stage, args)
     if args.frames is None:
+        stage = _stage_from_blend(args.scene) if is_blend else _open_usd(args.scene)
+        _check_camera(stage, args)
         return _render_frame(stage, args)
-    return _render_sequence(stage, args)
+    # A sequence's workers start first, and get ready while the stage is read here.
+    from .farm.batch import FarmError, open_render_runner
+    try:
+        runner = open_render_runner(args)
+    except FarmError as error:
+        raise CommandError(str(error))
+    try:
+        stage = _stage_from_blend(args.scene) if is_blend else _open_usd(args.scene)
+        _check_camera(stage, args)
+        # A .blend's stage was exported here: the workers get it as text.
+        text = stage.GetRootLayer().ExportToString() if is_blend else None
+    except BaseException:
+        runner.close(interrupted=True)
+        raise
+    return _render_sequence(stage, args, runner, text)
 
 
 def _colour(args):
@@ -463,42 +476,23 @@ def _frame_path(pattern, frame):
     return re.sub(r"#+", lambda m: f"{int(whole):0{len(m.group(0))}d}{fraction}", pattern, count=1)
 
 
-def _frames_rendered(stage, args):
-    """(frame, result) for every frame of --frames: whole-frame runs share one sequence
-    (static data read and uploaded once), other steps render frame by frame."""
-    from .engine import render_stage
-    from .engine.api import render_sequence
-    frames = args.frames
-    step = frames[1] - frames[0] if len(frames) > 1 else 1.0
-    if step == 1.0 and float(frames[0]).is_integer():
-        yield from render_sequence(stage, frames[0], frames[-1], _settings(args))
-        return
-    for frame in frames:
-        yield frame, render_stage(stage, _settings(args, frame))
-
-
-def _render_sequence(stage, args):
-    from .engine.image_io import write_animation, write_image
-    gif = args.output.lower().endswith(".gif")
-    images, seen = [], set()
-    results = _frames_rendered(stage, args)
-    while True:
-        item = _rendered(args.scene, lambda: next(results, None))
-        if item is None:
-            break
-        frame, result = item
-        _print_warnings(result.warnings, seen)
-        if gif:
-            images.append(result.rgba)
-            continue
-        path = _frame_path(args.output, frame)
-        _write(path, lambda: write_image(path, result.rgba, **args.colour))
-        print(f"{args.scene} frame {frame:g} -> {path} "
-              f"({result.timings.get('total', 0.0) * 1000:.1f} ms)")
-    if gif:
-        fps = stage.GetFramesPerSecond() or 24.0
-        _write(args.output, lambda: write_animation(args.output, images, fps, **args.colour))
-        print(f"{args.scene} frames {args.frames[0]:g}:{args.frames[-1]:g} -> {args.output}")
+def _render_sequence(stage, args, runner, stage_text):
+    """--frames as tasks (farm/): chunks of frames on worker processes that keep the
+    stage loaded, here or on a Dask cluster."""
+    from .farm.batch import FarmError, render_frames
+    if not args.output.lower().endswith(".gif"):
+        _make_folder(os.path.dirname(os.path.abspath(args.output)))
+    seen = set()
+    try:
+        status = render_frames(args, runner, stage_text, stage.GetFramesPerSecond() or 24.0,
+                               lambda warnings: _print_warnings(warnings, seen))
+    except FarmError as error:
+        raise CommandError(str(error))
+    except OSError as error:
+        raise CommandError(f"{error.filename or args.output}: cannot be written: "
+                           f"{error.strerror or error}")
+    if status:
+        raise CommandError(f"{args.scene}: some frames failed (see the summary above)")
     return 0
 
 

@@ -12,5 +12,6 @@ def register():
 def unregister():
     for module in reversed(_MODULES):
         module.unregister()
-    # No thread outlives the add-on: frames in flight finish, the GL thread stops.
+    # Nothing outlives the add-on: the engine process stops, with its threads and
+    # shared memory.
     scene_render.shutdown()

@@ -78,6 +78,7 @@ class LANTERN_RENDER_PT_quality(LanternPanel, bpy.types.Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         layout.prop(context.scene.lantern, "preset")
+        layout.prop(context.scene.lantern, "viewport_resolution")
 
 
 class LANTERN_RENDER_PT_film(LanternPanel, bpy.types.Panel):
@@ -89,6 +90,23 @@ class LANTERN_RENDER_PT_film(LanternPanel, bpy.types.Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         layout.prop(context.scene.render, "film_transparent", text="Transparent")
+
+
+class LANTERN_VIEWLAYER_PT_passes(LanternPanel, bpy.types.Panel):
+    """The render passes the engine computes (core/passes.py), by Blender's own view
+    layer switches: they come out of F12 as Blender's passes of the same names."""
+    bl_label = "Passes"
+    bl_context = "view_layer"
+
+    def draw(self, context):
+        from ..core.passes import provided
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        col = layout.column(heading="Include", align=True)
+        col.prop(context.view_layer, "use_pass_combined")
+        for p in provided():
+            col.prop(context.view_layer, p.view_layer, text=p.name)
 
 
 class LANTERN_LIGHT_PT_shadow(LanternPanel, bpy.types.Panel):
@@ -115,7 +133,8 @@ class LANTERN_LIGHT_PT_shadow(LanternPanel, bpy.types.Panel):
         col.prop(light.lantern, "shadow_bias")
 
 
-_CLASSES = (LANTERN_RENDER_PT_quality, LANTERN_RENDER_PT_film, LANTERN_LIGHT_PT_shadow)
+_CLASSES = (LANTERN_RENDER_PT_quality, LANTERN_RENDER_PT_film, LANTERN_VIEWLAYER_PT_passes,
+            LANTERN_LIGHT_PT_shadow)
 
 
 def register():

@@ -15,6 +15,10 @@ class LanternSceneSettings(bpy.types.PropertyGroup):
     preset: bpy.props.EnumProperty(
         name="Quality", items=PRESETS, default=DEFAULT,
         description="Trades render time for error against Cycles")
+    viewport_resolution: bpy.props.FloatProperty(
+        name="Viewport Resolution", default=1.0, min=0.1, max=1.0, subtype='FACTOR',
+        description="Fraction of the viewport's pixels rendered in Rendered shading "
+                    "(drawn stretched): lower is faster")
 
 
 class LanternLightSettings(bpy.types.PropertyGroup):

@@ -1,13 +1,19 @@
 """The LANTERN RenderEngine: F12, material previews and the viewport.
 
-Kept thin: the exporter turns the evaluated depsgraph into an in-memory USD stage,
-the engine renders that stage on its own GL thread, and the pixels come back here
-(scene_render.py holds every step but the `gpu` drawing). Blender's own GL context is
-never touched by ModernGL.
+Kept thin: the engine runs in its own process (addon/host.py, engine/host/); F12 and
+previews go through scene_render.py, the viewport through viewport.py. Only
+`_paint` touches Blender's `gpu` module (absent in background mode), in Blender's
+documented pattern: a float GPUTexture drawn inside bind_display_space_shader.
 """
 import bpy
 
-from .scene_render import ViewportSession, render_frame
+from ..core.passes import COMBINED, PASSES
+from . import host as host_module
+from .scene_render import render_frame, requested_passes
+from .viewport import ViewportRender, region_border, view_request
+
+REDRAW_SECONDS = 1 / 60     # how often a viewport waiting for a frame looks for it
+_timers = set()             # the redraw timers running, stopped with the add-on
 
 
 class LanternRenderEngine(bpy.types.RenderEngine):
@@ -21,47 +27,84 @@ class LanternRenderEngine(bpy.types.RenderEngine):
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         self._viewport = None
+        self._texture = None            # (frame number, GPUTexture) drawn last
+        self._polling = False
+
+    def __del__(self):
+        viewport = getattr(self, "_viewport", None)
+        if viewport is not None:
+            viewport.close()
 
     # F12 and previews ---------------------------------------------------------------------
     def render(self, depsgraph):
         render_frame(self, depsgraph)
 
+    def update_render_passes(self, scene=None, renderlayer=None):
+        self.register_pass(scene, renderlayer, COMBINED, 4, "RGBA", 'COLOR')
+        for name in requested_passes(renderlayer):
+            p = PASSES[name]
+            self.register_pass(scene, renderlayer, p.name, p.channels, p.chan_id, p.kind)
+
     # Viewport ----------------------------------------------------------------------------
     def view_update(self, context, depsgraph):
         if self._viewport is None:
-            self._viewport = ViewportSession()
-        self._viewport.sync(depsgraph)
+            self._viewport = ViewportRender()
+        self._viewport.update(depsgraph)
+        self._start_polling()
 
     def view_draw(self, context, depsgraph):
         if self._viewport is None:
             self.view_update(context, depsgraph)
-        region, view = context.region, context.region_data
+        scene, region = depsgraph.scene, context.region
+        view = view_request((region.width, region.height), context.region_data.view_matrix,
+                            context.region_data.window_matrix,
+                            scene.lantern.viewport_resolution, region_border(context, depsgraph))
+        self._viewport.draw(depsgraph, view, lambda *frame: _paint(self, scene, *frame),
+                            scene.lantern.preset, scene.render.film_transparent)
+        self.update_stats("", self._viewport.status)
+        while self._viewport.notices:
+            self.report({'ERROR'}, self._viewport.notices.pop(0))
+        self._start_polling()
+
+    def _start_polling(self):
+        if not self._polling and self._viewport is not None and self._viewport.waiting():
+            self._polling = True
+            poll = self._poll
+            _timers.add(poll)
+            bpy.app.timers.register(poll, first_interval=REDRAW_SECONDS)
+
+    def _poll(self):
+        """Tags a redraw when a new frame arrived; stops once nothing is to come."""
         try:
-            rgba = self._viewport.draw_pixels(
-                view.view_matrix, view.window_matrix, region.width, region.height)
-        except Exception as error:
-            self.report({'ERROR'}, f"Lantern: {error}")
-            return
-        _draw_pixels(self, depsgraph.scene, rgba)
+            viewport = self._viewport
+            if host_module.get().take_fresh(viewport.name):
+                self.tag_redraw()
+            if viewport.waiting():
+                return REDRAW_SECONDS
+            self.tag_redraw()               # the last frame, or an error, to show
+        except ReferenceError:              # the engine was freed with its viewport
+            return None
+        self._polling = False
+        _timers.discard(self._poll)
+        return None
 
 
-def _draw_pixels(engine, scene, rgba):
-    """Blender's documented pattern: a float GPUTexture drawn in the display-space shader."""
+def _paint(engine, scene, number, pixels, rect):
+    """Blender's documented pattern: the frame as a float GPUTexture (made again only
+    for a new frame, from the shared pixels with one copy), drawn over `rect` in the
+    display-space shader."""
     import gpu
-    from gpu_extras.batch import batch_for_shader
+    from gpu_extras.presets import draw_texture_2d
 
-    height, width = rgba.shape[:2]
-    buffer = gpu.types.Buffer('FLOAT', width * height * 4, rgba[::-1].ravel().tolist())
-    texture = gpu.types.GPUTexture((width, height), format='RGBA16F', data=buffer)
-    shader = gpu.shader.from_builtin('IMAGE')
-    batch = batch_for_shader(shader, 'TRI_FAN', {
-        "pos": ((0, 0), (width, 0), (width, height), (0, height)),
-        "texCoord": ((0, 0), (1, 0), (1, 1), (0, 1)),
-    })
+    if engine._texture is None or engine._texture[0] != number:
+        height, width = pixels.shape[:2]
+        buffer = gpu.types.Buffer('FLOAT', width * height * 4, pixels.reshape(-1))
+        engine._texture = (number, gpu.types.GPUTexture((width, height), format='RGBA16F',
+                                                        data=buffer))
+    x, y, w, h = rect
     gpu.state.blend_set('ALPHA_PREMULT')
     engine.bind_display_space_shader(scene)
-    shader.uniform_sampler("image", texture)
-    batch.draw(shader)
+    draw_texture_2d(engine._texture[1], (x, y), w, h)
     engine.unbind_display_space_shader()
     gpu.state.blend_set('NONE')
 
@@ -71,4 +114,8 @@ def register():
 
 
 def unregister():
+    for poll in list(_timers):
+        if bpy.app.timers.is_registered(poll):
+            bpy.app.timers.unregister(poll)
+    _timers.clear()
     bpy.utils.unregister_class(LanternRenderEngine)

@@ -98,6 +98,17 @@ def sweep_one(blend, out_dir, size, timeout):
         row.update(rendered=False, reason=_reason(status, err))
         return row
     row.update(rendered=True, image=_image_kind(exr))
+    facts = row["facts"]
+    if facts["point instancers"] or facts["points prims"]:
+        # Whether the engine draws them: its own counts, from a render of the file.
+        code = ("import sys; from lantern.engine import RenderSettings, render_file; "
+                f"r = render_file(sys.argv[1], RenderSettings(width={size.split('x')[0]}, "
+                f"height={size.split('x')[1]})); "
+                "print(r.stats['instances_drawn'], r.stats['points_drawn'])")
+        status, out, err, _ = _run([sys.executable, "-c", code, str(usd)], timeout)
+        drawn = out.split() if status == 0 else []
+        row.update(instances_drawn=int(drawn[0]) if drawn else -1,
+                   points_drawn=int(drawn[1]) if drawn else -1)
     return row
 
 
@@ -148,6 +159,13 @@ def main(argv=None):
     print(f"scenes with point instancers: {sum(1 for r in exported if r['facts']['point instancers'])}"
           f" ({facts['point instancers']} instancers, {facts['instances']} instances)")
     print(f"scenes with Points prims: {sum(1 for r in exported if r['facts']['points prims'])}")
+    inst = [r for r in rendered if r["facts"]["point instancers"]]
+    pts = [r for r in rendered if r["facts"]["points prims"]]
+    print(f"instanced scenes whose instances the engine draws: "
+          f"{sum(1 for r in inst if r.get('instances_drawn', 0) > 0)} of {len(inst)} "
+          f"({sum(max(r.get('instances_drawn', 0), 0) for r in inst)} instances in view)")
+    print(f"Points scenes whose points the engine draws: "
+          f"{sum(1 for r in pts if r.get('points_drawn', 0) > 0)} of {len(pts)}")
     print(f"scenes warning about instances: {sum(1 for r in rows if r['instance_warning'])}")
     print(f"warnings: {sum(r['warnings'] for r in rows)}, printed more than once: "
           f"{sum(r['repeated_warnings'] for r in rows)}")

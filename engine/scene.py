@@ -40,6 +40,7 @@ class Material:
     # input name ('diffuseColor', 'normal', ...) -> TextureRef
     maps: dict = field(default_factory=dict)
     uv_name: str | None = None     # primvar the material's reader asks for
+    pass_index: int = 0            # lantern:passIndex: render pass IndexMA
 
     @property
     def has_normal_map(self) -> bool:
@@ -101,12 +102,35 @@ class SkinData:
 
 @dataclass
 class Instance:
-    """One Mesh prim drawn: its MeshData (shared by prims with the same data) where."""
+    """One Mesh prim drawn: its MeshData (shared by prims with the same data) where.
+    A PointInstancer's instances of one prototype mesh are one Instance too, keyed
+    `<instancer path>{<mesh path>}` (`+`/`-` for mirroring ones), drawn by GPU
+    instancing: `worlds` holds every instance's world matrix and `world` is unused."""
     path: str
     mesh_key: tuple
     world: np.ndarray              # 4x4 (skinned with joints: the skeleton's local-to-world)
     # This frame's blend shapes: [(sub-shape index, weight)], zero weights left out.
     shapes: list = field(default_factory=list)
+    worlds: np.ndarray | None = None   # (n, 4, 4): instanced, one world matrix per instance
+    pass_index: int = 0            # lantern:passIndex of it or an ancestor: IndexOB
+
+
+@dataclass
+class PointCloud:
+    """A UsdGeom.Points prim: spheres of the given radii at its points (its own space,
+    placed by `world`), lit like meshes with its material's constants, or per-point
+    displayColor."""
+    path: str
+    points: np.ndarray             # (n, 3) float64
+    radii: np.ndarray              # (n,)
+    colours: np.ndarray | None     # (n, 3) displayColor, or None: the material's
+    material: str                  # Scene.materials key
+    world: np.ndarray = field(default_factory=lambda: np.eye(4))
+
+    @property
+    def bounds(self):
+        r = self.radii[:, None]
+        return (self.points - r).min(axis=0), (self.points + r).max(axis=0)
 
 
 @dataclass
@@ -179,6 +203,7 @@ class Scene:
     """Everything a stage draws, keyed by prim path, in the stage's traversal order."""
     meshes: dict = field(default_factory=dict)     # key -> MeshData
     instances: dict = field(default_factory=dict)  # mesh prim path -> Instance
+    points: dict = field(default_factory=dict)     # Points prim path -> PointCloud
     materials: dict = field(default_factory=dict)  # material name -> Material
     lights: dict = field(default_factory=dict)     # light prim path -> Light
     dome: Dome | None = None
@@ -198,6 +223,7 @@ class Changes:
     dropped_meshes: set = field(default_factory=set)
     instances: set = field(default_factory=set)         # paths added, moved or re-meshed
     dropped_instances: set = field(default_factory=set)
+    points: set = field(default_factory=set)            # Points paths added, changed or dropped
     shapes: set = field(default_factory=set)            # paths with new blend-shape weights
     skeletons: set = field(default_factory=set)         # skel keys posed anew
     materials: set = field(default_factory=set)         # material names re-read
@@ -208,5 +234,5 @@ class Changes:
 
     def __bool__(self):
         return bool(self.meshes or self.dropped_meshes or self.instances or
-                    self.dropped_instances or self.shapes or self.skeletons or
+                    self.dropped_instances or self.points or self.shapes or self.skeletons or
                     self.materials or self.lights or self.cameras or self.dome)

@@ -14,10 +14,11 @@ from __future__ import annotations
 
 import time
 import weakref
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..core import passes as render_passes
 from ..core.presets import DEFAULT as DEFAULT_PRESET, preset as find_preset
 from .gpu.context import gl_thread, run_gl
 from .gpu.renderer import Renderer
@@ -39,11 +40,16 @@ class RenderSettings:
     projection_matrix: np.ndarray | None = None
     camera: str | None = None    # a camera prim; None: /Render/Settings', else the first
     cull_backfaces: bool = False  # cull back faces of every single-sided mesh
+    # Render passes (AOVs) to compute besides Combined, by Blender's names
+    # (core/passes.py): only these are computed and read back.
+    passes: frozenset = frozenset()
 
 
 @dataclass
 class RenderResult:
     rgba: np.ndarray             # float32 (H, W, 4), scene-linear, row 0 = top
+    # The passes asked for: name -> float32 (H, W, C), row 0 = top, scene-linear.
+    passes: dict = field(default_factory=dict)
     warnings: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)  # load, per pass, total (seconds)
     stats: dict = field(default_factory=dict)    # prims_read, bytes_uploaded, draw_calls, ...
@@ -53,6 +59,7 @@ class Session:
     def __init__(self, stage, settings: RenderSettings | None = None):
         self.settings = settings = settings or RenderSettings()
         self._preset = find_preset(settings.preset)
+        self._passes = render_passes.check(settings.passes)
         self.stage = stage
         self.size = usd_camera.resolution(stage, settings.width, settings.height)
         self._reader = StageReader(stage)
@@ -63,6 +70,21 @@ class Session:
         # process's context goes with the process.
         self._finalizer = weakref.finalize(self, _release, renderer, self._reader)
         self._finalizer.atexit = False
+
+    def configure(self, **fields):
+        """Changes settings for the renders that follow (size, transparent, passes,
+        camera, ...), keeping the session's state; the preset is the session's own
+        (a different one needs another Session)."""
+        new = replace(self.settings, **fields)
+        if new.preset != self.settings.preset:
+            raise ValueError("a session keeps its preset; open another for "
+                             f"{new.preset!r}")
+        self._passes = render_passes.check(new.passes)
+        if (new.width, new.height) != (self.settings.width, self.settings.height):
+            self.size = usd_camera.resolution(self.stage, new.width, new.height)
+        if new.camera != self.settings.camera:
+            self._camera = None
+        self.settings = new
 
     @property
     def scene(self):
@@ -86,13 +108,14 @@ class Session:
         camera, read = self._view(view_matrix, projection_matrix, when, changes)
         t_load = time.perf_counter() - t0
         scene, size, s = self._reader.scene, self.size, self.settings
-        rgba, stats, timings = run_gl(lambda gl: self._renderer.render(
-            scene, changes, camera, size, s.transparent, s.cull_backfaces))
+        rgba, aovs, stats, timings = run_gl(lambda gl: self._renderer.render(
+            scene, changes, camera, size, s.transparent, s.cull_backfaces, self._passes))
         stats["prims_read"] = changes.prims_read + read
         timings["load"] = t_load
         timings["total"] = time.perf_counter() - t0
-        return RenderResult(rgba=rgba, warnings=scene.warning_list(), timings=timings,
-                            stats=stats)
+        return RenderResult(rgba=rgba, passes=aovs,
+                            warnings=scene.warning_list() + self._renderer.warnings(),
+                            timings=timings, stats=stats)
 
     def skinned_points(self, frame: float) -> dict:
         """GPU-deformed geometry read back: {mesh path: (points, normals)}, world space,
@@ -116,7 +139,14 @@ class Session:
             view_matrix, projection_matrix = self.settings.view_matrix, self.settings.projection_matrix
         if view_matrix is not None and projection_matrix is not None:
             return camera_from_matrices(view_matrix, projection_matrix), 0
-        path = self.settings.camera or usd_camera.settings_camera_path(self.stage)
+        settings_warnings = []
+        path = self.settings.camera or usd_camera.settings_camera_path(self.stage,
+                                                                        settings_warnings)
+        warnings = self._reader.scene.warnings
+        if settings_warnings:
+            warnings[usd_camera.RENDER_SETTINGS] = settings_warnings
+        else:
+            warnings.pop(usd_camera.RENDER_SETTINGS, None)
         if path is None:
             cameras = self._reader.cameras()
             path = cameras[0] if cameras else None

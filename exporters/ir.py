@@ -46,6 +46,7 @@ class MaterialRecord:
     # UsdPreviewSurface input name -> float, 3-tuple or TexInput
     inputs: dict = field(default_factory=dict)
     backface_culling: bool = False
+    pass_index: int = 0         # Blender's material pass index (render pass IndexMA)
 
 
 @dataclass
@@ -213,6 +214,7 @@ class ObjectRecord:
     trs: TRS | None = None       # the matrix (or its samples) as TRS, None when sheared
     points: PointsRecord | None = None        # particles or a point cloud it shows
     instances: InstancesRecord | None = None  # instances it generates
+    pass_index: int = 0          # Blender's object pass index (render pass IndexOB)
 
 
 @dataclass

@@ -9,6 +9,12 @@ layout(location = 0) out vec4 rt_base;
 layout(location = 1) out vec4 rt_normal;
 layout(location = 2) out vec4 rt_mat;
 layout(location = 3) out vec4 rt_emit;
+#ifdef WRITE_INDEX
+// Render passes IndexOB and IndexMA (asked for only).
+layout(location = 4) out vec2 rt_index;
+flat in float v_object_index;
+uniform float u_material_index;
+#endif
 
 uniform vec3 u_diffuse;
 uniform float u_metallic;
@@ -101,4 +107,7 @@ void main() {
     rt_normal = vec4(n, 1.0);
     rt_mat = vec4(clamp(metallic, 0.0, 1.0), clamp(roughness, 0.0, 1.0), f * f, 1.0);
     rt_emit = vec4(clamp(emissive, 0.0, 60000.0), 1.0);  // float16 target
+#ifdef WRITE_INDEX
+    rt_index = vec2(v_object_index, u_material_index);
+#endif
 }

@@ -1,12 +1,30 @@
-// Shared by every pass: constants, the BRDF, position from depth, SH irradiance.
+// Shared by every pass: constants, the BRDF, the depth convention, SH irradiance.
 const float PI = 3.14159265358979;
-const float BIG = 1e30;
 
-// World position from the depth buffer: NDC -> inverse view-projection.
-vec3 world_from_depth(vec2 uv, float depth, mat4 inv_view_proj) {
-    vec4 ndc = vec4(uv * 2.0 - 1.0, depth * 2.0 - 1.0, 1.0);
-    vec4 w = inv_view_proj * ndc;
-    return w.xyz / w.w;
+// --- Depth: read it only through these (engine/view.py states the convention) ----
+// Depth is a 32-bit float, reversed: 1 at the near plane, towards 0 far away (an
+// infinite far plane for perspective cameras), cleared to 0. Positions are
+// camera-relative: world axes, origin at the camera's eye. `inv_view_proj` is the
+// inverse of the window matrix (camera-relative -> x, y in [0, 1], window depth), the
+// same whatever the GL's clip convention.
+
+// Nothing was drawn at this pixel (the cleared value).
+bool is_background(float depth) { return depth <= 0.0; }
+
+// Whether depth a is nearer the camera than depth b.
+bool nearer(float a, float b) { return a > b; }
+
+// The camera-relative position of the surface at window uv (pixel centre: (px + 0.5) /
+// size) with stored depth `depth`.
+vec3 position_from_depth(vec2 uv, float depth, mat4 inv_view_proj) {
+    vec4 p = inv_view_proj * vec4(uv, depth, 1.0);
+    return p.xyz / p.w;
+}
+
+// The unit direction of the camera ray through window uv (for the background; an
+// orthographic camera's rays all run along its forward axis).
+vec3 pixel_ray(vec2 uv, mat4 inv_view_proj, bool ortho, vec3 forward) {
+    return ortho ? forward : normalize(position_from_depth(uv, 1.0, inv_view_proj));
 }
 
 // GGX / Trowbridge-Reitz, alpha = roughness^2.
@@ -74,8 +92,5 @@ vec3 sh_irradiance(vec3 sh[9], vec3 d) {
         + sh[7] * 1.092548 * d.x * d.z + sh[8] * 0.546274 * (d.x * d.x - d.y * d.y);
 }
 
-// Never hand NaN or Inf on to the blend unit.
-vec3 finite(vec3 c) {
-    bvec3 bad = bvec3(isnan(c.x) || isinf(c.x), isnan(c.y) || isinf(c.y), isnan(c.z) || isinf(c.z));
-    return min(mix(c, vec3(0.0), bvec3(bad)), vec3(BIG));
-}
+// No shader hides NaN or Inf: the resolve pass counts the pixels that hold them and
+// names the prims they lie on (engine/gpu/passes/resolve.py).

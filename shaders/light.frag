@@ -9,7 +9,6 @@ uniform sampler2D g_normal;
 uniform sampler2D g_mat;
 uniform sampler2D g_depth;
 uniform mat4 inv_view_proj;
-uniform vec3 cam_pos;
 uniform vec3 cam_forward;
 uniform bool cam_ortho;
 
@@ -22,9 +21,6 @@ uniform int light_index;
 #ifdef LIGHT_AREA
 #define MAX_VERTS 32
 #endif
-
-// The HDR target is RGBA16F: one light never writes more than it holds.
-const float HDR_MAX = 65000.0;
 
 #ifdef HAS_SHADOW
 #include "shadow_lookup.glsl"
@@ -100,11 +96,11 @@ void main() {
 #endif
     ivec2 px = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(g_depth, px, 0).r;
-    if (depth >= 1.0) discard;
+    if (is_background(depth)) discard;
     vec2 uv = (vec2(px) + 0.5) / vec2(textureSize(g_depth, 0));
-    vec3 p = world_from_depth(uv, depth, inv_view_proj);
+    vec3 p = position_from_depth(uv, depth, inv_view_proj);   // camera-relative
     vec3 n = normalize(texelFetch(g_normal, px, 0).xyz);
-    vec3 v = cam_ortho ? -cam_forward : normalize(cam_pos - p);
+    vec3 v = cam_ortho ? -cam_forward : normalize(-p);
     Surface s = make_surface(p, n, v, texelFetch(g_base, px, 0), texelFetch(g_mat, px, 0));
     float a = ggx_alpha(s.roughness);
     vec3 radiance = vec3(0.0);
@@ -166,7 +162,7 @@ void main() {
 
 #ifdef HAS_SHADOW
     if (max(radiance.r, max(radiance.g, radiance.b)) > 0.0)
-        radiance *= shadow_factor(p, n, light_pos, light_axis, dot(p - cam_pos, cam_forward));
+        radiance *= shadow_factor(p, n, light_pos, light_axis, dot(p, cam_forward));
 #endif
-    frag = vec4(min(finite(radiance), vec3(HDR_MAX)), 0.0);
+    frag = vec4(radiance, 0.0);   // NaN or Inf goes through: the resolve pass counts it
 }

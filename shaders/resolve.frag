@@ -1,6 +1,8 @@
 #version 330 core
 #include "lib.glsl"
 // HDR accumulation -> float32 output. Alpha is 1, or coverage when transparent.
+// NaN and Inf are passed on as they are: the resolve pass counts them and names the
+// prims they lie on.
 uniform sampler2D hdr;
 uniform sampler2D g_depth;
 uniform bool transparent;
@@ -8,10 +10,6 @@ out vec4 frag;
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     vec3 c = texelFetch(hdr, px, 0).rgb;
-    // Lights summing past float16's range overflow to +Inf: that is "very bright".
-    c = mix(c, vec3(65504.0), bvec3(isinf(c.r) && c.r > 0.0, isinf(c.g) && c.g > 0.0,
-                                    isinf(c.b) && c.b > 0.0));
-    c = finite(c);
-    float coverage = texelFetch(g_depth, px, 0).r < 1.0 ? 1.0 : 0.0;
+    float coverage = is_background(texelFetch(g_depth, px, 0).r) ? 0.0 : 1.0;
     frag = vec4(c, transparent ? coverage : 1.0);
 }

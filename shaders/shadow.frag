@@ -4,7 +4,7 @@
 // distances without un-projecting. Ortho (sun) depth is linear already.
 in vec3 v_world;
 uniform bool radial;
-uniform vec3 light_pos;
+uniform vec3 light_pos;        // anchor-relative (0 for radial maps)
 uniform float far;
 void main() {
     if (radial) gl_FragDepth = clamp(length(v_world - light_pos) / far, 0.0, 1.0);

@@ -16,7 +16,7 @@ uniform sampler2DShadow shadow_cmp;
 uniform sampler2D shadow_raw;
 uniform bool shadow_radial;
 uniform int shadow_tiles;
-uniform mat4 shadow_mats[6];
+uniform mat4 shadow_mats[6];    // camera-relative position -> tile uv, depth in [0, 1]
 uniform vec4 shadow_rects[6];   // atlas offset xy, scale zw
 uniform float shadow_far;       // radial: stored depth = distance / far
 uniform float shadow_texel;     // radial: world texel size per unit distance
@@ -37,14 +37,14 @@ int cube_face(vec3 d) {
     return d.z > 0.0 ? 4 : 5;
 }
 
-// Atlas uv of world point w; false when it falls outside its tile.
+// Atlas uv of camera-relative point w; false when it falls outside its tile.
 bool shadow_uv(vec3 w, vec3 light_pos, int cascade, out vec2 uv, out float z) {
     int k = shadow_radial ? (shadow_tiles == 6 ? cube_face(w - light_pos) : 0) : cascade;
     vec4 c = shadow_mats[k] * vec4(w, 1.0);
     if (c.w <= 0.0) return false;
-    vec3 ndc = c.xyz / c.w;
-    z = ndc.z * 0.5 + 0.5;
-    vec2 t = ndc.xy * 0.5 + 0.5;
+    vec3 s = c.xyz / c.w;
+    z = s.z;
+    vec2 t = s.xy;
     uv = shadow_rects[k].xy + t * shadow_rects[k].zw;
     return all(greaterThanEqual(t, vec2(0.0))) && all(lessThanEqual(t, vec2(1.0)));
 }

@@ -5,23 +5,20 @@ uses it. Run by tests/test_addon_install.py, which checks what this writes:
 
 - Blender's user resources (preferences, extensions, the extracted wheels) live in a
   temporary folder, so nothing leaks into the machine.
-- Every module a real Blender does not bundle is unimportable: whatever the venv's
-  site-packages holds beyond bpy and the packages bpy itself requires (Blender bundles
-  those), plus a list named by the brief. So moderngl and glcontext must come from the
-  zip's wheels, pxr from Blender's own USD, and the add-on from the zip, not from the
-  editable `lantern` install.
+- Every module a real Blender does not bundle is unimportable, in this process and in
+  the engine host's child process (tests/blender_only/sitecustomize.py): whatever the
+  venv's site-packages holds beyond bpy and the packages bpy itself requires (Blender
+  bundles those), plus a list named by the brief. So moderngl and glcontext must come
+  from the zip's wheels, pxr from Blender's own USD, and the add-on from the zip, not
+  from the editable `lantern` install.
 - Renders are tiny (64x36). Images go to OUT_DIR as EXR, everything else to
   OUT_DIR/report.json; a step that fails records its error and the rest go on.
 """
-import importlib.abc
-import importlib.machinery
-import importlib.metadata
+import importlib.util
 import json
 import os
-import re
 import shutil
 import sys
-import sysconfig
 import tempfile
 import threading
 import time
@@ -29,60 +26,16 @@ import traceback
 
 ZIP, OUT, CORPUS, DEMO = (os.path.abspath(p) for p in sys.argv[1:5])
 WIDTH, HEIGHT = 64, 36
-# Named by the brief: none of these ships with Blender.
-NOT_IN_BLENDER = ("imageio", "OpenEXR", "Imath", "PIL", "rich", "jsonschema", "dask",
-                  "flip_evaluator", "skimage", "matplotlib", "tqdm", "lantern")
 
-
-# --- module hiding (before anything else is imported) ---------------------------------
-
-def _norm(name):
-    return re.sub(r"[-_.]+", "-", name).lower()
-
-
-def _bpy_bundle():
-    """Top-level modules of bpy and of what bpy requires, transitively (Blender ships
-    them all: numpy, requests, zstandard, cython and their own requirements)."""
-    wanted, todo = set(), ["bpy"]
-    while todo:
-        dist = _norm(todo.pop())
-        if dist in wanted:
-            continue
-        wanted.add(dist)
-        for req in importlib.metadata.requires(dist) or ():
-            if "extra ==" not in req:
-                todo.append(re.match(r"[A-Za-z0-9._-]+", req).group(0))
-    return {module for module, dists in importlib.metadata.packages_distributions().items()
-            if any(_norm(d) in wanted for d in dists)}
-
-
-class BlenderBundleOnly(importlib.abc.MetaPathFinder):
-    """Top-level imports resolve as in a real Blender: never to a hidden name, and from
-    the venv's site-packages only for bpy's own bundle (other sys.path entries, such as
-    Blender's bundled site-packages or the extension's wheels, are searched instead)."""
-
-    def __init__(self):
-        self.venv = os.path.normpath(sysconfig.get_paths()["purelib"])
-        self.allowed = _bpy_bundle()
-        self.hidden = set(NOT_IN_BLENDER)
-
-    def find_spec(self, name, path=None, target=None):
-        if path is not None:
-            return None  # submodules follow their parent package
-        if name in self.hidden:
-            raise ModuleNotFoundError(f"No module named {name!r} (not in Blender)", name=name)
-        if name in self.allowed:
-            return None
-        if importlib.machinery.PathFinder.find_spec(name, [self.venv]) is None:
-            return None
-        others = [p for p in sys.path if os.path.normpath(p or os.getcwd()) != self.venv]
-        spec = importlib.machinery.PathFinder.find_spec(name, others)
-        if spec is None:
-            raise ModuleNotFoundError(f"No module named {name!r} (only in the venv)", name=name)
-        return spec
-
-
-sys.meta_path.insert(0, BlenderBundleOnly())
+# --- module hiding (before anything else is imported), here and in the engine host's
+# child process (PYTHONPATH carries the same sitecustomize to it) --------------------
+BLENDER_ONLY = os.path.join(os.path.dirname(os.path.abspath(__file__)), "blender_only")
+_spec = importlib.util.spec_from_file_location("blender_only",
+                                               os.path.join(BLENDER_ONLY, "sitecustomize.py"))
+blender_only = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(blender_only)
+NOT_IN_BLENDER = blender_only.NOT_IN_BLENDER
+os.environ["PYTHONPATH"] = BLENDER_ONLY
 USER = tempfile.mkdtemp(prefix="blender-user-", dir=OUT)  # inside OUT even if this crashes
 os.environ["BLENDER_USER_RESOURCES"] = USER
 
@@ -175,14 +128,32 @@ def check_install():
     result = bpy.ops.extensions.package_install_files(
         filepath=ZIP, repo=REPO_ID, enable_on_install=True)
     seconds = time.perf_counter() - t0
-    import moderngl
     from pxr import Usd
     package = sys.modules[MODULE]
+    # Found, not imported: the engine (and its GL) lives in the host's process.
+    moderngl = importlib.util.find_spec("moderngl").origin
     return {"result": sorted(result), "seconds": seconds,
             "enabled": MODULE in bpy.context.preferences.addons,
-            "package_file": package.__file__, "user_dir": USER,
-            "moderngl": moderngl.__file__, "moderngl_version": moderngl.__version__,
+            "package_file": package.__file__, "user_dir": USER, "moderngl": moderngl,
             "pxr": Usd.__file__, "blender_pxr_dir": bpy.utils.resource_path("LOCAL")}
+
+
+def host_module():
+    return sys.modules[MODULE + ".addon.host"]
+
+
+def check_engine_process():
+    """After the corpus renders: the host process Blender started, and what it runs."""
+    host = host_module().get()
+    return {"running": host.running(), "info": host.info, "executable": sys.executable,
+            "children": child_processes(),
+            "gl_in_blender": [m for m in ("moderngl", "glcontext") if m in sys.modules],
+            "segments": shared_memory()}
+
+
+def shared_memory():
+    """Lantern's shared-memory blocks alive on this machine (POSIX shm)."""
+    return sorted(f for f in os.listdir("/dev/shm") if f.startswith(f"lantern_{os.getpid()}_"))
 
 
 def check_corpus():
@@ -268,10 +239,6 @@ def check_animation():
             "files": sorted(os.listdir(os.path.join(OUT, "anim")))}
 
 
-def scene_render_module():
-    return sys.modules[MODULE + ".addon.scene_render"]
-
-
 def check_stats_and_errors():
     scene = two_object_scene()
     stats = []
@@ -284,18 +251,23 @@ def check_stats_and_errors():
         f12("stats", scene)
     finally:
         bpy.app.handlers.render_stats.remove(on_stats)
-    module = scene_render_module()
-    original = module.render_stage
+    # The engine process killed while it renders: one clear error, and the next F12
+    # starts a new process and renders.
+    host = host_module().get()
+    first = host.info["pid"]
 
-    def broken(stage, settings):
-        raise RuntimeError("the GL context is gone")
+    def kill_while_rendering(text):
+        if "Rendering" in str(text):
+            host.kill()
 
-    module.render_stage = broken
+    bpy.app.handlers.render_stats.append(kill_while_rendering)
     try:
-        failed = f12("broken", scene)
+        failed = f12("killed", scene)
     finally:
-        module.render_stage = original
-    return {"stats": stats, "error": failed.get("error")}
+        bpy.app.handlers.render_stats.remove(kill_while_rendering)
+    again = f12("recovered", scene)
+    return {"stats": stats, "error": failed.get("error"), "recovered": again.get("error"),
+            "pids": [first, host.info["pid"]]}
 
 
 def check_material_preview():
@@ -304,16 +276,15 @@ def check_material_preview():
     render() to return, then for the job to copy the frame into the preview (reading
     the preview while render() runs Python could wait on the job while holding the GIL)."""
     scene = two_object_scene()
-    stages = scene_render_module()
+    host_class = host_module().Host
     engine = sys.modules[MODULE + ".addon.render_engine"]
-    render_stage, render_frame = stages.render_stage, engine.render_frame
+    render_request, render_frame = host_class.render, engine.render_frame
     calls, returned = [], threading.Event()
 
-    def spy_stage(stage, settings):
-        result = render_stage(stage, settings)
-        calls.append({"preset": settings.preset, "size": [settings.width, settings.height],
-                      "seconds": result.timings["total"]})
-        return result
+    def spy_request(host, scene_name, **request):
+        calls.append({"scene": scene_name, "preset": request["preset"],
+                      "size": [request["width"], request["height"]]})
+        return render_request(host, scene_name, **request)
 
     def spy_frame(render_engine, depsgraph):
         try:
@@ -321,7 +292,7 @@ def check_material_preview():
         finally:
             returned.set()
 
-    stages.render_stage, engine.render_frame = spy_stage, spy_frame
+    host_class.render, engine.render_frame = spy_request, spy_frame
     previews = {}
     try:
         for name, colour in (("red", (0.8, 0.05, 0.05, 1.0)), ("blue", (0.05, 0.05, 0.8, 1.0))):
@@ -343,7 +314,7 @@ def check_material_preview():
             np.save(os.path.join(OUT, f"preview_{name}.npy"), pixels.reshape(h, w, 4))
             previews[name] = time.perf_counter() - t0
     finally:
-        stages.render_stage, engine.render_frame = render_stage, render_frame
+        host_class.render, engine.render_frame = render_request, render_frame
     return {"calls": calls, "seconds": previews, "scene_engine": scene.render.engine}
 
 
@@ -353,10 +324,14 @@ def lantern_threads():
 
 def check_lifecycle():
     """Disable, enable, reinstall and uninstall: no thread, process or file left."""
-    life = {"before_disable": lantern_threads(), "native_before_disable": native_threads()}
+    life = {"before_disable": lantern_threads(), "native_before_disable": native_threads(),
+            "children_before_disable": child_processes(),
+            "segments_before_disable": shared_memory()}
     bpy.ops.preferences.addon_disable(module=MODULE)
     life["after_disable"] = {"python_threads": python_threads(),
                              "native_threads": native_threads(),
+                             "child_processes": child_processes(),
+                             "segments": shared_memory(),
                              "enabled": MODULE in bpy.context.preferences.addons}
     bpy.ops.preferences.addon_enable(module=MODULE)
     scene = two_object_scene()
@@ -365,11 +340,13 @@ def check_lifecycle():
     scene = two_object_scene()
     life["reinstalled_render"] = f12("reinstalled", scene).get("error")
     life["after_reinstall"] = lantern_threads()
+    life["children_after_reinstall"] = child_processes()
     repo_index = [r.module for r in bpy.context.preferences.extensions.repos].index(REPO_ID)
     bpy.ops.extensions.package_uninstall(repo_index=repo_index, pkg_id="lantern")
     life["after_uninstall"] = {"python_threads": python_threads(),
                                "native_threads": native_threads(),
                                "child_processes": child_processes(),
+                               "segments": shared_memory(),
                                "files": files_under(USER),
                                "enabled": MODULE in bpy.context.preferences.addons}
     return life
@@ -377,7 +354,8 @@ def check_lifecycle():
 
 report["baseline"] = {"files": files_under(USER), "python_threads": python_threads(),
                       "native_threads": native_threads()}
-for name in ("hidden_modules", "install", "corpus", "view_layers", "film_border_resolution",
+for name in ("hidden_modules", "install", "corpus", "engine_process", "view_layers",
+             "film_border_resolution",
              "animation", "stats_and_errors", "material_preview", "lifecycle"):
     run_step(name, globals()["check_" + name])
 

@@ -1,8 +1,9 @@
 """The extension as users get it: `make extension`'s zip, checked by Blender's own
 extension code, installed into a bpy process that hides every module a real Blender
-lacks (tests/_addon_host.py), and used there: F12, view layers, border and crop,
-transparent film, resolution %, an animation, errors, progress, material previews,
-and disable / re-enable / reinstall / uninstall."""
+lacks, in that process and in the engine host's child process (tests/_addon_host.py,
+tests/blender_only/), and used there: the engine process, F12, view layers, border
+and crop, transparent film, resolution %, an animation, a killed engine, progress,
+material previews, and disable / re-enable / reinstall / uninstall."""
 import json
 import os
 import pathlib
@@ -157,7 +158,25 @@ def test_installs_with_what_blender_has(installed):
     assert info["package_file"].startswith(user)            # the add-on from the zip
     assert info["moderngl"].startswith(os.path.join(user, "extensions", ".local"))  # its wheel
     assert info["pxr"].startswith(info["blender_pxr_dir"])  # Blender's own USD
-    print(f"install: {info['seconds']:.2f} s, moderngl {info['moderngl_version']}")
+    print(f"install: {info['seconds']:.2f} s")
+
+
+def test_the_engine_runs_in_its_own_process_from_the_installed_extension(installed):
+    """The host process runs Blender's Python on the installed package, Blender's USD
+    and the extension's wheels, with its own GL; Blender's process loads no GL module."""
+    install = _step(installed, "install")
+    host = _step(installed, "engine_process")
+    user = install["user_dir"]
+    assert host["running"] and host["info"]["pid"] in host["children"]
+    assert host["info"]["executable"] == host["executable"]      # Blender's own Python
+    modules = host["info"]["modules"]
+    assert modules["lantern"] == install["package_file"]           # the installed add-on
+    assert modules["pxr"].startswith(install["blender_pxr_dir"])   # Blender's USD
+    for wheel in ("moderngl", "glcontext"):
+        assert modules[wheel].startswith(os.path.join(user, "extensions", ".local")), modules
+    assert host["info"]["gl"].startswith("OpenGL")
+    assert host["gl_in_blender"] == []
+    assert host["segments"], "frames come back through shared memory"
 
 
 @pytest.mark.parametrize("name", ["lights", "suzanne", "rig"])
@@ -175,20 +194,11 @@ def test_f12_renders_the_textured_rigged_demo(installed):
 
 def test_each_view_layer_renders_its_own_collections(installed):
     """Layer A shows only the sphere (left), layer B only the cube (right)."""
-    import OpenImageIO as oiio
+    from multilayer_exr import read_parts
     _step(installed, "view_layers")
     render = installed[0]["renders"]["layers"]
     assert "error" not in render, render["error"]
-    layers = {}
-    image = oiio.ImageInput.open(render["file"])     # a multi-part EXR: one part a layer
-    try:
-        subimage = 0
-        while image.seek_subimage(subimage, 0):
-            spec = image.spec()
-            layers[spec.getattribute("name")] = image.read_image(subimage, 0, 0, 4, "float")
-            subimage += 1
-    finally:
-        image.close()
+    layers = read_parts(render["file"])
     a, b = layers["LayerA.Combined"], layers["LayerB.Combined"]
     covered_a = np.nonzero(a[..., 3].max(axis=0) > 0)[0]
     covered_b = np.nonzero(b[..., 3].max(axis=0) > 0)[0]
@@ -245,13 +255,22 @@ def test_stats_and_errors_reach_blender(installed):
     info = _step(installed, "stats_and_errors")
     assert {"Exporting the scene", "Rendering"} <= set(info["stats"])
     assert any(s.startswith("Done in") for s in info["stats"])
-    assert "Lantern: the GL context is gone" in info["error"]
+
+
+def test_a_killed_engine_is_reported_and_the_next_render_recovers(installed):
+    info = _step(installed, "stats_and_errors")
+    assert "Lantern: the engine process stopped (killed by SIGKILL)" in info["error"]
+    assert info["recovered"] is None
+    first, second = info["pids"]
+    assert first != second
+    _sane(_image(installed, "recovered"))
 
 
 def test_material_previews_render_with_lantern(installed):
     info = _step(installed, "material_preview")
     assert info["scene_engine"] == "LANTERN"
     assert [c["preset"] for c in info["calls"]] == ["low", "low"]
+    assert {c["scene"] for c in info["calls"]} == {"preview"}
     assert all(c["size"] == [128, 128] for c in info["calls"])
     red, blue = (np.load(installed[1] / f"preview_{n}.npy") for n in ("red", "blue"))
     for image in (red, blue):
@@ -264,27 +283,32 @@ def test_material_previews_render_with_lantern(installed):
 
 
 def _gl_driver_threads(names):
-    """Mesa's rasteriser and shader-cache threads: they live as long as the process's
-    EGL display, which glcontext never terminates (nor may it: the display can be
-    Blender's own); they must not multiply with every enable."""
+    """Mesa's rasteriser and shader-cache threads: with the engine in its own process,
+    Blender's process has none."""
     return sorted(n for n in names if n.startswith("llvmpipe") or "disk$" in n)
+
+
+HOST_THREADS = ["lantern-host-log", "lantern-host-read", "lantern-host-write"]
 
 
 def test_disable_reenable_reinstall_uninstall_leave_nothing(installed):
     report = installed[0]
     life = _step(installed, "lifecycle")
-    assert life["before_disable"] == ["lantern-gl"]
+    assert life["before_disable"] == HOST_THREADS
+    assert len(life["children_before_disable"]) == 1 and life["segments_before_disable"]
+    assert _gl_driver_threads(life["native_before_disable"]) == []
     disabled = life["after_disable"]
     assert not disabled["enabled"]
     assert not [t for t in disabled["python_threads"] if t.startswith("lantern")]
+    assert disabled["child_processes"] == [] and disabled["segments"] == []
     assert life["reenabled_render"] is None and life["reinstalled_render"] is None
-    assert life["after_reinstall"] == ["lantern-gl"]  # one GL thread, not one per install
+    assert life["after_reinstall"] == HOST_THREADS  # one host, not one per install
+    assert len(life["children_after_reinstall"]) == 1
     gone = life["after_uninstall"]
     assert not gone["enabled"]
     assert not [t for t in gone["python_threads"] if t.startswith("lantern")]
-    assert gone["child_processes"] == []
-    assert _gl_driver_threads(gone["native_threads"]) == \
-        _gl_driver_threads(life["native_before_disable"])
+    assert gone["child_processes"] == [] and gone["segments"] == []
+    assert _gl_driver_threads(gone["native_threads"]) == []
     # Blender's own cache of repository compatibility is Blender's, rewritten on change.
     left = [f for f in gone["files"] if not f.startswith(os.path.join("extensions", ".cache"))]
     assert left == report["baseline"]["files"]

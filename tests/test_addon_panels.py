@@ -78,8 +78,20 @@ def test_cast_shadow_and_lanterns_shadow_settings_are_in_the_light_panel(addon, 
 def test_the_render_panels_show_only_what_the_engine_honours(addon, empty_scene):
     import bpy
     context = SimpleNamespace(engine="LANTERN", scene=empty_scene)
-    assert _drawn(bpy.types.LANTERN_RENDER_PT_quality, context) == ["preset"]
+    assert _drawn(bpy.types.LANTERN_RENDER_PT_quality, context) == ["preset",
+                                                                    "viewport_resolution"]
     assert _drawn(bpy.types.LANTERN_RENDER_PT_film, context) == ["film_transparent"]
+
+
+def test_the_passes_panel_lists_the_passes_the_engine_computes(addon, empty_scene):
+    """Blender's own view-layer switches, for the passes of core/passes.py that the
+    engine provides (one table), and no other."""
+    import bpy
+    from lantern.core.passes import provided
+    context = SimpleNamespace(engine="LANTERN", scene=empty_scene,
+                              view_layer=empty_scene.view_layers[0])
+    assert _drawn(bpy.types.LANTERN_VIEWLAYER_PT_passes, context) == \
+        ["use_pass_combined"] + [p.view_layer for p in provided()]
 
 
 def test_engine_specific_panels_stay_out(addon):

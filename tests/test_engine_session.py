@@ -407,7 +407,10 @@ def mixed_stage():
 
 
 def test_gl33_path_draws_the_same_pixels_as_multi_draw(monkeypatch):
+    # GL 4.4: multi-draw without glClipControl, so both paths share the depth
+    # convention's [-1, 1] fallback (engine/view.py) and differ only in how they draw.
     stage = mixed_stage()
+    monkeypatch.setenv("LANTERN_MAX_GL", "44")
     multi = render_stage(stage, RenderSettings(width=W, height=H, frame=2))
     monkeypatch.setenv("LANTERN_MAX_GL", "33")
     single = render_stage(stage, RenderSettings(width=W, height=H, frame=2))

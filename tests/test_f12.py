@@ -107,6 +107,59 @@ def test_export_operator_writes_the_same_stage_as_the_cli(addon, corpus, tmp_pat
     assert [str(p.GetPath()) for p in operator.Traverse()] == [str(p.GetPath()) for p in cli.Traverse()]
 
 
+def _passes_scene():
+    """The sun calibration scene (an orthographic camera 10 m above a white plane,
+    looking straight down), two cubes standing on the plane with object pass indices
+    1 and 2, the second with a material of pass index 5, and every pass Lantern
+    computes switched on."""
+    import bpy
+    from lantern.core.passes import provided
+    scene = calibration.build_scene("sun")
+    glow = bpy.data.materials.new("glow")
+    glow.pass_index = 5
+    for index, x in ((1, -2.0), (2, 2.0)):
+        bpy.ops.mesh.primitive_cube_add(size=1.0, location=(x, 0.0, 0.5))
+        cube = bpy.context.object
+        cube.pass_index = index
+        if index == 2:
+            cube.data.materials.append(glow)
+    layer = bpy.context.view_layer
+    for p in provided():
+        setattr(layer, p.view_layer, True)
+    return scene
+
+
+def test_f12_writes_every_pass_the_view_layer_asks_for(addon, tmp_path):
+    """Depth is the camera distance to the plane, Normal the plane's, IndexOB tells
+    the objects apart and IndexMA the materials; in a multilayer EXR Blender wrote."""
+    import bpy
+    from lantern.core.passes import provided
+    from multilayer_exr import read_parts
+    scene = _passes_scene()
+    scene.render.engine = 'LANTERN'
+    scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
+    scene.render.image_settings.file_format = 'OPEN_EXR_MULTILAYER'
+    scene.render.image_settings.color_depth = '32'
+    scene.render.filepath = str(tmp_path / "passes.exr")
+    bpy.ops.render.render(write_still=True)
+    parts = read_parts(tmp_path / "passes.exr")
+    layer = bpy.context.view_layer.name
+    for p in provided():
+        assert f"{layer}.{p.name}" in parts, (p.name, sorted(parts))
+    depth, normal = parts[f"{layer}.Depth"], parts[f"{layer}.Normal"]
+    ob, ma = parts[f"{layer}.IndexOB"], parts[f"{layer}.IndexMA"]
+    depth, ob, ma = (a.reshape(a.shape[:2]) for a in (depth, ob, ma))
+    plane = ob == 0
+    size = calibration.SIZE
+    assert depth.shape[:2] == (size, size) and plane.mean() > 0.8
+    np.testing.assert_allclose(depth[plane], calibration.CAMERA_HEIGHT, rtol=1e-5)
+    assert (depth[~plane] < calibration.CAMERA_HEIGHT - 0.9).all()     # the cubes' tops
+    np.testing.assert_allclose(normal[plane], np.broadcast_to((0, 0, 1), normal[plane].shape),
+                               atol=1e-3)
+    assert set(np.unique(ob)) == {0.0, 1.0, 2.0}
+    assert set(np.unique(ma[ob == 2])) == {5.0} and set(np.unique(ma[ob != 2])) == {0.0}
+
+
 # --- render_frame, the body of RenderEngine.render, driven by a recording engine ---------
 
 class _Pixels:
@@ -125,7 +178,7 @@ class RecordingEngine:
     def __init__(self, width, height, test_break=lambda: False, is_preview=False):
         self.resolution_x, self.resolution_y, self.is_preview = width, height, is_preview
         self._test_break = test_break
-        self.calls, self.pixels = [], None
+        self.calls, self.pixels = [], {}
 
     def test_break(self):
         return self._test_break()
@@ -144,10 +197,12 @@ class RecordingEngine:
 
     def begin_result(self, x, y, w, h, layer=""):
         from types import SimpleNamespace
+        from lantern.core.passes import PASSES
         self.calls.append(("begin_result", (x, y, w, h), layer))
-        self.pixels = _Pixels(w * h * 4)
-        return SimpleNamespace(layers=[SimpleNamespace(passes={"Combined": SimpleNamespace(
-            rect=self.pixels)})])
+        self.pixels = {name: _Pixels(w * h * (4 if name == "Combined" else PASSES[name].channels))
+                       for name in ["Combined", *PASSES]}
+        return SimpleNamespace(layers=[SimpleNamespace(passes={
+            name: SimpleNamespace(rect=pixels) for name, pixels in self.pixels.items()})])
 
     def end_result(self, result):
         self.calls.append(("end_result",))
@@ -155,20 +210,25 @@ class RecordingEngine:
     def kinds(self):
         return [c[0] for c in self.calls]
 
+    def image(self, name="Combined"):
+        """The pass as written, row 0 = top."""
+        data = self.pixels[name].data
+        return data.reshape(self.resolution_y, self.resolution_x, -1)[::-1]
 
-def test_render_settings_come_from_the_scene(addon):
-    from lantern.addon.scene_render import render_settings
-    scene = calibration.build_scene("sun")
-    scene.lantern.preset, scene.render.film_transparent, scene.frame_current = "high", True, 7
-    s = render_settings(scene, 32, 18)
-    assert (s.width, s.height, s.preset, s.transparent, s.frame) == (32, 18, "high", True, 7.0)
-    assert render_settings(scene, 32, 18, preview=True).preset == "low"
+
+def _in_process(depsgraph, size, passes=frozenset()):
+    """The same frame rendered in this process, from the same export."""
+    from lantern.engine import RenderSettings, render_stage
+    from lantern.exporters import stage_from_depsgraph
+    stage, _ = stage_from_depsgraph(depsgraph)
+    return render_stage(stage, RenderSettings(width=size, height=size, passes=passes,
+                                              frame=depsgraph.scene.frame_current))
 
 
 def test_render_frame_fills_this_layers_result_with_progress(addon):
     import bpy
-    from lantern.addon.scene_render import render_final, render_frame
-    calibration.build_scene("sun")
+    from lantern.addon.scene_render import render_frame
+    _passes_scene()
     depsgraph = bpy.context.evaluated_depsgraph_get()
     size = calibration.SIZE
     engine = RecordingEngine(size, size)
@@ -179,51 +239,97 @@ def test_render_frame_fills_this_layers_result_with_progress(addon):
     assert progress == sorted(progress) and progress[-1] == 1.0
     stats = [c[1] for c in engine.calls if c[0] == "stats"]
     assert stats[:2] == ["Exporting the scene", "Rendering"] and stats[-1].startswith("Done in")
-    expected, _ = render_final(depsgraph, size, size)
-    np.testing.assert_allclose(engine.pixels.data.reshape(size, size, 4), expected[::-1], atol=1e-6)
+    expected = _in_process(depsgraph, size, frozenset(["Depth", "IndexOB"]))
+    np.testing.assert_allclose(engine.image(), expected.rgba, atol=1e-6)
+    for name in ("Depth", "IndexOB"):
+        np.testing.assert_array_equal(engine.image(name), expected.passes[name])
 
 
-def test_esc_drops_the_frame_without_waiting_for_it(addon, monkeypatch):
-    """test_break is polled while the engine renders: the frame in flight is dropped at
-    once (nothing written), and finishes on its own; shutdown() waits for it."""
-    import threading
-    import time
+def test_an_animation_reuses_one_session(addon):
+    """Frame after frame of F12, the host's Session reads again only what moved: the
+    stage is not rebuilt, no mesh goes up again, and each frame equals a fresh render."""
     import bpy
-    from lantern.addon import scene_render
+    from lantern.addon import host
+    from lantern.addon.scene_render import render_frame
+    scene = calibration.build_scene("sun")
+    for i in range(12):
+        bpy.ops.mesh.primitive_cube_add(size=0.5, location=(i % 4 - 1.5, i // 4 - 1.0, 0.25))
+    mover = bpy.context.object
+    mover.keyframe_insert("location", frame=1)
+    mover.location.z = 2.0
+    mover.keyframe_insert("location", frame=3)
+    size, stats = 24, []
+    for frame in (1, 2, 3):
+        scene.frame_set(frame)
+        depsgraph = bpy.context.evaluated_depsgraph_get()
+        engine = RecordingEngine(size, size)
+        render_frame(engine, depsgraph)
+        name = f"render:{scene.name_full}:{depsgraph.view_layer.name}"
+        stats.append(host.get().channels[name].latest.stats)
+        np.testing.assert_allclose(engine.image(), _in_process(depsgraph, size).rgba, atol=1e-6)
+    assert stats[0]["prims_read"] > 1
+    for later in stats[1:]:
+        assert later["prims_read"] == 1 and later["meshes_uploaded"] == 0, later
+
+
+def test_esc_drops_the_frame_without_waiting_for_it(addon):
+    """test_break is polled while the host renders: the frame in flight is dropped at
+    once (nothing written), and the next render goes on as usual."""
+    import bpy
+    from lantern.addon.scene_render import render_frame
     calibration.build_scene("sun")
-    started, finished = threading.Event(), threading.Event()
-    real = scene_render.render_stage
-
-    def slow_render(stage, settings):
-        started.set()
-        time.sleep(0.5)
-        try:
-            return real(stage, settings)
-        finally:
-            finished.set()
-
-    monkeypatch.setattr(scene_render, "render_stage", slow_render)
-    engine = RecordingEngine(16, 16, test_break=started.is_set)
-    scene_render.render_frame(engine, bpy.context.evaluated_depsgraph_get())
-    assert started.is_set() and not finished.is_set()  # returned while the frame renders
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    engine = RecordingEngine(16, 16, test_break=lambda: engine.kinds().count("stats") >= 2)
+    render_frame(engine, depsgraph)
     assert "begin_result" not in engine.kinds() and "error_set" not in engine.kinds()
     assert ("stats", "Cancelled") in engine.calls
-    scene_render.shutdown()
-    assert finished.is_set()
-    assert not [t.name for t in threading.enumerate() if t.name.startswith("lantern")]
+    again = RecordingEngine(16, 16)
+    render_frame(again, depsgraph)
+    assert "end_result" in again.kinds()
+
+
+def test_a_killed_engine_is_reported_and_the_next_render_recovers(addon):
+    """The engine process killed mid-render: one clear line in report and error_set,
+    Blender goes on, and the next render starts a new process and succeeds."""
+    import bpy
+    from lantern.addon import host
+    from lantern.addon.scene_render import render_frame
+    calibration.build_scene("sun")
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    size = calibration.SIZE
+    render_frame(RecordingEngine(size, size), depsgraph)
+    first = host.get().generation
+
+    def kill_once():
+        if engine.kinds().count("stats") >= 2:       # rendering
+            host.get().kill()
+        return False
+
+    engine = RecordingEngine(size, size, test_break=kill_once)
+    render_frame(engine, depsgraph)
+    reports = [c for c in engine.calls if c[0] in ("report", "error_set")]
+    assert ("error_set", "Lantern: the engine process stopped (killed by SIGKILL)") in reports, reports
+    assert "begin_result" not in engine.kinds()
+    again = RecordingEngine(size, size)
+    render_frame(again, depsgraph)
+    assert "end_result" in again.kinds() and host.get().generation == first + 1
+    np.testing.assert_allclose(again.image(), _in_process(depsgraph, size).rgba, atol=1e-6)
 
 
 def test_errors_go_to_report_and_error_set(addon, monkeypatch):
+    """An engine that cannot start (here: no GL context in the child) is one line in
+    report and error_set, never an exception in Blender."""
     import bpy
-    from lantern.addon import scene_render
+    from lantern.addon import host
+    from lantern.addon.scene_render import render_frame
     calibration.build_scene("sun")
-
-    def broken(stage, settings):
-        raise RuntimeError("no headless OpenGL 3.3 context")
-
-    monkeypatch.setattr(scene_render, "render_stage", broken)
+    host.shutdown()
+    monkeypatch.setenv("MESA_GL_VERSION_OVERRIDE", "3.0")   # below the engine's GL 3.3
+    monkeypatch.setattr(host, "RESTART_SECONDS", 0.0)
     engine = RecordingEngine(16, 16)
-    scene_render.render_frame(engine, bpy.context.evaluated_depsgraph_get())
-    message = "Lantern: no headless OpenGL 3.3 context"
-    assert ("report", "ERROR", message) in engine.calls and ("error_set", message) in engine.calls
+    render_frame(engine, bpy.context.evaluated_depsgraph_get())
+    errors = [c[1] for c in engine.calls if c[0] == "error_set"]
+    assert len(errors) == 1 and errors[0].startswith("Lantern: the engine could not get an "
+                                                     "OpenGL context"), engine.calls
     assert "begin_result" not in engine.kinds()
+    host.shutdown()

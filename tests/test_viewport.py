@@ -1,9 +1,17 @@
-"""The viewport path without the `gpu` module: the session's pixels, and re-export only
-when data changed. (Drawing the pixels through a GPUTexture needs a window.)"""
+"""The viewport path without a window: real depsgraph edits become messages to the
+engine host, sized by what changed, and its frames come back and are painted (up to
+the `gpu` call, which background mode lacks).
+
+Blender fills `depsgraph.updates` only inside update callbacks, so the viewport is
+synced from Blender's depsgraph_update_post and frame_change_post handlers, as
+view_update would be. Region and view are plain objects and matrices."""
+import time
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
-import calibration
+W, H = 64, 36
 
 
 @pytest.fixture(scope="module")
@@ -14,63 +22,385 @@ def addon():
     lantern.unregister()
 
 
-def _camera_matrices(scene, depsgraph, width, height):
-    camera = scene.camera
+def _rig(scene):
+    """A three-bone armature bending a cylinder over frames 1-10 (UsdSkel in the
+    live stage: a frame change is a pose)."""
+    import bpy
+    data = bpy.data.armatures.new("Rig")
+    rig = bpy.data.objects.new("Rig", data)
+    scene.collection.objects.link(rig)
+    rig.location = (2.5, 0.0, 0.0)
+    bpy.context.view_layer.objects.active = rig
+    bpy.ops.object.mode_set(mode="EDIT")
+    previous = None
+    for b in range(3):
+        bone = data.edit_bones.new(f"B{b}")
+        bone.head, bone.tail, bone.parent = (0, 0, b * 0.5), (0, 0, (b + 1) * 0.5), previous
+        previous = bone
+    bpy.ops.object.mode_set(mode="OBJECT")
+    bpy.ops.mesh.primitive_cylinder_add(radius=0.3, depth=1.5, location=(2.5, 0.0, 0.75),
+                                        vertices=12)
+    body = bpy.context.object
+    bpy.ops.object.transform_apply(location=False)
+    body.name = "Body"
+    body.parent = rig
+    body.matrix_parent_inverse = rig.matrix_world.inverted()
+    body.modifiers.new("Armature", "ARMATURE").object = rig
+    z = np.array([v.co.z for v in body.data.vertices])
+    for b in range(3):
+        group = body.vertex_groups.new(name=f"B{b}")
+        for v in np.flatnonzero(np.abs(z - (b + 0.5) * 0.5) < 0.5):
+            group.add([int(v)], 1.0 - abs(z[v] - (b + 0.5) * 0.5), "REPLACE")
+    for frame, angle in ((1, 0.0), (10, 0.6)):
+        for pb in rig.pose.bones:
+            pb.rotation_mode = "XYZ"
+            pb.rotation_euler = (angle, 0.0, 0.0)
+            pb.keyframe_insert("rotation_euler", frame=frame)
+    return rig
+
+
+def _scene():
+    """A plane, two cubes (one painted), a sun, a camera and the rig."""
+    import bpy
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 10
+    scene.render.resolution_x, scene.render.resolution_y = W, H
+    scene.lantern.preset = "medium"
+    bpy.ops.mesh.primitive_plane_add(size=20.0)
+    for name, x in (("Cube", -2.0), ("Other", 0.0)):
+        bpy.ops.mesh.primitive_cube_add(size=1.0, location=(x, 0.0, 0.5))
+        bpy.context.object.name = name
+    paint = bpy.data.materials.new("paint")
+    paint.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.8, 0.1, 0.1, 1)
+    bpy.data.objects["Cube"].data.materials.append(paint)
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
+    sun.data.energy, sun.rotation_euler = 3.0, (0.5, 0.3, 0.0)
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    camera.location, camera.rotation_euler = (0.0, -9.0, 3.0), (np.radians(75), 0.0, 0.0)
+    for ob in (sun, camera):
+        scene.collection.objects.link(ob)
+    scene.camera = camera
+    _rig(scene)
+    scene.frame_set(1)
+    return scene
+
+
+def _camera_view(scene, depsgraph, scale=1.0, border=None):
+    from lantern.addon.viewport import view_request
+    camera = scene.camera.evaluated_get(depsgraph)
     view = np.array(camera.matrix_world.inverted())
-    proj = np.array(camera.calc_matrix_camera(depsgraph, x=width, y=height))
-    return view, proj
+    window = np.array(camera.calc_matrix_camera(depsgraph, x=W, y=H))
+    return view_request((W, H), view, window, scale, border)
 
 
-def test_viewport_from_the_camera_view_equals_f12(addon):
+class Viewport:
+    """A viewport synced from Blender's handlers, painting into numpy."""
+
+    def __init__(self):
+        import bpy
+        from lantern.addon.viewport import ViewportRender
+        self.render = ViewportRender()
+        self.painted = []
+        self.mark = 0               # frames before the last edit: wait for a newer one
+        self.handlers = (bpy.app.handlers.depsgraph_update_post, bpy.app.handlers.frame_change_post)
+        for handlers in self.handlers:
+            handlers.append(self.on_update)
+        self.render.update(bpy.context.evaluated_depsgraph_get())
+
+    def on_update(self, scene, depsgraph):
+        self.render.update(depsgraph)
+
+    def paint(self, number, pixels, rect):
+        self.painted.append((number, pixels[::-1].copy(), rect))
+
+    def frame(self, view, preset="medium", timeout=60.0):
+        """Draws until the final frame of the current view and stage is painted."""
+        import bpy
+        host, name = self.render.host, self.render.name
+        start = time.monotonic()
+        while time.monotonic() - start < timeout:
+            self.render.draw(bpy.context.evaluated_depsgraph_get(), view, self.paint, preset)
+            channel = host.channel(name)           # a new one when the engine restarted
+            latest = channel.latest
+            if channel.error is not None:
+                raise AssertionError(channel.error)
+            if latest is not None and latest.final and latest.request == channel.requested \
+                    and latest.number > self.mark and self.painted and self.painted[-1][0] == latest.number \
+                    and not self.render.waiting():
+                return self.painted[-1][1], latest
+            time.sleep(0.01)
+        raise TimeoutError("no final frame")
+
+    def close(self):
+        for handlers in self.handlers:
+            handlers.remove(self.on_update)
+        self.render.close()
+
+
+@pytest.fixture
+def viewport(addon):
+    scene = _scene()
+    vp = Viewport()
+    yield scene, vp
+    vp.close()
+
+
+def _edit(vp, action):
+    """The messages an edit sent: [(kind, bytes)], and the fragments of its edits."""
     import bpy
-    from lantern.addon.scene_render import ViewportSession, render_final
-
-    scene = calibration.build_scene("point")
-    depsgraph = bpy.context.evaluated_depsgraph_get()
-    size = calibration.SIZE
-    final, _ = render_final(depsgraph, size, size)
-    session = ViewportSession()
-    session.sync(depsgraph)
-    view, proj = _camera_matrices(scene, depsgraph, size, size)
-    pixels = session.draw_pixels(view, proj, size, size)
-    assert pixels.shape == final.shape
-    # Two routes to the same projection (Blender's matrix vs USD's apertures) differ
-    # in the last bits, which may round to a neighbouring float16 in the HDR light
-    # buffer: one half-precision step is 2^-10 relative.
-    assert np.allclose(pixels, final, rtol=2e-3, atol=1e-4), np.abs(pixels - final).max()
+    host = vp.render.host
+    before = host.messages
+    vp.mark = host.channel(vp.render.name).frames
+    action()
+    bpy.context.view_layer.update()
+    sent = [(kind, size) for kind, scene, size in host.sent_since(before) if scene == vp.render.name]
+    return sent, list(vp.render.live.last)
 
 
-def test_redraws_do_not_re_export_unchanged_data(addon):
-    """`depsgraph.updates` is filled only inside update callbacks, so the session is
-    synced from Blender's depsgraph_update_post handler, as view_update would be."""
+def _fresh(scene, view):
+    """The same view rendered in this process from a fresh live export."""
     import bpy
-    from lantern.addon.scene_render import ViewportSession
+    from pxr import Usd
+    from lantern.engine import RenderSettings, Session
+    from lantern.exporters.live import export_live
+    stage = Usd.Stage.CreateInMemory()
+    export_live(bpy.context.evaluated_depsgraph_get(), stage, lambda m: None)
+    with Session(stage, RenderSettings(width=view.size[0], height=view.size[1],
+                                       preset=scene.lantern.preset)) as session:
+        return session.render(view_matrix=view.view, projection_matrix=view.projection).rgba
 
-    scene = calibration.build_scene("sun")
-    depsgraph = bpy.context.evaluated_depsgraph_get()
-    session = ViewportSession()
-    session.sync(depsgraph)
-    view, proj = _camera_matrices(scene, depsgraph, 32, 32)
-    first = session.draw_pixels(view, proj, 32, 32)
 
-    def on_update(_scene, updated_depsgraph):
-        session.sync(updated_depsgraph)
+def _changed(a, b):
+    return np.abs(a - b)[..., :3].max(axis=-1) > 1e-3
 
-    bpy.app.handlers.depsgraph_update_post.append(on_update)
+
+def test_edits_send_the_minimal_delta_and_the_image_follows(viewport):
+    import bpy
+    scene, vp = viewport
+    view = _camera_view(scene, bpy.context.evaluated_depsgraph_get())
+    before, first = vp.frame(view)
+    assert first.preset == "medium" and first.final
+    np.testing.assert_allclose(before, _fresh(scene, view), atol=2e-3)
+
+    # Moving one object sends that object's transform: one small message.
+    cube = bpy.data.objects["Cube"]
+    sent, exports = _edit(vp, lambda: setattr(cube, "location", (-2.0, 0.0, 1.5)))
+    assert exports == [("object", "Cube")]
+    (kind, size), = [s for s in sent if s[0] == "edit"]
+    assert size < 700, size
+    after, _ = vp.frame(view)
+    moved = _changed(before, after)
+    cols = np.nonzero(moved.any(axis=0))[0]
+    assert moved.any() and cols.max() < W // 2          # the cube is left of the middle
+    np.testing.assert_allclose(after, _fresh(scene, view), atol=2e-3)
+
+    # Editing a mesh re-exports that mesh alone.
+    def lift():
+        for v in cube.data.vertices:
+            if v.co.z > 0:
+                v.co.z += 0.5
+        cube.data.update()
+    sent, exports = _edit(vp, lift)
+    assert ("geometry", "Cube") in exports and {k for k, _ in exports} <= {"geometry", "object"}
+    edits = [s for s in sent if s[0] == "edit"]
+    assert len(edits) == 1 and edits[0][1] < 4000, edits
+    taller, _ = vp.frame(view)
+    assert _changed(after, taller).any()
+
+    # A material edit sends that material; the cube's colour changes, nothing else.
+    bsdf = bpy.data.materials["paint"].node_tree.nodes["Principled BSDF"]
+    sent, exports = _edit(vp, lambda: setattr(bsdf.inputs["Base Color"], "default_value",
+                                               (0.1, 0.1, 0.8, 1)))
+    assert ("material", "paint") in exports
+    edits = [s for s in sent if s[0] == "edit"]
+    assert len(edits) == 1 and edits[0][1] < 1500, edits
+    blue, _ = vp.frame(view)
+    recoloured = _changed(taller, blue)
+    assert recoloured.any() and np.nonzero(recoloured.any(axis=0))[0].max() < W // 2
+    assert blue[recoloured][:, 2].mean() > taller[recoloured][:, 2].mean()
+
+    # A frame change on the rig sends joint channels only.
+    fragments = []
+    real_edit = vp.render.host.edit
+
+    def spy(scene_name, fragment):
+        fragments.append(fragment)
+        return real_edit(scene_name, fragment)
+
+    vp.render.host.edit = spy
     try:
-        # Moving the view alone re-renders the stage it has; selecting exports nothing.
-        moved = view.copy()
-        moved[0, 3] += 1.0
-        session.draw_pixels(moved, proj, 32, 32)
-        bpy.data.objects["Plane"].select_set(True)
-        bpy.context.view_layer.update()
-        assert session.exports == 1
-
-        # Changed data is exported again: a brighter sun shows up.
-        bpy.data.lights["sun"].energy *= 2.0
-        bpy.context.view_layer.update()
-        assert session.exports == 2
+        sent, exports = _edit(vp, lambda: scene.frame_set(8))
     finally:
-        bpy.app.handlers.depsgraph_update_post.remove(on_update)
-    second = session.draw_pixels(view, proj, 32, 32)
-    assert np.allclose(second[..., :3], 2.0 * first[..., :3], rtol=1e-3)
+        del vp.render.host.edit
+    assert exports == [("pose", "Rig")]
+    (fragment,) = fragments
+    paths = fragment["copy"] + fragment["fields"] + fragment["remove"]
+    assert paths and all(p.split(".")[0].endswith("/Animation") for p in paths), paths
+    assert {p.split(".")[1] for p in paths} <= {"translations", "rotations", "scales"}
+    joints = 3
+    (kind, size), = [s for s in sent if s[0] == "edit"]
+    assert size < 1200 + joints * 40, size
+    posed, frame = vp.frame(view)
+    bent = _changed(blue, posed)
+    # The rig is right of the middle (its shadow and the sun's cascade fit, which
+    # follows what casts, reach a few pixels further).
+    assert bent[:, W // 2:].sum() > 0.8 * bent.sum() > 0
+    assert frame.stats["meshes_uploaded"] == 0 and frame.stats["meshes_skinned"] == 1, (frame.stats["bytes_by_kind"], frame.stats["prims_read"], fragment["copy"])
+    np.testing.assert_allclose(posed, _fresh(scene, view), atol=2e-3)
+
+
+def test_views_are_progressive_and_send_no_edit(viewport):
+    import bpy
+    scene, vp = viewport
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    view = _camera_view(scene, depsgraph)
+    vp.frame(view)
+    host = vp.render.host
+    before = host.messages
+    seen = []
+    orbit = view.view.copy()
+    orbit[0, 3] += 0.5
+    moved = _camera_view(scene, depsgraph)
+    moved.view = orbit
+    start = time.monotonic()
+    channel = host.channel(vp.render.name)
+    while time.monotonic() - start < 60:
+        vp.render.draw(depsgraph, moved, vp.paint, "medium")
+        latest = channel.latest
+        if latest is not None and latest.request == channel.requested and \
+                (not seen or seen[-1] != latest.number):
+            seen.append(latest.number)
+            if latest.final:
+                break
+        time.sleep(0.005)
+    kinds = [k for k, s, _ in host.sent_since(before) if s == vp.render.name]
+    assert "edit" not in kinds and kinds.count("render") == 1
+    presets = [f.preset for f in [channel.latest]]
+    assert presets == ["medium"]
+    assert len(seen) == 2, seen                  # the interactive frame, then the final one
+
+
+def test_border_scale_and_orthographic(viewport):
+    """A render border renders only its rectangle, equal to that part of the whole
+    view; the resolution scale renders fewer pixels over the same rectangle; an
+    orthographic view renders."""
+    import bpy
+    from lantern.addon.viewport import view_request
+    scene, vp = viewport
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    full, _ = vp.frame(_camera_view(scene, depsgraph))
+    bordered = _camera_view(scene, depsgraph, border=(0.25, 0.5, 0.75, 1.0))
+    assert bordered.rect == (16, 18, 32, 18) and bordered.size == (32, 18)
+    part, frame = vp.frame(bordered)
+    assert frame.tag == (16, 18, 32, 18)
+    np.testing.assert_allclose(part, full[0:18, 16:48], atol=2e-3)
+    half = _camera_view(scene, depsgraph, scale=0.5)
+    small, _ = vp.frame(half)
+    assert small.shape[:2] == (18, 32) and half.rect == (0, 0, W, H)
+    from lantern.core.transforms import ortho as orthographic
+    ortho = orthographic(-6.0, 6.0, -6.0 * H / W, 6.0 * H / W, 0.1, 100.0)
+    flat, _ = vp.frame(view_request((W, H), _camera_view(scene, depsgraph).view, ortho))
+    assert flat[..., :3].max() > 0.01
+
+
+def test_camera_frame_maths():
+    """The camera's frame seen through the viewport's window matrix (zoom, offset)."""
+    from lantern.addon.viewport import border_in_frame, camera_frame, narrowed
+    from lantern.core.transforms import frustum
+    camera = frustum(-0.5, 0.5, -0.28, 0.28, 0.1, 100.0)
+    assert np.allclose(camera_frame(camera, camera), (0, 0, 1, 1))
+    zoomed_out = np.diag([0.5, 0.5, 1.0, 1.0]) @ camera        # the frame inside the region
+    assert np.allclose(camera_frame(zoomed_out, camera), (0.25, 0.25, 0.75, 0.75))
+    offset = np.eye(4)
+    offset[0, 3] = 0.2                                          # panned right by 10 %
+    assert np.allclose(camera_frame(offset @ zoomed_out, camera), (0.35, 0.25, 0.85, 0.75))
+    assert np.allclose(border_in_frame((0.25, 0.25, 0.75, 0.75), (0, 0.5, 0.5, 1)),
+                       (0.25, 0.5, 0.5, 0.75))
+    # Narrowing maps the rectangle's corners onto the image's.
+    p = narrowed(camera, (0.25, 0.5, 0.75, 1.0))
+    corner = np.linalg.inv(camera) @ np.array([0.5 * 2 - 1 - 0.5, 0.0, 0.0, 1.0])
+    ndc = p @ corner
+    assert np.isclose(ndc[0] / ndc[3], -1.0) and np.isclose(ndc[1] / ndc[3], -1.0)
+
+
+def test_view_draw_up_to_the_gpu_call(viewport, monkeypatch):
+    """RenderEngine.view_draw and view_update, run on a stand-in engine with a plain
+    region and view: everything but _paint's `gpu` calls."""
+    import bpy
+    from lantern.addon import render_engine
+    scene, vp = viewport
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    camera = scene.camera.evaluated_get(depsgraph)
+    painted, stats = [], []
+    monkeypatch.setattr(render_engine, "_paint", lambda engine, sc, *frame: painted.append(frame))
+    engine = SimpleNamespace(_viewport=None, _polling=True, update_stats=lambda a, b: stats.append(b),
+                             tag_redraw=lambda: None)
+    engine._start_polling = lambda: None
+    engine.view_update = lambda c, d: render_engine.LanternRenderEngine.view_update(engine, c, d)
+    context = SimpleNamespace(
+        region=SimpleNamespace(width=W, height=H),
+        region_data=SimpleNamespace(view_matrix=camera.matrix_world.inverted(),
+                                    window_matrix=camera.calc_matrix_camera(depsgraph, x=W, y=H),
+                                    view_perspective='PERSP'),
+        space_data=SimpleNamespace(use_render_border=False))
+    start = time.monotonic()
+    while not painted or not engine._viewport.host.channel(engine._viewport.name).latest.final:
+        render_engine.LanternRenderEngine.view_draw(engine, context, depsgraph)
+        assert time.monotonic() - start < 60
+        time.sleep(0.01)
+    number, pixels, rect = painted[-1]
+    assert pixels.shape == (H, W, 4) and rect == (0, 0, W, H) and pixels[..., :3].max() > 0.01
+    assert stats[-1] in ("", "Lantern: refining")
+    reported = []
+    engine.report = lambda kind, message: reported.append((kind, message))
+    engine._viewport.notices.append("Lantern: a failure")
+    render_engine.LanternRenderEngine.view_draw(engine, context, depsgraph)
+    assert reported == [({'ERROR'}, "Lantern: a failure")] and not engine._viewport.notices
+    engine._viewport.close()
+
+
+def test_a_killed_engine_restarts_on_the_next_redraw(viewport):
+    import bpy
+    scene, vp = viewport
+    view = _camera_view(scene, bpy.context.evaluated_depsgraph_get())
+    first, _ = vp.frame(view)
+    host = vp.render.host
+    generation = host.generation
+    host.kill()
+    deadline = time.monotonic() + 10
+    while host.running() and time.monotonic() < deadline:
+        time.sleep(0.01)
+    again, _ = vp.frame(view)
+    assert host.generation == generation + 1
+    assert vp.render.notices == ["Lantern: the engine process stopped (killed by SIGKILL); "
+                                 "it starts again"]
+    np.testing.assert_allclose(again, first, atol=1e-6)
+
+
+def test_the_redraw_timer_and_pass_registration(viewport):
+    """RenderEngine._poll (the redraw timer: a redraw per new frame, stopping once
+    nothing is to come) and update_render_passes (Combined and the view layer's
+    passes, from core/passes.py), on stand-in engines."""
+    import bpy
+    from lantern.addon import render_engine
+    from lantern.core.passes import PASSES
+    scene, vp = viewport
+    view = _camera_view(scene, bpy.context.evaluated_depsgraph_get())
+    vp.frame(view)
+    redraws = []
+    engine = SimpleNamespace(_viewport=vp.render, _polling=True,
+                             tag_redraw=lambda: redraws.append(1))
+    engine._poll = lambda: render_engine.LanternRenderEngine._poll(engine)
+    vp.render.host.channel(vp.render.name).fresh = True
+    assert render_engine.LanternRenderEngine._poll(engine) is None   # the final frame is in
+    assert len(redraws) == 2 and engine._polling is False
+
+    registered = []
+    engine = SimpleNamespace(register_pass=lambda *a: registered.append(a[2:]))
+    layer = scene.view_layers[0]
+    layer.use_pass_z, layer.use_pass_object_index = True, True
+    render_engine.LanternRenderEngine.update_render_passes(engine, scene, layer)
+    assert registered == [("Combined", 4, "RGBA", "COLOR"),
+                          ("Depth", 1, "Z", "VALUE"), ("IndexOB", 1, "X", "VALUE")]
+    assert all(PASSES[name].provided for name, *_ in registered[1:])

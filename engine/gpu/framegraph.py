@@ -7,11 +7,23 @@ first pass that writes them and gives them back after the last pass that uses th
 a warm frame allocates nothing. Other entries are whatever a pass hands on (this
 frame's view, the shadow maps, the read-back image). A pass the frame does not need
 (`needed` is false) does not run and allocates nothing. The order is checked once:
-every entry a pass reads is written by a pass before it."""
+every entry a pass reads is written by a pass before it.
+
+Render passes (AOVs, core/passes.py) are targets too: a pass lists in `aovs` the
+render passes it can write, each as (target, first channel). A frame asks for some
+(`Frame.aovs`); a pass writes an AOV target only when one of its AOVs is asked for
+(and a pass that only writes AOVs runs only then), so an AOV nobody asked for costs
+nothing. The graph keeps the asked-for AOV targets to the end of the frame and reads
+them back as float32 arrays, row 0 = top, into `board["aovs"]`. Lighting passes add
+theirs the same way: a target here, an entry in their `aovs`."""
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...core.passes import PASSES
 
 # Render targets by name: their pool format, at the frame's size.
 TARGETS = {
@@ -19,10 +31,16 @@ TARGETS = {
     "g_normal": "rgba16f",     # world normal
     "g_mat": "rgba16f",        # metallic, roughness, dielectric F0
     "g_emit": "rgba16f",       # emission
-    "g_depth": "depth",
-    "hdr": "rgba16f",          # light accumulation
+    "g_depth": "depth",         # 32-bit float, reversed (engine/view.py)
+    "hdr": "rgba32f",          # light accumulation: float32, 1e-38..3e38 (a 1e-6 W and a
+                               # 1e6 W light alike; float16 underflowed and overflowed)
     "depth_stencil": "depth_stencil",  # scene depth copy and light-volume marks
     "output": "rgba32f",
+    # Render passes (AOVs), only when asked for (core/passes.py).
+    "g_index": "rg32f",        # object and material pass indices (the G-buffer pass)
+    "aov_depth": "r32f",       # view-axis distance (the AOV pass)
+    "aov_normal": "rgba32f",   # world normal
+    "aov_emit": "rgba32f",     # emission
 }
 
 
@@ -34,6 +52,7 @@ class Frame:
     size: tuple
     preset: object
     transparent: bool = False
+    aovs: frozenset = frozenset()  # render passes asked for (core/passes.py names)
     camera: object = None          # None: the view pass frames the default view
     stats: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
@@ -46,9 +65,15 @@ class Pass:
     name = ""
     reads: tuple = ()
     writes: tuple = ()
+    aovs: dict = {}     # render pass name -> (target, first channel) this pass can write
 
     def needed(self, frame: Frame) -> bool:
         return True
+
+    def aov_targets(self, frame: Frame) -> tuple:
+        """The AOV targets this frame asks this pass to write."""
+        return tuple(dict.fromkeys(t for name, (t, _) in self.aovs.items()
+                                   if name in frame.aovs))
 
     def execute(self, frame: Frame, board: dict) -> None:
         raise NotImplementedError
@@ -62,24 +87,38 @@ class FrameGraph:
     def __init__(self, ctx, pool, passes):
         self.ctx, self.pool, self.passes = ctx, pool, list(passes)
         written = set()
+        self.producers = {}         # render pass name -> the pass that writes it
         for p in self.passes:
             missing = [r for r in p.reads if r not in written]
             if missing:
                 raise ValueError(f"pass {p.name} reads {missing} before any pass writes them")
             written |= set(p.writes)
+            for aov, (target, _) in p.aovs.items():
+                if target not in TARGETS:
+                    raise ValueError(f"pass {p.name} writes {aov} into {target}, not a target")
+                self.producers[aov] = p
 
     def run(self, frame: Frame) -> dict:
         board = {}
+        unknown = sorted(set(frame.aovs) - set(self.producers))
+        if unknown:
+            raise ValueError(f"no pass writes the render passes {unknown}")
         live = [p for p in self.passes if p.needed(frame)]
+        for aov in frame.aovs:
+            if self.producers[aov] not in live:
+                raise RuntimeError(f"the pass writing {aov} ({self.producers[aov].name}) "
+                                   "did not run")
+        writes = {p: p.writes + p.aov_targets(frame) for p in live}
+        kept = {t for p in live for t in p.aov_targets(frame)}   # read back at the end
         last_use = {}
         for i, p in enumerate(live):
-            for name in p.reads + p.writes:
-                if name in TARGETS:
+            for name in p.reads + writes[p]:
+                if name in TARGETS and name not in kept:
                     last_use[name] = i
         frame.stats["passes"] = [p.name for p in live]
         try:
             for i, p in enumerate(live):
-                for name in p.writes:
+                for name in writes[p]:
                     if name in TARGETS and name not in board:
                         board[name] = self.pool.acquire(frame.size, TARGETS[name])
                 absent = [r for r in p.reads if r in TARGETS and r not in board]
@@ -91,6 +130,8 @@ class FrameGraph:
                 frame.timings[p.name] = time.perf_counter() - t0
                 for name in [n for n, last in last_use.items() if last == i]:
                     self.pool.release(board.pop(name))
+            board["aovs"] = {aov: self._read_back(board, *self.producers[aov].aovs[aov], aov)
+                             for aov in sorted(frame.aovs)}
         finally:
             for name in [n for n in board if n in TARGETS]:
                 self.pool.release(board.pop(name))
@@ -98,6 +139,14 @@ class FrameGraph:
         for p in self.passes:
             frame.timings.setdefault(p.name, 0.0)
         return board
+
+    @staticmethod
+    def _read_back(board, target, first, aov):
+        tex = board[target]
+        w, h = tex.size
+        data = np.frombuffer(tex.read(), np.float32).reshape(h, w, tex.components)
+        channels = PASSES[aov].channels
+        return np.ascontiguousarray(data[::-1, :, first:first + channels])  # GL rows run bottom-up
 
     def release(self):
         for p in self.passes:

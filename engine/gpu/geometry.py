@@ -6,9 +6,12 @@ Storage (seed 003's static and dynamic branches):
                   time-sampled mesh is rewritten in place each frame).
   dynamic store   the same layout, written every frame by the skinning pass (transform
                   feedback); a skinned mesh's indices go up once.
-  object table    per object (a Mesh prim drawn), its model and normal matrices: 7
+  object table    per object (a Mesh prim drawn), its model and normal matrices: 8
                   RGBA32F texels in one texture, indexed by object id, so moving an
-                  object writes 112 bytes.
+                  object writes 128 bytes. The translation is a double split in two
+                  floats (hi in the matrix's fourth column, lo in texel 7): shaders
+                  subtract the frame's origin from it (camera-relative rendering,
+                  engine/view.py), so the table does not change when the view does.
 Indices are absolute in their store, so a draw needs no base vertex (GL 3.3 has none
 in ModernGL).
 
@@ -39,13 +42,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...core.transforms import normal_matrix, transform_aabbs
+from ...core.transforms import transform_aabbs
+from ..view import split_double
+from .points import PointClouds
 from .programs import set_uniform
 
 VERTEX_FORMAT = ("3f 3f 2f 4f", "in_pos", "in_normal", "in_uv", "in_tangent")
 VERTEX_BYTES = 48
-OBJECT_TEXELS = 7            # model matrix columns (4), normal matrix columns (3)
-OBJECT_TEX_W = 4095          # 585 objects per row: an object never straddles rows
+OBJECT_TEXELS = 8            # model matrix columns (4), normal matrix columns (3), lo translation
+OBJECT_TEX_W = 4096          # 512 objects per row: an object never straddles rows
 COMMAND_UINTS = 5            # DrawElementsIndirectCommand
 
 
@@ -164,44 +169,57 @@ class VertexStore:
 
 
 class ObjectTable:
-    """Per-object model and normal matrices in one RGBA32F texture."""
+    """Per-object model and normal matrices in one RGBA32F texture (shaders/objects.glsl
+    reads them). The instances of an instanced draw take consecutive ids, so one
+    command (baseInstance = the first, instanceCount = n) draws them all."""
 
     def __init__(self, ctx, uploads, rows: int = 1):
         self.ctx, self.uploads = ctx, uploads
         self.data = np.zeros((rows, OBJECT_TEX_W, 4), np.float32)
         self.texture = None
-        self._free_ids = []
-        self._next = 0
+        self._id_space = _Arena(self.capacity)
+        self._next = 0                 # one past the highest id ever handed out
         self._dirty = set()
 
     @property
     def capacity(self) -> int:
         return len(self.data) * (OBJECT_TEX_W // OBJECT_TEXELS)
 
-    def new_id(self) -> int:
-        if self._free_ids:
-            return self._free_ids.pop()
-        self._next += 1
-        return self._next - 1
-
-    def free_id(self, oid: int):
-        self._free_ids.append(oid)
-
-    def set(self, oid: int, world: np.ndarray):
-        if oid >= self.capacity:
-            rows = max(len(self.data) * 2, oid // (OBJECT_TEX_W // OBJECT_TEXELS) + 1)
+    def new_ids(self, n: int = 1) -> int:
+        """The first of n consecutive free ids."""
+        first = self._id_space.alloc(n)
+        if first is None:
+            per_row = OBJECT_TEX_W // OBJECT_TEXELS
+            rows = max(len(self.data) * 2, -(-(self.capacity + n) // per_row))
             grown = np.zeros((rows, OBJECT_TEX_W, 4), np.float32)
             grown[:len(self.data)] = self.data
             self.data = grown
             if self.texture is not None:
                 self.texture.release()
                 self.texture = None
-        texels = np.zeros((OBJECT_TEXELS, 4))
-        texels[:4] = world.T                      # columns
-        texels[4:, :3] = normal_matrix(world).T
+            self._id_space.grow(self.capacity)
+            first = self._id_space.alloc(n)
+        self._next = max(self._next, first + n)
+        return first
+
+    def free_ids(self, first: int, n: int = 1):
+        self._id_space.release(first, n)
+
+    def set(self, first: int, worlds: np.ndarray, pass_index: int = 0):
+        """The matrices of objects first, first + 1, ...: (4, 4) or (n, 4, 4), and their
+        render-pass index (IndexOB)."""
+        worlds = np.asarray(worlds, np.float64).reshape(-1, 4, 4)
+        n = len(worlds)
+        texels = np.zeros((n, OBJECT_TEXELS, 4), np.float32)
+        texels[:, :4] = worlds.transpose(0, 2, 1)          # columns
+        hi, lo = split_double(worlds[:, :3, 3])
+        texels[:, 3, :3] = hi
+        texels[:, 4:7, :3] = normal_matrices(worlds).transpose(0, 2, 1)
+        texels[:, 7, :3] = lo
+        texels[:, 4, 3] = pass_index                       # render pass IndexOB
         flat = self.data.reshape(-1, 4)
-        flat[oid * OBJECT_TEXELS:(oid + 1) * OBJECT_TEXELS] = texels
-        self._dirty.add(oid)
+        flat[first * OBJECT_TEXELS:(first + n) * OBJECT_TEXELS] = texels.reshape(-1, 4)
+        self._dirty.update(range(first, first + n))
 
     def flush(self):
         """Uploads the texels of objects set since the last flush (of every object
@@ -228,7 +246,10 @@ class ObjectTable:
 
 @dataclass
 class DrawObject:
-    """A Mesh prim on the GPU: its object id, where its triangles are, their state."""
+    """A Mesh prim on the GPU: its object id, where its triangles are, their state. A
+    PointInstancer's batch is one DrawObject of n instances with consecutive ids from
+    `oid`: its `local` box is then the union of the instances' world boxes and `world`
+    the identity."""
     oid: int
     path: str
     mesh_key: tuple
@@ -238,6 +259,7 @@ class DrawObject:
     mirrored: bool               # negative determinant: clockwise is front
     local: tuple                 # (lo, hi) of the vertices in the space it is drawn in
     world: np.ndarray = field(default_factory=lambda: np.eye(4))
+    n: int = 1                   # instances drawn (consecutive object ids)
 
 
 @dataclass
@@ -249,6 +271,7 @@ class Batch:
     mirrored: bool
     first: int                   # position in the view's command order
     count: int
+    instances: int = 0           # PointInstancer instances among them
 
 
 class Geometry:
@@ -260,8 +283,10 @@ class Geometry:
         self.static = VertexStore(ctx, uploads, "static")
         self.dynamic = None                      # made for the first skinned mesh
         self.objects = ObjectTable(ctx, uploads)
+        self.points = PointClouds(ctx, uploads, self.objects)   # Points prims
         self.meshes = {}                         # mesh key -> (store, Slot)
         self.draws = {}                          # instance path -> DrawObject
+        self._worlds = {}                        # instanced paths -> (n, 4, 4) worlds
         self.moved = []                          # world boxes that changed this frame
         self._ids = None                         # object-id attribute buffer (multi-draw)
         self._stale()
@@ -289,6 +314,9 @@ class Geometry:
             inst = scene.instances.get(path)
             if inst is not None:
                 self._place(inst, scene.meshes[inst.mesh_key], cull_backfaces)
+        if changes.points:
+            self.moved += self.points.update(scene, changes.points)
+            self._static_boxes = None
         self.objects.flush()
         return uploaded
 
@@ -319,10 +347,10 @@ class Geometry:
             store.write_vertices(slot, mesh.vertices)
         store.write_indices(slot, mesh.indices)
         if old is not None:
-            for d in self.draws.values():   # rebuilt data: same key, maybe new ranges
+            for path, d in self.draws.items():   # rebuilt data: same key, maybe new ranges
                 if d.mesh_key == mesh.key:
                     d.ranges = _ranges(mesh, slot)
-                    d.local = mesh.bounds
+                    d.local = self._local_box(mesh, self._worlds.get(path))
                     self._stale()
 
     def _free_mesh(self, key):
@@ -339,11 +367,19 @@ class Geometry:
     def _place(self, inst, mesh, cull_backfaces):
         d = self.draws.get(inst.path)
         store, slot = self.meshes[inst.mesh_key]
-        mirrored = bool(np.linalg.det(inst.world[:3, :3]) < 0)
+        worlds = inst.worlds
+        world = np.eye(4) if worlds is not None else inst.world
+        n = 1 if worlds is None else len(worlds)
+        first = worlds[0] if worlds is not None else world
+        mirrored = bool(np.linalg.det(first[:3, :3]) < 0)
+        local = self._local_box(mesh, worlds)
+        if d is not None and d.n != n:
+            self._drop(inst.path)     # a new number of instances: new consecutive ids
+            d = None
         if d is None:
             d = self.draws[inst.path] = DrawObject(
-                self.objects.new_id(), inst.path, inst.mesh_key, mesh.skin is not None,
-                _ranges(mesh, slot), _culls(mesh, cull_backfaces), mirrored, mesh.bounds)
+                self.objects.new_ids(n), inst.path, inst.mesh_key, mesh.skin is not None,
+                _ranges(mesh, slot), _culls(mesh, cull_backfaces), mirrored, local, n=n)
             self._stale()
         else:
             self._note_moved(d)
@@ -351,17 +387,32 @@ class Geometry:
             if state != (d.mesh_key, d.mirrored, d.cull, d.ranges):
                 self._stale()             # a new mesh or pipeline state: new commands
             d.mesh_key, d.mirrored, d.cull, d.ranges = state
-            d.skinned, d.local = mesh.skin is not None, mesh.bounds
-        d.world = inst.world
-        self.objects.set(d.oid, inst.world)
+            d.skinned, d.local = mesh.skin is not None, local
+        d.world = world
+        if worlds is None:
+            self._worlds.pop(inst.path, None)
+        else:
+            self._worlds[inst.path] = worlds
+        self.objects.set(d.oid, worlds if worlds is not None else world, inst.pass_index)
         self._static_boxes = None
         self._note_moved(d)
 
+    @staticmethod
+    def _local_box(mesh, worlds):
+        """The box a DrawObject is culled by, in the space `world` places: the mesh's
+        own, or for instances the union of their world boxes."""
+        if worlds is None or mesh.bounds is None:
+            return mesh.bounds
+        lo, hi = transform_aabbs(np.repeat(mesh.bounds[0][None], len(worlds), 0),
+                                 np.repeat(mesh.bounds[1][None], len(worlds), 0), worlds)
+        return lo.min(axis=0), hi.max(axis=0)
+
     def _drop(self, path):
         d = self.draws.pop(path, None)
+        self._worlds.pop(path, None)
         if d is not None:
             self._note_moved(d)
-            self.objects.free_id(d.oid)
+            self.objects.free_ids(d.oid, d.n)
             self._stale()
 
     def _stale(self):
@@ -415,9 +466,11 @@ class Geometry:
         rows, meta = [], []
         for d in draws:
             for material, first, count in d.ranges:
-                rows.append((count, 1, first, 0, d.oid))
+                rows.append((count, d.n, first, 0, d.oid))
                 meta.append((d, material))
         self._cmd = np.array(rows, np.uint32).reshape(-1, COMMAND_UINTS)
+        self._cmd_instances = np.array([m[0].n if m[0].path in self._worlds else 0
+                                        for m in meta], np.int64)
         # A mirrored object's front faces wind clockwise: the winding is pipeline state
         # (culling, and gl_FrontFacing for two-sided shading), so it splits batches.
         self._cmd_key = [(m[0].skinned, m[1], m[0].cull, m[0].mirrored) for m in meta]
@@ -430,7 +483,7 @@ class Geometry:
             if store is None:
                 continue
             sel = [d for d in draws if self.meshes[d.mesh_key][0] is store]
-            cast = np.array([(sum(r[2] for r in d.ranges), 1, d.ranges[0][1], 0, d.oid)
+            cast = np.array([(sum(r[2] for r in d.ranges), d.n, d.ranges[0][1], 0, d.oid)
                              for d in sel], np.uint32).reshape(-1, COMMAND_UINTS)
             buf = self.uploads.buffer(cast, kind="commands") \
                 if self.multi_draw and len(cast) else None
@@ -489,7 +542,8 @@ class Geometry:
         for end in list(bounds) + [len(order)]:
             skinned, material, cull, mirrored = self._cmd_key[order[start]]
             store = self.dynamic if skinned else self.static
-            batches.append(Batch(store, material, cull, mirrored, start, end - start))
+            batches.append(Batch(store, material, cull, mirrored, start, end - start,
+                                 int(self._cmd_instances[order[start:end]].sum())))
             start = end
         if self.multi_draw and not np.array_equal(order, self._gathered):
             # The same order as the last view leaves the indirect buffer as it is.
@@ -514,9 +568,9 @@ class Geometry:
             return
         vao = batch.store.vao(prog)
         for c in self._view_order[batch.first:batch.first + batch.count]:
-            count, _, first, _, oid = self._cmd[c]
+            count, n, first, _, oid = self._cmd[c]
             prog["u_object"].value = int(oid)
-            vao.render(self.ctx.TRIANGLES, vertices=int(count), first=int(first))
+            vao.render(self.ctx.TRIANGLES, vertices=int(count), first=int(first), instances=int(n))
 
     def draw_casters(self, prog) -> int:
         """Every object's triangles with `prog`; returns the commands drawn."""
@@ -533,9 +587,10 @@ class Geometry:
                                                            count=len(cast))
             else:
                 vao = store.vao(prog)
-                for count, _, first, _, oid in cast:
+                for count, n, first, _, oid in cast:
                     prog["u_object"].value = int(oid)
-                    vao.render(self.ctx.TRIANGLES, vertices=int(count), first=int(first))
+                    vao.render(self.ctx.TRIANGLES, vertices=int(count), first=int(first),
+                               instances=int(n))
             n += len(cast)
         return n
 
@@ -545,7 +600,18 @@ class Geometry:
     def bind_objects(self, unit):
         self.objects.texture.use(unit)
 
+    def path_of(self, oid: int):
+        """The instance path (or Points prim) object id `oid` belongs to, or None."""
+        for d in self.draws.values():
+            if d.oid <= oid < d.oid + d.n:
+                return d.path
+        return self.points.path_of(oid)
+
+    def has_casters(self) -> bool:
+        return any(d.ranges for d in self.draws.values()) or bool(self.points.clouds)
+
     def release(self):
+        self.points.release()
         self._release_commands()
         if self._ids is not None:
             self._ids.release()
@@ -553,6 +619,17 @@ class Geometry:
         if self.dynamic is not None:
             self.dynamic.release()
         self.objects.release()
+
+
+def normal_matrices(worlds) -> np.ndarray:
+    """(n, 3, 3) inverse transposes of the worlds' 3x3s (a singular one keeps its own,
+    as core.transforms.normal_matrix)."""
+    m3 = worlds[:, :3, :3]
+    out = m3.copy()
+    ok = np.abs(np.linalg.det(m3)) > 1e-30
+    if ok.any():
+        out[ok] = np.linalg.inv(m3[ok]).transpose(0, 2, 1)
+    return out
 
 
 def _ranges(mesh, slot: Slot) -> list:

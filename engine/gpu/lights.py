@@ -3,11 +3,14 @@ changes. Every light draw, one at a time or instanced, reads its light from the 
 by index (shaders/lights.glsl), so a light's numbers go up once, not per draw.
 
 Row layout (texels, must match shaders/lights.glsl):
-  0 position, volume radius R        1 colour (I, L or E), sphere radius
+  0 position (hi), volume radius R   1 colour (I, L or E), sphere radius
   2 emission direction, cos(cone)    3 cone softness, diffuse, specular, flags
   4 x axis, half width (disk: r)     5 y axis, half height
-  6 polygon vertices, area           7.. polygon vertices (rect 4, disk an N-gon)
-flags: 1 soft falloff, 2 spot, 4 disk, 8 headlight (shines along the view)."""
+  6 polygon vertices, area           7 position (lo)
+  8.. polygon vertices about the position (rect 4, disk an N-gon)
+flags: 1 soft falloff, 2 spot, 4 disk, 8 headlight (shines along the view).
+The position is a double split in two floats: shaders make it camera-relative
+(shaders/origin.glsl), so the table does not change when the view does."""
 from __future__ import annotations
 
 import math
@@ -16,14 +19,17 @@ import numpy as np
 
 from ...core.lights import DISK, RECT, SPOT
 from ..lighting import disk_polygon, rect_polygon, volume_radius
+from ..view import split_double
 
 MAX_POLY = 32
-ROW_TEXELS = 7 + MAX_POLY
+ROW_TEXELS = 8 + MAX_POLY
 
 
 def pack(light, R: float, disk_sides: int) -> np.ndarray:
     row = np.zeros((ROW_TEXELS, 4))
-    row[0] = [*light.position, R]
+    hi, lo = split_double(light.position)
+    row[0] = [*hi, R]
+    row[7, :3] = lo
     row[1] = [*np.asarray(light.color, float), light.radius]
     row[2] = [*light.direction, light.cos_half]
     flags = (1 if light.soft_falloff else 0) | (2 if light.kind == SPOT else 0) | \
@@ -39,7 +45,7 @@ def pack(light, R: float, disk_sides: int) -> np.ndarray:
         row[4] = [*light.x_axis, half[0]]
         row[5] = [*light.y_axis, half[1]]
         row[6] = [len(verts), area, 0.0, 0.0]
-        row[7:7 + len(verts), :3] = verts
+        row[8:8 + len(verts), :3] = verts - np.asarray(light.position, np.float64)
     return row.astype(np.float32)
 
 

@@ -9,10 +9,12 @@ import time
 import numpy as np
 
 from .context import Features
+from .depth import DepthConvention
 from .framegraph import Frame, FrameGraph
 from .geometry import Geometry
 from .lights import LightTable
 from .passes.ambient import AmbientPass
+from .passes.aovs import AovPass
 from .passes.gbuffer import GBufferPass
 from .passes.lights import LightPass
 from .passes.resolve import ResolvePass
@@ -26,7 +28,8 @@ from .textures import MaterialTextures
 # Every counter a render reports, zero when nothing of the kind happened.
 COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow_maps",
             "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
-            "light_volumes", "stencil_marks", "batched_lights")
+            "light_volumes", "stencil_marks", "batched_lights", "instances_drawn",
+            "points_drawn", "nonfinite_pixels")
 
 
 class Renderer:
@@ -37,22 +40,26 @@ class Renderer:
         self.features = Features.of(gl.version)
         self.uploads = Uploads(ctx)
         self.stencil = Stencil(gl.proc)
-        self.pool = TargetPool(ctx, self.stencil)
+        self.depth = DepthConvention(gl.proc, self.features.clip_control)
+        self.pool = TargetPool(ctx, self.stencil, self.depth)
         programs = gl.programs
         self.geometry = Geometry(ctx, self.uploads, programs, self.features)
         self.lights = LightTable(self.uploads, preset.disk_sides)
         self.textures = MaterialTextures(ctx, self.uploads, preset.anisotropy)
         self.skinning = SkinningPass(ctx, self.uploads, programs, self.geometry, gl.scratch)
-        self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights, preset)
+        self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights, preset,
+                                  self.depth)
+        self.resolve = ResolvePass(ctx, self.pool, programs, self.geometry, self.depth)
         self.graph = FrameGraph(ctx, self.pool, [
             self.skinning,
-            ViewPass(self.geometry),
+            ViewPass(self.geometry, self.depth),
             self.shadows,
-            GBufferPass(ctx, self.pool, programs, self.geometry, self.textures),
+            GBufferPass(ctx, self.pool, programs, self.geometry, self.textures, self.depth),
+            AovPass(ctx, self.pool, programs),
             AmbientPass(ctx, self.pool, programs, self.textures),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
                       self.geometry, preset),
-            ResolvePass(ctx, self.pool, programs),
+            self.resolve,
         ])
         self._cull_backfaces = None
 
@@ -68,22 +75,33 @@ class Renderer:
         self.skinning.update(scene, changes)
         return meshes
 
-    def render(self, scene, changes, camera, size, transparent, cull_backfaces):
-        """(rgba float32 (H, W, 4), stats, timings) of one frame."""
+    def render(self, scene, changes, camera, size, transparent, cull_backfaces,
+               aovs=frozenset()):
+        """(rgba float32 (H, W, 4), {render pass: float32 (H, W, C)}, stats, timings)
+        of one frame; `aovs`: the render passes asked for (core/passes.py)."""
         t0 = time.perf_counter()
         frame = Frame(scene=scene, changes=changes, size=tuple(size), preset=self.preset,
-                      transparent=transparent, camera=camera,
+                      transparent=transparent, aovs=frozenset(aovs), camera=camera,
                       stats={name: 0 for name in COUNTERS})
         frame.stats["meshes_uploaded"] = self.update(scene, changes, cull_backfaces)
         frame.timings["upload"] = time.perf_counter() - t0
-        board = self.graph.run(frame)
+        self.depth.begin()
+        try:
+            board = self.graph.run(frame)
+        finally:
+            self.depth.end()
         uploaded = self.uploads.take()
         frame.stats["bytes_uploaded"] = int(sum(uploaded.values()))
         frame.stats["bytes_by_kind"] = dict(uploaded)
         frame.stats["gl_path"] = "multi-draw (GL 4.3)" if self.features.multi_draw else \
             "draw per object (GL 3.3)"
         self._restore_state()
-        return board["rgba"], frame.stats, frame.timings
+        return board["rgba"], board["aovs"], frame.stats, frame.timings
+
+    def warnings(self) -> list:
+        """What the GL side could not use (images it could not read) and the last
+        render's non-finite pixels, named by the prims they lie on."""
+        return list(self.textures.failed.values()) + self.resolve.warnings
 
     def skinned_points(self, scene, changes) -> dict:
         """{mesh path: (points, normals)} of every skinned mesh at this sync's time,

@@ -83,15 +83,17 @@ def _bytes(data) -> bytes:
 
 
 # Target formats. Colour: (components, dtype). Besides these, "depth" is a sampled
-# DEPTH_COMPONENT24 texture (G-buffer depth, shadow maps) and "depth_stencil" a
-# DEPTH24_STENCIL8 renderbuffer (light volumes).
-COLOR_FORMATS = {"rgba16f": (4, "f2"), "rgba32f": (4, "f4")}
+# DEPTH_COMPONENT32F texture (G-buffer depth, shadow maps; engine/gpu/depth.py) and
+# "depth_stencil" a DEPTH32F_STENCIL8 renderbuffer (light volumes).
+COLOR_FORMATS = {"rgba16f": (4, "f2"), "rgba32f": (4, "f4"),
+                 "r32f": (1, "f4"), "rg32f": (2, "f4")}   # render passes (AOVs)
 
 
 class TargetPool:
-    def __init__(self, ctx, stencil):
+    def __init__(self, ctx, stencil, depth):
         self.ctx = ctx
         self.stencil = stencil
+        self.depth = depth
         self._free = {}            # (size, format) -> [objects]
         self._out = {}             # id(object) -> (key, object)
         self._fbos = {}            # (ids of attachments) -> framebuffer
@@ -117,7 +119,7 @@ class TargetPool:
         if fmt == "depth_stencil":
             return self.stencil.depth_stencil(size)
         if fmt == "depth":
-            tex = ctx.depth_texture(size)
+            tex = self.depth.float_depth(ctx.depth_texture(size))
             tex.compare_func = ""
         else:
             components, dtype = COLOR_FORMATS[fmt]

@@ -4,7 +4,8 @@ engine/gpu/context.py). ModernGL does not track stencil state, so the two never
 disagree. GL 3.3 core calls only.
 
 Light-volume marking (seed 000 §8.6.1, two-sided stencil, Carmack's depth-fail):
-with the scene depth in the depth buffer, depth test LESS and no culling, a back face
+with the scene depth in the depth buffer, a depth test that passes in front of the
+scene (GREATER: depth is reversed, engine/view.py) and no culling, a back face
 behind the scene increments and a front face behind the scene decrements, so the
 stencil ends non-zero exactly where the scene surface lies inside the volume. The
 camera may be inside (front faces clipped away: only the back-face count remains).
@@ -14,7 +15,7 @@ from __future__ import annotations
 
 import ctypes
 
-GL_DEPTH24_STENCIL8, GL_RENDERBUFFER, GL_FRAMEBUFFER = 0x88F0, 0x8D41, 0x8D40
+GL_DEPTH32F_STENCIL8, GL_RENDERBUFFER, GL_FRAMEBUFFER = 0x8CAD, 0x8D41, 0x8D40
 GL_DEPTH_STENCIL_ATTACHMENT = 0x821A
 GL_STENCIL_TEST, GL_STENCIL_BUFFER_BIT, GL_DEPTH_BUFFER_BIT = 0x0B90, 0x400, 0x100
 GL_FRONT, GL_BACK, GL_FRONT_AND_BACK = 0x0404, 0x0405, 0x0408
@@ -100,7 +101,8 @@ class Stencil:
 
 
 class DepthStencil:
-    """A DEPTH24_STENCIL8 renderbuffer (ModernGL makes no stencil attachments)."""
+    """A DEPTH32F_STENCIL8 renderbuffer (ModernGL makes no stencil attachments): the
+    scene's float depth copied exactly, and the light-volume marks."""
 
     def __init__(self, stencil: Stencil, size):
         gl = stencil._fn
@@ -109,7 +111,7 @@ class DepthStencil:
         self.rb = _u()
         gl["glGenRenderbuffers"](1, ctypes.byref(self.rb))
         gl["glBindRenderbuffer"](GL_RENDERBUFFER, self.rb.value)
-        gl["glRenderbufferStorage"](GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, self.size[0], self.size[1])
+        gl["glRenderbufferStorage"](GL_RENDERBUFFER, GL_DEPTH32F_STENCIL8, self.size[0], self.size[1])
 
     def release(self):
         self._gl["glDeleteRenderbuffers"](1, ctypes.byref(self.rb))

@@ -4,7 +4,9 @@ sRGB data goes up as GL_SRGB8_ALPHA8 so the sampler decodes to linear before
 filtering (and mips are built in linear light); float images go up as float16.
 Trilinear filtering with anisotropy, wrap modes via samplers (mirror and black are
 finished in the shader, see gbuffer.frag sample_map). Reading the files is
-engine/textures.py's job."""
+engine/textures.py's job; an image that cannot be read (corrupt, truncated, empty,
+not an image) becomes a magenta texel and a warning naming the file, here and only
+here (`_image`), whatever the reader raises."""
 from __future__ import annotations
 
 import numpy as np
@@ -21,6 +23,7 @@ class MaterialTextures:
         self._tex = {}
         self._samplers = {}
         self._dome = None              # (path, texture)
+        self.failed = {}               # path -> warning: images that could not be read
 
     def get(self, path: str, colorspace: str):
         key = (path, colorspace)
@@ -28,8 +31,22 @@ class MaterialTextures:
             self._tex[key] = self._upload(path, colorspace)
         return self._tex[key]
 
+    def _image(self, path):
+        """The file's pixels, or a magenta texel when it cannot be read: the one place
+        the engine's image-reading errors are caught (engine/image_io raises ImageError,
+        a ValueError, naming the file; the file system raises OSError)."""
+        try:
+            img = read_rgba(path)
+            if img.ndim != 3 or img.shape[0] < 1 or img.shape[1] < 1:
+                raise ValueError(f"an image of shape {img.shape}")
+            return img
+        except (ValueError, OSError) as exc:
+            reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            self.failed[path] = f"{path}: cannot be read as an image ({reason}); magenta used"
+            return np.array([[[255, 0, 255, 255]]], np.uint8)
+
     def _upload(self, path, colorspace):
-        img = read_rgba(path)
+        img = self._image(path)
         img = np.ascontiguousarray(img[::-1])  # GL's t = 0 is the bottom row, as USD st
         h, w = img.shape[:2]
         srgb = is_srgb(img, colorspace)
@@ -78,6 +95,8 @@ class MaterialTextures:
         used = {(ref.path, ref.colorspace) for m in materials for ref in m.maps.values()}
         for key in [k for k in self._tex if k not in used]:
             self._tex.pop(key).release()
+            if not any(k[0] == key[0] for k in self._tex):
+                self.failed.pop(key[0], None)
 
     def release(self):
         for t in self._tex.values():

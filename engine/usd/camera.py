@@ -5,6 +5,8 @@ The aperture is conformed to the image aspect like Blender's sensor fit AUTO (se
 engine/view.py, which also frames stages without a camera)."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from pxr import Gf, Usd, UsdGeom, UsdRender
 
@@ -20,26 +22,62 @@ def gf_to_np(m) -> np.ndarray:
     return np.array(m, dtype=np.float64).T
 
 
+class CameraError(ValueError):
+    """A camera that cannot make an image (zero, negative or non-finite lens values,
+    clipping range or transform, an unknown projection): the message names the prim."""
+
+
+def _finite(*values) -> bool:
+    return all(math.isfinite(float(v)) for v in values)
+
+
 def camera_from_usd(prim: Usd.Prim, time, aspect: float, xcache=None):
-    gfcam = UsdGeom.Camera(prim).GetCamera(time)
+    path = str(prim.GetPath())
+    camera_schema = UsdGeom.Camera(prim)
+    projection = camera_schema.GetProjectionAttr().Get(time)
+    if projection not in (UsdGeom.Tokens.perspective, UsdGeom.Tokens.orthographic):
+        raise CameraError(f"{path}: unknown projection {projection!r} "
+                          f"(perspective or orthographic)")
+    gfcam = camera_schema.GetCamera(time)
     world = gf_to_np(xcache.GetLocalToWorldTransform(prim)) if xcache else gf_to_np(gfcam.transform)
-    h_ap, v_ap = conform(gfcam.horizontalAperture, gfcam.verticalAperture, aspect)
+    if not np.isfinite(world).all():
+        raise CameraError(f"{path}: its transform is not finite")
+    if abs(np.linalg.det(world[:3, :3])) <= 1e-300:
+        raise CameraError(f"{path}: its transform is singular (a zero scale)")
+    h_ap, v_ap = gfcam.horizontalAperture, gfcam.verticalAperture
     h_off, v_off = gfcam.horizontalApertureOffset, gfcam.verticalApertureOffset
+    if not _finite(h_ap, v_ap, h_off, v_off) or h_ap < 0 or v_ap < 0:
+        raise CameraError(f"{path}: apertures must be finite and positive "
+                          f"(horizontal {h_ap:g}, vertical {v_ap:g})")
+    h_ap, v_ap = conform(h_ap, v_ap, aspect)
+    if not (h_ap > 0 and v_ap > 0):
+        raise CameraError(f"{path}: a zero aperture (horizontal {gfcam.horizontalAperture:g}, "
+                          f"vertical {gfcam.verticalAperture:g}) sees nothing")
     clip = gfcam.clippingRange
-    near, far = max(float(clip.min), 1e-6), float(clip.max)
-    if far <= near:
-        far = near * 1e4
-    is_ortho = gfcam.projection == Gf.Camera.Orthographic
+    near, far = float(clip.min), float(clip.max)
+    if not _finite(near, far) or near < 0 or far <= near:
+        raise CameraError(f"{path}: clippingRange ({near:g}, {far:g}) must be finite with "
+                          f"0 <= near < far")
+    # A near plane at 0 would put every depth at infinity: take it a little off the eye,
+    # relative to the far plane (reversed float depth is precise there anyway).
+    if near == 0:
+        near = far * 1e-7
+    is_ortho = projection == UsdGeom.Tokens.orthographic
     if is_ortho:
         # Apertures are in tenths of a scene unit (USD's convention).
         s = 0.1
         proj = ortho((-h_ap / 2 + h_off) * s, (h_ap / 2 + h_off) * s,
                      (-v_ap / 2 + v_off) * s, (v_ap / 2 + v_off) * s, near, far)
     else:
-        k = near / gfcam.focalLength
+        focal = gfcam.focalLength
+        if not _finite(focal) or focal <= 0:
+            raise CameraError(f"{path}: focalLength {focal:g} must be finite and positive")
+        k = near / focal
         proj = frustum((-h_ap / 2 + h_off) * k, (h_ap / 2 + h_off) * k,
                        (-v_ap / 2 + v_off) * k, (v_ap / 2 + v_off) * k, near, far)
-    return camera(world, proj, near, far, is_ortho, str(prim.GetPath()))
+    if not np.isfinite(proj).all():
+        raise CameraError(f"{path}: its lens gives no finite projection")
+    return camera(world, proj, near, far, is_ortho, path)
 
 
 def might_vary(prim: Usd.Prim) -> bool:
@@ -56,14 +94,20 @@ def might_vary(prim: Usd.Prim) -> bool:
     return False
 
 
-def settings_camera_path(stage: Usd.Stage):
-    """The /Render/Settings `camera` target when it is a camera, else None."""
+def settings_camera_path(stage: Usd.Stage, warnings: list | None = None):
+    """The /Render/Settings `camera` target when it is a camera, else None (with a
+    warning in `warnings` when it names a missing prim or one that is not a camera)."""
     settings = stage.GetPrimAtPath(RENDER_SETTINGS)
     if settings and settings.IsA(UsdRender.Settings):
         for t in UsdRender.Settings(settings).GetCameraRel().GetForwardedTargets():
             p = stage.GetPrimAtPath(t)
             if p and p.IsA(UsdGeom.Camera):
                 return str(p.GetPath())
+            if warnings is not None:
+                what = f"is a {p.GetTypeName() or 'typeless prim'}, not a Camera" if p \
+                    else "does not exist"
+                warnings.append(f"{RENDER_SETTINGS}: its camera {t} {what}; using the "
+                                f"first camera, or the default view")
     return None
 
 

@@ -69,8 +69,53 @@ def _unit(v):
     return v / n if n > 1e-30 else v
 
 
+class _Bad(ValueError):
+    """A light value no light can have: the light is dropped with a warning."""
+
+
+def _valid(value, what, ok="finite", positive=False, nonneg=False):
+    """value (float or sequence) if finite (and > 0 / >= 0 as asked), else _Bad."""
+    arr = np.atleast_1d(np.asarray(value, np.float64))
+    if not np.isfinite(arr).all():
+        raise _Bad(f"{what} is {_show(value)}")
+    if positive and not (arr > 0).all():
+        raise _Bad(f"{what} is {_show(value)}, not positive")
+    if nonneg and not (arr >= 0).all():
+        raise _Bad(f"{what} is {_show(value)}, negative")
+    return value
+
+
+def _show(value):
+    arr = np.atleast_1d(np.asarray(value, np.float64))
+    return f"{arr[0]:g}" if arr.size == 1 else "(" + ", ".join(f"{v:g}" for v in arr) + ")"
+
+
+def _scale(intensity, exposure, color):
+    """intensity * 2^exposure * color, or _Bad when it overflows."""
+    _valid(intensity, "inputs:intensity", nonneg=True)
+    _valid(exposure, "inputs:exposure")
+    _valid(color, "inputs:color", nonneg=True)
+    try:
+        gain = 2.0 ** exposure
+    except OverflowError:
+        gain = math.inf
+    s = intensity * gain * color
+    if not np.isfinite(s).all():
+        raise _Bad(f"inputs:intensity {intensity:g} x 2^inputs:exposure {exposure:g} overflows")
+    return s
+
+
 def read_light(prim: Usd.Prim, world: np.ndarray, time, warnings: list):
-    """A Light record, a Dome, or None (unsupported, with a warning)."""
+    """A Light record, a Dome, or None (unsupported or invalid, with a warning)."""
+    path = str(prim.GetPath())
+    try:
+        return _read_light(prim, world, time, warnings)
+    except _Bad as bad:
+        warnings.append(f"{path}: {bad}; light dropped")
+        return None
+
+
+def _read_light(prim, world, time, warnings):
     tname = prim.GetTypeName()
     path = str(prim.GetPath())
     api = UsdLux.LightAPI(prim)
@@ -78,11 +123,13 @@ def read_light(prim: Usd.Prim, world: np.ndarray, time, warnings: list):
     exposure = float(api.GetExposureAttr().Get(time) or 0.0)
     color = np.array(api.GetColorAttr().Get(time) or (1, 1, 1), dtype=np.float64)
     normalize = bool(api.GetNormalizeAttr().Get(time))
-    s = intensity * 2.0 ** exposure * color
+    if not np.isfinite(world).all():
+        raise _Bad("its transform is not finite")
+    s = _scale(intensity, exposure, color)
     if tname == "DomeLight":
         return read_dome(prim, world, s, time, warnings)
-    diffuse = float(_get(prim, "inputs:diffuse", 1.0, time))
-    specular = float(_get(prim, "inputs:specular", 1.0, time))
+    diffuse = float(_valid(_get(prim, "inputs:diffuse", 1.0, time), "inputs:diffuse"))
+    specular = float(_valid(_get(prim, "inputs:specular", 1.0, time), "inputs:specular"))
     shadow = bool(_get(prim, "inputs:shadow:enable", True, time))
     shadow_res = int(_get(prim, "lantern:shadowResolution", 0, time) or 0)
     scale = _axis_lengths(world)
@@ -91,32 +138,41 @@ def read_light(prim: Usd.Prim, world: np.ndarray, time, warnings: list):
     common = dict(name=path, position=pos, axis=axis, x_axis=_unit(world[:3, 0]),
                   y_axis=_unit(world[:3, 1]), diffuse=diffuse, specular=specular, shadow=shadow,
                   shadow_resolution=shadow_res)
+    shaped = prim.HasAPI(UsdLux.ShapingAPI)
     cone = float(_get(prim, "inputs:shaping:cone:angle", 90.0, time))
-    kind = kind_of_usd(tname, spot=prim.HasAPI(UsdLux.ShapingAPI) and cone < 90.0)
+    if shaped:
+        _valid(cone, "inputs:shaping:cone:angle", positive=True)
+    kind = kind_of_usd(tname, spot=shaped and cone < 90.0)
 
     if kind in (POINT, SPOT):
-        radius = float(_get(prim, "inputs:radius", 0.5, time)) * float(np.mean(scale))
+        radius = float(_valid(_get(prim, "inputs:radius", 0.5, time), "inputs:radius",
+                              nonneg=True)) * float(np.mean(scale))
         point = bool(_get(prim, "treatAsPoint", False, time)) or radius <= 0
         if normalize:
             I = s / 4.0
         else:
             I = s if point else s * math.pi * radius * radius
-        soft = float(_get(prim, "inputs:shaping:cone:softness", 0.0, time))
+        soft = float(_valid(_get(prim, "inputs:shaping:cone:softness", 0.0, time),
+                            "inputs:shaping:cone:softness"))
         return Light(kind=kind, color=I, radius=0.0 if point else radius,
                      soft_falloff=bool(_get(prim, "lantern:softFalloff", True, time)),
                      cone_angle=cone, cone_softness=max(soft, 0.0), **common)
     if kind == SUN:
-        return Light(kind=SUN, color=s, angle=float(_get(prim, "inputs:angle", 0.53, time)),
-                     **common)
+        angle = float(_valid(_get(prim, "inputs:angle", 0.53, time), "inputs:angle", nonneg=True))
+        return Light(kind=SUN, color=s, angle=angle, **common)
     if kind == RECT:
-        w = float(_get(prim, "inputs:width", 1.0, time)) * scale[0]
-        h = float(_get(prim, "inputs:height", 1.0, time)) * scale[1]
-        area = max(w * h, 1e-12)
-        return Light(kind=RECT, color=s / area if normalize else s, width=w, height=h, **common)
+        w = float(_valid(_get(prim, "inputs:width", 1.0, time), "inputs:width", positive=True))
+        h = float(_valid(_get(prim, "inputs:height", 1.0, time), "inputs:height", positive=True))
+        w, h = w * scale[0], h * scale[1]
+        if not w * h > 0:
+            raise _Bad("its transform scales it to no area")
+        return Light(kind=RECT, color=s / (w * h) if normalize else s, width=w, height=h, **common)
     if kind == DISK:
-        r = float(_get(prim, "inputs:radius", 0.5, time)) * float(np.mean(scale[:2]))
-        area = max(math.pi * r * r, 1e-12)
-        return Light(kind=DISK, color=s / area if normalize else s, radius=r, **common)
+        r = float(_valid(_get(prim, "inputs:radius", 0.5, time), "inputs:radius",
+                         positive=True)) * float(np.mean(scale[:2]))
+        if not r > 0:
+            raise _Bad("its transform scales it to no area")
+        return Light(kind=DISK, color=s / (math.pi * r * r) if normalize else s, radius=r, **common)
     warnings.append(f"{path}: light type {tname or 'untyped'} is not supported; skipped")
     return None
 

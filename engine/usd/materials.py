@@ -6,8 +6,10 @@ missing gives a warning naming the material and the path, and the input keeps it
 constant value (or the UsdPreviewSurface default)."""
 from __future__ import annotations
 
+import math
 import os
 
+import numpy as np
 from pxr import Usd, UsdShade
 
 from ..scene import Material, TextureRef
@@ -71,6 +73,9 @@ def _uv_name(tex_shader, time):
 def read_material(mat: UsdShade.Material, time, warnings: list) -> Material:
     path = str(mat.GetPath())
     out = Material(name=path)
+    index = mat.GetPrim().GetAttribute("lantern:passIndex")
+    if index and index.HasAuthoredValue():
+        out.pass_index = int(index.Get())        # render pass IndexMA
     surface = mat.ComputeSurfaceSource()[0]
     if not surface or _shader_id(surface) != "UsdPreviewSurface":
         warnings.append(f"{path}: no UsdPreviewSurface surface; using the default material")
@@ -80,6 +85,10 @@ def read_material(mat: UsdShade.Material, time, warnings: list) -> Material:
         if not inp:
             continue
         value, src = _source(inp, time)
+        if src is None and not inp.HasConnectedSource() and inp.GetAttr().HasAuthoredConnections():
+            targets = ", ".join(str(t) for t in inp.GetAttr().GetConnections())
+            warnings.append(f"{path}: input {name} is connected to {targets}, which does "
+                            f"not exist; using its value or default")
         if src is not None:
             tex_shader, channel = src
             if _shader_id(tex_shader) != "UsdUVTexture" or name not in MAPPABLE:
@@ -97,6 +106,10 @@ def read_material(mat: UsdShade.Material, time, warnings: list) -> Material:
                 value = tuple(float(c) for c in value)
             else:
                 value = float(value)
+            if not all(math.isfinite(c) for c in np.atleast_1d(value)):
+                warnings.append(f"{path}: input {name} is not finite ({value}); using the "
+                                f"default {DEFAULTS[name]}")
+                continue
             setattr(out, FIELDS[name], value)
     return out
 

@@ -66,9 +66,20 @@ def _pick_uv(mesh, wanted, time):
     return None, None
 
 
-def build_mesh(prim, time, materials, subsets, key) -> MeshData:
+def _finite(values, what, n_items=None):
+    """MeshError naming how many values are NaN or Inf (the prim is then skipped: a
+    non-finite vertex would smear NaN over every pixel it touches)."""
+    bad = ~np.isfinite(values)
+    if bad.ndim > 1:
+        bad = bad.any(axis=tuple(range(1, bad.ndim)))
+    if bad.any():
+        raise MeshError(f"{int(bad.sum())} of {len(bad)} {what} are not finite")
+
+
+def build_mesh(prim, time, materials, subsets, key, warnings=None) -> MeshData:
     """materials: [Material] (the prim's own first, then one per subset); subsets:
-    [(index into materials, face indices)]."""
+    [(index into materials, face indices)]. Zero-length normals are replaced by the
+    surface's own (with a warning in `warnings`)."""
     mesh = UsdGeom.Mesh(prim)
     pts = mesh.GetPointsAttr().Get(time)
     counts = mesh.GetFaceVertexCountsAttr().Get(time)
@@ -77,6 +88,8 @@ def build_mesh(prim, time, materials, subsets, key) -> MeshData:
         raise MeshError("missing points, faceVertexCounts or faceVertexIndices")
     pts = np.asarray(pts, np.float64)
     counts = np.asarray(counts, np.int64)
+    if not len(counts):
+        raise MeshError(f"no faces ({len(pts)} points only)")
     idx = np.asarray(idx, np.int64)
     if counts.sum() != len(idx):
         raise MeshError(f"faceVertexCounts sum {counts.sum()} != {len(idx)} indices")
@@ -85,6 +98,7 @@ def build_mesh(prim, time, materials, subsets, key) -> MeshData:
     if np.any(counts < 3):
         raise MeshError("face with fewer than 3 vertices")
 
+    _finite(pts[np.unique(idx)], "points used by faces")
     n_faces = len(counts)
     face_of_corner = np.repeat(np.arange(n_faces), counts)
     tri, face_of_tri = triangulate(_topology_points(mesh, pts), counts, idx)
@@ -102,7 +116,14 @@ def build_mesh(prim, time, materials, subsets, key) -> MeshData:
             normals, interp = np.asarray(v, np.float64), str(mesh.GetNormalsInterpolation())
     if normals is not None:
         N = _per_corner(normals, interp, len(pts), face_of_corner, idx, n_faces, "normals")[corners]
+        _finite(N, "normals (per corner)")
         per_point &= _per_point(interp)
+        zero = np.linalg.norm(N, axis=1) == 0
+        if zero.any():
+            N[zero] = _smooth_normals(pts, idx, corners)[zero]
+            if warnings is not None:
+                warnings.append(f"{prim.GetPath()}: {int(zero.sum())} zero-length normals "
+                                f"(per corner); the surface's own used there")
     else:
         N = _smooth_normals(pts, idx, corners)
 
@@ -110,6 +131,7 @@ def build_mesh(prim, time, materials, subsets, key) -> MeshData:
     uvs, uv_interp = _pick_uv(mesh, uv_name, time)
     if uvs is not None:
         UV = _per_corner(uvs, uv_interp, len(pts), face_of_corner, idx, n_faces, "uv")[corners]
+        _finite(UV, "texture coordinates (per corner)")
         per_point &= _per_point(uv_interp)
     else:
         UV = np.zeros((len(corners), 2))
@@ -127,6 +149,7 @@ def build_mesh(prim, time, materials, subsets, key) -> MeshData:
         tan, t_interp = _primvar(mesh, "tangents", time)
         if tan is not None and tan.shape[1] in (3, 4):
             tc = _per_corner(tan, t_interp, len(pts), face_of_corner, idx, n_faces, "tangents")[corners]
+            _finite(tc, "tangents (per corner)")
             T[:, :tan.shape[1]] = tc
             if tan.shape[1] == 3:
                 T[:, 3] = 1.0

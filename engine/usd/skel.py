@@ -97,6 +97,9 @@ def _joint_influences(skel_query, sq, n_points, time, path, warnings):
     if ind is None or wts is None:
         raise BindingError("jointIndices or jointWeights has no value")
     ind, wts = np.asarray(ind, np.int64), np.asarray(wts, np.float64)
+    if not np.isfinite(wts).all():
+        raise BindingError(f"{int((~np.isfinite(wts)).sum())} of {len(wts)} jointWeights "
+                           f"are not finite")
     if len(ind) != len(wts):
         raise BindingError(f"{len(ind)} jointIndices but {len(wts)} jointWeights")
     if k < 1 or len(ind) % k:
@@ -198,6 +201,67 @@ def _blend_shapes(sq, n_points, skin, path, warnings):
     return bsq
 
 
+def check_unbound(prim, warnings):
+    """A mesh UsdSkel did not bind although it names a skeleton: say why."""
+    rel = prim.GetRelationship("skel:skeleton")
+    for target in (rel.GetTargets() if rel else []):
+        p = prim.GetStage().GetPrimAtPath(target)
+        what = "does not exist" if not p else (
+            f"is a {p.GetTypeName() or 'typeless prim'}, not a Skeleton"
+            if not p.IsA(UsdSkel.Skeleton) else "is not under the mesh's SkelRoot")
+        warnings.append(f"{prim.GetPath()}: its skel:skeleton {target} {what}; "
+                        f"drawn unskinned")
+
+
+def check_skeleton(skel_query):
+    """BindingError naming the Skeleton when it cannot skin: no joints, bind
+    transforms that do not match the joints, or are singular or not finite."""
+    skel = skel_query.GetSkeleton()
+    where = str(skel.GetPrim().GetPath())
+    joints = skel_query.GetJointOrder()
+    if not len(joints):
+        raise BindingError(f"Skeleton {where} has no joints")
+    bind = skel.GetBindTransformsAttr().Get()
+    n_bind = 0 if bind is None else len(bind)
+    if n_bind != len(joints):
+        raise BindingError(f"Skeleton {where} has {n_bind} bindTransforms for "
+                           f"{len(joints)} joints")
+    m = np.array(bind, np.float64).reshape(-1, 4, 4)
+    if not np.isfinite(m).all():
+        raise BindingError(f"Skeleton {where}: bindTransforms are not finite")
+    det = np.linalg.det(m[:, :3, :3])
+    scale = np.abs(m[:, :3, :3]).max(axis=(1, 2))
+    singular = np.abs(det) <= 1e-12 * np.maximum(scale, 1e-300) ** 3
+    if singular.any():
+        raise BindingError(f"Skeleton {where}: the bind transform of joint "
+                           f"{joints[int(np.argmax(singular))]} is singular")
+
+
+def skeleton_warnings(skel_query) -> list:
+    """What is odd about a Skeleton and its SkelAnimation but leaves it usable: rest
+    transforms or animation channels whose counts do not match the joints (UsdSkel
+    then ignores them: the skeleton keeps its rest or bind pose)."""
+    out = []
+    skel = skel_query.GetSkeleton()
+    n = len(skel_query.GetJointOrder())
+    rest = skel.GetRestTransformsAttr().Get()
+    if rest is not None and len(rest) != n:
+        out.append(f"{skel.GetPrim().GetPath()}: {len(rest)} restTransforms for {n} joints; "
+                   f"they are ignored")
+    anim_query = skel_query.GetAnimQuery()
+    if anim_query:
+        anim = UsdSkel.Animation(anim_query.GetPrim())
+        n_anim = len(anim.GetJointsAttr().Get() or [])
+        for name, attr in (("translations", anim.GetTranslationsAttr()),
+                           ("rotations", anim.GetRotationsAttr()),
+                           ("scales", anim.GetScalesAttr())):
+            value = attr.Get(Usd.TimeCode.EarliestTime()) if attr.HasValue() else None
+            if value is not None and len(value) != n_anim:
+                out.append(f"{anim.GetPrim().GetPath()}: {len(value)} {name} for {n_anim} "
+                           f"joints; the animation is ignored")
+    return out
+
+
 def attach_skin(mesh_data, prim, binding, time, warnings) -> bool:
     """Adds a SkinData (per vertex of the MeshData) to a freshly built MeshData. A
     malformed binding leaves the mesh unskinned with a warning naming it and the
@@ -208,8 +272,11 @@ def attach_skin(mesh_data, prim, binding, time, warnings) -> bool:
     n_points = len(points)
     skin = SkinData(skel_key=skel_key(skel_query), n_points=n_points)
     try:
-        if sq.HasJointInfluences() and len(skel_query.GetJointOrder()):
+        if sq.HasJointInfluences():
+            check_skeleton(skel_query)
             joints, weights = _joint_influences(skel_query, sq, n_points, time, path, warnings)
+            if not (weights != 0).any():
+                raise BindingError("every jointWeight is 0")
             pi = mesh_data.point_of_vertex
             skin.joints, skin.weights = joints[pi], weights[pi]
             if joints.shape[1] > MAX_ATTRIBUTE_INFLUENCES:
@@ -241,10 +308,37 @@ def attach_skin(mesh_data, prim, binding, time, warnings) -> bool:
     return True
 
 
-def pose(skel_query, time, dqs) -> SkelPose:
+def pose(skel_query, time, dqs, warnings=None) -> SkelPose:
+    """The skinning transforms at `time`. Non-finite ones (a NaN rotation in the
+    animation) give the rest pose instead, with a warning naming the animation."""
+    n = len(skel_query.GetJointOrder())
     xf = np.array(skel_query.ComputeSkinningTransforms(time), np.float64).reshape(-1, 4, 4)
+    if len(xf) != n or not np.isfinite(xf).all():
+        anim = skel_query.GetAnimQuery()
+        where = anim.GetPrim().GetPath() if anim else skel_query.GetPrim().GetPath()
+        when = "" if time.IsDefault() else f" at time {time.GetValue():g}"
+        if warnings is not None:
+            warnings.append(f"{where}: joint transforms are not finite{when}; the skeleton "
+                            f"is drawn in its rest pose")
+        xf = _rest_skinning(skel_query)
     xf = np.concatenate([xf.transpose(0, 2, 1), np.eye(4)[None]])
     return SkelPose(xforms=xf, dqs=dqs)
+
+
+def _rest_skinning(skel_query):
+    """Skinning transforms of the rest pose (row-vector, as UsdSkel's): inverse bind
+    times rest skel-space transforms; identity wherever that is not finite."""
+    n = len(skel_query.GetJointOrder())
+    skel = np.array(skel_query.ComputeJointSkelTransforms(Usd.TimeCode.Default(), True),
+                    np.float64).reshape(-1, 4, 4)
+    bind = np.array(skel_query.GetJointWorldBindTransforms(), np.float64).reshape(-1, 4, 4)
+    out = np.tile(np.eye(4), (n, 1, 1))
+    if len(skel) == n and len(bind) == n:
+        with np.errstate(all="ignore"):
+            xf = np.linalg.pinv(bind) @ skel
+        ok = np.isfinite(xf).all(axis=(1, 2))
+        out[ok] = xf[ok]
+    return out
 
 
 def blend_weights(skel_query, sq, bsq_cache, prim, time):
@@ -257,7 +351,10 @@ def blend_weights(skel_query, sq, bsq_cache, prim, time):
         return []
     mapper = sq.GetBlendShapeMapper()
     if mapper and not mapper.IsNull() and not mapper.IsIdentity():
-        w = mapper.Remap(w, Vt.FloatArray(), 1, 0.0)
+        # The animation's blend shapes in the mesh's order (float weights: a Python
+        # 0.0 default would be a double, which UsdSkel refuses); shapes the animation
+        # lacks get 0.
+        w = mapper.Remap(Vt.FloatArray(w))
     key = str(prim.GetPath())
     bsq = bsq_cache.get(key)
     if bsq is None:

@@ -40,6 +40,22 @@ def modifiers_disabled(modifiers, depsgraph):
             depsgraph.update()
 
 
+def evaluated_at(scene, times):
+    """Yields each time with the scene evaluated there, and restores the frame. The
+    current frame alone is read as it is: no frame change (none may happen inside a
+    depsgraph update, where the live viewport exports)."""
+    if list(times) == [scene.frame_current] and scene.frame_subframe == 0:
+        yield times[0]
+        return
+    frame, subframe = scene.frame_current, scene.frame_subframe
+    try:
+        for f in times:
+            scene.frame_set(f)
+            yield f
+    finally:
+        scene.frame_set(frame, subframe=subframe)
+
+
 def _relative_error(a, b):
     scale = max(1.0, float(np.abs(b).max(initial=0.0)))
     return float(np.abs(a - b).max(initial=0.0)) / scale
@@ -116,20 +132,15 @@ class Sampler:
         poses = {k: [] for k in self.armatures}
         weights = {k: [] for k in skinned if self._skin(k).blend_shapes}
         names = {k: [s.name for s in self._skin(k).blend_shapes] for k in weights}
-        frame, subframe = scene.frame_current, scene.frame_subframe
-        try:
-            for t, f in enumerate(times):
-                scene.frame_set(f)
-                for i, k in enumerate(keys):
-                    worlds[t, i] = self.originals[k].evaluated_get(self.depsgraph).matrix_world
-                for k in self.armatures:
-                    ev = self.originals[k].evaluated_get(self.depsgraph)
-                    poses[k].append(pose_matrices(ev, order[k]))
-                for k in weights:
-                    ev = self.originals[k].evaluated_get(self.depsgraph)
-                    weights[k].append(shape_weights(ev, names[k]))
-        finally:
-            scene.frame_set(frame, subframe=subframe)
+        for t, _ in enumerate(evaluated_at(scene, times)):
+            for i, k in enumerate(keys):
+                worlds[t, i] = self.originals[k].evaluated_get(self.depsgraph).matrix_world
+            for k in self.armatures:
+                ev = self.originals[k].evaluated_get(self.depsgraph)
+                poses[k].append(pose_matrices(ev, order[k]))
+            for k in weights:
+                ev = self.originals[k].evaluated_get(self.depsgraph)
+                weights[k].append(shape_weights(ev, names[k]))
         for i, k in enumerate(keys):
             require_finite(worlds[:, i], f"object '{self.objects[k].name}'", "animated transform")
         for k, v in poses.items():
@@ -253,20 +264,15 @@ class Sampler:
             return
         scene = self.depsgraph.scene
         samples = {k: PointSamples(times=list(times), points=[], normals=[]) for k in baked}
-        frame, subframe = scene.frame_current, scene.frame_subframe
-        try:
-            for f in times:
-                scene.frame_set(f)
-                for k in baked:
-                    ev = self.originals[k].evaluated_get(self.depsgraph)
-                    mesh = ev.to_mesh()
-                    try:
-                        _append_points(samples[k], mesh, self.rec.meshes[self.objects[k].mesh],
-                                       f"object '{self.objects[k].name}'")
-                    finally:
-                        ev.to_mesh_clear()
-        finally:
-            scene.frame_set(frame, subframe=subframe)
+        for _ in evaluated_at(scene, times):
+            for k in baked:
+                ev = self.originals[k].evaluated_get(self.depsgraph)
+                mesh = ev.to_mesh()
+                try:
+                    _append_points(samples[k], mesh, self.rec.meshes[self.objects[k].mesh],
+                                   f"object '{self.objects[k].name}'")
+                finally:
+                    ev.to_mesh_clear()
         for k in baked:
             rec = self.rec.meshes[self.objects[k].mesh]
             if len(samples[k].points) == len(times):

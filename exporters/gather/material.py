@@ -315,4 +315,5 @@ def gather_material(material, warn, texture_dir=None):
             walker.shader(link, found)
             inputs.update(found)
     return MaterialRecord(key=material.name_full, name=material.name, inputs=inputs,
-                          backface_culling=bool(material.use_backface_culling))
+                          backface_culling=bool(material.use_backface_culling),
+                          pass_index=int(material.pass_index))

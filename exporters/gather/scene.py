@@ -61,9 +61,13 @@ def _ancestors(ob):
         yield ob
 
 
-def gather_scene(depsgraph, warn, texture_dir=None, animation=True):
+def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False):
     """`animation`: sample the frame range (rigs, blend shapes, moving objects). Only a
-    viewport depsgraph can step through frames; a render one is exported as a still."""
+    viewport depsgraph can step through frames; a render one is exported as a still.
+    `live` (the viewport, exporters/live.py): rigs at the current frame only, and no
+    modifier is switched off (that would be an edit inside a depsgraph update): a
+    skinned mesh's rest shape is its mesh data, so one with other modifiers than its
+    Armature modifier is baked instead."""
     scene = depsgraph.scene
     rec = SceneRecord(settings=_settings(scene))
     visible = render_visible(depsgraph.view_layer)
@@ -93,6 +97,10 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True):
                 if rig is not None and rig.armature is not None and rig.reason is None \
                         and ob in _ancestors(rig.armature):
                     rig.reason, rig.disabled = "its armature is parented to the mesh", []
+                if live and rig is not None and rig.reason is None and rig.disabled:
+                    if [m for m in ob.modifiers if m.show_viewport] != rig.disabled:
+                        rig.reason = "other modifiers than its Armature modifier (live viewport)"
+                    rig.disabled, rig.rest_from_data = [], rig.reason is None
                 if rig is not None:
                     rigs[key] = rig
 
@@ -106,7 +114,8 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True):
             sampler = Sampler(depsgraph, rec, originals, rigs, warn)
             sampler.build_skeletons()
             sampler.build_skins(groups)
-            times = list(range(scene.frame_start, scene.frame_end + 1))
+            times = [scene.frame_current] if live else \
+                list(range(scene.frame_start, scene.frame_end + 1))
             rec.times = times
             sampler.sample(times)
             sampler.write_transforms()
@@ -162,7 +171,7 @@ def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir, instance
         else:
             local = world
         obj = ObjectRecord(key=key, name=ob.original.name, parent=parent_key,
-                           matrix=local, kind="empty")
+                           matrix=local, kind="empty", pass_index=int(ob.original.pass_index))
         if ob.type == "LIGHT":
             obj.kind, obj.light = "light", gather_light(ob.data.original, warn)
         elif ob.type == "CAMERA":
@@ -212,9 +221,11 @@ def _gather_geometry(ob, obj, rec, shared, rig, groups, warn):
     owner = f"object '{orig.name}'"
     if mesh_key not in rec.meshes:
         # Blend shapes apply to the mesh without its shape keys: the data itself (such
-        # meshes have no other modifier), with the reference key's positions.
+        # meshes have no other modifier), with the reference key's positions. A live
+        # export reads a skinned mesh's rest shape from its data likewise.
         keyed = skinned and rig.shape_keys
-        mesh = orig.data if keyed else ob.to_mesh()
+        from_data = keyed or (skinned and rig.rest_from_data)
+        mesh = orig.data if from_data else ob.to_mesh()
         try:
             if len(mesh.polygons) == 0:
                 # Points or edges only: nothing to render. Empty meshes (a metaball
@@ -237,7 +248,7 @@ def _gather_geometry(ob, obj, rec, shared, rig, groups, warn):
             if skinned and rig.armature is not None:
                 groups[orig.name_full] = group_entries(mesh)
         finally:
-            if not keyed:
+            if not from_data:
                 ob.to_mesh_clear()
     obj.kind, obj.mesh, obj.shared = "mesh", mesh_key, is_shared
     obj.materials = [(s.material.original.name_full, s.material.original)

@@ -21,6 +21,7 @@ class MeshRig:
     shape_keys: bool = False             # relative shape keys to write as blend shapes
     reason: str | None = None            # why UsdSkel cannot express it: bake the points
     disabled: list = field(default_factory=list)  # modifiers switched off to get the rest mesh
+    rest_from_data: bool = False         # the rest mesh is the mesh data (live exports)
 
 
 def animated(id_data):

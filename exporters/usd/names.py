@@ -29,3 +29,10 @@ def primvar_name(uv_name):
 def set_blender_name(prim, name):
     prim.CreateAttribute("lantern:blenderName", Sdf.ValueTypeNames.String,
                          custom=True).Set(name)
+
+
+def set_pass_index(prim, index):
+    """Blender's pass index (render passes IndexOB, IndexMA), authored only when set."""
+    if index:
+        prim.CreateAttribute("lantern:passIndex", Sdf.ValueTypeNames.Int,
+                             custom=True).Set(int(index))

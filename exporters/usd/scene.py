@@ -1,4 +1,10 @@
-"""SceneRecord -> a stage, laid out as docs/stage_contract.md says."""
+"""SceneRecord -> a stage, laid out as docs/stage_contract.md says.
+
+write_scene writes a whole scene and returns where it put each record (StagePaths);
+the pieces it is made of (an object's prim and attributes, its mesh prim, a material)
+are also what exporters/live.py writes alone, at those same paths."""
+from dataclasses import dataclass, field
+
 import numpy as np
 from pxr import Gf, Sdf, UsdGeom, UsdSkel, Vt
 
@@ -7,7 +13,7 @@ from .instances import write_instances, write_points, write_prototype
 from .light import write_light
 from .material import write_material
 from .mesh import bind_materials, write_mesh
-from .names import Namer, primvar_name, set_blender_name
+from .names import Namer, primvar_name, set_blender_name, set_pass_index
 from .skel import bind_skin, write_skeleton
 from .stage import write_metadata, write_render_settings
 from .world import write_world
@@ -28,7 +34,7 @@ def _channel(op, values, times, convert):
             op.Set(convert(value), frame)
 
 
-def _transform(prim, obj, times=()):
+def write_transform(prim, obj, times=()):
     """translate, orient (quaternion) and scale ops when the matrix is TRS, so that USD
     interpolates between samples as Blender does; the matrix op only for shear."""
     xformable = UsdGeom.Xformable(prim)
@@ -57,8 +63,78 @@ def _bake_points(stage, mesh_path, samples):
         extent.Set(Vt.Vec3fArray([tuple(map(float, lo)), tuple(map(float, hi))]), frame)
 
 
-def write_scene(stage, scene, asset_path, max_influences=None):
+@dataclass
+class StagePaths:
+    """Where write_scene put each record (what a partial export needs to write the
+    same prims again)."""
+    objects: dict = field(default_factory=dict)     # object key -> its prim
+    meshes: dict = field(default_factory=dict)      # object key -> its mesh prim
+    prototypes: dict = field(default_factory=dict)  # shared mesh key -> the prototype's prim
+    materials: dict = field(default_factory=dict)   # material key -> Material prim
+    default_uv: dict = field(default_factory=dict)  # material key -> primvar of its textures
+    skeletons: dict = field(default_factory=dict)   # rig key -> (Skeleton path, shape tokens)
+    world: Sdf.Path | None = None
+
+
+def double_sided(materials, slot_keys):
+    """Whether a mesh with these slot materials is drawn two-sided: unless every one
+    asks for backface culling. `materials`: key -> MaterialRecord."""
+    mats = [materials[k] for k in slot_keys if k is not None]
+    return not (mats and all(m.backface_culling for m in mats))
+
+
+def slot_names(materials, slot_keys):
+    return [materials[k].name if k is not None else None for k in slot_keys]
+
+
+def write_material_prim(stage, path, rec, default_uv, asset_path):
+    write_material(stage, path, rec, default_uv, asset_path)
+    prim = stage.GetPrimAtPath(path)
+    set_blender_name(prim, rec.name)
+    set_pass_index(prim, rec.pass_index)
+
+
+def define_object_prim(stage, path, obj):
+    """The object's own prim: the UsdLux light or camera it is, a SkelRoot for a rig
+    (its Skeleton is written apart), else an Xform."""
+    if obj.kind == "light":
+        return write_light(stage, path, obj.light).GetPrim()
+    if obj.kind == "camera":
+        return write_camera(stage, path, obj.camera).GetPrim()
+    if obj.rig is not None:
+        return UsdSkel.Root.Define(stage, path).GetPrim()
+    return UsdGeom.Xform.Define(stage, path).GetPrim()
+
+
+def write_object_attributes(prim, obj, times=()):
+    """What an object prim holds of the object itself: its transform, Blender name
+    and pass index."""
+    write_transform(prim, obj, times)
+    set_blender_name(prim, obj.name)
+    set_pass_index(prim, obj.pass_index)
+
+
+def write_object_mesh(stage, mesh_path, obj, rec, materials, paths, max_influences=None):
+    """An object's mesh prim: its data (or a reference to the shared prototype), its
+    material bindings, its skin and its baked points."""
+    if obj.shared:
+        stage.DefinePrim(mesh_path).GetReferences().AddInternalReference(
+            paths.prototypes[obj.mesh])
+    else:
+        write_mesh(stage, mesh_path, rec, double_sided(materials, obj.materials),
+                   slot_names(materials, obj.materials))
+        set_blender_name(stage.GetPrimAtPath(mesh_path), rec.name)
+    bind_materials(stage, mesh_path, rec, obj.materials, paths.materials)
+    if rec.skin is not None:
+        skeleton_path, tokens = paths.skeletons[rec.skin.rig]
+        bind_skin(stage, mesh_path, rec.skin, skeleton_path, tokens, max_influences)
+    if rec.point_samples is not None:
+        _bake_points(stage, mesh_path, rec.point_samples)
+
+
+def write_scene(stage, scene, asset_path, max_influences=None) -> StagePaths:
     namer = Namer()
+    paths = StagePaths()
     for reserved in ("_prototypes", "_materials", "_world"):
         namer.reserve(ROOT, reserved)
     UsdGeom.Xform.Define(stage, ROOT)
@@ -69,7 +145,6 @@ def write_scene(stage, scene, asset_path, max_influences=None):
         if obj.mesh is not None:
             slots_of.setdefault(obj.mesh, obj.materials)
 
-    material_paths = {}
     if scene.materials:
         UsdGeom.Scope.Define(stage, MATERIALS)
         for key, rec in scene.materials.items():
@@ -78,18 +153,9 @@ def write_scene(stage, scene, asset_path, max_influences=None):
                                if o.mesh is not None and key in o.materials
                                and scene.meshes[o.mesh].active_uv), "UVMap")
             path = namer.child(MATERIALS, rec.name)
-            write_material(stage, path, rec, default_uv, asset_path)
-            set_blender_name(stage.GetPrimAtPath(path), rec.name)
-            material_paths[key] = path
+            write_material_prim(stage, path, rec, default_uv, asset_path)
+            paths.materials[key], paths.default_uv[key] = path, default_uv
 
-    def double_sided(slot_materials):
-        mats = [scene.materials[k] for k in slot_materials if k is not None]
-        return not (mats and all(m.backface_culling for m in mats))
-
-    def slot_names(slot_materials):
-        return [scene.materials[k].name if k is not None else None for k in slot_materials]
-
-    proto_paths = {}  # mesh key -> path of its data, written once
     for proto in scene.prototypes.values():
         if proto.mesh is not None:
             slots_of.setdefault(proto.mesh, proto.materials)
@@ -100,32 +166,25 @@ def write_scene(stage, scene, asset_path, max_influences=None):
         for key in shared:
             rec = scene.meshes[key]
             path = namer.child(PROTOTYPES, rec.name)
-            write_mesh(stage, path, rec, double_sided(slots_of[key]), slot_names(slots_of[key]))
+            write_mesh(stage, path, rec, double_sided(scene.materials, slots_of[key]),
+                       slot_names(scene.materials, slots_of[key]))
             set_blender_name(stage.GetPrimAtPath(path), rec.name)
-            proto_paths[key] = path
+            paths.prototypes[key] = path
     instance_paths = {}  # prototype key -> its Xform under /root/_prototypes
     for key in sorted(scene.prototypes):
         proto = scene.prototypes[key]
         instance_paths[key] = namer.child(PROTOTYPES, proto.name)
-        write_prototype(stage, instance_paths[key], proto, proto_paths, material_paths,
+        write_prototype(stage, instance_paths[key], proto, paths.prototypes, paths.materials,
                         scene.meshes)
 
-    object_paths, skeletons = {}, {}  # rig key -> (Skeleton path, blend shape tokens)
     for obj in scene.objects:
-        parent = object_paths[obj.parent] if obj.parent is not None else ROOT
+        parent = paths.objects[obj.parent] if obj.parent is not None else ROOT
         path = namer.child(parent, obj.name)
-        object_paths[obj.key] = path
-        if obj.kind == "light":
-            prim = write_light(stage, path, obj.light).GetPrim()
-        elif obj.kind == "camera":
-            prim = write_camera(stage, path, obj.camera).GetPrim()
-        elif obj.rig is not None:
-            prim = UsdSkel.Root.Define(stage, path).GetPrim()
-            skeletons[obj.rig] = write_skeleton(stage, path, scene.skeletons[obj.rig], namer)
-        else:
-            prim = UsdGeom.Xform.Define(stage, path).GetPrim()
-        _transform(prim, obj, scene.times)
-        set_blender_name(prim, obj.name)
+        paths.objects[obj.key] = path
+        prim = define_object_prim(stage, path, obj)
+        if obj.rig is not None:
+            paths.skeletons[obj.rig] = write_skeleton(stage, path, scene.skeletons[obj.rig], namer)
+        write_object_attributes(prim, obj, scene.times)
         if obj.points is not None:
             write_points(stage, namer.child(path, obj.points.name), obj.points)
         if obj.instances is not None:
@@ -135,20 +194,12 @@ def write_scene(stage, scene, asset_path, max_influences=None):
             continue
         rec = scene.meshes[obj.mesh]
         mesh_path = namer.child(path, rec.name)
-        if obj.shared:
-            stage.DefinePrim(mesh_path).GetReferences().AddInternalReference(proto_paths[obj.mesh])
-        else:
-            write_mesh(stage, mesh_path, rec, double_sided(obj.materials), slot_names(obj.materials))
-            set_blender_name(stage.GetPrimAtPath(mesh_path), rec.name)
-        bind_materials(stage, mesh_path, rec, obj.materials, material_paths)
-        if rec.skin is not None:
-            skeleton_path, tokens = skeletons[rec.skin.rig]
-            bind_skin(stage, mesh_path, rec.skin, skeleton_path, tokens, max_influences)
-        if rec.point_samples is not None:
-            _bake_points(stage, mesh_path, rec.point_samples)
+        paths.meshes[obj.key] = mesh_path
+        write_object_mesh(stage, mesh_path, obj, rec, scene.materials, paths, max_influences)
 
     if scene.world is not None:
         write_world(stage, WORLD, scene.world, asset_path)
-    camera = object_paths.get(scene.settings.camera)
+        paths.world = WORLD
+    camera = paths.objects.get(scene.settings.camera)
     write_render_settings(stage, scene.settings, camera)
-    return object_paths
+    return paths

@@ -66,10 +66,19 @@ def write_skeleton(stage, parent_path, rec, namer):
     skel.GetPrim().CreateAttribute("lantern:jointNames", Sdf.ValueTypeNames.StringArray,
                                    custom=True).Set(Vt.StringArray(names))
 
-    tokens = {}
     if not rec.times:
-        return path, tokens
-    anim = UsdSkel.Animation.Define(stage, path.AppendChild("Animation"))
+        return path, {}
+    anim_path = path.AppendChild("Animation")
+    tokens = write_animation(stage, anim_path, rec, joints)
+    UsdSkel.BindingAPI.Apply(skel.GetPrim()).CreateAnimationSourceRel().SetTargets([anim_path])
+    return path, tokens
+
+
+def write_animation(stage, path, rec, joints):
+    """The SkelAnimation of a rig: joint channels and blend-shape weights at its
+    times. Returns the blend shape tokens: (object key, key name) -> token."""
+    tokens = {}
+    anim = UsdSkel.Animation.Define(stage, path)
     anim.CreateJointsAttr(Vt.TokenArray(joints))
     _channel(anim.CreateTranslationsAttr(), _with_static(rec.translations, rec, (0, 0, 0)),
              rec.times, lambda v: Vt.Vec3fArray.FromNumpy(v.astype(np.float32)))
@@ -86,9 +95,7 @@ def write_skeleton(stage, parent_path, rec, namer):
         anim.CreateBlendShapesAttr(Vt.TokenArray([tokens[s] for s in rec.blend_shapes]))
         _channel(anim.CreateBlendShapeWeightsAttr(), rec.blend_weights, rec.times,
                  lambda v: Vt.FloatArray.FromNumpy(v.astype(np.float32)))
-    UsdSkel.BindingAPI.Apply(skel.GetPrim()).CreateAnimationSourceRel().SetTargets(
-        [anim.GetPath()])
-    return path, tokens
+    return tokens
 
 
 def bind_skin(stage, mesh_path, skin, skeleton_path, shape_tokens, max_influences=None):

@@ -11,20 +11,7 @@ import time
 
 import pytest
 
-
-
-def _load_generator():
-    """malformed_usd.py beside this file, loaded by path: putting this folder on
-    sys.path would shadow tests/test_skinning.py and friends."""
-    import importlib.util
-    path = pathlib.Path(__file__).with_name("malformed_usd.py")
-    spec = importlib.util.spec_from_file_location("lantern_malformed_usd", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-malformed_usd = _load_generator()
+from hard_cases import malformed_usd  # tests/ is on sys.path (conftest.py)
 
 CUBE = pathlib.Path(__file__).resolve().parents[2].parent / "shared" / "corpus" / "blender" / "01_cube.blend"
 

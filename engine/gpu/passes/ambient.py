@@ -15,14 +15,11 @@ GBUFFER = ("g_base", "g_normal", "g_mat", "g_emit", "g_depth")
 
 
 def bind_gbuffer(board, prog, view):
-    """The G-buffer and the camera, as every screen-space lighting pass reads them."""
+    """The G-buffer and the camera, as every screen-space lighting pass reads them
+    (positions from depth are camera-relative: lib.glsl)."""
     for name in GBUFFER:
         board[name].use(UNITS[name])
-    cam = view.camera
-    set_uniform(prog, "inv_view_proj", view.inv_view_proj)
-    set_uniform(prog, "cam_pos", cam.position)
-    set_uniform(prog, "cam_forward", cam.forward)
-    set_uniform(prog, "cam_ortho", bool(cam.ortho))
+    view.set_camera(prog)
 
 
 class AmbientPass(Pass):

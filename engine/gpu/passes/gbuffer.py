@@ -8,7 +8,10 @@ and its images stay on the GPU for the session.
 
 reads: skinned (posed geometry), view
 writes: g_base (base colour + alpha), g_normal (world normal), g_mat (metallic,
-        roughness, dielectric F0), g_emit (emission), all RGBA16F; g_depth (DEPTH24)"""
+        roughness, dielectric F0), g_emit (emission), all RGBA16F; g_depth (32-bit
+        float, reversed: cleared to 0, tested GREATER; engine/view.py)
+render passes: IndexOB, IndexMA into g_index (RG32F), only when asked for (a
+        shader variant with a fifth output)"""
 from __future__ import annotations
 
 from ..framegraph import Pass
@@ -27,18 +30,22 @@ class GBufferPass(Pass):
     name = "gbuffer"
     reads = ("skinned", "view")
     writes = TARGETS
+    aovs = {"IndexOB": ("g_index", 0), "IndexMA": ("g_index", 1)}
 
-    def __init__(self, ctx, pool, programs, geometry, textures):
+    def __init__(self, ctx, pool, programs, geometry, textures, depth):
         self.ctx, self.pool, self.programs = ctx, pool, programs
-        self.geometry, self.textures = geometry, textures
+        self.geometry, self.textures, self.depth = geometry, textures, depth
 
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]
-        fbo = self.pool.framebuffer([board[n] for n in TARGETS[:4]], depth=board["g_depth"])
+        index = "g_index" in self.aov_targets(frame)
+        colors = [board[n] for n in TARGETS[:4]] + ([board["g_index"]] if index else [])
+        fbo = self.pool.framebuffer(colors, depth=board["g_depth"])
         fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=0.0)
         ctx.enable(ctx.DEPTH_TEST)
-        ctx.depth_func = "<"
+        ctx.depth_func = ">"
+        self.depth.far_clip(True)
         ctx.disable(ctx.BLEND)
         ctx.cull_face = "back"
         cam = view.camera
@@ -50,9 +57,11 @@ class GBufferPass(Pass):
         for batch in batches:
             mat = materials[batch.material]
             defines = [flag for name, _, flag in MAP_SLOTS if name in mat.maps] + \
-                self.geometry.object_defines()
+                self.geometry.object_defines() + (["WRITE_INDEX"] if index else [])
             prog = self.programs.get("gbuffer.vert", "gbuffer.frag", defines)
             set_uniform(prog, "view_proj", view.view_proj)
+            set_uniform(prog, "u_far", view.far_clip)
+            view.set_origin(prog)
             self._material(prog, mat)
             # A mirroring transform turns counter-clockwise triangles clockwise.
             ctx.front_face = "cw" if batch.mirrored else "ccw"
@@ -62,8 +71,32 @@ class GBufferPass(Pass):
                 ctx.disable(ctx.CULL_FACE)
             self.geometry.draw_batch(batch, prog)
             frame.count("draw_calls", batch.count)
+            frame.count("instances_drawn", batch.instances)
         ctx.front_face = "ccw"
-        ctx.disable(ctx.CULL_FACE | ctx.DEPTH_TEST)
+        ctx.disable(ctx.CULL_FACE)
+        if self.geometry.points.clouds:
+            self._points(frame, view, materials)
+        ctx.disable(ctx.DEPTH_TEST)
+        self.depth.far_clip(False)
+
+    def _points(self, frame, view, materials):
+        """Points prims: spheres facing the camera (points.vert), depth-tested with
+        the meshes."""
+        cam = view.camera
+
+        def setup(prog, cloud):
+            set_uniform(prog, "view_proj", view.view_proj)
+            set_uniform(prog, "u_window", view.window)
+            set_uniform(prog, "u_far", view.far_clip)
+            set_uniform(prog, "u_face_axis", bool(cam.ortho))
+            set_uniform(prog, "u_axis", cam.forward)
+            view.set_origin(prog)
+            self._material(prog, materials[cloud.material])
+
+        draws, points = self.geometry.points.draw(
+            self.programs, "gbuffer", setup, lambda lo, hi: not view.outside(lo[None], hi[None])[0])
+        frame.count("draw_calls", draws)
+        frame.count("points_drawn", points)
 
     def _material(self, prog, mat):
         set_uniform(prog, "u_diffuse", mat.diffuse)
@@ -73,6 +106,7 @@ class GBufferPass(Pass):
         set_uniform(prog, "u_emissive", mat.emissive)
         set_uniform(prog, "u_opacity", mat.opacity)
         set_uniform(prog, "u_opacity_threshold", mat.opacity_threshold)
+        set_uniform(prog, "u_material_index", float(mat.pass_index))
         for name, short, _ in MAP_SLOTS:
             ref = mat.maps.get(name)
             if ref is None:

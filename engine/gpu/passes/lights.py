@@ -6,11 +6,14 @@ ONE), reading its numbers from the light table (engine/gpu/lights.py).
                            a scissor rectangle, shading only pixels whose scene surface
                            lies inside it: two-sided stencil marking against a copy of
                            the scene depth, then the volume's back faces where marked
-                           (engine/gpu/stencil.py). A volume crossing the far plane
-                           shades its scissored screen instead.
+                           (engine/gpu/stencil.py). Depth is reversed with an infinite
+                           far plane (engine/view.py), so no volume crosses it; an
+                           orthographic camera's volume that crosses its finite far
+                           plane shades its scissored screen instead.
   shadowless point/spot    all in one instanced draw of their spheres: per-light
                            Python and draw calls would cost more than their few pixels.
-Shadow-casting lights read their map from the shadow pass.
+Shadow-casting lights read their map from the shadow pass. Volumes are placed
+relative to the camera (positions are camera-relative, as the surfaces they light).
 
 reads: g_base, g_normal, g_mat, g_emit, g_depth, hdr, view, shadow_maps (optional)
 writes: hdr, depth_stencil"""
@@ -21,6 +24,7 @@ import math
 import numpy as np
 
 from ....core.lights import KINDS, POINT, SPOT, SUN
+from ...view import translate
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
 from .ambient import GBUFFER, bind_gbuffer
@@ -54,7 +58,7 @@ def icosphere(level: int) -> np.ndarray:
 
 
 def cone(light, length: float) -> np.ndarray:
-    """World-space triangle soup of a cone enclosing the spot's lit region (height
+    """Triangle soup, about the light's position, of a cone enclosing the spot's lit region (height
     `length` along its axis past the light, polygon base circumscribing). A spot with
     a radius lights from every point of its sphere, so the apex moves back until the
     cone contains the cone of every such point: by radius / sin(half angle)."""
@@ -67,7 +71,7 @@ def cone(light, length: float) -> np.ndarray:
     u /= np.linalg.norm(u)
     w = np.cross(ax, u)
     ang = np.arange(CONE_SIDES) * 2 * math.pi / CONE_SIDES
-    apex = light.position - ax * back
+    apex = -ax * back
     ring = apex + ax * length + (np.outer(np.cos(ang), u) + np.outer(np.sin(ang), w)) * r
     center = apex + ax * length
     tris = []
@@ -106,8 +110,9 @@ class LightPass(Pass):
         fbo.depth_mask = True
         fbo.use()
         self.stencil.clear()
-        # Scene depth into this pass's depth buffer (the shaders sample g_depth); the
-        # HDR target already holds the ambient pass's light, so colour writes are off.
+        # Scene depth into this pass's depth buffer (the shaders sample g_depth), float
+        # to float, exactly; the HDR target already holds the ambient pass's light, so
+        # colour writes are off.
         ctx.disable(ctx.BLEND)
         ctx.enable(ctx.DEPTH_TEST)
         ctx.depth_func = "1"
@@ -123,7 +128,7 @@ class LightPass(Pass):
         ctx.blend_equation = ctx.FUNC_ADD
         self.table.texture.use(UNITS["u_lights"])
 
-        has_casters = any(d.ranges for d in self.geometry.draws.values())
+        has_casters = self.geometry.has_casters()
         batched = []
         for path, light in frame.scene.lights.items():
             R = self.table.ranges[path]
@@ -150,7 +155,7 @@ class LightPass(Pass):
 
     def _batchable(self, light, R, has_casters, view):
         return (light.kind in (POINT, SPOT) and not (light.shadow and has_casters)
-                and not _crosses_far_plane(view, light.position, R * 1.3))
+                and not _crosses_far_plane(view, light.position - view.origin, R * 1.3))
 
     def _sphere_vbo(self):
         if self._sphere is None:
@@ -186,7 +191,7 @@ class LightPass(Pass):
         ctx.enable(ctx.BLEND)
         ctx.blend_func = ctx.ONE, ctx.ONE
         ctx.enable(ctx.DEPTH_TEST)
-        ctx.depth_func = ">="
+        ctx.depth_func = "<="            # at or behind the scene surface (reversed depth)
         ctx.enable(ctx.CULL_FACE)
         ctx.cull_face = "front"
         self._vao(prog, self._sphere_vbo(), self._instances[1]).render(ctx.TRIANGLES,
@@ -202,11 +207,11 @@ class LightPass(Pass):
         bind_gbuffer(board, prog, view)
         set_uniform(prog, "light_index", row)
         if sm is not None:
-            sm.set_uniforms(prog, self.preset)
+            sm.set_uniforms(prog, self.preset, view.origin)
         return prog
 
     def _cone_vbo(self, path, light, R):
-        params = (tuple(light.position), tuple(light.axis), light.cone_angle, light.radius, R)
+        params = (tuple(light.axis), light.cone_angle, light.radius, R)
         entry = self._cones.get(path)
         if entry is None or entry[0] != params:
             if entry is not None:
@@ -231,33 +236,33 @@ class LightPass(Pass):
             return
         variant = KINDS[light.kind].shader
         use_cone = light.kind == SPOT and light.cone_angle <= CONE_MAX_HALF_ANGLE
+        center = np.asarray(light.position, np.float64) - view.origin   # camera-relative
         if use_cone:
             vbo, soup = self._cone_vbo(path, light, R)
-            mvp = view.view_proj
-            hull = soup.astype(float)
+            mvp = view.view_proj @ translate(center)
+            hull = center + soup.astype(float)
         else:
             vbo = self._sphere_vbo()
-            model = np.diag([R, R, R, 1.0])
-            model[:3, 3] = light.position
-            mvp = view.view_proj @ model
-            hull = light.position + R * 1.3 * np.array(
+            mvp = view.view_proj @ translate(center) @ np.diag([R, R, R, 1.0])
+            hull = center + R * 1.3 * np.array(
                 [[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
         rect = _scissor(view, frame.size, hull)
         if rect is not None and (rect[2] <= 0 or rect[3] <= 0):
             return                                 # wholly off screen
         ctx.scissor = rect
         bound = R / math.cos(math.radians(light.cone_angle)) if use_cone else R * 1.3
-        if _crosses_far_plane(view, light.position, bound):
+        if _crosses_far_plane(view, center, bound):
             # Its back faces would be clipped away: shade the (scissored) screen instead.
             ctx.disable(ctx.DEPTH_TEST)
             self.programs.fullscreen(self._program(board, view, "fullscreen.vert", variant, row, sm))
             frame.count("lights_drawn")
             return
-        # Stencil marking: depth-fail counting of both faces against the scene depth.
+        # Stencil marking: depth-fail counting of both faces against the scene depth
+        # (a face passes in front of the scene: GREATER, depth being reversed).
         mark = self.programs.get("volume.vert", "volume_mark.frag")
         set_uniform(mark, "mvp", mvp)
         ctx.enable(ctx.DEPTH_TEST)
-        ctx.depth_func = "<"
+        ctx.depth_func = ">"
         ctx.disable(ctx.CULL_FACE)
         self.stencil.begin_mark()
         self._vao(mark, vbo).render(ctx.TRIANGLES)
@@ -293,8 +298,8 @@ class LightPass(Pass):
 
 
 def _scissor(view, size, points):
-    """Pixel rectangle (x, y, w, h) bounding the projected points, None (the whole
-    screen) when any lies behind the camera's near plane."""
+    """Pixel rectangle (x, y, w, h) bounding the projected (camera-relative) points,
+    None (the whole screen) when any lies behind the camera's near plane."""
     w, h = size
     clip = (view.view_proj @ np.c_[points, np.ones(len(points))].T).T
     if np.any(clip[:, 3] <= view.camera.near * 0.5):
@@ -308,6 +313,10 @@ def _scissor(view, size, points):
 
 
 def _crosses_far_plane(view, center, radius):
+    """Whether a volume (camera-relative centre) reaches the far plane, which only an
+    orthographic camera's depth has: a perspective one's is at infinity."""
     cam = view.camera
-    z = float(np.dot(center - cam.position, cam.forward))
+    if not cam.ortho:
+        return False
+    z = float(np.dot(center, cam.forward))
     return z + radius >= cam.far * 0.999

@@ -1,7 +1,12 @@
 """The resolve pass: the HDR accumulation into a float32 image, read back top row
 first. Alpha is 1, or coverage when the render is transparent.
 
-reads: hdr, g_depth   writes: output, rgba (the image, numpy)"""
+Nothing masks a non-finite value: the pass counts the pixels holding NaN or Inf
+(`stats["nonfinite_pixels"]`) and, only when there are some, draws the scene's
+object ids (shaders/ids.vert, points.frag's POINTS_ID) to name the prims those
+pixels lie on, in one warning per render ("the background" where nothing is).
+
+reads: hdr, g_depth, view   writes: output, rgba (the image, numpy)"""
 from __future__ import annotations
 
 import numpy as np
@@ -9,14 +14,18 @@ import numpy as np
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
 
+NAMED = 5                    # prims named in the warning, most pixels first
+
 
 class ResolvePass(Pass):
     name = "resolve"
-    reads = ("hdr", "g_depth")
+    reads = ("hdr", "g_depth", "view")
     writes = ("output", "rgba")
 
-    def __init__(self, ctx, pool, programs):
+    def __init__(self, ctx, pool, programs, geometry, depth):
         self.ctx, self.pool, self.programs = ctx, pool, programs
+        self.geometry, self.depth = geometry, depth
+        self.warnings = []       # this render's
 
     def execute(self, frame, board):
         ctx, (w, h) = self.ctx, frame.size
@@ -29,4 +38,64 @@ class ResolvePass(Pass):
         set_uniform(prog, "transparent", bool(frame.transparent))
         self.programs.fullscreen(prog)
         data = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32)
-        board["rgba"] = data.reshape(h, w, 4)[::-1].copy()  # GL rows run bottom-up
+        rgba = data.reshape(h, w, 4)[::-1].copy()  # GL rows run bottom-up
+        board["rgba"] = rgba
+        bad = ~np.isfinite(rgba).all(axis=-1)
+        count = int(bad.sum())
+        frame.stats["nonfinite_pixels"] = count
+        self.warnings = []
+        if count:
+            self.warnings.append(self._name(frame, board["view"], bad, count))
+
+    def _name(self, frame, view, bad, count) -> str:
+        """The warning: how many pixels, on which prims."""
+        ids = self._object_ids(frame, view)[bad]
+        names = {}
+        for oid, n in zip(*np.unique(ids, return_counts=True)):
+            path = "the background" if oid == 0 else \
+                (self.geometry.path_of(int(oid) - 1) or f"object {int(oid) - 1}")
+            names[path] = names.get(path, 0) + int(n)
+        ranked = sorted(names.items(), key=lambda kv: -kv[1])
+        listed = ", ".join(f"{p} ({n} px)" for p, n in ranked[:NAMED])
+        more = f" and {len(ranked) - NAMED} more" if len(ranked) > NAMED else ""
+        return (f"{count} pixels of the image are not finite (NaN or Inf): on "
+                f"{listed}{more}")
+
+    def _object_ids(self, frame, view) -> np.ndarray:
+        """(H, W) int: 1 + the object id nearest the camera at each pixel, 0 where
+        nothing is drawn, row 0 = top. Drawn only when needed."""
+        ctx, (w, h) = self.ctx, frame.size
+        ids = ctx.texture((w, h), 1, dtype="i4")
+        depth = self.pool.acquire((w, h), "depth")
+        fbo = ctx.framebuffer([ids], depth)
+        try:
+            fbo.use()
+            fbo.clear(0.0, 0.0, 0.0, 0.0, depth=0.0)
+            ctx.enable(ctx.DEPTH_TEST)
+            ctx.depth_func = ">"
+            ctx.disable(ctx.CULL_FACE | ctx.BLEND)
+            self.depth.far_clip(True)
+            prog = self.programs.get("ids.vert", "ids.frag", self.geometry.object_defines())
+            self.geometry.bind_objects(UNITS["u_objects"])
+            set_uniform(prog, "view_proj", view.view_proj)
+            set_uniform(prog, "u_far", view.far_clip)
+            view.set_origin(prog)
+            self.geometry.draw_casters(prog)
+            cam = view.camera
+
+            def setup(p, cloud):
+                set_uniform(p, "view_proj", view.view_proj)
+                set_uniform(p, "u_window", view.window)
+                set_uniform(p, "u_far", view.far_clip)
+                set_uniform(p, "u_face_axis", bool(cam.ortho))
+                set_uniform(p, "u_axis", cam.forward)
+                view.set_origin(p)
+            self.geometry.points.draw(self.programs, "id", setup)
+            out = np.frombuffer(ids.read(), np.int32).reshape(h, w)[::-1].copy()
+        finally:
+            self.depth.far_clip(False)
+            ctx.disable(ctx.DEPTH_TEST)
+            fbo.release()
+            ids.release()
+            self.pool.release(depth)
+        return out

@@ -19,9 +19,17 @@ Layouts (every map is a set of tiles in one 2D depth texture):
                                 drawn this frame (posed skinned meshes included); depth
                                 spans the whole scene so off-screen casters still cast.
 
-Stored depth is linear: radial maps write distance / far (shadow.frag), so every
-face stores the same quantity and PCSS reads blocker distances directly; ortho
-depth is linear already. The lookup (shaders/shadow_lookup.glsl) does the bias
+Maps are fitted in light-relative space: a radial map's matrices are relative to the
+light's position, a sun's to an anchor (the eye, which its cascades follow), both
+carried in double precision, and casters are drawn relative to that anchor (their
+translations are double-float pairs, shaders/origin.glsl). So a map's precision
+depends on the scene's size about the light, not on its distance to the world origin.
+The lookup matrices carry camera-relative receivers (lib.glsl) to the map's uv and
+depth in [0, 1], whatever the GL's clip convention (engine/gpu/depth.py).
+
+Stored depth is linear, in a 32-bit float: radial maps write distance / far
+(shadow.frag), so every face stores the same quantity and PCSS reads blocker
+distances directly; ortho depth is linear already. The lookup (shaders/shadow_lookup.glsl) does the bias
 (normal offset + receiver-plane depth + slope-scaled constant), a PCSS blocker
 search, and PCF with hardware compares (sampler2DShadow, bilinear).
 
@@ -34,9 +42,10 @@ import numpy as np
 
 from ....core.lights import DISK, POINT, SPOT, SUN
 from ....core.transforms import aabb_corners, frustum, look_at, ortho
-from ...view import boxes_outside, frustum_planes
+from ...view import boxes_outside, frustum_planes, relative_view, translate
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
+from .view import set_origin
 
 BORDER = 2                 # cube tiles: texels beyond 90 deg on each side
 MAX_CUBE_TILE = 2048       # a cube is 3 x 2 tiles: cap its memory
@@ -45,12 +54,17 @@ MIN_RES, MAX_RES = 64, 8192
 # Cube faces: (forward, up) in GL's cube-map order +X -X +Y -Y +Z -Z.
 CUBE_FACES = [((1, 0, 0), (0, -1, 0)), ((-1, 0, 0), (0, -1, 0)), ((0, 1, 0), (0, 0, 1)),
               ((0, -1, 0), (0, 0, -1)), ((0, 0, 1), (0, -1, 0)), ((0, 0, -1), (0, -1, 0))]
+# GL projection (NDC [-1, 1]) -> texture space [0, 1] (seed 000's bias matrix).
+BIAS = np.array([[0.5, 0, 0, 0.5], [0, 0.5, 0, 0.5], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]])
+# GL projection -> the same window depth under glClipControl's ZERO_TO_ONE.
+ZERO_TO_ONE = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]])
 
 
-def _view(eye, forward, up):
-    """View matrix of a shadow map at `eye` looking along `forward`."""
-    eye = np.asarray(eye, float)
-    return np.linalg.inv(look_at(eye, eye + np.asarray(forward, float), np.asarray(up, float)))
+def _view(forward, up):
+    """View matrix of a shadow map at its anchor (the origin) looking along `forward`:
+    a rotation."""
+    zero = np.zeros(3)
+    return np.linalg.inv(look_at(zero, np.asarray(forward, float), np.asarray(up, float)))
 
 
 def resolution(light, preset) -> int:
@@ -63,9 +77,10 @@ class ShadowMap:
     its two samplers once rendered."""
 
     def __init__(self, radial, tiles, mats, rects, texel, far=1.0, splits=(), ranges=(),
-                 size=0.0, atlas=(0, 0)):
+                 size=0.0, atlas=(0, 0), anchor=(0.0, 0.0, 0.0)):
         self.radial, self.tiles = radial, tiles
-        self.mats, self.rects = mats, rects
+        self.mats, self.rects = mats, rects   # GL projections of anchor-relative positions
+        self.anchor = np.asarray(anchor, np.float64)  # world, what positions are relative to
         self.texel = texel          # radial: world texel per unit distance; ortho: per cascade
         self.far = far
         self.splits, self.ranges = list(splits), list(ranges)
@@ -76,20 +91,23 @@ class ShadowMap:
 
     def same_layout(self, other) -> bool:
         return other is not None and self.atlas == other.atlas and \
+            np.array_equal(self.anchor, other.anchor) and \
             self.radial == other.radial and self.tiles == other.tiles and \
             self.far == other.far and self.size == other.size and \
             all(np.array_equal(a, b) for a, b in zip(self.mats, other.mats)) and \
             self.splits == other.splits and self.ranges == other.ranges and \
             self.texel == other.texel
 
-    def set_uniforms(self, prog, preset):
+    def set_uniforms(self, prog, preset, eye):
+        """The lookup of camera-relative receivers (the camera at `eye`, world)."""
         self.cmp.use(UNITS["shadow_cmp"])
         self.raw.use(UNITS["shadow_raw"])
         set_uniform(prog, "shadow_radial", self.radial)
         set_uniform(prog, "shadow_tiles", self.tiles)
         mats = np.zeros((6, 4, 4), "f4")
+        to_anchor = translate(np.asarray(eye, np.float64) - self.anchor)
         for i, m in enumerate(self.mats):
-            mats[i] = m.T                     # column-major, as GLSL reads a mat4
+            mats[i] = (BIAS @ m @ to_anchor).T    # column-major, as GLSL reads a mat4
         set_uniform(prog, "shadow_mats", mats)
         rects = np.zeros((6, 4), "f4")
         rects[:len(self.rects)] = self.rects
@@ -126,8 +144,10 @@ def plan(light, R, preset, bounds, view):
     if light.kind == SUN:
         return _plan_sun(light, res, preset, bounds, view)
     pos = np.asarray(light.position, float)
-    far = max(min(R, _scene_far(bounds, pos, R)) * 1.01, 1e-3)
-    near = max(far * 1e-4, 1e-4)
+    far = min(R, _scene_far(bounds, pos, R)) * 1.01
+    if not far > 0:
+        return None
+    near = far * 1e-4
     size = light.radius if light.kind in (POINT, SPOT, DISK) else \
         math.sqrt(light.width * light.height / math.pi)
     if light.kind == SPOT and light.cone_angle <= SPOT_MAX_HALF_ANGLE:
@@ -135,39 +155,43 @@ def plan(light, R, preset, bounds, view):
         t = math.tan(half) * near
         proj = frustum(-t, t, -t, t, near, far)
         up = light.y_axis if abs(np.dot(light.y_axis, light.axis)) < 0.9 else light.x_axis
-        m = proj @ _view(pos, light.axis, up)
+        m = proj @ _view(light.axis, up)
         return ShadowMap(True, 1, [m], [(0.0, 0.0, 1.0, 1.0)], 2 * math.tan(half) / res,
-                         far=far, size=size, atlas=(res, res))
+                         far=far, size=size, atlas=(res, res), anchor=pos)
     res = min(res, MAX_CUBE_TILE)
     k = (res + 2 * BORDER) / res          # the tile sees a little beyond 90 deg
     t = near * k
     proj = frustum(-t, t, -t, t, near, far)
     mats, rects = [], []
     for i, (fwd, up) in enumerate(CUBE_FACES):
-        mats.append(proj @ _view(pos, fwd, up))
+        mats.append(proj @ _view(fwd, up))
         rects.append(((i % 3) / 3, (i // 3) / 2, 1 / 3, 1 / 2))
     return ShadowMap(True, 6, mats, rects, 2 * k / res, far=far, size=size,
-                     atlas=(3 * res, 2 * res))
+                     atlas=(3 * res, 2 * res), anchor=pos)
 
 
 def _plan_sun(light, res, preset, bounds, view):
+    """Cascades fitted to the view, relative to the eye (the anchor): every length is
+    taken relative to the scene's own size, so a scene and its scaled copy get the
+    same maps (a hard case)."""
     cam = view.camera
     if bounds is None:
         return None
+    anchor = np.asarray(view.origin, np.float64)
     d = light.direction
     up = [0, 0, 1.0] if abs(d[2]) < 0.9 else [0, 1.0, 0]
-    corners = aabb_corners(*bounds)
-    lview = _view(np.zeros(3), d, up)
+    corners = aabb_corners(*bounds) - anchor
+    lview = _view(d, up)
     lc = (lview[:3, :3] @ corners.T).T         # scene bounds in light space
     lo_b, hi_b = lc.min(axis=0), lc.max(axis=0)
     # The visible depth range, clipped to the scene.
-    depth = (corners - cam.position) @ cam.forward
+    depth = corners @ cam.forward
     z0 = max(cam.near, float(depth.min()))
     z1 = min(cam.far, float(depth.max()))
     if z1 < z0:
         return None                       # the scene is wholly outside the view
     # A scene flat along the view (a plane seen straight on) still needs a slice.
-    pad = 1e-3 * max(z1, 1.0)
+    pad = 1e-3 * z1
     z0, z1 = max(cam.near, z0 - pad), min(cam.far, z1 + pad)
     n = int(preset.cascades)
     splits = []
@@ -175,19 +199,24 @@ def _plan_sun(light, res, preset, bounds, view):
         f = i / n
         log = z0 * (z1 / z0) ** f
         splits.append(0.75 * log + 0.25 * (z0 + (z1 - z0) * f))
-    inv = view.inv_view_proj
+    # The view frustum's corners (camera-relative), with the camera's finite far plane.
+    inv = np.linalg.inv(np.asarray(cam.proj, np.float64) @ relative_view(cam))
     ndc = np.array([[x, y, z, 1.0] for z in (-1, 1) for y in (-1, 1) for x in (-1, 1)])
     w = (inv @ ndc.T).T
     w = w[:, :3] / w[:, 3:4]
     near_c, far_c = w[:4], w[4:]
-    dn = (near_c - cam.position) @ cam.forward
-    df = (far_c - cam.position) @ cam.forward
+    dn = near_c @ cam.forward
+    df = far_c @ cam.forward
+    # Casters right at the scene's bounds along the light stay inside the depth range.
+    span = float(np.linalg.norm(hi_b - lo_b))
+    zpad = 1e-4 * span if span > 0 else 1.0
+    znear, zfar = -hi_b[2] - zpad, -lo_b[2] + zpad   # the whole scene along the light
     mats, rects, texels, ranges = [], [], [], []
     start = z0
     for i, end in enumerate(splits):
         pts = []
         for z in (start, end):
-            t = ((z - dn) / np.maximum(df - dn, 1e-12))[:, None]
+            t = ((z - dn) / (df - dn))[:, None]
             pts.append(near_c + (far_c - near_c) * t)
         pts = np.concatenate(pts)
         pl = (lview[:3, :3] @ pts.T).T
@@ -197,8 +226,9 @@ def _plan_sun(light, res, preset, bounds, view):
             lo, hi = lo_b.copy(), hi_b.copy()
         # A square tile, padded by the PCF footprint so edge taps stay inside.
         ext = max(hi[0] - lo[0], hi[1] - lo[1]) * (1 + 16.0 / res)
+        if not ext > 0:
+            ext = zpad
         c = (lo + hi) / 2
-        znear, zfar = -hi_b[2] - 1e-3, -lo_b[2] + 1e-3   # the whole scene along the light
         proj = ortho(c[0] - ext / 2, c[0] + ext / 2, c[1] - ext / 2, c[1] + ext / 2, znear, zfar)
         mats.append(proj @ lview)
         rects.append((i / n, 0.0, 1.0 / n, 1.0))
@@ -207,7 +237,7 @@ def _plan_sun(light, res, preset, bounds, view):
         start = end
     size = math.tan(math.radians(light.angle) / 2)
     return ShadowMap(False, n, mats, rects, texels, splits=splits, ranges=ranges,
-                     size=size, atlas=(n * res, res))
+                     size=size, atlas=(n * res, res), anchor=anchor)
 
 
 def casts(light, R) -> bool:
@@ -220,13 +250,14 @@ class ShadowPass(Pass):
     reads = ("skinned", "view")
     writes = ("shadow_maps",)
 
-    def __init__(self, ctx, pool, programs, geometry, lights, preset):
+    def __init__(self, ctx, pool, programs, geometry, lights, preset, depth):
         self.ctx, self.pool, self.programs = ctx, pool, programs
         self.geometry, self.lights, self.preset = geometry, lights, preset
+        self.depth = depth
         self.maps = {}             # light path -> ShadowMap, kept across frames
 
     def needed(self, frame):
-        has_casters = any(d.ranges for d in self.geometry.draws.values())
+        has_casters = self.geometry.has_casters()
         wanted = has_casters and any(
             casts(light, self.lights.ranges.get(path, 0.0))
             for path, light in frame.scene.lights.items())
@@ -292,8 +323,10 @@ class ShadowPass(Pass):
         prog = self.programs.get("shadow.vert", "shadow.frag", self.geometry.object_defines())
         self.geometry.bind_objects(UNITS["u_objects"])
         set_uniform(prog, "radial", sm.radial)
-        set_uniform(prog, "light_pos", np.asarray(light.position, float))
+        set_uniform(prog, "light_pos", np.asarray(light.position, float) - sm.anchor)
         set_uniform(prog, "far", sm.far)
+        set_origin(prog, sm.anchor)
+        clip = ZERO_TO_ONE if self.depth.zero_to_one else np.eye(4)
         for i in tiles:
             x, y, sx, sy = sm.rects[i]
             rect = (round(x * tw), round(y * th), round(sx * tw), round(sy * th))
@@ -303,10 +336,28 @@ class ShadowPass(Pass):
             ctx.scissor = rect
             ctx.enable(ctx.DEPTH_TEST)
             ctx.depth_func = "<"
-            set_uniform(prog, "view_proj", sm.mats[i])
+            set_uniform(prog, "view_proj", clip @ sm.mats[i])
             frame.count("shadow_draws", self.geometry.draw_casters(prog))
+            if self.geometry.points.clouds:
+                frame.count("shadow_draws", self._draw_points(sm, light, clip @ sm.mats[i],
+                                                              BIAS @ sm.mats[i]))
         ctx.scissor = None
         ctx.disable(ctx.DEPTH_TEST)
+
+    def _draw_points(self, sm, light, view_proj, window) -> int:
+        """Point clouds into a tile: spheres facing the light (radial maps) or across
+        the sun's direction, writing the same depth as meshes do."""
+        def setup(prog, cloud):
+            set_uniform(prog, "view_proj", view_proj)
+            set_uniform(prog, "u_window", window)
+            set_uniform(prog, "u_far", 1e30)
+            set_uniform(prog, "radial", sm.radial)
+            set_uniform(prog, "far", sm.far)
+            set_uniform(prog, "u_face_axis", not sm.radial)
+            set_uniform(prog, "u_axis", np.asarray(light.direction, np.float64))
+            set_origin(prog, sm.anchor)
+        draws, _ = self.geometry.points.draw(self.programs, "shadow", setup)
+        return draws
 
     def _drop(self, paths):
         for path in paths:
@@ -342,5 +393,6 @@ def _stale_tiles(sm, light, R, moved) -> list:
         lo, hi = lo[near], hi[near]
         if not len(lo):
             return []
+    lo, hi = lo - sm.anchor, hi - sm.anchor        # the maps' matrices are anchor-relative
     return [i for i, m in enumerate(sm.mats)
             if not np.all(boxes_outside(frustum_planes(m), lo, hi))]

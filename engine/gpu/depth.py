@@ -1,0 +1,66 @@
+"""The depth convention on the GL side (engine/view.py states it): 32-bit float depth
+everywhere, the clip convention the GL offers, and the far-plane clip distance.
+ModernGL makes 24-bit depth textures and knows neither glClipControl nor clip
+distances, so these few calls go through the context backend's entry points, as the
+stencil calls do (engine/gpu/stencil.py).
+
+  GL 4.5 (clip control)   glClipControl(LOWER_LEFT, ZERO_TO_ONE) while Lantern draws:
+                          the projection's z / w is the window depth itself.
+  GL 3.3 .. 4.4, macOS    GL's default NDC [-1, 1]: the same reversed depth through
+                          2n/d - 1 (precision measured in the README).
+The context's default is restored after every frame (`end`)."""
+from __future__ import annotations
+
+import ctypes
+
+from .stencil import _FUNCTYPE
+
+GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE, GL_ZERO_TO_ONE = 0x8CA1, 0x935E, 0x935F
+GL_TEXTURE_2D, GL_DEPTH_COMPONENT, GL_FLOAT = 0x0DE1, 0x1902, 0x1406
+GL_DEPTH_COMPONENT32F = 0x8CAC
+GL_CLIP_DISTANCE0 = 0x3000
+
+_u, _i = ctypes.c_uint, ctypes.c_int
+_SIGS = {
+    "glBindTexture": (None, _u, _u),
+    "glTexImage2D": (None, _u, _i, _i, _i, _i, _i, _u, _u, ctypes.c_void_p),
+    "glEnable": (None, _u), "glDisable": (None, _u),
+}
+
+
+class DepthConvention:
+    def __init__(self, proc, clip_control: bool):
+        self.zero_to_one = bool(clip_control)
+        self._fn = {}
+        names = dict(_SIGS)
+        if self.zero_to_one:
+            names["glClipControl"] = (None, _u, _u)
+        for name, (restype, *args) in names.items():
+            addr = proc(name)
+            if not addr:
+                raise RuntimeError(f"GL entry point {name} not found")
+            self._fn[name] = _FUNCTYPE(restype, *args)(addr)
+
+    def begin(self):
+        """A frame starts: the clip convention its projections are made for."""
+        if self.zero_to_one:
+            self._fn["glClipControl"](GL_LOWER_LEFT, GL_ZERO_TO_ONE)
+
+    def end(self):
+        if self.zero_to_one:
+            self._fn["glClipControl"](GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE)
+        self._fn["glDisable"](GL_CLIP_DISTANCE0)
+
+    def float_depth(self, texture):
+        """Re-specifies a ModernGL depth texture (DEPTH_COMPONENT24) as
+        DEPTH_COMPONENT32F, same size; its sampling parameters are kept."""
+        w, h = texture.size
+        self._fn["glBindTexture"](GL_TEXTURE_2D, texture.glo)
+        self._fn["glTexImage2D"](GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT32F, w, h, 0,
+                                 GL_DEPTH_COMPONENT, GL_FLOAT, None)
+        self._fn["glBindTexture"](GL_TEXTURE_2D, 0)
+        return texture
+
+    def far_clip(self, on: bool):
+        """Clip distance 0 (the camera's far plane, written by the vertex shader)."""
+        self._fn["glEnable" if on else "glDisable"](GL_CLIP_DISTANCE0)

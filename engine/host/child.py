@@ -1,0 +1,236 @@
+"""The engine host's child process: stages, Sessions and frames, on its own GL context.
+
+One *scene* per stream Blender opens (a viewport, an F12 view layer, previews): an
+in-memory stage that Blender's edits (fragments) keep equal to Blender's mirror, the
+Sessions rendering it (one per preset: a progressive view draws with the interactive
+preset while it moves and with the scene's once it settles), the last render request
+and the shared-memory slots its frames go to.
+
+The main loop applies every message that has arrived, then renders one frame of the
+scene that most needs one: a new request or edit first (the interactive preset when
+the view is progressive), then a settled view's final frame. Requests that arrive
+while a frame renders replace the one waiting: a moving view never queues frames.
+A reader thread receives messages meanwhile, so Blender's sends never wait on a
+render."""
+from __future__ import annotations
+
+import importlib.util
+import os
+import queue
+import sys
+import threading
+import time
+import traceback
+from multiprocessing import connection
+
+from ...core.passes import PASSES
+from . import protocol as p
+
+
+class Scene:
+    def __init__(self):
+        from ..usd.fragments import receiver
+        self.stage = receiver()
+        self.sessions = {}         # preset -> Session
+        self.request = None        # the last render request (its fields)
+        self.level = 0             # 0: to render, 1: interactive frame shown, 2: done
+        self.touched = 0.0         # when the request or the stage last changed
+        self.blocks = {}           # slot name -> SharedMemory
+        self.free = []             # slots this process may write
+
+    def session(self, preset):
+        from ..session import RenderSettings, Session
+        if preset not in self.sessions:
+            self.sessions[preset] = Session(self.stage, RenderSettings(width=1, height=1,
+                                                                       preset=preset))
+        return self.sessions[preset]
+
+    def set_slots(self, names):
+        self.close_slots(unlink=False)
+        self.blocks = {name: p.attach_block(name) for name in names}
+        self.free = list(names)
+
+    def close_slots(self, unlink):
+        for block in self.blocks.values():
+            p.release_block(block, unlink)
+        self.blocks, self.free = {}, []
+
+    def close(self, unlink=False):
+        for session in self.sessions.values():
+            session.close()
+        self.sessions = {}
+        self.close_slots(unlink)
+
+
+class Host:
+    def __init__(self, conn):
+        self.conn = conn
+        self.scenes = {}
+        self.inbox = queue.Queue()
+        self.parent_gone = False
+
+    # --- messages ---------------------------------------------------------------------
+    def _read(self):
+        try:
+            while True:
+                self.inbox.put(p.loads(self.conn.recv_bytes()))
+        except (EOFError, OSError):
+            self.inbox.put(None)           # Blender is gone (or closed the pipe)
+
+    def _send(self, kind, **fields):
+        self.conn.send_bytes(p.dumps(kind, **fields))
+
+    def _take(self, timeout):
+        """Every message waiting, after waiting up to `timeout` for the first (None:
+        as long as it takes; 0: not at all)."""
+        out = []
+        try:
+            out.append(self.inbox.get(timeout=timeout) if timeout != 0 else
+                       self.inbox.get_nowait())
+            while True:
+                out.append(self.inbox.get_nowait())
+        except queue.Empty:
+            pass
+        return out
+
+    def _handle(self, message) -> bool:
+        """Applies one message; False when the host is to stop."""
+        if message is None:
+            self.parent_gone = True
+            return False
+        kind, f = message
+        if kind == p.QUIT:
+            return False
+        name = f.get("scene")
+        if kind == p.DROP:
+            scene = self.scenes.pop(name, None)
+            if scene is not None:
+                scene.close()
+            return True
+        scene = self.scenes.setdefault(name, Scene())
+        now = time.monotonic()
+        if kind == p.EDIT:
+            from ..usd.fragments import apply
+            try:
+                apply(scene.stage, f["fragment"])
+            except Exception as error:
+                self._send(p.ERROR, scene=name, request=None,
+                           message=f"the stage edit failed: {error}")
+                return True
+            if scene.request is not None and scene.request["progressive"]:
+                scene.level, scene.touched = 0, now     # a live view shows edits at once
+        elif kind == p.RENDER:
+            scene.request, scene.level, scene.touched = f, 0, now
+        elif kind == p.SLOTS:
+            scene.set_slots(f["names"])
+        elif kind == p.RELEASE:
+            if f["slot"] in scene.blocks and f["slot"] not in scene.free:
+                scene.free.append(f["slot"])
+        elif kind == p.FORGET:
+            scene.request = None
+        return True
+
+    # --- rendering --------------------------------------------------------------------
+    def _next(self):
+        """(scene name or None, seconds until a settled view is due or None)."""
+        now, due = time.monotonic(), None
+        waiting = [(s.touched, n) for n, s in self.scenes.items()
+                   if s.request is not None and s.level == 0]
+        if waiting:
+            return min(waiting)[1], None
+        for name, scene in self.scenes.items():
+            if scene.request is not None and scene.level == 1:
+                left = scene.touched + p.SETTLE_SECONDS - now
+                if left <= 0:
+                    return name, None
+                due = left if due is None else min(due, left)
+        return None, due
+
+    def _render(self, name):
+        scene = self.scenes[name]
+        req = scene.request
+        progressive = req["progressive"] and req["preset"] != p.INTERACTIVE_PRESET
+        final = not progressive or scene.level >= 1
+        preset = req["preset"] if final else p.INTERACTIVE_PRESET
+        passes = [(n, PASSES[n].channels) for n in req["passes"]]
+        w, h = req["width"], req["height"]
+        if not final and w * h > p.INTERACTIVE_MIN_PIXELS:
+            w, h = max(1, round(w * p.INTERACTIVE_SCALE)), max(1, round(h * p.INTERACTIVE_SCALE))
+        frame_layout, total = p.layout(w, h, passes)
+        try:
+            session = scene.session(preset)
+            session.configure(width=w, height=h, transparent=req["transparent"],
+                              passes=frozenset(req["passes"]), camera=req.get("camera"))
+            result = session.render(view_matrix=req.get("view"),
+                                    projection_matrix=req.get("projection"),
+                                    frame=req.get("frame"))
+        except Exception as error:
+            scene.level = 2
+            self._send(p.ERROR, scene=name, request=req["id"], message=str(error),
+                       detail=traceback.format_exc())
+            return True
+        while not scene.free:                   # Blender still reads every slot
+            for message in self._take(timeout=None):
+                if not self._handle(message):
+                    return False
+            if self.scenes.get(name) is not scene or scene.request is not req:
+                return True                     # dropped, or a newer request
+        slot = scene.free.pop(0)
+        block = scene.blocks[slot]
+        if total > block.size:
+            scene.free.append(slot)
+            scene.level = 2
+            self._send(p.ERROR, scene=name, request=req["id"],
+                       message=f"a {w}x{h} frame does not fit its {block.size}-byte slot")
+            return True
+        images = {"Combined": result.rgba, **result.passes}
+        for pass_name, channels, offset in frame_layout:
+            p.view(block, w, h, channels, offset)[:] = images[pass_name][::-1]
+        scene.level = 2 if final else 1
+        if not final:
+            scene.touched = time.monotonic()    # settling counts from the frame shown
+        self._send(p.FRAME, scene=name, request=req["id"], tag=req.get("tag"), slot=slot,
+                   width=w, height=h, layout=frame_layout, final=final, preset=preset,
+                   stats=result.stats, timings=result.timings, warnings=result.warnings)
+        return True
+
+    def run(self) -> int:
+        from .. import shutdown
+        threading.Thread(target=self._read, name="lantern-host-reader", daemon=True).start()
+        try:
+            from ..gpu.context import run_gl
+            gl = run_gl(lambda gl: f"OpenGL {gl.ctx.info['GL_VERSION']}, "
+                                   f"{gl.ctx.info['GL_RENDERER']}")
+        except Exception as error:
+            self._send(p.FATAL, message=f"the engine could not get an OpenGL context: {error}")
+            return 3
+        modules = {name: getattr(importlib.util.find_spec(name), "origin", None)
+                   for name in ("lantern", "pxr", "numpy", "moderngl", "glcontext")}
+        self._send(p.READY, pid=os.getpid(), gl=gl, executable=sys.executable, modules=modules)
+        try:
+            while True:
+                name, due = self._next()
+                for message in self._take(timeout=0 if name else due):
+                    if not self._handle(message):
+                        return 0
+                name, _ = self._next()
+                if name is not None and not self._render(name):
+                    return 0
+        finally:
+            for scene in self.scenes.values():
+                scene.close(unlink=self.parent_gone)   # an orphan cleans up after Blender
+            shutdown()
+
+
+def connect(handle: str):
+    if sys.platform == "win32":
+        return connection.PipeConnection(int(handle))
+    return connection.Connection(int(handle))
+
+
+def main(handle: str) -> int:
+    conn = connect(handle)
+    try:
+        return Host(conn).run()
+    finally:
+        conn.close()

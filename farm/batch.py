@@ -1,0 +1,380 @@
+"""The client side of a batch: which tasks to run, running them, and the summary.
+
+`export_batch` and `render_frames` are what `lantern export` (several files) and
+`lantern render --frames` call, with or without `--scheduler`. Both:
+- skip, with `--resume`, outputs that exist and are newer than their inputs (a file at
+  an output's name is complete: every write is a temporary name and a rename);
+- run the tasks on a runner (runners.py) with a progress bar;
+- write the outputs that come back with `--collect` (atomically, here);
+- after a lost worker, remove the temporary files its task left in the shared folder;
+- report each failure once with its reason, and each task that ran again because its
+  worker died; print the summary table; return the exit status (1 if anything failed).
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import statistics
+import sys
+import tempfile
+from collections import deque
+
+from ..core.files import atomic_write
+from . import chunking
+from .runners import FarmError, open_runner
+from .tasks import EXPORT_NEEDS, RENDER_NEEDS, ExportTask, RenderChunk, frame_output
+
+FAILED = 1
+STALL_SECONDS = 5.0  # how often a waiting client checks that some worker can run its tasks
+
+
+def _needs_text(needs):
+    return ",".join(f"{k}={v}" for k, v in needs.items())
+
+
+def _progress():
+    from rich.console import Console
+    from rich.progress import Progress
+    return Progress(console=Console(stderr=True), transient=True)
+
+
+def _table(title, columns):
+    from rich.table import Table
+    table = Table(title=title)
+    for column in columns:
+        table.add_column(column, overflow="fold")
+    return table
+
+
+def _print(table):
+    from rich.console import Console
+    Console(width=max(160, Console().width)).print(table)
+
+
+def _drive(runner, submit_more, on_done, needs):
+    """Waits for every task, calling on_done for each finished one and submit_more
+    after it; gives the rest up if no worker can run them any more."""
+    submit_more()
+    while runner.pending:
+        finished = runner.wait(timeout=STALL_SECONDS)
+        if not finished and not runner.offers(needs):
+            finished = runner.fail_pending(f"no worker offers {_needs_text(needs)} any more")
+        for done in finished:
+            on_done(done)
+        submit_more()
+
+
+def open_render_runner(args):
+    """The runner for a sequence, opened before the client reads the stage: local
+    workers import the engine meanwhile."""
+    return open_runner(args.scheduler, args.jobs, render=True)
+
+
+def _open(args, needs, runner=None):
+    runner = runner or open_runner(args.scheduler, args.jobs)
+    if not runner.offers(needs):
+        runner.close()
+        raise FarmError(f"{args.scheduler}: no worker offers {_needs_text(needs)} (start "
+                        f"workers with --resources \"{_needs_text(needs)}\")")
+    if runner.dashboard:
+        print(f"dashboard: {runner.dashboard}", file=sys.stderr, flush=True)
+    return runner
+
+
+def _up_to_date(output, input_mtime_ns):
+    try:
+        stat = os.stat(output)
+    except OSError:
+        return False
+    return stat.st_size > 0 and stat.st_mtime_ns > input_mtime_ns
+
+
+def _write_collected(files):
+    for path, data in files.items():
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+
+        def write(tmp, data=data):
+            with open(tmp, "wb") as f:
+                f.write(data)
+        atomic_write(path, write, suffix=os.path.splitext(path)[1], keep_mode=True)
+
+
+def _sweep(outputs):
+    """Removes what a lost worker's atomic writes left: `.<name>.XXXXXXXX<suffix>`
+    beside each output (core/files.py's temporary names)."""
+    for output in outputs:
+        folder, name = os.path.split(output)
+        pattern = re.compile(re.escape("." + name + ".") + r"[a-z0-9_]{8}"
+                             + re.escape(os.path.splitext(name)[1]) + "$")
+        try:
+            names = os.listdir(folder)
+        except OSError:
+            continue
+        for leftover in filter(pattern.match, names):
+            try:
+                os.remove(os.path.join(folder, leftover))
+            except OSError:
+                pass
+
+
+def _folder_clock(folder):
+    """Now, on the output folder's own clock (a file system shared by machines whose
+    clocks differ): the mtime of a file made and removed there."""
+    fd, path = tempfile.mkstemp(prefix=".lantern-clock-", dir=folder)
+    try:
+        return os.fstat(fd).st_mtime_ns
+    finally:
+        os.close(fd)
+        os.remove(path)
+
+
+def _retry_line(label, done):
+    workers = ", ".join(done.lost)
+    where = f", then ran on {done.result.worker}" if done.result else ""
+    return f"retried: {label}: its worker died while running it ({workers}){where}"
+
+
+# --- export -----------------------------------------------------------------------------
+
+def export_batch(args, jobs):
+    """jobs: [(blend, output)] in the order given. Returns the exit status."""
+    tasks, rows, skipped = [], {}, []
+    for blend, output in jobs:
+        if args.resume and os.path.isfile(blend) and \
+                _up_to_date(output, os.stat(blend).st_mtime_ns):
+            skipped.append(blend)
+            rows[blend] = (blend, "skipped", 0.0, 0, "", 1, f"{output} (up to date)")
+            continue
+        tasks.append(ExportTask(os.path.abspath(blend), os.path.abspath(output), args.textures,
+                                args.max_influences, args.collect))
+    retries, lost_outputs = [], []
+    if tasks:
+        runner = _open(args, EXPORT_NEEDS)
+        queue = deque(tasks)
+        try:
+            with _progress() as progress:
+                bar = progress.add_task("exporting", total=len(tasks))
+
+                def submit_more():
+                    while queue:
+                        runner.submit(queue.popleft())
+
+                def on_done(done):
+                    task, result = done.task, done.result
+                    blend = next(b for b, o in jobs if os.path.abspath(b) == task.blend)
+                    tries = 1 + len(done.lost)
+                    if done.lost:
+                        retries.append(_retry_line(os.path.basename(blend), done))
+                        lost_outputs.extend(task.outputs)
+                    if result is None:
+                        rows[blend] = (blend, "failed", done.latency, 0, "", tries, done.error)
+                    elif result.ok:
+                        _write_collected(result.files)
+                        rows[blend] = (blend, "ok", result.seconds, len(result.warnings),
+                                       result.worker, tries, task.output)
+                    else:
+                        rows[blend] = (blend, "failed", result.seconds, len(result.warnings),
+                                       result.worker, tries, result.reason)
+                    progress.advance(bar)
+
+                _drive(runner, submit_more, on_done, EXPORT_NEEDS)
+        except BaseException:
+            runner.close(interrupted=True)
+            raise
+        else:
+            runner.close()
+        if not args.collect:
+            _sweep(lost_outputs)
+
+    table = _table("lantern export", ("file", "status", "seconds", "warnings", "worker",
+                                      "tries", "output / reason"))
+    ordered = [rows[blend] for blend, _ in jobs]
+    for blend, status, seconds, warnings, worker, tries, detail in ordered:
+        style = {"ok": "green", "skipped": "blue"}.get(status, "red")
+        table.add_row(os.path.basename(blend), f"[{style}]{status}[/]", f"{seconds:.2f}",
+                      str(warnings), worker, str(tries), detail)
+    _print(table)
+    for line in retries:
+        print(line)
+    failed = sum(1 for row in ordered if row[1] == "failed")
+    exported = sum(1 for row in ordered if row[1] == "ok")
+    tail = f", {len(skipped)} skipped (up to date)" if skipped else ""
+    print(f"{exported} exported, {failed} failed{tail}")
+    return FAILED if failed else 0
+
+
+# --- render -----------------------------------------------------------------------------
+
+class _Costs:
+    """What the finished chunks measured: cold, warm and per-task overhead (seconds)."""
+
+    def __init__(self):
+        self.cold, self.warm, self.overhead, self.chunks = [], [], None, 0
+
+    def add(self, done):
+        result = done.result
+        self.chunks += 1
+        if result.cold is not None:
+            self.cold.append(result.cold)
+        self.warm += result.warm
+        if not done.lost:
+            overhead = max(0.0, done.latency - result.seconds)
+            self.overhead = overhead if self.overhead is None else min(self.overhead, overhead)
+
+    @property
+    def measured(self):
+        return self.chunks > 0
+
+    def chunk(self, left, workers):
+        cold = max(self.cold, default=0.0)
+        warm = statistics.median(self.warm) if self.warm else cold
+        return chunking.chunk_size(cold, warm, self.overhead or 0.0, left, workers)
+
+
+def _frames_text(frames):
+    """1-4, 7, 9-12 for the frames given (in order)."""
+    runs, start, prev = [], None, None
+    for frame in sorted(frames):
+        if start is not None and frame == prev + 1:
+            prev = frame
+            continue
+        if start is not None:
+            runs.append(f"{start:g}" if start == prev else f"{start:g}-{prev:g}")
+        start = prev = frame
+    if start is not None:
+        runs.append(f"{start:g}" if start == prev else f"{start:g}-{prev:g}")
+    return ", ".join(runs)
+
+
+def render_frames(args, runner, stage_text=None, fps=24.0, print_warnings=None):
+    """Renders args.frames of args.scene into args.output ('####' or a .gif) as chunks
+    on `runner` (open_render_runner), which it closes. stage_text: the stage as USD text
+    when the client exported it (a .blend)."""
+    try:
+        status = _render_frames(args, runner, stage_text, fps, print_warnings)
+    except BaseException:
+        runner.close(interrupted=True)
+        raise
+    return status
+
+
+def _render_frames(args, runner, stage_text, fps, print_warnings):
+    gif = args.output.lower().endswith(".gif")
+    pattern = None if gif else os.path.abspath(args.output)
+    scene = os.path.abspath(args.scene)
+    input_mtime = os.stat(scene).st_mtime_ns
+    frames = list(args.frames)
+    up_to_date = []
+    if args.resume:
+        if gif:
+            up_to_date = frames if _up_to_date(args.output, input_mtime) else []
+        else:
+            up_to_date = [f for f in frames if _up_to_date(frame_output(pattern, f), input_mtime)]
+        frames = [f for f in frames if f not in set(up_to_date)]
+    if not frames:
+        runner.close()
+        print(f"0 frames written, 0 failed, {len(up_to_date)} skipped (up to date)")
+        return 0
+    folder = os.path.dirname(pattern or os.path.abspath(args.output))
+    os.makedirs(folder, exist_ok=True)
+    digest = hashlib.sha1(stage_text.encode()).hexdigest() if stage_text is not None else None
+    base = dict(scene=scene, pattern=pattern, width=args.size[0] if args.size else None,
+                height=args.size[1] if args.size else None, preset=args.preset,
+                camera=args.camera, stage_digest=digest, collect=args.collect,
+                colour=(args.view, args.look, args.exposure),
+                since_ns=None if (args.collect or gif) else _folder_clock(folder))
+
+    _open(args, RENDER_NEEDS, runner)
+    workers = max(1, runner.workers(RENDER_NEEDS))
+    left = deque(frames)
+    costs = _Costs()
+    pixels, failed, per_worker, retries, lost_outputs = {}, {}, {}, [], []
+    written = skipped_lost = 0
+    first = [] if args.chunk else chunking.first_wave(frames, workers)
+    for chunk in first:
+        for _ in chunk:
+            left.popleft()
+
+    def submit(chunk):
+        runner.submit(RenderChunk(frames=tuple(chunk), **base), stage_text)
+
+    with _progress() as progress:
+        bar = progress.add_task("rendering", total=len(frames))
+
+        def submit_more():
+            while first:
+                submit(first.pop(0))
+            # Two chunks per worker in flight: a worker never waits for its next.
+            while left and runner.pending < 2 * workers and (args.chunk or costs.measured):
+                size = args.chunk or costs.chunk(len(left), workers)
+                submit([left.popleft() for _ in range(min(size, len(left)))])
+            if left and not runner.pending:  # nothing measured: every chunk failed
+                for frame in left:
+                    failed[frame] = "not rendered: every chunk before it failed"
+                left.clear()
+
+        def on_done(done):
+            nonlocal written, skipped_lost
+            task, result = done.task, done.result
+            if done.lost:
+                retries.append(_retry_line(task.label, done))
+                lost_outputs.extend(task.outputs)
+            if result is None:
+                for frame in task.frames:
+                    failed[frame] = done.error
+                progress.advance(bar, len(task.frames))
+                return
+            print_warnings(result.warnings)
+            stats = per_worker.setdefault(result.worker, [0, 0, 0.0, [], []])
+            stats[0] += 1
+            stats[1] += len(result.written)
+            stats[2] += result.seconds
+            if result.cold is not None:
+                stats[3].append(result.cold)
+            stats[4] += result.warm
+            if result.written or result.skipped:
+                costs.add(done)
+            _write_collected(result.files)
+            pixels.update(result.pixels)
+            written += len(result.written)
+            skipped_lost += len(result.skipped)
+            failed.update(result.failed)
+            progress.advance(bar, len(task.frames))
+
+        _drive(runner, submit_more, on_done, RENDER_NEEDS)
+    dashboard = runner.dashboard
+    runner.close()
+    if pattern and not args.collect:
+        _sweep(lost_outputs)
+    if gif and not failed:
+        from ..engine.image_io import write_animation
+        images = [pixels[f] for f in sorted(pixels)]
+        write_animation(args.output, images, fps, **args.colour)
+
+    table = _table(f"lantern render ({runner.name})",
+                   ("worker", "chunks", "frames", "seconds", "cold s", "warm ms/frame"))
+    for worker, (chunks, n, seconds, cold, warm) in sorted(per_worker.items()):
+        table.add_row(worker, str(chunks), str(n), f"{seconds:.2f}",
+                      f"{max(cold):.2f}" if cold else "-",
+                      f"{statistics.median(warm) * 1000:.1f}" if warm else "-")
+    _print(table)
+    if dashboard:
+        print(f"dashboard: {dashboard}")
+    for line in retries:
+        print(line)
+    if skipped_lost:
+        print(f"{skipped_lost} frames written by a lost worker before it died were kept, "
+              "not rendered again")
+    reasons = {}
+    for frame, reason in failed.items():
+        reasons.setdefault(reason, []).append(frame)
+    for reason, frames_failed in reasons.items():
+        print(f"failed: frames {_frames_text(frames_failed)}: {reason}")
+    tail = f", {len(up_to_date)} skipped (up to date)" if up_to_date else ""
+    where = args.output if gif else os.path.dirname(args.output) or "."
+    print(f"{written + skipped_lost} frames written, {len(failed)} failed{tail} -> {where}")
+    return FAILED if failed else 0
+
+
+__all__ = ["FarmError", "export_batch", "open_render_runner", "render_frames"]
