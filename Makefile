@@ -4,7 +4,7 @@ VENV    := .venv
 VPY     := $(VENV)/bin/python
 STAMP   := $(VENV)/.lantern-installed
 
-.PHONY: setup demo test bench clean system-deps extension
+.PHONY: setup demo test bench clean system-deps extension compare
 
 setup: $(STAMP)
 
@@ -27,6 +27,11 @@ test: setup
 
 bench: setup
 	$(VPY) bench/run_all.py
+
+# `lantern compare` over the suite (calibration scenes, the corpus, the rigged crowd):
+# one report per scene and out/compare/index.html linking them. Not part of `make test`.
+compare: setup
+	$(VPY) bench/compare_suite.py
 
 # The Blender extension zip, built and validated by Blender's own extension tool. The
 # wheels the manifest names (ModernGL, glcontext and mapbox-earcut, every platform, cp311

@@ -160,6 +160,10 @@ def _build_parser():
     render.add_argument("-j", "--jobs", type=int, default=RENDER_PROCESSES,
                         help="worker processes for a sequence on this machine "
                              f"(default {RENDER_PROCESSES})")
+
+    from .compare.command import add_parser as add_compare_parser
+    add_compare_parser(commands, [common], _parse_size, EXIT_STATUSES,
+                       argparse.RawDescriptionHelpFormatter)
     return parser
 
 
@@ -177,6 +181,9 @@ def main(argv=None):
     # handler from printing each a second time.
     logging.getLogger("lantern").addHandler(logging.NullHandler())
     try:
+        if args.command == "compare":
+            from .compare.command import run as compare
+            return compare(args, _usage, CommandError)
         return _export(args) if args.command == "export" else _render(args)
     except CommandError as error:
         _fail(args, str(error))

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs the system libraries Lantern needs when they are missing:
 # Mesa's EGL and llvmpipe for the engine's headless context, and the shared
-# libraries that Blender-as-a-module (bpy) links against.
+# libraries that Blender-as-a-module (bpy) links against, and chromium for the
+# browser test of the compare report.
 set -euo pipefail
 need=()
 have() { ldconfig -p | grep -q "$1"; }
@@ -16,6 +17,8 @@ have 'libXfixes.so.3'     || need+=(libxfixes3)
 have 'libXi.so.6'         || need+=(libxi6)
 have 'libxkbcommon.so.0'  || need+=(libxkbcommon0)
 have 'libSM.so.6'         || need+=(libsm6)
+# Debian's chromium: the headless browser that opens `lantern compare`'s report in tests.
+command -v chromium >/dev/null 2>&1 || need+=(chromium)
 if [ ${#need[@]} -gt 0 ]; then
   echo "installing system packages: ${need[*]}"
   SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"

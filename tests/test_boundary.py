@@ -2,9 +2,11 @@
 and the engine's layering.
 
 - `engine/` (and the CLI, which must run without Blender) never imports Blender modules.
-- Only `exporters/` and `addon/` import bpy among the package's runtime modules.
-  Scripts that author scenes inside Blender (tests, bench, the demo scene builder)
-  are not runtime code and are exempt.
+- Only `exporters/` and `addon/` import bpy among the package's runtime modules, and
+  `compare/`, a tool that drives Cycles and EEVEE in worker processes. Scripts that
+  author scenes inside Blender (tests, bench, the demo scene builder) are not runtime
+  code and are exempt.
+- The engine never imports `compare/` (the tool uses the engine, not the reverse).
 - `engine` and `exporters` never import each other.
 - Inside the engine, `engine/usd/` is the only code that imports pxr and
   `engine/gpu/` the only code that imports moderngl or glcontext; the rest
@@ -69,7 +71,8 @@ def test_engine_never_imports_blender_or_exporters():
     for path in _package_files("engine"):
         for module, level in _imports(path):
             name = _resolve(path, module, level)
-            if _top(name) in BLENDER_MODULES or name.startswith("lantern.exporters"):
+            if _top(name) in BLENDER_MODULES or name.startswith(("lantern.exporters",
+                                                                  "lantern.compare")):
                 offences.append(f"{path.relative_to(REPO)} imports {name}")
     assert not offences, offences
 
@@ -86,7 +89,7 @@ def test_only_exporters_and_addon_import_bpy():
     offences = []
     for path in _package_files():
         top_folder = path.relative_to(REPO).parts[0]
-        if top_folder in {"exporters", "addon"}:
+        if top_folder in {"exporters", "addon", "compare"}:
             continue
         for module, level in _imports(path):
             if _top(_resolve(path, module, level)) in BLENDER_MODULES:
@@ -205,6 +208,7 @@ def test_the_layer_guards_can_fail(source, rule):
     ("from ..exporters import api", "lantern.exporters"),
     ("import bpy", "bpy"),
     ("from .. import exporters", "lantern.exporters"),
+    ("from ..compare import run", "lantern.compare"),
 ])
 def test_the_guard_sees_forbidden_imports(tmp_path, source, expected):
     """The checks above can fail: a planted offending file is detected."""

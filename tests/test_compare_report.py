@@ -1,0 +1,248 @@
+"""lantern compare end to end, tiny: 64x36, Cycles at 1 and 4 samples against a
+16-sample reference, Lantern at one preset, EEVEE at 1 sample, on a scene whose
+image texture is missing. Then the report in headless Chromium.
+
+One comparison runs per module (about 20 s); two more check the reference cache."""
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+import jsonschema
+import numpy as np
+import pytest
+
+from lantern.compare import metrics, report
+
+TINY = ["--size", "64x36", "--cycles-samples", "1,4", "--reference-samples", "16",
+        "--presets", "low"]
+NUMBER = r"[\d.]+(?:e-\d+)?"
+SUMMARY = re.compile(rf"^Lantern low: {NUMBER} s warm \({NUMBER} s cold\), FLIP {NUMBER}; Cycles .*"
+                     rf"; EEVEE 1 spp {NUMBER} s, FLIP {NUMBER}$")
+CHROMIUM = "/usr/bin/chromium"
+
+
+def build_scene(path):
+    """A white plane, a cube whose base colour is an image file that does not exist,
+    a point light and a camera."""
+    import bpy
+    from mathutils import Vector
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    white = bpy.data.materials.new("White")
+    white.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.8, 0.8, 0.8, 1)
+    bpy.ops.mesh.primitive_plane_add(size=10.0)
+    bpy.context.object.data.materials.append(white)
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0, 0, 0.5))
+    textured = bpy.data.materials.new("Textured")
+    nodes = textured.node_tree.nodes
+    texture = nodes.new("ShaderNodeTexImage")
+    texture.image = bpy.data.images.new("missing", 4, 4)
+    texture.image.source, texture.image.filepath = "FILE", "//textures/missing.png"
+    textured.node_tree.links.new(texture.outputs["Color"],
+                                 nodes["Principled BSDF"].inputs["Base Color"])
+    bpy.context.object.data.materials.append(textured)
+    light = bpy.data.objects.new("Light", bpy.data.lights.new("Light", "POINT"))
+    light.data.energy = 500.0
+    light.location = (2.0, -2.0, 3.0)
+    scene.collection.objects.link(light)
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    camera.location = (4.0, -5.0, 3.5)
+    camera.rotation_euler = (Vector((0, 0, 0.4)) - camera.location).to_track_quat("-Z", "Y").to_euler()
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    scene.world = bpy.data.worlds.new("Grey")
+    scene.world.color = (0.05, 0.05, 0.05)
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+
+
+def lantern_compare(*args):
+    return subprocess.run([sys.executable, "-m", "lantern", "compare", *map(str, args)],
+                          capture_output=True, text=True)
+
+
+@pytest.fixture(scope="module")
+def compared(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("compare")
+    scene = folder / "scene.blend"
+    build_scene(scene)
+    out, cache = folder / "report", folder / "cache"
+    proc = lantern_compare(scene, "-o", out, *TINY, "--eevee", "--eevee-samples", "1",
+                           "--cache", cache)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    with open(out / "results.json") as f:
+        results = json.load(f)
+    return {"scene": scene, "out": out, "cache": cache, "proc": proc, "results": results}
+
+
+def test_the_summary_line(compared):
+    lines = compared["proc"].stdout.strip().splitlines()
+    assert len(lines) == 1 and SUMMARY.match(lines[0]), lines
+
+
+def test_results_validate_against_the_schema(compared):
+    report.validate(compared["results"])
+
+
+@pytest.mark.parametrize("breakage", [
+    lambda r: r.pop("renders"),
+    lambda r: r["renders"][0].update(seconds="fast"),
+    lambda r: r["equal_error"][0]["cycles"].update(status="almost"),
+    lambda r: r["equal_error"][0].update(winner_warm="everyone"),
+    lambda r: r["references"]["direct"].update(cache_key="not a hash"),
+    lambda r: r["settings"].update(modes=["sideways"]),
+    lambda r: r["renders"][0].pop("image"),
+    lambda r: r.update(unexpected=1),
+])
+def test_a_hand_broken_results_json_fails_the_schema(compared, breakage):
+    broken = json.loads(json.dumps(compared["results"]))
+    breakage(broken)
+    with pytest.raises(jsonschema.ValidationError):
+        report.validate(broken)
+
+
+def test_every_scored_image_is_named_and_the_metrics_can_be_recomputed(compared):
+    from lantern.engine import read_exr
+    out, results = compared["out"], compared["results"]
+    renderers = {r["renderer"] for r in results["renders"]}
+    assert renderers == {"lantern", "cycles", "eevee"}
+    assert [r["samples"] for r in results["renders"] if r["renderer"] == "cycles"] == [1, 4]
+    reference = read_exr(str(out / results["references"]["direct"]["image"]))
+    assert reference.shape == (36, 64, 4)
+    for render in results["renders"]:
+        image = read_exr(str(out / render["image"]))
+        assert (out / render["png"]).is_file()
+        assert (out / render["metrics"]["direct"]["heatmap"]).is_file()
+        again = metrics.score(image, reference)["all"]
+        assert again == pytest.approx(render["metrics"]["direct"]["all"])
+    assert (out / results["plots"]["direct"]).is_file()
+
+
+def test_a_broken_image_link_is_reported_and_the_scene_still_renders(compared):
+    results = compared["results"]
+    broken = results["broken_links"]
+    assert [(b["kind"], b["path"]) for b in broken] == [("image", "//textures/missing.png")]
+    assert any("missing.png" in w for w in results["warnings"])
+    assert results["failures"] == []
+    lantern = next(r for r in results["renders"] if r["renderer"] == "lantern")
+    assert lantern["problems"]["nonfinite_pixels"] == 0
+    assert 0 < lantern["metrics"]["direct"]["all"]["hdr_flip"] < 1
+    assert lantern["cold_seconds"] > lantern["seconds"] > 0
+    assert results["mask"]["source"] == "lantern_coverage"
+    assert lantern["metrics"]["direct"]["foreground"] is not None
+    html = (compared["out"] / "index.html").read_text()
+    assert "missing.png" in html and "Broken links" in html
+
+
+def test_the_reference_is_cached_and_a_changed_setting_misses(compared, tmp_path):
+    first = compared["results"]["references"]["direct"]
+    assert first["cached"] is False
+    cache_files = sorted(os.listdir(compared["cache"]))
+    assert cache_files == [first["cache_key"] + ".exr", first["cache_key"] + ".json"]
+    # Same reference settings, a different sweep: the reference comes from the cache.
+    again = tmp_path / "again"
+    proc = lantern_compare(compared["scene"], "-o", again, "--size", "64x36",
+                           "--cycles-samples", "1", "--reference-samples", "16",
+                           "--presets", "low", "--cache", compared["cache"], "--jobs", "2")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    second = json.loads((again / "results.json").read_text())["references"]["direct"]
+    assert second["cached"] is True and second["cache_key"] == first["cache_key"]
+    assert not (again / "logs" / "reference_direct.log").exists()   # nothing rendered it
+    assert (again / second["image"]).read_bytes() == \
+        (compared["out"] / first["image"]).read_bytes()
+    # A different reference (8 samples): a new key, rendered, stored beside the first.
+    changed = tmp_path / "changed"
+    proc = lantern_compare(compared["scene"], "-o", changed, "--size", "64x36",
+                           "--cycles-samples", "1", "--reference-samples", "8",
+                           "--presets", "low", "--cache", compared["cache"], "--jobs", "2")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    third = json.loads((changed / "results.json").read_text())["references"]["direct"]
+    assert third["cached"] is False and third["cache_key"] != first["cache_key"]
+    assert third["inputs"]["samples"] == 8
+    assert len(os.listdir(compared["cache"])) == 4
+
+
+def test_a_failed_job_is_one_line_and_the_others_go_on(tmp_path):
+    from lantern.compare.tasks import Job, run_job
+    job = run_job(Job("lantern low", {"job": "lantern", "scene": str(tmp_path / "gone.blend"),
+                                      "frame": 1.0, "size": [8, 8], "preset": "low",
+                                      "transparent": False, "warm_runs": 1,
+                                      "image": str(tmp_path / "x.exr")}, 1),
+                  str(tmp_path / "logs"), lambda *_: None)
+    assert job.result is None
+    assert "gone.blend" in job.error and "\n" not in job.error
+
+
+@pytest.mark.parametrize("args, status, message", [
+    (["scene.usd", "-o", "out"], 2, "needs a .blend"),
+    (["{scene}", "-o", "out", "--presets", "low,best"], 2, "--presets best"),
+    (["{scene}", "-o", "out", "--mode", "sideways"], 2, "choose from direct, full"),
+    (["{scene}", "-o", "out", "--cycles-samples", "0,4"], 2, "positive"),
+    (["{folder}/gone.blend", "-o", "out"], 1, "no such file"),
+])
+def test_wrong_command_lines(compared, tmp_path, args, status, message):
+    args = [a.format(scene=compared["scene"], folder=tmp_path) for a in args]
+    proc = lantern_compare(*args)
+    assert proc.returncode == status
+    assert message in proc.stderr.strip().splitlines()[-1]
+
+
+# --- the report in a browser ----------------------------------------------------------
+
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+         "--disable-component-update", "--no-first-run"]
+
+
+def open_in_chromium(index, screenshot, profile):
+    """Opens index.html in Debian's chromium (headless, a fresh profile): (images as
+    [src, naturalWidth], console errors). Saves a full-page screenshot."""
+    from playwright.sync_api import sync_playwright
+    errors = []
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch_persistent_context(
+            str(profile), executable_path=CHROMIUM, headless=True, args=FLAGS,
+            viewport={"width": 1400, "height": 900})
+        try:
+            page = browser.new_page()
+            page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(index.as_uri(), wait_until="load")
+            images = page.evaluate(
+                "Array.from(document.images).map(i => [i.getAttribute('src'), i.naturalWidth])")
+            page.screenshot(path=str(screenshot), full_page=True)
+        finally:
+            browser.close()
+    return images, errors
+
+
+@pytest.fixture(scope="module")
+def chromium():
+    if not os.access(CHROMIUM, os.X_OK):
+        pytest.fail(f"{CHROMIUM} is missing: `make setup` installs Debian's chromium")
+    return CHROMIUM
+
+
+def test_the_report_opens_in_chromium_with_every_image(compared, chromium, tmp_path):
+    screenshot = tmp_path / "report.png"
+    images, errors = open_in_chromium(compared["out"] / "index.html", screenshot,
+                                      tmp_path / "profile")
+    assert errors == []
+    sources = [src for src, _ in images]
+    assert compared["results"]["plots"]["direct"] in sources
+    expected = {r["png"] for r in compared["results"]["renders"]}
+    expected |= {r["metrics"]["direct"]["heatmap"] for r in compared["results"]["renders"]}
+    assert expected <= set(sources)
+    assert all(width > 0 for _, width in images), images
+    assert screenshot.stat().st_size > 10_000
+
+
+def test_the_browser_check_sees_a_missing_image(compared, chromium, tmp_path):
+    broken = tmp_path / "broken"
+    shutil.copytree(compared["out"], broken)
+    (broken / compared["results"]["plots"]["direct"]).unlink()
+    images, errors = open_in_chromium(broken / "index.html", tmp_path / "shot.png",
+                                      tmp_path / "profile")
+    assert dict(images)[compared["results"]["plots"]["direct"]] == 0
+    assert errors, "a missing image must show as a console error"
