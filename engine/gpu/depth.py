@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import ctypes
 
-from .stencil import _FUNCTYPE
+from .stencil import entry_points
 
 GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE, GL_ZERO_TO_ONE = 0x8CA1, 0x935E, 0x935F
 GL_TEXTURE_2D, GL_DEPTH_COMPONENT, GL_FLOAT = 0x0DE1, 0x1902, 0x1406
@@ -31,15 +31,10 @@ _SIGS = {
 class DepthConvention:
     def __init__(self, proc, clip_control: bool):
         self.zero_to_one = bool(clip_control)
-        self._fn = {}
         names = dict(_SIGS)
         if self.zero_to_one:
             names["glClipControl"] = (None, _u, _u)
-        for name, (restype, *args) in names.items():
-            addr = proc(name)
-            if not addr:
-                raise RuntimeError(f"GL entry point {name} not found")
-            self._fn[name] = _FUNCTYPE(restype, *args)(addr)
+        self._fn = entry_points(proc, names)
 
     def begin(self):
         """A frame starts: the clip convention its projections are made for."""

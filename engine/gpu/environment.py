@@ -28,7 +28,7 @@ import numpy as np
 from ..lighting import dfg_lut, latlong_sh
 from ..textures import read_image_linear
 from .programs import UNITS, set_uniform
-from .stencil import _FUNCTYPE
+from .stencil import entry_points
 
 GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 = 0x8D40, 0x8CE0
 GL_TEXTURE_CUBE_MAP_POSITIVE_X = 0x8515
@@ -74,12 +74,7 @@ class EnvironmentMap:
 class Environment:
     def __init__(self, ctx, uploads, programs, proc):
         self.ctx, self.uploads, self.programs = ctx, uploads, programs
-        self._fn = {}
-        for name, (restype, *args) in _SIGS.items():
-            addr = proc(name)
-            if not addr:
-                raise RuntimeError(f"GL entry point {name} not found")
-            self._fn[name] = _FUNCTYPE(restype, *args)(addr)
+        self._fn = entry_points(proc, _SIGS)
         # Cube lookups filter across faces (core since GL 3.2; off by default).
         self._fn["glEnable"](GL_TEXTURE_CUBE_MAP_SEAMLESS)
         table = dfg_lut()

@@ -31,6 +31,17 @@ class Cloud:
                 obj.release()
 
 
+def set_camera_facing(prog, view):
+    """The uniforms that turn each point into a sphere facing `view`'s camera
+    (shaders/points.vert); shadow maps face their light instead (passes/shadows.py)."""
+    set_uniform(prog, "view_proj", view.view_proj)
+    set_uniform(prog, "u_window", view.window)
+    set_uniform(prog, "u_far", view.far_clip)
+    set_uniform(prog, "u_face_axis", bool(view.camera.ortho))
+    set_uniform(prog, "u_axis", view.camera.forward)
+    view.set_origin(prog)
+
+
 class PointClouds:
     def __init__(self, ctx, uploads, objects):
         self.ctx, self.uploads, self.objects = ctx, uploads, objects

@@ -44,16 +44,23 @@ _SIGS = {
 _FUNCTYPE = getattr(ctypes, "WINFUNCTYPE", ctypes.CFUNCTYPE)
 
 
+def entry_points(proc, signatures: dict) -> dict:
+    """GL functions ModernGL does not wrap, by name, resolved through the context
+    backend's `proc(name)`; `signatures` maps a name to (restype, *argtypes)."""
+    functions = {}
+    for name, (restype, *args) in signatures.items():
+        address = proc(name)
+        if not address:
+            raise RuntimeError(f"GL entry point {name} not found")
+        functions[name] = _FUNCTYPE(restype, *args)(address)
+    return functions
+
+
 class Stencil:
     """The stencil calls of one GL context, resolved through `proc(name)`."""
 
     def __init__(self, proc):
-        self._fn = {}
-        for name, (restype, *args) in _SIGS.items():
-            addr = proc(name)
-            if not addr:
-                raise RuntimeError(f"GL entry point {name} not found")
-            self._fn[name] = _FUNCTYPE(restype, *args)(addr)
+        self._fn = entry_points(proc, _SIGS)
 
     def depth_stencil(self, size) -> "DepthStencil":
         return DepthStencil(self, size)

@@ -36,16 +36,16 @@ SIZE = "32x18"
 
 # --- the valid scene ------------------------------------------------------------------
 
-def write_png(path, rgb):
-    """An 8-bit RGB PNG with the standard library (no imaging package needed)."""
-    rgb = np.asarray(rgb, np.uint8)
+def write_png(path, rgb, bits=8):
+    """An 8- or 16-bit RGB PNG with the standard library (no imaging package needed)."""
+    rgb = np.asarray(rgb, np.uint8 if bits == 8 else ">u2")
     height, width = rgb.shape[:2]
     raw = b"".join(b"\x00" + rgb[y].tobytes() for y in range(height))
 
     def chunk(kind, data):
         return (struct.pack(">I", len(data)) + kind + data +
                 struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
-    header = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    header = struct.pack(">IIBBBBB", width, height, bits, 2, 0, 0, 0)
     with open(path, "wb") as f:
         f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) +
                 chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))

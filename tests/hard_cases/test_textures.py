@@ -8,9 +8,6 @@ range) makes these hold; the cases that fail before it are marked for it.
 - A float EXR base colour above 1, and a constant diffuseColor of 2, reflect twice
   what a base colour of 1 does (not clamped): relative <= 1e-3.
 Every image is finite."""
-import struct
-import zlib
-
 import numpy as np
 import pytest
 from pxr import Gf, Sdf, UsdLux, UsdShade
@@ -18,21 +15,9 @@ from pxr import Gf, Sdf, UsdLux, UsdShade
 from lantern.engine import RenderSettings, render_stage
 
 from hard_cases import engine_scenes as E  # tests/ is on sys.path (conftest.py)
+from hard_cases.malformed_usd import write_png
 S = E.S
 W, H = 64, 36
-def write_png16(path, rgb):
-    """A 16-bit RGB PNG with the standard library."""
-    rgb = np.asarray(rgb, ">u2")
-    height, width = rgb.shape[:2]
-    raw = b"".join(b"\x00" + rgb[y].tobytes() for y in range(height))
-
-    def chunk(kind, data):
-        return (struct.pack(">I", len(data)) + kind + data +
-                struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
-    header = struct.pack(">IIBBBBB", width, height, 16, 2, 0, 0, 0)
-    with open(path, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) +
-                chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
 
 
 def _textured_card(path, input_name, colorspace="raw", diffuse=(0, 0, 0), lit=False):
@@ -91,7 +76,7 @@ def test_16_bit_png_precision(tmp_path, hard_case):
     levels = (np.linspace(0.001, 0.06, 16) * 65535).round().astype(np.uint16)
     img = np.repeat(np.repeat(np.repeat(levels, 4)[None, :, None], 4, 0), 3, 2)
     path = tmp_path / "ramp16.png"
-    write_png16(path, img)
+    write_png(path, img, bits=16)
     out = _render(_textured_card(path, "emissiveColor"))
     got = out[H // 2, 1::4, 0]
     want = levels.astype(np.float64) / 65535

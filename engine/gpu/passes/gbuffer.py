@@ -18,6 +18,7 @@ render passes: IndexOB, IndexMA into g_index (RG32F), only when asked for (a
 from __future__ import annotations
 
 from ..framegraph import Pass
+from ..points import set_camera_facing
 from ..programs import UNITS, set_uniform
 
 # Material input -> shader names and variant define.
@@ -88,15 +89,8 @@ class GBufferPass(Pass):
     def _points(self, frame, view, materials):
         """Points prims: spheres facing the camera (points.vert), depth-tested with
         the meshes."""
-        cam = view.camera
-
         def setup(prog, cloud):
-            set_uniform(prog, "view_proj", view.view_proj)
-            set_uniform(prog, "u_window", view.window)
-            set_uniform(prog, "u_far", view.far_clip)
-            set_uniform(prog, "u_face_axis", bool(cam.ortho))
-            set_uniform(prog, "u_axis", cam.forward)
-            view.set_origin(prog)
+            set_camera_facing(prog, view)
             mat = materials[cloud.material]
             set_material(prog, mat, self.textures, mat.opacity_threshold)
 

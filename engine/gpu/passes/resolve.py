@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..framegraph import Pass
+from ..points import set_camera_facing
 from ..programs import UNITS, set_uniform
 
 NAMED = 5                    # prims named in the warning, most pixels first
@@ -81,16 +82,8 @@ class ResolvePass(Pass):
             set_uniform(prog, "u_far", view.far_clip)
             view.set_origin(prog)
             self.geometry.draw_casters(prog)
-            cam = view.camera
-
-            def setup(p, cloud):
-                set_uniform(p, "view_proj", view.view_proj)
-                set_uniform(p, "u_window", view.window)
-                set_uniform(p, "u_far", view.far_clip)
-                set_uniform(p, "u_face_axis", bool(cam.ortho))
-                set_uniform(p, "u_axis", cam.forward)
-                view.set_origin(p)
-            self.geometry.points.draw(self.programs, "id", setup)
+            self.geometry.points.draw(self.programs, "id",
+                                      lambda p, cloud: set_camera_facing(p, view))
             out = np.frombuffer(ids.read(), np.int32).reshape(h, w)[::-1].copy()
         finally:
             self.depth.far_clip(False)
