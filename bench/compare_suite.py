@@ -20,6 +20,8 @@ Scenes, built or copied into a temporary folder by a Blender process (`--build`)
   own sizes and samples;
 
     .venv/bin/python bench/compare_suite.py [--out out/compare] [--only NAME ...]
+
+(--only measures those scenes again and keeps the other rows of an earlier summary.)
 """
 import argparse
 import json
@@ -423,12 +425,25 @@ def write_summary(out, scenes, args, seconds):
     write_text(str(out / "index.html"), "\n".join(body))
 
 
+def _with_earlier(out, scenes, only):
+    """With --only, the scenes just run replace theirs in the summary an earlier run left
+    in `out`, and the others are kept, so one scene can be measured again."""
+    earlier = out / "summary.json"
+    if not only or not earlier.is_file():
+        return scenes
+    fresh = {scene["name"]: scene for scene in scenes}
+    kept = json.loads(earlier.read_text())["scenes"]
+    merged = [fresh.pop(scene["name"], scene) for scene in kept]
+    return merged + list(fresh.values())
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(REPO / "out" / "compare"))
     parser.add_argument("--only", nargs="*", default=None, metavar="NAME",
                         help="only these scenes (plane_sun, box_point, glossy_spheres, "
-                             "crowd_16, 02_suzanne, ...)")
+                             "crowd_16, 02_suzanne, ...); they replace their rows in the "
+                             "summary an earlier run left in --out")
     parser.add_argument("--size", default=SIZE, type=lambda t: tuple(map(int, t.split("x"))),
                         help=f"image size of scenes without their own (default {SIZE[0]}x{SIZE[1]})")
     parser.add_argument("--reference-samples", type=int, default=REFERENCE_SAMPLES)
@@ -459,6 +474,9 @@ def main():
             scenes.append(run_scene(name, entry, args))
             print(f"{name}: {scenes[-1].get('summary') or scenes[-1].get('error')}", flush=True)
     seconds = time.perf_counter() - start
+    scenes = _with_earlier(out, scenes, args.only)
+    if args.only:   # the time of every scene's compare, earlier runs' included
+        seconds = sum(scene.get("seconds", 0.0) for scene in scenes)
     write_summary(out, scenes, args, seconds)
     print()
     print(markdown(summary_rows(scenes, preset="medium")))

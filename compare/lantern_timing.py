@@ -15,8 +15,15 @@ import statistics
 import time
 
 
+def point_sampled(pixel_filter: float) -> bool:
+    """A filter narrower than half a pixel puts Cycles' samples at the pixel centres,
+    where Lantern shades without anti-aliasing: Lantern is then compared with its
+    supersampling and FXAA off, as the calibration tests compare it."""
+    return pixel_filter < 0.5
+
+
 def time_lantern(blend, frame, size, preset, transparent, spawned_at, warm_runs,
-                 coverage=False) -> dict:
+                 coverage=False, antialias=True) -> dict:
     """Renders `blend` with Lantern and times it. spawned_at: time.time() in the parent
     just before it started this process. Returns the image (float RGBA), the times,
     the warnings, and with `coverage` Lantern's coverage (alpha) for foreground masks."""
@@ -30,7 +37,8 @@ def time_lantern(blend, frame, size, preset, transparent, spawned_at, warm_runs,
     stage, report = exporters.stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
     export_seconds = time.perf_counter() - start
     settings = RenderSettings(width=size[0], height=size[1], frame=frame, preset=preset,
-                              transparent=transparent)
+                              transparent=transparent,
+                              **({} if antialias else {"supersample": 1, "fxaa": False}))
     with Session(stage, settings) as session:
         first = session.render()
         cold_seconds = time.time() - spawned_at

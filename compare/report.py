@@ -12,6 +12,7 @@ import os
 
 from .curves import describe as describe_equal_error
 from .files import atomic_write, write_json, write_text
+from .lantern_timing import point_sampled
 
 SCHEMA_PATH = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results.schema.json")
 LABELS = {"cycles": "Cycles", "cycles_denoised": "Cycles + denoiser", "eevee": "EEVEE",
@@ -296,7 +297,9 @@ def html_page(results: dict, plots: dict) -> str:
                                                           f"{scene['size'][0]}×{scene['size'][1]}")],
              ["modes", _e(", ".join(settings["modes"]))],
              ["Cycles sweep", _e(", ".join(map(str, settings["cycles_samples"])) + " spp")],
-             ["pixel filter", _e(f"Blackman-Harris, {settings['pixel_filter']['width']} px")],
+             ["pixel filter", _e(f"Blackman-Harris, {settings['pixel_filter']['width']} px" + (
+                 "; point-sampled, so Lantern renders without anti-aliasing"
+                 if point_sampled(settings["pixel_filter"]["width"]) else ""))],
              ["seeds", _e(f"reference {settings['seeds']['reference']}, "
                           f"sweep {settings['seeds']['sweep']}")],
              ["foreground mask", _e(results["mask"]["source"])],

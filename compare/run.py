@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from . import cache as reference_cache
 from .curves import EqualError, time_to_reach
 from .files import atomic_write
+from .lantern_timing import point_sampled
 from .tasks import Job, run_job, run_jobs
 
 MODES = ("direct", "full")  # the Cycles references: see blender_render.configure_cycles
@@ -131,7 +132,7 @@ def _plan(options, out, scan, size, frame):
         coverage = _image(out, "lantern_coverage") if index == 0 and not transparent else None
         jobs.append(Job(f"lantern {preset}", common | {
             "job": "lantern", "preset": preset, "transparent": transparent,
-            "warm_runs": options.warm_runs, "image": _image(out, f"lantern_{preset}"),
+            "antialias": not point_sampled(options.pixel_filter), "warm_runs": options.warm_runs, "image": _image(out, f"lantern_{preset}"),
             "coverage": coverage}, 1, extra={"renderer": "lantern", "preset": preset}))
     return jobs, references
 

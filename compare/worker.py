@@ -72,7 +72,8 @@ def _lantern(spec):
     from .lantern_timing import time_lantern
     timed = time_lantern(spec["scene"], spec["frame"], tuple(spec["size"]), spec["preset"],
                          spec["transparent"], spec["spawned_at"], spec["warm_runs"],
-                         coverage=spec.get("coverage") is not None)
+                         coverage=spec.get("coverage") is not None,
+                         antialias=spec.get("antialias", True))
     write_image(spec["image"], timed.pop("rgba"))
     coverage = timed.pop("coverage")
     if coverage is not None:

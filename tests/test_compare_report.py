@@ -246,3 +246,20 @@ def test_the_browser_check_sees_a_missing_image(compared, chromium, tmp_path):
                                       tmp_path / "profile")
     assert dict(images)[compared["results"]["plots"]["direct"]] == 0
     assert errors, "a missing image must show as a console error"
+
+
+@pytest.mark.parametrize("pixel_filter, antialias", [(0.01, False), (1.5, True)])
+def test_a_point_sampled_comparison_renders_lantern_without_anti_aliasing(tmp_path, pixel_filter,
+                                                                         antialias):
+    """Cycles with a filter narrower than half a pixel shades pixel centres: Lantern is
+    compared with its supersampling and FXAA off, as tests/test_shadows_vs_cycles.py
+    compares it; with a real filter, Lantern keeps its preset's anti-aliasing."""
+    from lantern.compare import run
+    scene = tmp_path / "scene.blend"
+    scene.write_bytes(b"BLENDER")
+    options = run.Options(scene=str(scene), out=str(tmp_path / "out"), presets=("medium", "high"),
+                          pixel_filter=pixel_filter, cache=str(tmp_path / "cache"))
+    scan = {"scene": {"blender": "5.0.1", "film_transparent": False}, "links": []}
+    jobs, _ = run._plan(options, str(tmp_path / "out"), scan, (16, 9), 1.0)
+    lantern = [job for job in jobs if job.spec["job"] == "lantern"]
+    assert [job.spec["antialias"] for job in lantern] == [antialias, antialias]
