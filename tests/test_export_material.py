@@ -540,3 +540,50 @@ def test_packed_environment_image_is_exported(empty_scene, tmp_path):
     assert report.warnings == []
     dome = UsdLux.DomeLight(stage.GetPrimAtPath("/root/_world"))
     assert np.array_equal(read_image(dome.GetTextureFileAttr().Get().resolvedPath), sky)
+
+
+def _render_unlit_world(stage):
+    """The stage under a uniform white world only, from a fixed view."""
+    from lantern.engine import RenderSettings, render_stage
+    dome = UsdLux.DomeLight.Define(stage, "/root/World")
+    dome.CreateColorAttr(Gf.Vec3f(1.0, 1.0, 1.0))
+    return render_stage(stage, RenderSettings(width=48, height=32, preset="low")).rgba
+
+
+def test_faces_without_a_material_shade_as_blenders_default_surface(empty_scene):
+    """Cycles renders a face without a material with a 0.8 grey diffuse surface; USD's
+    fallback (UsdPreviewSurface's 0.18) rendered 29_armature_use_current_pose's cube a
+    quarter as bright as Cycles. The exporter writes that colour as displayColor: a
+    mesh without a material renders as one with Blender's default Principled BSDF."""
+    cube_object("Bare")
+    stage, _ = export_current()
+    bare = UsdGeom.Mesh(stage.GetPrimAtPath("/root/Bare/Bare_mesh") or
+                        next(p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)))
+    assert tuple(bare.GetDisplayColorAttr().Get()[0]) == pytest.approx((0.8, 0.8, 0.8))
+    unbound = _render_unlit_world(stage)
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    mat, _, _ = principled_material("Default")
+    cube_object("Bare").data.materials.append(mat)
+    stage, _ = export_current()
+    mesh = next(p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))
+    assert not UsdGeom.Mesh(mesh).GetDisplayColorAttr().HasAuthoredValue()
+    bound = _render_unlit_world(stage)
+    assert unbound[..., :3].max() > 0.5
+    assert np.abs(unbound - bound).max() < 0.02
+
+
+def test_an_empty_material_slot_gets_the_default_surface_colour(empty_scene):
+    mat, tree, bsdf = principled_material("Red")
+    bsdf.inputs["Base Color"].default_value = (1.0, 0.0, 0.0, 1.0)
+    ob = cube_object("TwoSlots")
+    ob.data.materials.append(mat)
+    ob.data.materials.append(None)
+    for polygon in ob.data.polygons:
+        polygon.material_index = polygon.index % 2
+    stage, _ = export_current()
+    mesh = next(p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))
+    assert tuple(UsdGeom.Mesh(mesh).GetDisplayColorAttr().Get()[0]) == pytest.approx((0.8, 0.8, 0.8))
+    bound = [UsdShade.MaterialBindingAPI(s.GetPrim()).ComputeBoundMaterial()[0]
+             for s in UsdShade.MaterialBindingAPI(mesh).GetMaterialBindSubsets()]
+    assert sorted(bool(m) for m in bound) == [False, True]

@@ -54,8 +54,16 @@ def face_slots(rec, slot_count):
     return slots if len(np.unique(slots)) > 1 else None
 
 
+# What Blender renders a face without a material with: Cycles' default surface is a
+# diffuse BSDF of this colour (EEVEE's a Principled BSDF of it). Written as the mesh's
+# displayColor, which UsdPreviewSurface-based renderers (Storm, Lantern) shade unbound
+# faces with; USD's own fallback would be 0.18 grey, a quarter as bright.
+DEFAULT_SURFACE_COLOR = (0.8, 0.8, 0.8)
+
+
 def bind_materials(stage, mesh_path, rec, slot_materials, material_paths):
-    """Binds per face slot (subsets written by write_mesh), or the whole mesh."""
+    """Binds per face slot (subsets written by write_mesh), or the whole mesh; faces left
+    without a material get Blender's default surface colour."""
     slots = face_slots(rec, len(slot_materials))
     mesh_prim = stage.GetPrimAtPath(mesh_path)
     if slots is None:
@@ -64,6 +72,8 @@ def bind_materials(stage, mesh_path, rec, slot_materials, material_paths):
         if key is not None:
             material = UsdShade.Material(stage.GetPrimAtPath(material_paths[key]))
             UsdShade.MaterialBindingAPI.Apply(mesh_prim).Bind(material)
+        else:
+            _default_surface(mesh_prim)
         return
     subsets = {int(s.GetIndicesAttr().Get()[0]): s for s in
                UsdGeom.Subset.GetGeomSubsets(UsdGeom.Imageable(mesh_prim),
@@ -71,8 +81,13 @@ def bind_materials(stage, mesh_path, rec, slot_materials, material_paths):
     for first_face, subset in sorted(subsets.items()):
         key = slot_materials[slots[first_face]]
         if key is None:
+            _default_surface(mesh_prim)
             continue
         # Over the subset: on a referenced prototype this is a local opinion.
         prim = stage.OverridePrim(subset.GetPath())
         material = UsdShade.Material(stage.GetPrimAtPath(material_paths[key]))
         UsdShade.MaterialBindingAPI.Apply(prim).Bind(material)
+
+
+def _default_surface(mesh_prim):
+    UsdGeom.Gprim(mesh_prim).CreateDisplayColorAttr(Vt.Vec3fArray([DEFAULT_SURFACE_COLOR]))
