@@ -156,9 +156,11 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
 //     at z's own scale (z, not d_b, is where that occluder crosses the segment to l),
 //     so an occluder seen at the wrong depth (a floor beside a wall) does not shadow.
 //  3. A tap still lit is marched: AREA_MARCH_STEPS points of the segment q -> l
-//     between the blockers' nearest and farthest distances; a point up to one step
+//     between the blockers' nearest and farthest distances; a point up to 1.5 steps
 //     behind the surface the map holds there is inside an occluder. This finds what
-//     one mean depth misses: contact shadows, occluders at several depths.
+//     one mean depth misses: contact shadows, occluders at several depths. (No
+//     thicker: a point just behind an occluder's silhouette seen from c, where its
+//     chord is thin, would count as inside it and speckle lit surfaces.)
 // Compares are against the receiver's tangent plane along each ray (receiver-plane
 // depth, exact for a planar receiver), never beyond the map's range.
 const float AREA_SEARCH = 1.0;
@@ -249,7 +251,7 @@ float area_shadow_factor(vec3 p, vec3 n, vec3 c, vec3 x, vec3 y, vec2 half_exten
     k = max(k, least / max(max(half_extent.x, half_extent.y), 1e-9));
     float lo = 0.9 * nearest, hi = min(1.1 * farthest, 0.99 * D);
     float step = max(hi - lo, 0.0) / float(AREA_MARCH_STEPS);
-    float thickness = 1.5 * step + 0.01 * D;
+    float thickness = 1.5 * step;
     float offset = fract(ign * 7.0 + 0.5);
 
     float lit = 0.0, total = 0.0;

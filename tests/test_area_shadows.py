@@ -57,3 +57,41 @@ def test_area_light_penumbra_against_cycles(name):
     assert flip < bound
     if ratio_bound is not None:
         assert abs(ratio - 1.0) < ratio_bound
+
+
+def test_no_speckles_on_smooth_spheres_under_an_area_light():
+    """The march along each tap's segment to the light (contact shadows) once took a
+    point just behind a sphere's silhouette, seen from the light's centre, for a point
+    inside it: isolated dark pixels on lit spheres and floor (741 on this scene at the
+    high preset without supersampling, when the thickness it assumes for occluders
+    added 1% of the distance to the light to 1.5 march steps; now 1.5 steps alone). Counted in the Shadow pass: pixels darker by 0.4 than their 5x5 median."""
+    import math
+
+    import bpy
+    import numpy as np
+    from scipy.ndimage import median_filter
+
+    from lantern.engine import RenderSettings, render_stage
+    from lantern.exporters import stage_from_depsgraph
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.mesh.primitive_plane_add(size=30.0)
+    for i in range(5):
+        bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32, radius=0.8,
+                                             location=(-4.0 + 2.0 * i, 0.0, 0.8))
+        bpy.ops.object.shade_smooth()
+    light = bpy.data.objects.new("Area", bpy.data.lights.new("Area", "AREA"))
+    light.data.energy, light.data.size = 800.0, 2.0
+    light.location = (0.0, -4.0, 5.0)
+    light.rotation_euler = (math.radians(38.7), 0.0, 0.0)   # towards the spheres
+    bpy.context.scene.collection.objects.link(light)
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    camera.location, camera.rotation_euler = (0.0, -10.0, 3.5), (math.radians(76), 0.0, 0.0)
+    bpy.context.scene.collection.objects.link(camera)
+    bpy.context.scene.camera = camera
+    stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+    result = render_stage(stage, RenderSettings(width=640, height=360, preset="high",
+                                                supersample=1, passes=["Shadow"]))
+    shadow = result.passes["Shadow"][..., 0]
+    speckles = int((shadow < median_filter(shadow, size=5) - 0.4).sum())
+    print(f"isolated dark pixels: {speckles}")
+    assert speckles <= 5
