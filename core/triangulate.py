@@ -11,10 +11,12 @@ from __future__ import annotations
 import mapbox_earcut
 import numpy as np
 
+from .transforms import cross
+
 
 def _newell(p):
     """(..., K, 3) polygon corners -> (..., 3) Newell normals (twice the vector area)."""
-    q = np.roll(p, -1, axis=-2)
+    q = np.concatenate([p[..., 1:, :], p[..., :1, :]], axis=-2)   # the next corner
     return np.stack([((p[..., 1] - q[..., 1]) * (p[..., 2] + q[..., 2])).sum(-1),
                      ((p[..., 2] - q[..., 2]) * (p[..., 0] + q[..., 0])).sum(-1),
                      ((p[..., 0] - q[..., 0]) * (p[..., 1] + q[..., 1])).sum(-1)], axis=-1)
@@ -77,8 +79,8 @@ def triangulate(points, counts, indices):
         p = points[indices[c]]
         p = p - p[:, :1]
         n = _newell(p)
-        first = np.einsum("ij,ij->i", np.cross(p[:, 1], p[:, 2]), n)
-        second = np.einsum("ij,ij->i", np.cross(p[:, 2], p[:, 3]), n)
+        first = np.einsum("ij,ij->i", cross(p[:, 1], p[:, 2]), n)
+        second = np.einsum("ij,ij->i", cross(p[:, 2], p[:, 3]), n)
         good = (first > 0) & (second > 0)   # the 0-2 diagonal is inside the quad
         q = quad[good]
         qc = c[good]

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 from pxr import Sdf, Usd, UsdGeom
 
+from ...core.transforms import cross
 from ...core.triangulate import triangulate
 from ..scene import MeshData
 
@@ -207,7 +208,7 @@ def _index(soup, keys, n_keys):
 def _smooth_normals(pts, idx, corners):
     tri = idx[corners].reshape(-1, 3)
     a, b, c = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
-    fn = np.cross(b - a, c - a)  # area-weighted
+    fn = cross(b - a, c - a)  # area-weighted
     acc = np.zeros_like(pts)
     for j in range(3):
         np.add.at(acc, tri[:, j], fn)
@@ -233,5 +234,5 @@ def compute_tangents(P, N, UV, point_of_corner):
     tc, bc = tacc[point_of_corner], bacc[point_of_corner]
     tc = tc - N * np.sum(N * tc, axis=1, keepdims=True)
     tc /= np.maximum(np.linalg.norm(tc, axis=1, keepdims=True), 1e-30)
-    w = np.where(np.sum(np.cross(N, tc) * bc, axis=1) < 0, -1.0, 1.0)
+    w = np.where(np.sum(cross(N, tc) * bc, axis=1) < 0, -1.0, 1.0)
     return np.concatenate([tc, w[:, None]], axis=1)
