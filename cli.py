@@ -149,11 +149,15 @@ def _build_parser():
     render.add_argument("--camera", default=None, metavar="PRIM",
                         help="the camera prim to render through (default: the stage's "
                              "render settings camera, else the first camera)")
-    # Blender's colour management for .png/.gif outputs (an .exr stays scene linear).
-    render.add_argument("--view", default="Standard",
-                        help="view transform: Standard, AgX, Filmic, Khronos PBR Neutral, ...")
-    render.add_argument("--look", default=None, help="a look of that view, e.g. Punchy")
-    render.add_argument("--exposure", type=float, default=0.0, help="exposure in stops")
+    # Blender's colour management for .png/.gif outputs (an .exr stays scene linear):
+    # the scene's own (exported on /Render/Settings), unless given here.
+    render.add_argument("--view", default=None,
+                        help="view transform: Standard, AgX, Filmic, Khronos PBR Neutral, ... "
+                             "(default: the scene's, else Standard)")
+    render.add_argument("--look", default=None,
+                        help="a look of that view, e.g. Punchy (default: the scene's, with its view)")
+    render.add_argument("--exposure", type=float, default=None,
+                        help="exposure in stops (default: the scene's, with its view, else 0)")
     render.add_argument("--chunk", type=int, default=None, metavar="N",
                         help="frames per task of a sequence (default: chosen from the "
                              "measured cold and warm render times)")
@@ -353,11 +357,12 @@ def _render(args):
     if is_blend:
         from . import exporters  # noqa: F401  (Blender's pxr before the engine's)
     _check_preset(args.preset)
-    args.colour = _colour(args)
+    _check_colour(args)
 
     if args.frames is None:
         stage = _stage_from_blend(args.scene) if is_blend else _open_usd(args.scene)
         _check_camera(stage, args)
+        args.colour = _colour(stage, args)
         return _render_frame(stage, args)
     # A sequence's workers start first, and get ready while the stage is read here.
     from .farm.batch import FarmError, open_render_runner
@@ -368,6 +373,7 @@ def _render(args):
     try:
         stage = _stage_from_blend(args.scene) if is_blend else _open_usd(args.scene)
         _check_camera(stage, args)
+        args.colour = _colour(stage, args)
         # A .blend's stage was exported here: the workers get it as text.
         text = stage.GetRootLayer().ExportToString() if is_blend else None
     except BaseException:
@@ -376,14 +382,41 @@ def _render(args):
     return _render_sequence(stage, args, runner, text)
 
 
-def _colour(args):
-    """The view settings for image writers; an unknown view or look is a usage error."""
+def _check_colour(args):
+    """The view settings given on the command line, checked before any work; an unknown
+    view or look is a usage error."""
     from .engine.color import ColorManagementError, check
+    if args.view is None:
+        return      # a --look alone belongs to the scene's view: checked with it
     try:
-        check(args.view, args.look, args.exposure)
+        check(args.view, args.look, args.exposure or 0.0)
     except ColorManagementError as error:
         raise _usage(str(error))
-    return dict(view=args.view, look=args.look, exposure=args.exposure)
+
+
+def _colour(stage, args):
+    """The view settings for image writers: the command line's; else the stage's, as
+    Blender's colour management was exported (a --look or --exposure alone applies over
+    its view); else Standard. The stage's, when this OpenColorIO config lacks them, are
+    a warning and Standard. Sets args.view, look and exposure to what applies."""
+    from .engine.color import STANDARD, ColorManagementError, check
+    from .engine.usd.camera import view_settings
+    stored = view_settings(stage) if args.view is None else {}
+    view = args.view or str(stored.get("view") or STANDARD)
+    look = args.look if args.look is not None else (stored.get("look") or None)
+    exposure = args.exposure
+    if exposure is None:
+        exposure = float(stored.get("exposure", 0.0))
+    try:
+        check(view, look, exposure)
+    except (ColorManagementError, ValueError) as error:
+        if args.look is not None:       # the command line's look, for the scene's view
+            raise _usage(str(error))
+        _print_warnings([f"{args.scene}: the scene's colour management cannot be applied "
+                         f"({_one_line(str(error))}); using {STANDARD}"], set())
+        view, look, exposure = STANDARD, None, args.exposure or 0.0
+    args.view, args.look, args.exposure = view, look, exposure
+    return dict(view=view, look=look, exposure=exposure)
 
 
 def _check_preset(name):

@@ -20,6 +20,10 @@ class StageSettings:
     resolution: tuple[int, int] = (1920, 1080)
     pixel_aspect: float = 1.0
     camera: str | None = None  # key of the active camera's ObjectRecord
+    # Colour management (Render Properties > Color Management), for display images.
+    view_transform: str = "Standard"
+    look: str | None = None     # Blender's look identifier, e.g. "AgX - Punchy"
+    exposure: float = 0.0       # stops
 
 
 @dataclass

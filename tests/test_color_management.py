@@ -118,3 +118,76 @@ def test_lantern_render_png_with_agx_equals_blenders(empty_scene, tmp_path):
     bad = lantern("-o", str(tmp_path / "y.png"), "--view", "Filmik")
     assert bad.returncode == 2 and "Filmik" in bad.stderr
     assert not os.path.exists(tmp_path / "y.png")
+
+
+def test_lantern_render_takes_the_scenes_colour_management(empty_scene, tmp_path):
+    """Without --view, a PNG is made with the scene's own view, look and exposure (Render
+    Properties > Color Management, exported on /Render/Settings), as Blender's render
+    would save it; --view replaces them; a stage without them (any USD file) is
+    Standard; a view the config lacks is a warning and Standard, a wrong --look a usage
+    error."""
+    import bpy
+    from pxr import Sdf, Usd
+    from lantern.engine.image_io import read_image
+    from lantern.engine.usd.camera import view_settings
+    from lantern.exporters import export_depsgraph_to_file
+    bpy.ops.mesh.primitive_uv_sphere_add()
+    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
+    sun.data.energy = 20.0
+    bpy.context.scene.collection.objects.link(sun)
+    view = bpy.context.scene.view_settings
+    view.view_transform, view.look, view.exposure = "AgX", "AgX - Punchy", 0.5
+    usd = tmp_path / "scene.usda"
+    export_depsgraph_to_file(bpy.context.evaluated_depsgraph_get(), str(usd))
+    stage = Usd.Stage.Open(str(usd))
+    assert view_settings(stage) == {"view": "AgX", "look": "AgX - Punchy", "exposure": 0.5}
+
+    def png(name, *args, scene=usd):
+        proc = subprocess.run([sys.executable, "-m", "lantern", "render", str(scene), "--size",
+                               "48x27", "-o", str(tmp_path / name), *args],
+                              capture_output=True, text=True, timeout=300)
+        done = proc.returncode == 0 and "#" not in name
+        return proc, (read_image(str(tmp_path / name)).astype(int) if done else None)
+
+    _, scenes = png("scene.png")
+    _, explicit = png("explicit.png", "--view", "AgX", "--look", "Punchy", "--exposure", "0.5")
+    _, standard = png("standard.png", "--view", "Standard")
+    assert np.array_equal(scenes, explicit)
+    assert np.abs(scenes - standard).max() > 20
+    # A sequence's frames (rendered by the farm's worker process) take it too.
+    proc, _ = png("seq_####.png", "--frames", "1:1")
+    assert proc.returncode == 0, proc.stderr
+    assert np.array_equal(read_image(str(tmp_path / "seq_0001.png")).astype(int), scenes)
+
+    # Any USD file without Lantern's attributes renders Standard, as before.
+    for name in ("lantern:viewTransform", "lantern:look", "lantern:exposure"):
+        stage.GetPrimAtPath("/Render/Settings").RemoveProperty(name)
+    plain = tmp_path / "plain.usda"
+    stage.GetRootLayer().Export(str(plain))
+    _, default = png("plain.png", scene=plain)
+    assert np.array_equal(default, standard)
+
+    # A view this OpenColorIO config lacks: one warning naming the file, then Standard.
+    stage.GetPrimAtPath("/Render/Settings").CreateAttribute(
+        "lantern:viewTransform", Sdf.ValueTypeNames.String, custom=True).Set("Nope")
+    odd = tmp_path / "odd.usda"
+    stage.GetRootLayer().Export(str(odd))
+    proc, image = png("odd.png", scene=odd)
+    assert proc.returncode == 0 and np.array_equal(image, standard)
+    assert proc.stderr.count("warning:") == 1 and "odd.usda" in proc.stderr and "Nope" in proc.stderr
+
+    proc, _ = png("bad.png", "--look", "Nope")
+    assert proc.returncode == 2 and "Nope" in proc.stderr
+
+
+def test_colour_management_that_is_not_exported_is_one_warning(empty_scene):
+    import bpy
+    from _export_helpers import export_current
+    bpy.ops.mesh.primitive_cube_add()
+    bpy.context.scene.view_settings.gamma = 2.0
+    _, report = export_current()
+    said = [w for w in report.warnings if "colour management" in w]
+    assert len(said) == 1 and "gamma 2" in said[0] and "Scene" in said[0]
+    bpy.context.scene.view_settings.gamma = 1.0
+    _, report = export_current()
+    assert not any("colour management" in w for w in report.warnings)

@@ -111,6 +111,20 @@ def settings_camera_path(stage: Usd.Stage, warnings: list | None = None):
     return None
 
 
+def view_settings(stage: Usd.Stage) -> dict:
+    """Blender's colour management as the exporter wrote it on /Render/Settings (view,
+    look, exposure; docs/stage_contract.md), for display images; {} when absent."""
+    prim = stage.GetPrimAtPath(RENDER_SETTINGS)
+    out = {}
+    if prim and prim.IsA(UsdRender.Settings):
+        for key, name in (("view", "lantern:viewTransform"), ("look", "lantern:look"),
+                          ("exposure", "lantern:exposure")):
+            attr = prim.GetAttribute(name)
+            if attr and attr.HasAuthoredValue():
+                out[key] = attr.Get()
+    return out
+
+
 def is_camera(prim: Usd.Prim) -> bool:
     return prim.IsA(UsdGeom.Camera)
 

@@ -31,14 +31,24 @@ def render_visible(view_layer):
     return names
 
 
-def _settings(scene):
+def _settings(scene, warn):
     r = scene.render
     pct = r.resolution_percentage / 100.0
+    view, device = scene.view_settings, scene.display_settings.display_device
+    ignored = [what for what, differs in ((f"display device {device!r}", device != "sRGB"),
+                                          (f"gamma {view.gamma:g}", view.gamma != 1.0),
+                                          ("curves", view.use_curve_mapping)) if differs]
+    if ignored:
+        warn(f"scene '{scene.name}': colour management's {', '.join(ignored)} not "
+             "exported; display images are made for sRGB without them")
     return StageSettings(
         fps=r.fps / r.fps_base, frame_start=scene.frame_start, frame_end=scene.frame_end,
         meters_per_unit=float(scene.unit_settings.scale_length) or 1.0,
         resolution=(max(1, int(r.resolution_x * pct)), max(1, int(r.resolution_y * pct))),
-        pixel_aspect=float(r.pixel_aspect_x / r.pixel_aspect_y))
+        pixel_aspect=float(r.pixel_aspect_x / r.pixel_aspect_y),
+        view_transform=view.view_transform,
+        look=None if view.look in ("None", "NONE", "") else view.look,
+        exposure=float(view.exposure))
 
 
 def _is_shareable(ob):
@@ -69,7 +79,7 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False):
     skinned mesh's rest shape is its mesh data, so one with other modifiers than its
     Armature modifier is baked instead."""
     scene = depsgraph.scene
-    rec = SceneRecord(settings=_settings(scene))
+    rec = SceneRecord(settings=_settings(scene, warn))
     visible = render_visible(depsgraph.view_layer)
 
     originals, shown, materials = {}, {}, {}

@@ -1,5 +1,5 @@
 """Stage metadata and /Render/Settings."""
-from pxr import Gf, UsdGeom, UsdRender
+from pxr import Gf, Sdf, UsdGeom, UsdRender
 
 RENDER_SETTINGS = "/Render/Settings"
 
@@ -21,5 +21,14 @@ def write_render_settings(stage, settings, camera_path):
     rs.CreatePixelAspectRatioAttr(settings.pixel_aspect)
     if camera_path is not None:
         rs.CreateCameraRel().SetTargets([camera_path])
+    # Blender's colour management, which display images (PNG, GIF) are made with.
+    prim = rs.GetPrim()
+    prim.CreateAttribute("lantern:viewTransform", Sdf.ValueTypeNames.String,
+                         custom=True).Set(settings.view_transform)
+    if settings.look:
+        prim.CreateAttribute("lantern:look", Sdf.ValueTypeNames.String,
+                             custom=True).Set(settings.look)
+    prim.CreateAttribute("lantern:exposure", Sdf.ValueTypeNames.Float,
+                         custom=True).Set(settings.exposure)
     stage.SetMetadata("renderSettingsPrimPath", RENDER_SETTINGS)
     return rs
