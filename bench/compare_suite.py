@@ -331,8 +331,8 @@ def run_scene(name, entry, args):
 
 
 def _eevee_points(results):
-    return [{"samples": r["samples"], "seconds": r["seconds"],
-             "flip": ((r["metrics"].get("direct") or {}).get("all") or {}).get("hdr_flip")}
+    from lantern.compare.curves import hdr_flip
+    return [{"samples": r["samples"], "seconds": r["seconds"], "flip": hdr_flip(r, "direct")}
             for r in results["renders"] if r["renderer"] == "eevee"]
 
 

@@ -34,16 +34,22 @@ def file_sha256(path: str) -> str:
     return digest.hexdigest()
 
 
-def reference_inputs(scene_path: str, links: list, settings: dict) -> dict:
-    """What the reference depends on (the cache key is its hash)."""
+def scene_inputs(scene_path: str, links: list) -> dict:
+    """The files every reference of a scene depends on, hashed once per comparison:
+    the .blend and each file it links."""
     linked = []
     for link in sorted(links, key=lambda k: (k["kind"], k["path"], k["name"])):
         present = link["exists"] and not link.get("packed") and os.path.isfile(link["resolved"])
         linked.append({"kind": link["kind"], "path": link["path"],
                        "sha256": file_sha256(link["resolved"]) if present
                        else ("packed" if link.get("packed") else "missing")})
-    return {"recipe": RECIPE, "scene_sha256": file_sha256(scene_path), "links": linked,
-            **settings}
+    return {"scene_sha256": file_sha256(scene_path), "links": linked}
+
+
+def reference_inputs(scene: dict, settings: dict) -> dict:
+    """What one reference depends on (the cache key is its hash): `scene_inputs` and
+    the reference's settings."""
+    return {"recipe": RECIPE, **scene, **settings}
 
 
 def key_of(inputs: dict) -> str:

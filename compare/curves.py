@@ -31,6 +31,21 @@ class EqualError:
         return asdict(self)
 
 
+def hdr_flip(render: dict, mode: str):
+    """A results.json render's mean HDR-FLIP against `mode`'s reference, or None when
+    it was not scored (a failed render, non-finite pixels, another mode's sweep)."""
+    return ((render["metrics"].get(mode) or {}).get("all") or {}).get("hdr_flip")
+
+
+def sweep_points(renders, renderer: str, mode: str) -> list:
+    """(samples, seconds, HDR-FLIP) of `renderer`'s scored renders against `mode`'s
+    reference: its error-against-time curve. Cycles' sweeps belong to one mode each;
+    EEVEE's images are scored against every mode's reference."""
+    return sorted((r["samples"], r["seconds"], hdr_flip(r, mode)) for r in renders
+                  if r["renderer"] == renderer and hdr_flip(r, mode) is not None
+                  and (renderer == "eevee" or r.get("mode") == mode))
+
+
 def _log(x):
     return math.log(max(float(x), ERROR_FLOOR))
 

@@ -11,6 +11,7 @@ import math
 import os
 
 from .curves import describe as describe_equal_error
+from .curves import hdr_flip, sweep_points
 from .files import atomic_write, write_json, write_text
 from .lantern_timing import point_sampled
 
@@ -55,14 +56,8 @@ def heatmap_png(path: str, error_map) -> str:
 # --- the plot -------------------------------------------------------------------------
 
 def _curve(renders, renderer, mode):
-    points = []
-    for render in renders:
-        if render["renderer"] != renderer or (renderer != "eevee" and render.get("mode") != mode):
-            continue
-        flip = ((render["metrics"].get(mode) or {}).get("all") or {}).get("hdr_flip")
-        if flip is not None and flip > 0 and render["seconds"] > 0:
-            points.append((render["samples"], render["seconds"], flip))
-    return sorted(points)
+    """The points a log-log plot can show (positive time and error)."""
+    return [p for p in sweep_points(renders, renderer, mode) if p[1] > 0 and p[2] > 0]
 
 
 def plot(out: str, results: dict, mode: str) -> str | None:
@@ -93,7 +88,7 @@ def plot(out: str, results: dict, mode: str) -> str | None:
         return label
 
     for render in renders:
-        flip = ((render["metrics"].get(mode) or {}).get("all") or {}).get("hdr_flip")
+        flip = hdr_flip(render, mode)
         if render["renderer"] != "lantern" or not flip:
             continue
         warm, cold = render["seconds"], render["cold_seconds"]
@@ -196,7 +191,7 @@ def _winner_text(row, clock):
 
 
 def _scored(render, mode):
-    return ((render["metrics"].get(mode) or {}).get("all") or {}).get("hdr_flip") is not None
+    return hdr_flip(render, mode) is not None
 
 
 def _equal_time_pairs(renders, mode):

@@ -18,7 +18,7 @@ import shutil
 from dataclasses import dataclass, field
 
 from . import cache as reference_cache
-from .curves import EqualError, time_to_reach
+from .curves import EqualError, hdr_flip, sweep_points, time_to_reach
 from .files import atomic_write
 from .lantern_timing import point_sampled
 from .tasks import Job, run_job, run_jobs
@@ -85,9 +85,9 @@ def _image(out, stem):
     return os.path.join(out, "images", stem + ".exr")
 
 
-def _plan(options, out, scan, size, frame):
+def _plan(options, out, scan, scene_files, size, frame):
     """(jobs, references): the worker jobs to run, and per mode the reference entry
-    (cached, or the job that renders it)."""
+    (cached, or the job that renders it). scene_files: cache.scene_inputs."""
     scene_path = os.path.abspath(options.scene)
     common = {"scene": scene_path, "frame": frame, "size": list(size)}
     cache = reference_cache.ReferenceCache(options.cache or reference_cache.default_dir())
@@ -96,7 +96,7 @@ def _plan(options, out, scan, size, frame):
         settings = {"size": list(size), "frame": frame, "samples": options.reference_samples,
                     "seed": REFERENCE_SEED, "mode": mode, "filter_width": options.pixel_filter,
                     "blender": scan["scene"]["blender"]}
-        inputs = reference_cache.reference_inputs(scene_path, scan["links"], settings)
+        inputs = reference_cache.reference_inputs(scene_files, settings)
         key = reference_cache.key_of(inputs)
         path = _image(out, f"reference_{mode}")
         hit = cache.lookup(key)
@@ -148,17 +148,14 @@ def _store_references(references):
                                  {"inputs": reference["inputs"], "seconds": point["seconds"]})
 
 
-def _mask(references, lantern_jobs, film_transparent):
-    """(mask or None, description) of the foreground."""
-    import numpy as np
-
+def _mask(loaded, references, lantern_jobs, film_transparent):
+    """(mask or None, description) of the foreground. loaded: the reference images
+    read, by mode."""
     from ..engine.image_io import read_exr
-    if film_transparent:
-        for reference in references.values():
-            if os.path.isfile(reference["image"]):
-                alpha = read_exr(reference["image"])[..., 3]
-                return alpha > MASK_THRESHOLD, {"source": "reference_alpha",
-                                                "image": reference["image"]}
+    if film_transparent and loaded:
+        mode, image = next(iter(loaded.items()))
+        return image[..., 3] > MASK_THRESHOLD, {"source": "reference_alpha",
+                                                "image": references[mode]["image"]}
     for job in lantern_jobs:
         coverage = job.result and job.result.get("coverage")
         if coverage and os.path.isfile(coverage):
@@ -192,22 +189,13 @@ def _bounds(result: EqualError):
 def _equal_error(renders, modes, presets):
     rows = []
     for mode in modes:
-        curves = {name: [] for name in RENDERERS}
-        for render in renders:
-            metric = (render["metrics"].get(mode) or {}).get("all") or {}
-            if render["renderer"] == "lantern" or metric.get("hdr_flip") is None:
-                continue
-            if render["renderer"] != "eevee" and render["mode"] != mode:
-                continue
-            curves[render["renderer"]].append((render["samples"], render["seconds"],
-                                               metric["hdr_flip"]))
+        curves = {name: sweep_points(renders, name, mode) for name in RENDERERS}
         for preset in presets:
             lantern = next((r for r in renders if r["renderer"] == "lantern"
                             and r["preset"] == preset), None)
-            metric = lantern and ((lantern["metrics"].get(mode) or {}).get("all") or {})
-            if not metric or metric.get("hdr_flip") is None:
+            target = lantern and hdr_flip(lantern, mode)
+            if target is None:
                 continue
-            target = metric["hdr_flip"]
             row = {"mode": mode, "preset": preset, "flip": target,
                    "lantern_warm_seconds": lantern["seconds"],
                    "lantern_cold_seconds": lantern["cold_seconds"]}
@@ -242,9 +230,9 @@ def _score(options, out, references, jobs, film_transparent, view):
     from . import metrics, report
 
     lantern_jobs = [j for j in jobs if j.extra.get("renderer") == "lantern" and j.result]
-    mask, mask_info = _mask(references, lantern_jobs, film_transparent)
     loaded = {mode: read_exr(r["image"]) for mode, r in references.items()
               if os.path.isfile(r["image"])}
+    mask, mask_info = _mask(loaded, references, lantern_jobs, film_transparent)
     for mode, reference in references.items():
         reference["problems"] = metrics.problems(loaded[mode]) if mode in loaded else None
         if mode in loaded:
@@ -332,12 +320,10 @@ def _summary(equal, renders, modes):
     else:
         text += (f"; Cycles does not reach it by {cycles['bound_samples']} spp "
                  f"(> {cycles['bound_seconds']:.3g} s, > {_ratio(cycles['ratio_warm'])}x)")
-    eevee = [r for r in renders if r["renderer"] == "eevee"
-             and ((r["metrics"].get(modes[0]) or {}).get("all") or {}).get("hdr_flip") is not None]
+    eevee = sweep_points(renders, "eevee", modes[0])
     if eevee:
-        first = min(eevee, key=lambda r: r["samples"])
-        text += (f"; EEVEE {first['samples']} spp {first['seconds']:.3g} s, "
-                 f"FLIP {first['metrics'][modes[0]]['all']['hdr_flip']:.2g}")
+        samples, seconds, flip = eevee[0]
+        text += f"; EEVEE {samples} spp {seconds:.3g} s, FLIP {flip:.2g}"
     return text
 
 
@@ -383,7 +369,8 @@ def compare(options: Options) -> dict:
     scan = _scan(options, log_dir)
     size = _size(options, scan["scene"])
     frame = float(options.frame if options.frame is not None else scan["scene"]["frame"])
-    jobs, references = _plan(options, out, scan, size, frame)
+    scene_files = reference_cache.scene_inputs(os.path.abspath(options.scene), scan["links"])
+    jobs, references = _plan(options, out, scan, scene_files, size, frame)
     jobs = run_jobs(jobs, options.jobs, log_dir, quiet=options.quiet)
     _store_references(references)
     view, view_note = _view(scan["scene"]["view"])
@@ -397,7 +384,7 @@ def compare(options: Options) -> dict:
         "schema": "lantern-compare/1",
         "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "scene": {"path": os.path.abspath(options.scene),
-                  "sha256": reference_cache.file_sha256(options.scene),
+                  "sha256": scene_files["scene_sha256"],
                   "name": scan["scene"]["name"], "frame": frame, "size": list(size),
                   "film_transparent": scan["scene"]["film_transparent"],
                   "camera": scan["scene"]["camera"], "view": view},

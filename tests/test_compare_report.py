@@ -142,11 +142,14 @@ def test_the_reference_is_cached_and_a_changed_setting_misses(compared, tmp_path
     cache_files = sorted(os.listdir(compared["cache"]))
     assert cache_files == [first["cache_key"] + ".exr", first["cache_key"] + ".json"]
     # Same reference settings, a different sweep: the reference comes from the cache.
+    def rerun(out, reference_samples):
+        proc = lantern_compare(compared["scene"], "-o", out, "--size", "64x36",
+                               "--cycles-samples", "1", "--reference-samples", reference_samples,
+                               "--presets", "low", "--cache", compared["cache"], "--jobs", "2")
+        assert proc.returncode == 0, proc.stderr[-3000:]
+
     again = tmp_path / "again"
-    proc = lantern_compare(compared["scene"], "-o", again, "--size", "64x36",
-                           "--cycles-samples", "1", "--reference-samples", "16",
-                           "--presets", "low", "--cache", compared["cache"], "--jobs", "2")
-    assert proc.returncode == 0, proc.stderr[-3000:]
+    rerun(again, 16)
     second = json.loads((again / "results.json").read_text())["references"]["direct"]
     assert second["cached"] is True and second["cache_key"] == first["cache_key"]
     assert not (again / "logs" / "reference_direct.log").exists()   # nothing rendered it
@@ -154,10 +157,7 @@ def test_the_reference_is_cached_and_a_changed_setting_misses(compared, tmp_path
         (compared["out"] / first["image"]).read_bytes()
     # A different reference (8 samples): a new key, rendered, stored beside the first.
     changed = tmp_path / "changed"
-    proc = lantern_compare(compared["scene"], "-o", changed, "--size", "64x36",
-                           "--cycles-samples", "1", "--reference-samples", "8",
-                           "--presets", "low", "--cache", compared["cache"], "--jobs", "2")
-    assert proc.returncode == 0, proc.stderr[-3000:]
+    rerun(changed, 8)
     third = json.loads((changed / "results.json").read_text())["references"]["direct"]
     assert third["cached"] is False and third["cache_key"] != first["cache_key"]
     assert third["inputs"]["samples"] == 8
@@ -254,12 +254,13 @@ def test_a_point_sampled_comparison_renders_lantern_without_anti_aliasing(tmp_pa
     """Cycles with a filter narrower than half a pixel shades pixel centres: Lantern is
     compared with its supersampling and FXAA off, as tests/test_shadows_vs_cycles.py
     compares it; with a real filter, Lantern keeps its preset's anti-aliasing."""
-    from lantern.compare import run
+    from lantern.compare import cache, run
     scene = tmp_path / "scene.blend"
     scene.write_bytes(b"BLENDER")
     options = run.Options(scene=str(scene), out=str(tmp_path / "out"), presets=("medium", "high"),
                           pixel_filter=pixel_filter, cache=str(tmp_path / "cache"))
     scan = {"scene": {"blender": "5.0.1", "film_transparent": False}, "links": []}
-    jobs, _ = run._plan(options, str(tmp_path / "out"), scan, (16, 9), 1.0)
+    files = cache.scene_inputs(str(scene), [])
+    jobs, _ = run._plan(options, str(tmp_path / "out"), scan, files, (16, 9), 1.0)
     lantern = [job for job in jobs if job.spec["job"] == "lantern"]
     assert [job.spec["antialias"] for job in lantern] == [antialias, antialias]
