@@ -404,12 +404,10 @@ def _colour(stage, args):
     stored = view_settings(stage) if args.view is None else {}
     view = args.view or str(stored.get("view") or STANDARD)
     look = args.look if args.look is not None else (stored.get("look") or None)
-    exposure = args.exposure
-    if exposure is None:
-        exposure = float(stored.get("exposure", 0.0))
     try:
+        exposure = float(stored.get("exposure", 0.0)) if args.exposure is None else args.exposure
         check(view, look, exposure)
-    except (ColorManagementError, ValueError) as error:
+    except (ColorManagementError, ValueError, TypeError) as error:
         if args.look is not None:       # the command line's look, for the scene's view
             raise _usage(str(error))
         _print_warnings([f"{args.scene}: the scene's colour management cannot be applied "

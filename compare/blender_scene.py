@@ -96,14 +96,14 @@ def links() -> list:
 
 
 def describe(scene) -> dict:
+    from ..exporters.gather.scene import colour_management
     render = scene.render
     scale = render.resolution_percentage / 100.0
+    transform, look, exposure = colour_management(scene)
     return {"name": scene.name, "frame": scene.frame_current + scene.frame_subframe,
             "resolution": [max(1, round(render.resolution_x * scale)),
                            max(1, round(render.resolution_y * scale))],
             "film_transparent": bool(render.film_transparent),
             "camera": scene.camera.name if scene.camera else None,
-            "view": {"transform": scene.view_settings.view_transform,
-                     "look": None if scene.view_settings.look == "None" else scene.view_settings.look,
-                     "exposure": float(scene.view_settings.exposure)},
+            "view": {"transform": transform, "look": look, "exposure": exposure},
             "blender": bpy.app.version_string}

@@ -6,7 +6,13 @@ from __future__ import annotations
 import argparse
 import os
 
-from .run import MODES, preset_names
+from .run import MODES, Options, preset_names
+
+DEFAULTS = Options(scene="", out="")   # one table of defaults: run.Options
+
+
+def _csv(values):
+    return ",".join(map(str, values))
 
 
 def _samples(text):
@@ -48,25 +54,31 @@ def add_parser(commands, parents, parse_size, epilog, formatter):
     compare.add_argument("--presets", type=_names, default=None,
                          help="Lantern presets, comma-separated (default: all of them, "
                               "low,medium,high,ultra)")
-    compare.add_argument("--cycles-samples", type=_samples, default=(1, 4, 16, 64, 256),
-                         metavar="N,N,...", help="the Cycles sweep (default 1,4,16,64,256)")
-    compare.add_argument("--reference-samples", type=int, default=4096, metavar="N",
-                         help="samples of the cached Cycles reference (default 4096)")
+    compare.add_argument("--cycles-samples", type=_samples, default=DEFAULTS.cycles_samples,
+                         metavar="N,N,...",
+                         help=f"the Cycles sweep (default {_csv(DEFAULTS.cycles_samples)})")
+    compare.add_argument("--reference-samples", type=int, default=DEFAULTS.reference_samples,
+                         metavar="N", help="samples of the cached Cycles reference "
+                                           f"(default {DEFAULTS.reference_samples})")
     compare.add_argument("--eevee", action="store_true", help="also render EEVEE")
-    compare.add_argument("--eevee-samples", type=_samples, default=(1, 4, 16, 64),
-                         metavar="N,N,...", help="EEVEE's samples with --eevee (default 1,4,16,64)")
+    compare.add_argument("--eevee-samples", type=_samples, default=DEFAULTS.eevee_samples,
+                         metavar="N,N,...", help="EEVEE's samples with --eevee "
+                                                 f"(default {_csv(DEFAULTS.eevee_samples)})")
     compare.add_argument("--cycles-denoised", action="store_true",
                          help="also sweep Cycles with its denoiser (OpenImageDenoise), as its own curve")
-    compare.add_argument("--mode", type=_modes, default=("direct",),
+    compare.add_argument("--mode", type=_modes, default=DEFAULTS.modes,
                          help="direct (Cycles max bounces 0, the default), full (the scene's "
                               "bounces), or direct,full: one reference and column each")
-    compare.add_argument("--jobs", "-j", type=int, default=1, metavar="N",
+    compare.add_argument("--jobs", "-j", type=int, default=DEFAULTS.jobs, metavar="N",
                          help="renders at once (default 1: above 1, times share the cores)")
-    compare.add_argument("--pixel-filter", type=float, default=1.5, metavar="PX",
-                         help="Cycles' Blackman-Harris filter width (default 1.5, Cycles' own; "
+    compare.add_argument("--pixel-filter", type=float, default=DEFAULTS.pixel_filter,
+                         metavar="PX",
+                         help=f"Cycles' Blackman-Harris filter width (default "
+                              f"{DEFAULTS.pixel_filter:g}, Cycles' own; "
                               "0.01 point-samples pixel centres, as Lantern shades them)")
-    compare.add_argument("--warm-runs", type=int, default=5, metavar="N",
-                         help="Lantern renders whose median is the warm time (default 5)")
+    compare.add_argument("--warm-runs", type=int, default=DEFAULTS.warm_runs, metavar="N",
+                         help="Lantern renders whose median is the warm time "
+                              f"(default {DEFAULTS.warm_runs})")
     compare.add_argument("--cache", default=None, metavar="DIR",
                          help="reference cache (default $LANTERN_COMPARE_CACHE or "
                               "~/.cache/lantern/compare)")

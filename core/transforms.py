@@ -8,13 +8,13 @@ from __future__ import annotations
 import numpy as np
 
 
-
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """np.cross of (..., 3) arrays, the same arithmetic without its axis handling,
     which costs more than the products on one small mesh's arrays."""
     return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
                      a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
                      a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
+
 
 def quaternions_from_matrices(r: np.ndarray) -> np.ndarray:
     """(..., 3, 3) proper rotation matrices -> (..., 4) unit quaternions (x, y, z, w),

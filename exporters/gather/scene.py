@@ -31,10 +31,19 @@ def render_visible(view_layer):
     return names
 
 
+def colour_management(scene) -> tuple:
+    """(view transform, look or None, exposure): Render Properties > Color Management,
+    which display images are made with. Blender names the absence of a look "None"."""
+    view = scene.view_settings
+    return (view.view_transform, None if view.look in ("None", "NONE", "") else view.look,
+            float(view.exposure))
+
+
 def _settings(scene, warn):
     r = scene.render
     pct = r.resolution_percentage / 100.0
     view, device = scene.view_settings, scene.display_settings.display_device
+    view_transform, look, exposure = colour_management(scene)
     ignored = [what for what, differs in ((f"display device {device!r}", device != "sRGB"),
                                           (f"gamma {view.gamma:g}", view.gamma != 1.0),
                                           ("curves", view.use_curve_mapping)) if differs]
@@ -46,9 +55,7 @@ def _settings(scene, warn):
         meters_per_unit=float(scene.unit_settings.scale_length) or 1.0,
         resolution=(max(1, int(r.resolution_x * pct)), max(1, int(r.resolution_y * pct))),
         pixel_aspect=float(r.pixel_aspect_x / r.pixel_aspect_y),
-        view_transform=view.view_transform,
-        look=None if view.look in ("None", "NONE", "") else view.look,
-        exposure=float(view.exposure))
+        view_transform=view_transform, look=look, exposure=exposure)
 
 
 def _is_shareable(ob):
