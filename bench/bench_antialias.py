@@ -6,7 +6,7 @@ warm render time (median of 3). Prints a table; asserts nothing.
 
 Jittered accumulation (a still's TAA: k x k drawings with sub-pixel offsets, averaged
 with the same filter) was measured with this script at commit a9b91f4, where the
-engine had it as `samples`, before supersampling replaced it (README, "Anti-aliasing").
+engine had it as `samples`, before supersampling replaced it (docs/rendering.md, "Anti-aliasing").
 
     .venv/bin/python bench/bench_antialias.py
 """

@@ -10,7 +10,7 @@ horizon-search directions (rays) and depth samples per side (0 slices: no AO).
 supersample: the image is drawn this many times wider and taller and filtered down
 with Cycles' pixel filter (anti-aliasing; 1: not). fxaa: FXAA on images not
 supersampled.
-Cost and error of each preset against the Cycles references: README, "Presets"."""
+Cost and error of each preset against the Cycles references: docs/rendering.md, "Presets"."""
 from __future__ import annotations
 
 from dataclasses import dataclass

@@ -27,7 +27,7 @@ through lib.glsl's helpers):
                     glClipControl(LOWER_LEFT, ZERO_TO_ONE) the projection writes n / d
                     directly; without it (GL 3.3 to 4.4, macOS) the same window depth
                     comes through NDC [-1, 1] as 2n/d - 1, whose rounding near -1 limits
-                    it to ~6e-8 absolute in n / d (see README, measured).
+                    it to ~6e-8 absolute in n / d (see docs/status.md, measured).
   far clip          the camera's far plane still clips, as USD's clippingRange asks,
                     by a clip distance rather than by the depth range; culling uses
                     the finite frustum (as Filament's culling projection).

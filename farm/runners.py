@@ -3,7 +3,7 @@
 Both runners take the same tasks (tasks.py) and hand back the same `Done` records:
 
 - `PoolRunner`: processes on this machine, started by Lantern (the default: it measured
-  better than a LocalCluster on one machine, see README). Spawned, SIGINT ignored (the
+  better than a LocalCluster on one machine, see docs/status.md). Spawned, SIGINT ignored (the
   client alone answers Ctrl-C), one task at a time each, kept for the whole batch so a
   process keeps its Sessions. A process that dies mid-task is replaced and its task
   runs again on another, up to RETRIES times.

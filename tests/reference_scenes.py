@@ -7,7 +7,7 @@ first, or the corpus .blend opened in place) and returns it with its camera, siz
 world set; generated textures are written into `workdir`. SCENES records each scene's
 size and Cycles samples; the Cycles settings themselves are in the reference script.
 
-Conventions the references share (see the README, "Images against Cycles"):
+Conventions the references share (see docs/rendering.md):
 - lighting is direct only (Cycles max bounces 0): lights and the world light each
   surface once, the world through the first bounce (environment, AO, furnace);
 - the materials are Principled BSDFs as Blender makes them, with Specular IOR Level 0

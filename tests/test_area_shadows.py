@@ -11,7 +11,7 @@ its ratio is Lantern's light there over Cycles'. Bounds: the measured figures
 before issue 10), and the ratios within 5% of 1 for the boxes (before issue 10: 0.89
 and 0.84). The demo's ratio is printed: its 2 m light
 over several occluders at once is where one shadow map from the light's centre is
-furthest from Cycles (README, "Transparency and area-light shadows")."""
+furthest from Cycles (docs/rendering.md, "Transparency and area-light shadows")."""
 import pathlib
 
 import pytest

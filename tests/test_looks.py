@@ -3,7 +3,7 @@ references in references/looks/ (direct light, Cycles' 1.5 px Blackman-Harris fi
 Every scene comes from reference_scenes.build, exported in memory as `lantern render
 scene.blend` does, and renders at its reference size.
 
-Figures are printed (pytest -s shows them); the README's tables come from
+Figures are printed (pytest -s shows them); docs/rendering.md's tables come from
 bench/bench_presets.py."""
 import functools
 import pathlib

@@ -7,7 +7,7 @@ stencil calls do (engine/gpu/stencil.py).
   GL 4.5 (clip control)   glClipControl(LOWER_LEFT, ZERO_TO_ONE) while Lantern draws:
                           the projection's z / w is the window depth itself.
   GL 3.3 .. 4.4, macOS    GL's default NDC [-1, 1]: the same reversed depth through
-                          2n/d - 1 (precision measured in the README).
+                          2n/d - 1 (precision measured in docs/status.md).
 The context's default is restored after every frame (`end`)."""
 from __future__ import annotations
 

@@ -2,7 +2,7 @@
 
 `hard_case(name, value, bound)` asserts value <= bound (and that both are finite) and
 keeps the pair; with LANTERN_HARD_CASES=path set, the session writes every recorded
-case as a markdown table there (the README's hard-case table comes from it).
+case as a markdown table there (the hard-case tables of docs/status.md come from it).
 """
 import math
 import os

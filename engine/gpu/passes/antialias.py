@@ -9,7 +9,7 @@
                       mips for the larger image, as Cycles' samples see them.
   k = 1               FXAA at geometric edges (passes/post.py), when the preset asks.
 
-Chosen by measurement (bench/bench_antialias.py, README "Anti-aliasing"): against
+Chosen by measurement (bench/bench_antialias.py, docs/rendering.md "Anti-aliasing"): against
 jittered accumulation of as many drawings (a still's TAA) supersampling had the lower
 error on every corpus scene at every sample count and took less time, since one
 drawing of k^2 pixels costs less than k^2 drawings, and its filter reaches the

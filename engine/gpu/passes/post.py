@@ -11,7 +11,7 @@ alternate). In order, each only when asked for:
   mirror     flip x, y or both (RenderSettings.mirror: "x", "y", "xy")
 Blender's view transforms and looks are not here: they turn the linear image into
 display values when a file is written (engine/color.py, OpenColorIO with Blender's
-config, byte-identical to Blender's own save; the README says why it stays on that
+config, byte-identical to Blender's own save; docs/rendering.md says why it stays on that
 path). Inside Blender nothing here runs unless asked: the image stays scene linear and
 Blender's colour management applies.
 
