@@ -158,19 +158,26 @@ class Session:
         (stats["readback_latency_frames"]); the images equal render()'s."""
         self._check_open()
         pending = None
-        for when in frames:
-            t0 = time.perf_counter()
-            request = ReadbackRequest(self.settings.readback, queued=True)
-            try:
-                submitted = (when, self._submit(view_matrix, projection_matrix, when,
-                                                request, t0), t0)
-            except (ValueError, RuntimeError, OSError) as error:
-                submitted = (when, error, t0)
-            if pending is not None:
-                yield self._finish_queued(*pending, latest=False)
-            pending = submitted
-        if pending is not None:
-            yield self._finish_queued(*pending, latest=True)
+        try:
+            for when in frames:
+                t0 = time.perf_counter()
+                request = ReadbackRequest(self.settings.readback, queued=True)
+                try:
+                    submitted = (when, self._submit(view_matrix, projection_matrix, when,
+                                                    request, t0), t0)
+                except (ValueError, RuntimeError, OSError) as error:
+                    submitted = (when, error, t0)
+                done, pending = pending, submitted
+                if done is not None:
+                    yield self._finish_queued(*done, latest=False)
+            done, pending = pending, None
+            if done is not None:
+                yield self._finish_queued(*done, latest=True)
+        finally:
+            if pending is not None and not isinstance(pending[1], Exception):
+                # Stopped early (an interrupt, or the caller broke off): the queued
+                # frame's fence and buffer are freed for the next render.
+                run_gl(lambda gl: self._renderer.finish(pending[1]))
 
     def _finish_queued(self, when, state, t0, latest: bool):
         if isinstance(state, Exception):

@@ -182,3 +182,13 @@ def test_no_draw_reads_memory_that_nothing_wrote(gl_path, junk, monkeypatch):
     dirty = render_stage(stage, settings)
     assert clean.stats["nonfinite_pixels"] == dirty.stats["nonfinite_pixels"] == 0
     assert np.array_equal(clean.rgba, dirty.rgba)
+
+
+def test_a_sequence_broken_off_leaves_the_session_usable():
+    stage = session_scenes.time_sampled_mesh_stage(frames=4, grid=8)
+    with Session(stage, RenderSettings(width=W, height=H)) as session:
+        frames = session.render_frames([1, 2, 3])
+        next(frames)                            # frame 2 is queued behind a fence
+        frames.close()
+        again = session.render(frame=3)
+        assert list(session.render_frames([3]))[0][1].rgba.tolist() == again.rgba.tolist()
