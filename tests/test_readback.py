@@ -192,3 +192,16 @@ def test_a_sequence_broken_off_leaves_the_session_usable():
         frames.close()
         again = session.render(frame=3)
         assert list(session.render_frames([3]))[0][1].rgba.tolist() == again.rgba.tolist()
+
+
+def test_a_moving_view_takes_the_size_its_frame_time_allows():
+    from lantern.engine.host import protocol as p
+    assert p.interactive_scale(None, None) == p.INTERACTIVE_SCALE      # measure first
+    budget = p.INTERACTIVE_BUDGET
+    # A GPU that drew half size in a tenth of the budget draws the full size next.
+    assert p.interactive_scale(0.5, budget / 10) == 1.0
+    # llvmpipe: half size took 4x the budget -> a quarter of its pixels fit.
+    assert p.interactive_scale(0.5, budget * 4) == 0.25
+    # In between: the largest step that fits.
+    assert p.interactive_scale(1.0, budget * 1.5) == 0.75
+    assert p.interactive_scale(1.0, budget * 3.0) == 0.5
