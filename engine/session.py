@@ -117,14 +117,16 @@ class Session:
         self._finalizer.atexit = False
 
     def configure(self, **fields):
-        """Changes settings for the renders that follow (size, transparent, passes,
-        camera, ...), keeping the session's state; the preset is the session's own
-        (a different one needs another Session)."""
+        """Changes settings for the renders that follow (size, preset, transparent,
+        passes, camera, ...), keeping the session's state: a new preset reads and
+        uploads nothing again (Renderer.set_preset)."""
         new = replace(self.settings, **fields)
-        if new.preset != self.settings.preset:
-            raise ValueError("a session keeps its preset; open another for "
-                             f"{new.preset!r}")
-        self._passes = render_passes.check(new.passes)
+        preset = find_preset(new.preset)
+        passes = render_passes.check(new.passes)
+        if preset is not self._preset:
+            run_gl(lambda gl: self._renderer.set_preset(preset))
+            self._preset = preset
+        self._passes = passes
         if (new.width, new.height) != (self.settings.width, self.settings.height):
             self.size = usd_camera.resolution(self.stage, new.width, new.height)
         if new.camera != self.settings.camera:

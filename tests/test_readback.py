@@ -205,3 +205,21 @@ def test_a_moving_view_takes_the_size_its_frame_time_allows():
     # In between: the largest step that fits.
     assert p.interactive_scale(1.0, budget * 1.5) == 0.75
     assert p.interactive_scale(1.0, budget * 3.0) == 0.5
+
+
+@pytest.mark.parametrize("preset", ["low", "ultra"])
+def test_a_new_preset_reads_and_uploads_nothing_and_equals_a_fresh_session(preset):
+    stage = session_scenes.cubes_stage(n=9, lights=("point", "spot"))
+    with Session(stage, RenderSettings(width=W, height=H)) as session:
+        session.render()
+        session.configure(preset=preset)
+        changed = session.render()
+        session.configure(preset="medium")
+        back = session.render()
+    assert changed.stats["prims_read"] == 0 and back.stats["prims_read"] == 0
+    assert changed.stats["bytes_by_kind"].get("mesh", 0) == 0
+    assert back.stats["bytes_by_kind"].get("mesh", 0) == 0
+    fresh = render_stage(stage, RenderSettings(width=W, height=H, preset=preset))
+    assert np.array_equal(changed.rgba, fresh.rgba)
+    again = render_stage(stage, RenderSettings(width=W, height=H))
+    assert np.array_equal(back.rgba, again.rgba)

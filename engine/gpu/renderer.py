@@ -78,11 +78,11 @@ class Renderer:
         self.pool = TargetPool(ctx, self.stencil, self.depth)
         programs = gl.programs
         self.geometry = Geometry(ctx, self.uploads, programs, self.features)
-        self.lights = LightTable(self.uploads, preset.disk_sides)
+        self.lights = LightTable(self.uploads)
         self.textures = MaterialTextures(ctx, self.uploads, preset.anisotropy, srgb_filtering)
         self.environment = Environment(ctx, self.uploads, programs, gl.proc)
         self.skinning = SkinningPass(ctx, self.uploads, programs, self.geometry, gl.scratch)
-        self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights, preset,
+        self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights,
                                   self.depth, self.textures)
         self.readback = Readback(ctx, programs, gl.proc, compute=self.features.multi_draw)
         self.resolve = ResolvePass(ctx, self.pool, programs, self.geometry, self.depth,
@@ -96,9 +96,9 @@ class Renderer:
             AoPass(ctx, self.pool, programs),
             AmbientPass(ctx, self.pool, programs, self.environment),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
-                      self.geometry, preset, self.environment),
+                      self.geometry, self.environment),
             TransparencyPass(ctx, self.pool, programs, self.geometry, self.textures,
-                             self.lights, self.environment, self.depth, preset),
+                             self.lights, self.environment, self.depth),
             SupersamplePass(ctx, self.pool, programs),
             PostPass(ctx, self.pool, programs),
             self.resolve,
@@ -113,7 +113,7 @@ class Renderer:
         meshes = self.geometry.update(scene, changes, cull_backfaces)
         self.geometry.set_see_through(name for name, m in scene.materials.items()
                                       if m.alpha != "opaque")
-        self.lights.update(scene, changes.lights)
+        self.lights.update(scene, changes.lights, self.preset.disk_sides)
         if changes.materials or changes.dropped_meshes:
             self.textures.prune(scene.materials.values())
         self.skinning.update(scene, changes)
@@ -177,6 +177,13 @@ class Renderer:
         self._restore_state()
         frame.board = None
         return rgba, board["aovs"], frame.stats, frame.timings, self.graph.gpu_times(frame)
+
+    def set_preset(self, preset):
+        """Renders that follow use `preset`: what depends on it is rebuilt from what
+        the GPU already holds (texture filtering now, the light table's disk polygons
+        at the next update, shadow maps at the next frame), nothing is read again."""
+        self.preset = preset
+        self.textures.set_anisotropy(preset.anisotropy)
 
     def warnings(self) -> list:
         """What the GL side could not use (images it could not read) and the last

@@ -2,9 +2,9 @@
 
 One *scene* per stream Blender opens (a viewport, an F12 view layer, previews): an
 in-memory stage that Blender's edits (fragments) keep equal to Blender's mirror, the
-Sessions rendering it (one per preset: a progressive view draws with the interactive
-preset while it moves and with the scene's once it settles), the last render request
-and the shared-memory slots its frames go to.
+one Session rendering it (a progressive view draws with the interactive preset while
+it moves and with the scene's once it settles: a preset change reads and uploads
+nothing again), the last render request and the shared-memory slots its frames go to.
 
 The main loop applies every message that has arrived, then renders one frame of the
 scene that most needs one: a new request or edit first (the interactive preset when
@@ -31,7 +31,7 @@ class Scene:
     def __init__(self):
         from ..usd.fragments import receiver
         self.stage = receiver()
-        self.sessions = {}         # preset -> Session
+        self._session = None       # made at the first render
         self.request = None        # the last render request (its fields)
         self.level = 0             # 0: to render, 1: interactive frame shown, 2: done
         self.touched = 0.0         # when the request or the stage last changed
@@ -40,11 +40,13 @@ class Scene:
         self.moving = (None, None)  # (scale, seconds) of the last moving frame
 
     def session(self, preset):
+        """The scene's Session, set to `preset`."""
         from ..session import RenderSettings, Session
-        if preset not in self.sessions:
-            self.sessions[preset] = Session(self.stage, RenderSettings(width=1, height=1,
-                                                                       preset=preset))
-        return self.sessions[preset]
+        if self._session is None:
+            self._session = Session(self.stage, RenderSettings(width=1, height=1,
+                                                               preset=preset))
+        self._session.configure(preset=preset)
+        return self._session
 
     def set_slots(self, names):
         self.close_slots(unlink=False)
@@ -57,9 +59,9 @@ class Scene:
         self.blocks, self.free = {}, []
 
     def close(self, unlink=False):
-        for session in self.sessions.values():
-            session.close()
-        self.sessions = {}
+        if self._session is not None:
+            self._session.close()
+            self._session = None
         self.close_slots(unlink)
 
 
