@@ -26,7 +26,8 @@ UNITS = {name: unit for unit, name in enumerate((
     "t_diffuse", "t_metallic", "t_roughness", "t_emissive", "t_opacity", "t_normal",
     "u_objects", "u_lights",
     "u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences",
-    "dfg_lut", "env_specular", "radiance", "ao_tex", "post_src", "post_aux"))}
+    "dfg_lut", "env_specular", "radiance", "ao_tex", "post_src", "post_aux",
+    "overlay_image", "overlay_atlas"))}
 
 
 class ShaderError(RuntimeError):

@@ -11,7 +11,8 @@ The .npz holds two kinds of glyph image for printable ASCII:
 - `bitmap_<px>`: FreeType's own coverage at small pixel sizes, drawn texel for pixel
   (the mapped-texture path, pixel-exact).
 Per glyph, `*_rect` is (x, y, w, h) in the atlas and `*_plane` (left, top, right,
-bottom) the quad around the pen origin on the baseline, y down, in em (sdf) or px.
+bottom) the quad around the pen origin on the baseline, y down, in em (sdf) or px;
+`advance`, `ascent` and `descent` are in em.
 """
 import glob
 import os
@@ -107,7 +108,10 @@ def bitmap_glyphs(path, px):
 def main(argv):
     path = argv[1] if len(argv) > 1 else find_font()
     atlas, rects, planes, advances = sdf_glyphs(path)
+    from PIL import ImageFont
+    ascent, descent = ImageFont.truetype(path, EM * SUPER).getmetrics()
     arrays = dict(chars=np.array(CHARS), em=np.int32(EM), spread=np.int32(SPREAD),
+                  ascent=np.float32(ascent / (EM * SUPER)), descent=np.float32(descent / (EM * SUPER)),
                   sdf=atlas, sdf_rect=rects, sdf_plane=planes, advance=advances,
                   bitmap_sizes=np.array(BITMAP_SIZES, np.int32))
     for px in BITMAP_SIZES:
