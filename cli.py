@@ -12,6 +12,7 @@ exported or rendered or an output cannot be written, 130 when interrupted (Ctrl-
 `--debug` shows the traceback of an unexpected error instead of one line.
 """
 import argparse
+import functools
 import logging
 import math
 import os
@@ -164,6 +165,8 @@ def _build_parser():
     render.add_argument("-j", "--jobs", type=int, default=RENDER_PROCESSES,
                         help="worker processes for a sequence on this machine "
                              f"(default {RENDER_PROCESSES})")
+    from .cli_overlays import add_options as add_overlay_options
+    add_overlay_options(render)
 
     from .compare.command import add_parser as add_compare_parser
     add_compare_parser(commands, [common], _parse_size, EXIT_STATUSES,
@@ -347,6 +350,8 @@ def _render(args):
                      "(--frames)")
     if args.chunk is not None and args.chunk < 1:
         raise _usage("--chunk must be at least 1")
+    from . import cli_overlays
+    cli_overlays.check(args, _usage, CommandError)
     if args.camera is not None and not args.camera.startswith("/"):
         raise _usage(f"--camera {args.camera}: must be an absolute prim path, like /root/Camera")
     if not os.path.isfile(args.scene):
@@ -363,6 +368,7 @@ def _render(args):
         stage = _stage_from_blend(args.scene) if is_blend else _open_usd(args.scene)
         _check_camera(stage, args)
         args.colour = _colour(stage, args)
+        args.overlays = cli_overlays.from_args(args, stage, CommandError)
         return _render_frame(stage, args)
     # A sequence's workers start first, and get ready while the stage is read here.
     from .farm.batch import FarmError, open_render_runner
@@ -374,6 +380,7 @@ def _render(args):
         stage = _stage_from_blend(args.scene) if is_blend else _open_usd(args.scene)
         _check_camera(stage, args)
         args.colour = _colour(stage, args)
+        args.overlays = cli_overlays.from_args(args, stage, CommandError)
         # A .blend's stage was exported here: the workers get it as text.
         text = stage.GetRootLayer().ExportToString() if is_blend else None
     except BaseException:
@@ -492,7 +499,13 @@ def _render_frame(stage, args):
     from .engine.image_io import write_image
     result = _rendered(args.scene, lambda: render_stage(stage, _settings(args, args.frame)))
     _print_warnings(result.warnings, set())
-    _write(args.output, lambda: write_image(args.output, result.rgba, **args.colour))
+    overlay = None
+    if args.overlays is not None:
+        from .engine.usd.camera import default_time
+        frame = args.frame if args.frame is not None else default_time(stage)
+        overlay = functools.partial(args.overlays.apply, frame=frame)
+    _write(args.output, lambda: write_image(args.output, result.rgba, **args.colour,
+                                            overlay=overlay))
     height_px, width_px = result.rgba.shape[:2]
     print(f"{args.scene} -> {args.output} ({width_px}x{height_px}, "
           f"{result.timings.get('total', 0.0) * 1000:.1f} ms)")

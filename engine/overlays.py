@@ -177,7 +177,7 @@ def expand(template: str, values: dict) -> str:
                               **values, "frame": frame if frame is not None else 0})
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)     # holds an array: hashed by identity
 class BurnIn:
     """The command line's overlays, picklable for farm workers: a burn-in template
     (or None), its anchor and size, and a watermark image (or None)."""

@@ -283,6 +283,7 @@ def _render_frames(args, runner, stage_text, fps, print_warnings):
                 height=args.size[1] if args.size else None, preset=args.preset,
                 camera=args.camera, stage_digest=digest, collect=args.collect,
                 colour=(args.view, args.look, args.exposure),
+                overlays=getattr(args, "overlays", None),
                 since_ns=None if (args.collect or gif) else _folder_clock(folder))
 
     _open(args, RENDER_NEEDS, runner)
