@@ -14,9 +14,10 @@ from __future__ import annotations
 
 import datetime
 import functools
+import math
 import os
 import string
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -114,12 +115,12 @@ def layout(text: Text):
     key = "sdf" if mode == "sdf" else f"bitmap_{int(text.size)}"
     rects, planes = atlas[f"{key}_rect"], atlas[f"{key}_plane"]
     scale = text.size if mode == "sdf" else 1.0
-    baseline = round(text.y + float(atlas["ascent"]) * text.size)
+    baseline = _whole(text.y + float(atlas["ascent"]) * text.size)
     pen, quads = float(text.x), []
     for ch in text.text:
         i = atlas["index"].get(ch, atlas["index"]["?"])
         if ch != " ":
-            ox = round(pen)
+            ox = _whole(pen)
             left, top, right, bottom = planes[i] * scale
             x, y, w, h = rects[i]
             quads.append((ox + left, baseline + top, ox + right, baseline + bottom,
@@ -128,15 +129,43 @@ def layout(text: Text):
     return np.array(quads, np.float32).reshape(-1, 8), mode
 
 
+def _whole(value: float) -> int:
+    """The nearest whole pixel, halves up (round() would send them to even, and a
+    layout shifted by whole pixels would then round differently)."""
+    return math.floor(value + 0.5)
+
+
 def draw(display8: np.ndarray, sprites=(), texts=()) -> np.ndarray:
     """(H, W, 4) uint8 display-referred RGBA with the sprites, then the texts, drawn over
-    it (a new array; the input is left as it is)."""
+    it (a new array; the input is left as it is). Each overlay goes to the GPU with only
+    the pixels under it, so the cost follows the overlays' area, not the image's."""
     if not sprites and not texts:
         return display8
     from .gpu.context import run_gl
     from .gpu.overlays import draw_overlays
-    runs = [(layout(t), t) for t in texts]
-    return run_gl(lambda gl: draw_overlays(gl, display8, sprites, runs, font_atlas()))
+    height, width = display8.shape[:2]
+    out = display8.copy()
+    atlas = font_atlas()
+    for item in list(sprites) + list(texts):
+        if isinstance(item, Sprite):
+            x, y, w, h = item.rect(width, height)
+            box = int(np.floor(x)), int(np.floor(y)), int(np.ceil(x + w)), int(np.ceil(y + h))
+        else:
+            x, y, w, h = text_box(item)
+            box = x, y, x + w, y + h
+        x0, y0 = max(box[0], 0), max(box[1], 0)
+        x1, y1 = min(box[2], width), min(box[3], height)
+        if x1 <= x0 or y1 <= y0:
+            continue
+        if isinstance(item, Sprite):
+            moved = Sprite(item.pixels, x - x0, y - y0, w, h, opacity=item.opacity)
+            job = ([moved], [])
+        else:   # whole-pixel shifts keep the layout's rounding
+            moved = replace(item, x=item.x - x0, y=item.y - y0)
+            job = ([], [(layout(moved), moved)])
+        crop = np.ascontiguousarray(out[y0:y1, x0:x1])
+        out[y0:y1, x0:x1] = run_gl(lambda gl: draw_overlays(gl, crop, *job, atlas))
+    return out
 
 
 # --- burn-in ------------------------------------------------------------------------------

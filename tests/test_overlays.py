@@ -2,6 +2,7 @@
 --watermark`): glyph coverage against the font's outlines rasterised on the CPU by
 FreeType (through Pillow), the burn-in's rectangle, the watermark's alpha, the CLI's
 fields and its scene-linear .exr left clean."""
+import math
 import os
 import subprocess
 import sys
@@ -33,10 +34,10 @@ def _freetype(text, width, height, supersample):
     atlas = font_atlas()
     canvas = Image.new("L", (width * k, height * k), 0)
     pen_draw = ImageDraw.Draw(canvas)
-    baseline = round(text.y + float(atlas["ascent"]) * text.size)
+    baseline = math.floor(text.y + float(atlas["ascent"]) * text.size + 0.5)
     pen = float(text.x)
     for ch in text.text:
-        pen_draw.text((round(pen) * k, baseline * k), ch, font=font, fill=255, anchor="ls")
+        pen_draw.text((math.floor(pen + 0.5) * k, baseline * k), ch, font=font, fill=255, anchor="ls")
         pen += float(atlas["advance"][atlas["index"][ch]]) * text.size
     return (np.asarray(canvas) / 255.0).reshape(height, k, width, k).mean(axis=(1, 3))
 
