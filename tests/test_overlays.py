@@ -57,10 +57,10 @@ def _edge_figures(ours, reference):
     return diff[edge].mean(), (diff[edge] > 0.25).mean(), edge
 
 
-@pytest.mark.parametrize("size, mean_bound, wrong_bound", [(12, 0.08, 0.02), (96, 0.16, 0.15)])
+@pytest.mark.parametrize("size, mean_bound, wrong_bound", [(12, 0.08, 0.02), (96, 0.12, 0.06)])
 def test_sdf_text_coverage_matches_freetype_outlines(size, mean_bound, wrong_bound):
-    # Measured 2026-11-25: 12 px mean 0.046, 0.3 % of edge pixels off by > 0.25;
-    # 96 px mean 0.12, 10 % (the distance field rounds the outlines' corners).
+    # Measured 2026-11-25: 12 px mean 0.043, 0.5 % of edge pixels off by > 0.25;
+    # 96 px mean 0.081, 2.7 % (the distance field rounds the outlines' corners).
     ours, text = _coverage(size, "sdf")
     reference = _freetype(text, ours.shape[1], ours.shape[0], supersample=8)
     mean, wrong, edge = _edge_figures(ours, reference)

@@ -21,9 +21,9 @@ import sys
 import numpy as np
 
 CHARS = "".join(chr(c) for c in range(32, 127))
-EM = 48            # sdf atlas pixels per em
+EM = 64            # sdf atlas pixels per em
 SUPER = 4          # measured at EM * SUPER
-SPREAD = 6         # atlas pixels of distance each side of the outline (also the padding)
+SPREAD = 8         # atlas pixels of distance each side of the outline (also the padding)
 BITMAP_SIZES = tuple(range(8, 17))
 BITMAP_PAD = 2     # room for a 1 px shadow
 COLUMNS = 16
