@@ -8,9 +8,7 @@ from __future__ import annotations
 import os
 import sys
 
-import numpy as np
-
-from .engine.overlays import ANCHORS, BURN_IN_FIELDS, TEXT_MODES, BurnIn, OverlayError, \
+from .engine.overlay_options import ANCHORS, BURN_IN_FIELDS, TEXT_MODES, OverlayError, \
     check_template
 
 FIELDS_HELP = "fields: " + "; ".join(f"{{{name}}} {text}" for name, text in
@@ -67,6 +65,7 @@ def from_args(args, stage, failed):
         print(f"warning: {args.output}: overlays are drawn on .png outputs only (an .exr "
               "stays scene linear; a .gif preview has none)", file=sys.stderr, flush=True)
         return None
+    from .engine.overlays import BurnIn
     watermark = _watermark(args.watermark, failed) if args.watermark else None
     values = dict(scene=os.path.splitext(os.path.basename(args.scene))[0],
                   camera=_camera_name(stage, args.camera), preset=args.preset)
@@ -88,6 +87,7 @@ def _camera_name(stage, camera):
 
 def _watermark(path, failed):
     """(H, W, 4) uint8 straight alpha; grey and RGB images get an opaque alpha."""
+    import numpy as np
     from .engine.image_io import ImageError, read_image
     try:
         pixels = read_image(path)

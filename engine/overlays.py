@@ -2,8 +2,8 @@
 transform), so a colour asked for is the colour written.
 
 Plain records (Sprite, Text), the font atlas (shaders/fonts/dejavu_sans_mono.npz,
-built by shaders/fonts/make_atlas.py), text layout into glyph quads, and the burn-in
-template's fields. The drawing itself is engine/gpu/overlays.py, on the GL thread.
+built by shaders/fonts/make_atlas.py), text layout into glyph quads, and BurnIn (what
+the command line asks for; its template's fields are engine/overlay_options.py). The drawing itself is engine/gpu/overlays.py, on the GL thread.
 Order, as the pipeline draws them: sprites, then text, each in list order.
 
 Layout puts each glyph's pen origin on a whole pixel (unhinted advances summed in
@@ -12,23 +12,16 @@ path draws FreeType's own coverage texel for pixel.
 """
 from __future__ import annotations
 
-import datetime
 import functools
 import math
 import os
-import string
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 ATLAS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "shaders",
                      "fonts", "dejavu_sans_mono.npz")
-ANCHORS = ("top-left", "top", "top-right", "bottom-left", "bottom", "bottom-right")
-TEXT_MODES = ("auto", "sdf", "bitmap")
-
-
-class OverlayError(ValueError):
-    """A burn-in template or overlay placement that cannot be drawn."""
+from .overlay_options import ANCHORS, TEXT_MODES, OverlayError, expand  # noqa: F401
 
 
 @dataclass(frozen=True)
@@ -169,42 +162,6 @@ def draw(display8: np.ndarray, sprites=(), texts=()) -> np.ndarray:
 
 
 # --- burn-in ------------------------------------------------------------------------------
-
-BURN_IN_FIELDS = {
-    "scene": "the scene file's name without its folder and extension",
-    "camera": "the camera prim's name (its last path element)",
-    "frame": "the frame number (an integer for whole frames): {frame:04d} pads it",
-    "date": "today's date, YYYY-MM-DD (local time)",
-    "time": "the time the frame was written, HH:MM:SS (local time)",
-    "preset": "the quality preset (low, medium, high, ultra)",
-}
-
-
-def check_template(template: str) -> None:
-    """Raises OverlayError for an unknown field or a format the field's value rejects."""
-    try:
-        fields = [f for _, f, _, _ in string.Formatter().parse(template) if f is not None]
-    except ValueError as error:
-        raise OverlayError(f"--burn-in {template!r}: {error}")
-    for name in fields:
-        if name not in BURN_IN_FIELDS:
-            raise OverlayError(f"--burn-in {template!r}: unknown field {{{name}}}; known: "
-                               + ", ".join("{" + f + "}" for f in BURN_IN_FIELDS))
-    try:
-        expand(template, dict(scene="s", camera="c", frame=1, preset="medium"))
-    except (ValueError, TypeError, IndexError, KeyError) as error:
-        raise OverlayError(f"--burn-in {template!r}: {error}")
-
-
-def expand(template: str, values: dict) -> str:
-    now = datetime.datetime.now()
-    frame = values.get("frame")
-    if isinstance(frame, float) and frame.is_integer():
-        frame = int(frame)
-    return template.format(**{**dict(date=now.strftime("%Y-%m-%d"),
-                                     time=now.strftime("%H:%M:%S")),
-                              **values, "frame": frame if frame is not None else 0})
-
 
 @dataclass(frozen=True, eq=False)     # holds an array: hashed by identity
 class BurnIn:
