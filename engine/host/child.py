@@ -201,7 +201,8 @@ class Host:
             scene.moving = (scale, result.timings["total"] - result.timings.get("load", 0.0))
         self._send(p.FRAME, scene=name, request=req["id"], tag=req.get("tag"), slot=slot,
                    width=w, height=h, layout=frame_layout, final=final, preset=preset,
-                   stats=result.stats, timings=result.timings, warnings=result.warnings)
+                   stats=result.stats, timings=result.timings, gpu_timings=result.gpu_timings,
+                   warnings=result.warnings)
         return True
 
     def run(self) -> int:
