@@ -15,8 +15,9 @@ import argparse
 import logging
 import math
 import os
-import re
 import sys
+
+from .core.text import error_text, one_line
 
 USD_SUFFIXES = (".usd", ".usda", ".usdc")
 IMAGE_SUFFIXES = (".exr", ".png")
@@ -198,36 +199,13 @@ def main(argv=None):
     except Exception as error:  # a bug: one line, or the traceback with --debug
         if args.debug:
             raise
-        _fail(args, f"internal error: {type(error).__name__}: {_one_line(_text(error))} "
+        _fail(args, f"internal error: {type(error).__name__}: {one_line(error_text(error))} "
                     "(--debug shows the traceback)")
         return FAILED
 
 
 def _fail(args, message):
     print(f"lantern {args.command}: {message}", file=sys.stderr, flush=True)
-
-
-_PXR_ERROR = re.compile(r"^Error in '.*' at line \d+ in file .* : '(.*)'$")
-
-
-def _text(error):
-    """str(error), even when pxr's message holds bytes that are not UTF-8 (a damaged
-    file's contents quoted in a parse error)."""
-    try:
-        return str(error)
-    except UnicodeDecodeError:
-        return f"{type(error).__name__} (its message is not UTF-8 text: the file is damaged)"
-
-
-def _one_line(text):
-    """pxr's errors span lines ("Error in '...' at line N in file F : 'reason'"): keep
-    the reasons, on one line."""
-    reasons = []
-    for line in str(text).splitlines():
-        line = line.strip()
-        match = _PXR_ERROR.match(line)
-        reasons.append(match.group(1) if match else line)
-    return "; ".join(dict.fromkeys(r for r in reasons if r)) or "no reason given"
 
 
 def _check_output(path, kinds, what="output"):
@@ -303,7 +281,7 @@ def _export_one(blend, out_path, args):
     try:
         report = export_blend(blend, out_path, options)
     except ExportError as error:
-        raise CommandError(_one_line(str(error)))
+        raise CommandError(one_line(str(error)))
     except OSError as error:
         raise CommandError(f"{out_path}: cannot be written: {error.strerror or error}")
     _print_warnings(report.warnings, set())
@@ -411,7 +389,7 @@ def _colour(stage, args):
         if args.look is not None:       # the command line's look, for the scene's view
             raise _usage(str(error))
         _print_warnings([f"{args.scene}: the scene's colour management cannot be applied "
-                         f"({_one_line(str(error))}); using {STANDARD}"], set())
+                         f"({one_line(str(error))}); using {STANDARD}"], set())
         view, look, exposure = STANDARD, None, args.exposure or 0.0
     args.view, args.look, args.exposure = view, look, exposure
     return dict(view=view, look=look, exposure=exposure)
@@ -429,12 +407,12 @@ def _open_usd(path):
     try:
         stage = Usd.Stage.Open(path)
     except Tf.ErrorException as error:
-        raise CommandError(f"{path}: cannot be read as USD: {_one_line(_text(error))}")
+        raise CommandError(f"{path}: cannot be read as USD: {one_line(error_text(error))}")
     if stage is None:
         raise CommandError(f"{path}: cannot be read as USD")
     # Missing or broken references, sublayers and payloads, and cycles: USD composes
     # what it can; say what it could not.
-    _print_warnings([f"{path}: {_one_line(_text(e))}" for e in stage.GetCompositionErrors()],
+    _print_warnings([f"{path}: {one_line(error_text(e))}" for e in stage.GetCompositionErrors()],
                     set())
     return stage
 
@@ -445,7 +423,7 @@ def _stage_from_blend(blend):
     try:
         stage, report = stage_from_blend(blend)
     except ExportError as error:
-        raise CommandError(_one_line(str(error)))
+        raise CommandError(one_line(str(error)))
     _print_warnings(report.warnings, set())
     return stage
 
@@ -476,7 +454,7 @@ def _rendered(scene, run):
     try:
         return run()
     except (ValueError, RuntimeError, OSError) as error:  # pxr's errors are RuntimeErrors
-        raise CommandError(f"{scene}: {_one_line(_text(error))}")
+        raise CommandError(f"{scene}: {one_line(error_text(error))}")
 
 
 def _write(path, write):
@@ -497,14 +475,6 @@ def _render_frame(stage, args):
     print(f"{args.scene} -> {args.output} ({width_px}x{height_px}, "
           f"{result.timings.get('total', 0.0) * 1000:.1f} ms)")
     return 0
-
-
-def _frame_path(pattern, frame):
-    """'####' (any run of #) -> the frame zero-padded to that width; a fractional frame
-    keeps its fraction after the padded whole part (0012.5)."""
-    whole = math.floor(frame)
-    fraction = f"{frame - whole:.6f}".rstrip("0").rstrip(".")[1:] if frame != whole else ""
-    return re.sub(r"#+", lambda m: f"{int(whole):0{len(m.group(0))}d}{fraction}", pattern, count=1)
 
 
 def _render_sequence(stage, args, runner, stage_text):

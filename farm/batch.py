@@ -21,9 +21,10 @@ import tempfile
 from collections import deque
 
 from ..core.files import atomic_write
+from ..core.text import frame_path
 from . import chunking
 from .runners import FarmError, open_runner
-from .tasks import EXPORT_NEEDS, RENDER_NEEDS, ExportTask, RenderChunk, frame_output
+from .tasks import EXPORT_NEEDS, RENDER_NEEDS, ExportTask, RenderChunk
 
 FAILED = 1
 STALL_SECONDS = 5.0  # how often a waiting client checks that some worker can run its tasks
@@ -270,7 +271,7 @@ def _render_frames(args, runner, stage_text, fps, print_warnings):
         if gif:
             up_to_date = frames if _up_to_date(args.output, input_mtime) else []
         else:
-            up_to_date = [f for f in frames if _up_to_date(frame_output(pattern, f), input_mtime)]
+            up_to_date = [f for f in frames if _up_to_date(frame_path(pattern, f), input_mtime)]
         frames = [f for f in frames if f not in set(up_to_date)]
     if not frames:
         runner.close()
