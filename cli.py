@@ -292,6 +292,7 @@ def _export_one(blend, out_path, args):
 
 def _export_batch(args):
     from .farm.batch import FarmError, export_batch
+    from .farm.options import ExportBatchOptions
     jobs = []
     for blend in args.blends:
         stem = os.path.splitext(os.path.basename(blend))[0]
@@ -300,7 +301,9 @@ def _export_batch(args):
         raise _usage("two inputs share a file name; their outputs would collide")
     _make_folder(args.output)
     try:
-        return export_batch(args, jobs)
+        return export_batch(ExportBatchOptions(
+            scheduler=args.scheduler, jobs=args.jobs, collect=args.collect, resume=args.resume,
+            textures=args.textures, max_influences=args.max_influences), jobs)
     except FarmError as error:
         raise CommandError(str(error))
 
@@ -345,7 +348,7 @@ def _render(args):
     # A sequence's workers start first, and get ready while the stage is read here.
     from .farm.batch import FarmError, open_render_runner
     try:
-        runner = open_render_runner(args)
+        runner = open_render_runner(args.scheduler, args.jobs)
     except FarmError as error:
         raise CommandError(str(error))
     try:
@@ -481,11 +484,16 @@ def _render_sequence(stage, args, runner, stage_text):
     """--frames as tasks (farm/): chunks of frames on worker processes that keep the
     stage loaded, here or on a Dask cluster."""
     from .farm.batch import FarmError, render_frames
+    from .farm.options import SequenceOptions
     if not args.output.lower().endswith(".gif"):
         _make_folder(os.path.dirname(os.path.abspath(args.output)))
     seen = set()
     try:
-        status = render_frames(args, runner, stage_text, stage.GetFramesPerSecond() or 24.0,
+        options = SequenceOptions(
+            scheduler=args.scheduler, jobs=args.jobs, collect=args.collect, resume=args.resume,
+            scene=args.scene, output=args.output, frames=tuple(args.frames), size=args.size,
+            preset=args.preset, camera=args.camera, chunk=args.chunk, **args.colour)
+        status = render_frames(options, runner, stage_text, stage.GetFramesPerSecond() or 24.0,
                                lambda warnings: _print_warnings(warnings, seen))
     except FarmError as error:
         raise CommandError(str(error))
