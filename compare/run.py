@@ -23,7 +23,6 @@ from .files import atomic_write
 from .lantern_timing import point_sampled
 from .tasks import Job, run_job, run_jobs
 
-MODES = ("direct", "full")  # the Cycles references: see blender_render.configure_cycles
 DEFAULT_WIDTH = 320        # without --size: this wide, at the scene's aspect
 SWEEP_SEED = 0             # Blender's default seed
 REFERENCE_SEED = 7919      # any other: the reference's noise is independent of the sweep's

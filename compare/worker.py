@@ -16,7 +16,8 @@ import statistics
 import sys
 import time
 
-PROGRESS = "@@lantern-compare@@"
+from .modes import PROGRESS
+
 # Short renders are repeated (median) so that one scheduler hiccup does not decide a
 # point of the curve; a render longer than this is timed once.
 REPEAT_BELOW_SECONDS = 0.5
