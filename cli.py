@@ -406,17 +406,14 @@ def _check_preset(name):
 
 def _open_usd(path):
     """A USD file opened with usd-core (no bpy)."""
-    from pxr import Tf, Usd
+    from .engine.usd.opening import UnreadableStage, composition_errors, open_stage
     try:
-        stage = Usd.Stage.Open(path)
-    except Tf.ErrorException as error:
-        raise CommandError(f"{path}: cannot be read as USD: {one_line(error_text(error))}")
-    if stage is None:
-        raise CommandError(f"{path}: cannot be read as USD")
+        stage = open_stage(path)
+    except UnreadableStage as error:
+        raise CommandError(str(error))
     # Missing or broken references, sublayers and payloads, and cycles: USD composes
     # what it can; say what it could not.
-    _print_warnings([f"{path}: {one_line(error_text(e))}" for e in stage.GetCompositionErrors()],
-                    set())
+    _print_warnings([f"{path}: {reason}" for reason in composition_errors(stage)], set())
     return stage
 
 
@@ -434,22 +431,17 @@ def _stage_from_blend(blend):
 def _check_camera(stage, args):
     if args.camera is None:
         return
-    from pxr import Sdf, UsdGeom
-    if not Sdf.Path.IsValidPathString(args.camera):
-        raise _usage(f"--camera {args.camera}: not a valid prim path")
-    prim = stage.GetPrimAtPath(args.camera)
-    if not prim:
-        raise _usage(f"--camera {args.camera}: {args.scene} has no such prim")
-    if not prim.IsA(UsdGeom.Camera):
-        raise _usage(f"--camera {args.camera}: is a {prim.GetTypeName() or 'typeless prim'}, "
-                     "not a Camera")
+    from .engine.usd.camera import camera_path_problem
+    problem = camera_path_problem(stage, args.camera, args.scene)
+    if problem is not None:
+        raise _usage(f"--camera {args.camera}: {problem}")
 
 
 def _settings(args, frame=None):
     from .engine import RenderSettings
     width, height = args.size if args.size else (None, None)
-    extra = {"camera": args.camera} if args.camera is not None else {}
-    return RenderSettings(width=width, height=height, frame=frame, preset=args.preset, **extra)
+    return RenderSettings(width=width, height=height, frame=frame, preset=args.preset,
+                          camera=args.camera)
 
 
 def _rendered(scene, run):
