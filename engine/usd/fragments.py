@@ -15,13 +15,15 @@ minimal edit, whatever was rewritten. The receiver applies a fragment the same w
 (CopySpec, TransferContent), so what listens to its stage (a Session) sees that same
 minimal edit and reads again only what it touches.
 
-    fragment = encode(mirror.GetRootLayer(), *tracker.take())   # sender
-    apply(stage, fragment)                                       # receiver
+    fragment = mirror.fragment()        # sender (a Mirror)
+    apply(stage, fragment)              # receiver
 """
 from __future__ import annotations
 
 import numpy as np
 from pxr import Sdf, Usd, Vt
+
+from .changes import ChangeTracker
 
 ARRAY_MIN = 16          # arrays with this many scalars or more travel as numpy
 ROOT = Sdf.Path.absoluteRootPath
@@ -183,3 +185,27 @@ def _remove(layer: Sdf.Layer, path: Sdf.Path):
     parent = layer.pseudoRoot if path.GetParentPath() == ROOT else \
         layer.GetPrimAtPath(path.GetParentPath())
     del parent.nameChildren[path.name]
+
+
+class Mirror:
+    """The sender's copy of a stage the receiver holds, and what changed in it since
+    the last fragment."""
+
+    def __init__(self):
+        self.stage = Usd.Stage.CreateInMemory()
+        self.tracker = ChangeTracker(self.stage)
+
+    def fragment(self):
+        """The edits since the last call, as a fragment (None: nothing changed)."""
+        return encode(self.stage.GetRootLayer(), *self.tracker.take())
+
+    def replace(self, write):
+        """write(stage) fills a new in-memory stage, whose contents then replace the
+        mirror's (only the fields that differ change); returns what write returned."""
+        scratch = Usd.Stage.CreateInMemory()
+        result = write(scratch)
+        self.stage.GetRootLayer().TransferContent(scratch.GetRootLayer())
+        return result
+
+    def close(self):
+        self.tracker.close()
