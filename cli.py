@@ -18,6 +18,7 @@ import os
 import sys
 
 from .core.text import error_text, one_line
+from .core.version import installed_version
 
 USD_SUFFIXES = (".usd", ".usda", ".usdc")
 IMAGE_SUFFIXES = (".exr", ".png")
@@ -87,19 +88,11 @@ def _parse_frames(text):
     return [first + i * step for i in range(count)]
 
 
-def _version():
-    from importlib.metadata import PackageNotFoundError, version
-    try:
-        return version("lantern")
-    except PackageNotFoundError:
-        return "unknown"
-
-
 def _build_parser():
     parser = argparse.ArgumentParser(
         prog="lantern", description=__doc__.splitlines()[0], epilog=EXIT_STATUSES,
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--version", action="version", version=f"lantern {_version()}")
+    parser.add_argument("--version", action="version", version=f"lantern {installed_version()}")
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--debug", action="store_true",
                         help="show the traceback of an unexpected error")

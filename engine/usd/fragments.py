@@ -76,12 +76,7 @@ def encode(layer: Sdf.Layer, resynced=(), changed=()) -> dict | None:
     frag = Sdf.Layer.CreateAnonymous(".usda")
     if todo["all"]:
         frag.TransferContent(layer)
-    for text in todo["copy"]:
-        path = Sdf.Path(text)
-        parent = path.GetPrimPath() if path.IsPropertyPath() else path.GetParentPath()
-        if parent != ROOT:
-            Sdf.CreatePrimInLayer(frag, parent)
-        Sdf.CopySpec(layer, path, frag, path)
+    _copy_specs(layer, frag, todo["copy"])
     for text in todo["fields"]:
         path = Sdf.Path(text)
         src = layer.GetObjectAtPath(path)
@@ -91,6 +86,17 @@ def encode(layer: Sdf.Layer, resynced=(), changed=()) -> dict | None:
     arrays = _take_arrays(frag)
     return {"all": todo["all"], "copy": todo["copy"], "fields": todo["fields"],
             "remove": todo["remove"], "text": frag.ExportToString(), "arrays": arrays}
+
+
+def _copy_specs(src: Sdf.Layer, dst: Sdf.Layer, paths) -> None:
+    """Copies each spec (a prim with its subtree, or one property) at the same path,
+    making its parent prim in `dst` first (as an `over`)."""
+    for text in paths:
+        path = Sdf.Path(text)
+        parent = path.GetPrimPath() if path.IsPropertyPath() else path.GetParentPath()
+        if parent != ROOT:
+            Sdf.CreatePrimInLayer(dst, parent)
+        Sdf.CopySpec(src, path, dst, path)
 
 
 def _is_numeric_array(value) -> bool:
@@ -156,12 +162,7 @@ def apply(stage, fragment: dict) -> None:
             return
         for text in fragment["remove"]:
             _remove(layer, Sdf.Path(text))
-        for text in fragment["copy"]:
-            path = Sdf.Path(text)
-            parent = path.GetPrimPath() if path.IsPropertyPath() else path.GetParentPath()
-            if parent != ROOT:
-                Sdf.CreatePrimInLayer(layer, parent)
-            Sdf.CopySpec(src, path, layer, path)
+        _copy_specs(src, layer, fragment["copy"])
         for text in fragment["fields"]:
             path = Sdf.Path(text)
             spec = src.GetObjectAtPath(path)
