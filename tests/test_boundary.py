@@ -426,3 +426,11 @@ def test_the_package_guards_can_fail(tmp_path):
     assert _pxr_offences(tmp_path) == ["b/three.py imports pxr"]
     (tmp_path / "b" / "three.py").write_text("_secret = 1\n")    # the cycle broken
     assert _cycles(_import_graph(tmp_path, "pkg")) == []
+
+
+def test_every_module_says_what_it_is_for():
+    """Each of the package's modules opens with a docstring (its first sentence says
+    what the module is for)."""
+    missing = [str(path.relative_to(REPO)) for path in _package_files_under(REPO)
+               if not ast.get_docstring(ast.parse(path.read_text()))]
+    assert not missing, missing
