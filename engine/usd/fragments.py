@@ -7,9 +7,9 @@ numeric arrays of ARRAY_MIN values or more, which travel beside it as numpy arra
 (exact, and a fraction of their text size). A fragment is plain data (str, lists,
 numpy arrays): it pickles across a process boundary and names no class of Lantern.
 
-The sender keeps a mirror of the receiver's stage. It edits the mirror with the USD
-API and encodes what USD reports changed (Usd.Notice.ObjectsChanged, collected by
-engine/usd/changes.py). USD skips a value set to what it was, and Sdf.CopySpec and
+The sender keeps a mirror of the receiver's stage (Mirror, below). It edits the mirror
+with the USD API and encodes what USD reports changed (Usd.Notice.ObjectsChanged,
+collected by engine/usd/changes.py). USD skips a value set to what it was, and Sdf.CopySpec and
 Sdf.Layer.TransferContent change only the fields that differ, so the report is the
 minimal edit, whatever was rewritten. The receiver applies a fragment the same way
 (CopySpec, TransferContent), so what listens to its stage (a Session) sees that same
