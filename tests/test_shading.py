@@ -1,4 +1,4 @@
-"""The shading parts of issue 10 against independent answers: the split-sum table
+"""The shading (docs/rendering.md) against independent answers: the split-sum table
 against brute-force integration, the dome's harmonics against a function they hold
 exactly, a uniform world's exact hemisphere term, clearcoat read from USD, the sRGB
 mip chain, supersampling's GPU filter against the same filter in numpy, the post
