@@ -75,7 +75,8 @@ def enclosing_material(prim):
 
 
 class EditTracking:
-    """StageReader's edit job: the tracker's paths turned into re-reads."""
+    """StageReader's edit job: the tracker's paths turned into re-reads (state:
+    stage.py)."""
 
     def _apply_edits(self, resynced, changed, changes: Changes):
         roots, props = set(), []

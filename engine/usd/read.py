@@ -52,7 +52,9 @@ def strongest_spec(attr):
 
 
 class FirstRead:
-    """StageReader's reading job: the whole stage, or one subtree, into records."""
+    """StageReader's reading job: the whole stage, or one subtree, into records.
+    The state it shares with the other jobs is set up in StageReader.__init__
+    (stage.py)."""
 
     def _read_all(self, changes: Changes):
         """The whole stage, from nothing (the first sync, or after the stage's own

@@ -21,7 +21,7 @@ class InstancerState:
 
 
 class InstancerReading:
-    """StageReader's reading of PointInstancers and Points."""
+    """StageReader's reading of PointInstancers and Points (state: stage.py)."""
 
     def _read_instancer(self, prim, changes: Changes, rebuild: bool = False):
         """(Re)reads a PointInstancer: one batch (an Instance with `worlds`) per

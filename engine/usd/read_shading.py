@@ -19,7 +19,7 @@ HEADLIGHT = "<headlight>"
 
 
 class ShadingReading:
-    """StageReader's reading of materials and lights."""
+    """StageReader's reading of materials and lights (state: stage.py)."""
 
     def _face_materials(self, prim, warnings):
         """[Material] (the prim's, then one per bound GeomSubset) and [(Material name,

@@ -35,7 +35,8 @@ def mesh_attributes_vary(prim) -> bool:
 
 
 class TimeSampling:
-    """StageReader's time job: which records vary, and the re-read at a new time."""
+    """StageReader's time job: which records vary, and the re-read at a new time
+    (state: stage.py)."""
 
     def _xform_varies(self, prim) -> bool:
         """Whether the prim's local-to-world may change in time (any xformable
