@@ -37,6 +37,7 @@ class Scene:
         self.touched = 0.0         # when the request or the stage last changed
         self.blocks = {}           # slot name -> SharedMemory
         self.free = []             # slots this process may write
+        self.moving = (None, None)  # (scale, seconds) of the last moving frame
 
     def session(self, preset):
         from ..session import RenderSettings, Session
@@ -154,22 +155,11 @@ class Host:
         preset = req["preset"] if final else protocol.INTERACTIVE_PRESET
         passes = [(n, PASSES[n].channels) for n in req["passes"]]
         w, h = req["width"], req["height"]
+        scale = 1.0
         if not final and w * h > protocol.INTERACTIVE_MIN_PIXELS:
-            scale = protocol.INTERACTIVE_SCALE
+            scale = protocol.interactive_scale(*scene.moving)
             w, h = max(1, round(w * scale)), max(1, round(h * scale))
         frame_layout, total = protocol.layout(w, h, passes)
-        try:
-            session = scene.session(preset)
-            session.configure(width=w, height=h, transparent=req["transparent"],
-                              passes=frozenset(req["passes"]), camera=req.get("camera"))
-            result = session.render(view_matrix=req.get("view"),
-                                    projection_matrix=req.get("projection"),
-                                    frame=req.get("frame"))
-        except Exception as error:
-            scene.level = 2
-            self._send(protocol.ERROR, scene=name, request=req["id"], message=str(error),
-                       detail=traceback.format_exc())
-            return True
         while not scene.free:                   # Blender still reads every slot
             for message in self._take(timeout=None):
                 if not self._handle(message):
@@ -184,12 +174,29 @@ class Host:
             self._send(protocol.ERROR, scene=name, request=req["id"],
                        message=f"a {w}x{h} frame does not fit its {block.size}-byte slot")
             return True
-        images = {"Combined": result.rgba, **result.passes}
-        for pass_name, channels, offset in frame_layout:
-            protocol.view(block, w, h, channels, offset)[:] = images[pass_name][::-1]
+        try:
+            session = scene.session(preset)
+            session.configure(width=w, height=h, transparent=req["transparent"],
+                              passes=frozenset(req["passes"]), camera=req.get("camera"))
+            # The image is read straight into the slot, in Blender's bottom-up rows.
+            result = session.render(view_matrix=req.get("view"),
+                                    projection_matrix=req.get("projection"),
+                                    frame=req.get("frame"), bottom_up=True,
+                                    out=protocol.view(block, w, h, 4, frame_layout[0][2]))
+        except Exception as error:
+            scene.free.append(slot)
+            scene.level = 2
+            self._send(protocol.ERROR, scene=name, request=req["id"], message=str(error),
+                       detail=traceback.format_exc())
+            return True
+        for pass_name, channels, offset in frame_layout[1:]:
+            protocol.view(block, w, h, channels, offset)[:] = result.passes[pass_name][::-1]
         scene.level = 2 if final else 1
         if not final:
             scene.touched = time.monotonic()    # settling counts from the frame shown
+            # GL work and read-back of the moving frame: what the next one's size is
+            # chosen from (the stage read is the same at any size).
+            scene.moving = (scale, result.timings["total"] - result.timings.get("load", 0.0))
         self._send(protocol.FRAME, scene=name, request=req["id"], tag=req.get("tag"), slot=slot,
                    width=w, height=h, layout=frame_layout, final=final, preset=preset,
                    stats=result.stats, timings=result.timings, warnings=result.warnings)
