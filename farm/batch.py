@@ -278,9 +278,9 @@ class _WorkerTally:
 
 def render_frames(options: SequenceOptions, runner, stage_text=None, fps=24.0,
                   print_warnings=None):
-    """Renders options.frames of options.scene into options.output ('####' or a .gif) as chunks
-    on `runner` (open_render_runner), which it closes. stage_text: the stage as USD text
-    when the client exported it (a .blend)."""
+    """Renders options.frames of options.scene into options.output ('####' or a .gif)
+    as chunks on `runner` (open_render_runner), which it closes. stage_text: the stage
+    as USD text when the client exported it (a .blend)."""
     try:
         status = _render_frames(options, runner, stage_text, fps, print_warnings)
     except BaseException:

@@ -47,7 +47,8 @@ class TimeSampling:
             xf = UsdGeom.Xformable(prim)
             own = bool(xf) and xf.TransformMightBeTimeVarying()
             parent = prim.GetParent()
-            memo = own or (bool(parent) and not parent.IsPseudoRoot() and self._xform_varies(parent))
+            memo = own or (bool(parent) and not parent.IsPseudoRoot()
+                           and self._xform_varies(parent))
             self._xform_memo[path] = memo
         return memo
 
