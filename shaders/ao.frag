@@ -1,13 +1,14 @@
 #version 330 core
 #include "lib.glsl"
-// Screen-space ambient occlusion (seed 002), the fraction of a surface's cosine-
-// weighted hemisphere that sees the dome within `radius` (Blender's AO distance), by
-// a horizon search (GTAO, Jimenez et al. 2016): per slice through the view vector,
-// the highest horizon on each side within the radius, and the cosine-weighted
-// visible arc between them, integrated in closed form about the normal projected into
-// the slice. `slices` directions (the preset's rays) x `steps` depth samples per side,
-// rotated per pixel over a 4x4 tile (a Bayer pattern) that the bilateral blur
-// (ao_blur.frag) then averages away. Depth is read through lib.glsl's helpers.
+// Screen-space ambient occlusion (docs/design.md, Ambient occlusion), the fraction of a
+// surface's cosine-weighted hemisphere that sees the dome within `radius` (Blender's AO
+// distance), by a horizon search (GTAO, Jimenez et al. 2016): per slice through the
+// view vector, the highest horizon on each side within the radius, and the
+// cosine-weighted visible arc between them, integrated in closed form about the normal
+// projected into the slice. `slices` directions (the preset's rays) x `steps` depth
+// samples per side, rotated per pixel over a 4x4 tile (a Bayer pattern) that the
+// bilateral blur (ao_blur.frag) then averages away. Depth is read through lib.glsl's
+// helpers.
 uniform sampler2D g_depth;
 uniform sampler2D g_normal;
 uniform mat4 inv_view_proj;

@@ -1,4 +1,4 @@
-"""The ambient-occlusion pass (seed 002): screen-space occlusion of the dome's light
+"""The ambient-occlusion pass (docs/design.md, Ambient occlusion): screen-space occlusion of the dome's light
 by a horizon search (shaders/ao.frag), then a depth-aware blur (shaders/ao_blur.frag).
 The ambient pass multiplies the dome's diffuse light by it, and its specular light by
 the specular occlusion it implies; lights and emission are never occluded here
