@@ -19,6 +19,9 @@ uniform float pixel_scale;   // pixels per world unit at view depth 1 (orthograp
 uniform float max_pixels;    // the search never reaches further across the screen
 uniform int slices;
 uniform int steps;
+// Drawn at 1/u_step of the G-buffer's size per side (a supersampled frame's AO at the
+// output's resolution): each AO pixel searches from the centre sub-pixel of its block.
+uniform int u_step;
 out float ao;
 
 // A 4x4 Bayer index in [0, 16): the tile's 16 pixels take 16 evenly spaced slice
@@ -75,7 +78,9 @@ vec3 depth_normal(ivec2 px, vec3 p, vec3 fallback) {
 }
 
 void main() {
-    ivec2 px = ivec2(gl_FragCoord.xy);
+    ivec2 cell = ivec2(gl_FragCoord.xy);
+    ivec2 px = cell * u_step + u_step / 2;
+    vec2 centre = vec2(px) + 0.5;
     ivec2 size = textureSize(g_depth, 0);
     float depth = texelFetch(g_depth, px, 0).r;
     ao = 1.0;
@@ -90,8 +95,8 @@ void main() {
     float z = cam_ortho ? 1.0 : max(dot(p, cam_forward), 1e-6);
     float r_px = min(radius * pixel_scale / z, max_pixels);
     if (r_px < 1.0) return;
-    float rotation = (bayer4(px) + 0.5) / 16.0;
-    float jitter = (bayer4(px.yx + ivec2(1, 2)) + 0.5) / 16.0;
+    float rotation = (bayer4(cell) + 0.5) / 16.0;
+    float jitter = (bayer4(cell.yx + ivec2(1, 2)) + 0.5) / 16.0;
     float visible = 0.0;
     for (int s = 0; s < slices; ++s) {
         float phi = (float(s) + rotation) * PI / float(slices);
@@ -113,7 +118,7 @@ void main() {
                 float t = (float(j) + jitter) / float(steps);
                 float offset = max(t * t * r_px, float(j) + 1.0);
                 if (offset > r_px) break;
-                vec2 w = gl_FragCoord.xy + d * offset;
+                vec2 w = centre + d * offset;
                 if (any(lessThan(w, vec2(0.0))) || any(greaterThanEqual(w, vec2(size)))) break;
                 bool drawn;
                 vec3 delta = position_at(w, drawn) - p;
