@@ -101,7 +101,7 @@ def _write_collected(files):
         def write(tmp, data=data):
             with open(tmp, "wb") as f:
                 f.write(data)
-        atomic_write(path, write, suffix=os.path.splitext(path)[1], keep_mode=True)
+        atomic_write(path, write, suffix=os.path.splitext(path)[1])
 
 
 def _sweep(outputs):
