@@ -5,7 +5,8 @@ Prints figures (medians of several new processes), asserts nothing.
      process, its phases as --timings prints them and its wall time seen from here:
      - program cache empty (a new folder each run), then warm (one folder, filled);
      - no program cache (LANTERN_NO_PROGRAM_CACHE=1);
-     - the code before (`git archive` of --baseline, default main, run in its place);
+     - the code before (`git archive` of --baseline, default the commit where this
+       branch left main, run in its place);
      - Mesa's own shader cache off too (MESA_SHADER_CACHE_DISABLE=true), the cold of a
        machine that never rendered (Mesa then offers no program binary format, so
        Lantern's cache cannot help there);
@@ -17,7 +18,7 @@ Prints figures (medians of several new processes), asserts nothing.
 The first F12 in a fresh Blender is not measured: the engine host is not prestarted
 (docs/rendering.md, "Cold start").
 
-    .venv/bin/python bench/bench_cold.py [--runs 5] [--baseline main]
+    .venv/bin/python bench/bench_cold.py [--runs 5] [--baseline REV] [--no-compare]
 """
 import argparse
 import json
@@ -124,7 +125,7 @@ def compare_cold(blend, env):
 def baseline_code(rev, folder):
     """The package as of `rev`, extracted as folder/lantern (PYTHONPATH=folder)."""
     package = folder / "lantern"
-    package.mkdir()
+    package.mkdir(parents=True)
     archive = subprocess.run(["git", "archive", rev], cwd=REPO, capture_output=True, check=True)
     subprocess.run(["tar", "-x", "-C", str(package)], input=archive.stdout, check=True)
     commit = subprocess.run(["git", "rev-parse", "--short", rev], cwd=REPO, capture_output=True,
@@ -135,7 +136,8 @@ def baseline_code(rev, folder):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=5)
-    parser.add_argument("--baseline", default="main", help="git revision of the code before")
+    parser.add_argument("--baseline", default=None,
+                        help="git revision of the code before (default: git merge-base HEAD main)")
     parser.add_argument("--no-compare", action="store_true", help="skip part 2")
     args = parser.parse_args()
     if not DEMO.is_file():
@@ -144,16 +146,19 @@ def main():
 
     with tempfile.TemporaryDirectory(prefix="lantern-bench-cold-") as tmp:
         tmp = pathlib.Path(tmp)
-        code, commit = baseline_code(args.baseline, tmp / "baseline")
+        rev = args.baseline or subprocess.run(
+            ["git", "merge-base", "HEAD", "main"], cwd=REPO, capture_output=True, text=True,
+            check=True).stdout.strip()
+        code, commit = baseline_code(rev, tmp / "baseline")
         out = tmp / "demo.png"
         warm_cache = tmp / "warm-cache"
         cli_cold(environment(cache=warm_cache), out)           # fills the warm cache
-        conditions = {
-            "program cache empty": lambda i: environment(cache=tmp / f"empty-{i}"),
-            "program cache warm": lambda i: environment(cache=warm_cache),
-            "no program cache": lambda i: environment(no_cache=True),
-            f"before ({args.baseline} {commit})": lambda i: environment(code=code),
-            "Mesa's shader cache off too": lambda i: environment(no_cache=True, mesa_off=True),
+        conditions = {      # column: its environment for run i
+            "cache empty": lambda i: environment(cache=tmp / f"empty-{i}"),
+            "cache warm": lambda i: environment(cache=warm_cache),
+            "cache off": lambda i: environment(no_cache=True),
+            f"before {commit}": lambda i: environment(code=code),
+            "Mesa cache off": lambda i: environment(no_cache=True, mesa_off=True),
         }
         table, programs = {}, {}
         for i in range(args.runs):      # interleaved, so that the machine's load is shared
@@ -164,7 +169,8 @@ def main():
         warm = warm_session(max(args.runs, 5))
 
         print(f"`lantern render out/demo.usdc -o demo.png --size {SIZE[0]}x{SIZE[1]}`, "
-              f"medians of {args.runs} new processes (ms):")
+              f"medians of {args.runs} new processes (ms); cache: Lantern's program cache; "
+              "Mesa cache off: MESA_SHADER_CACHE_DISABLE=true and Lantern's off:")
         columns = list(conditions)
         rows = medians([r for name in columns for r in table[name]])
         width = max(len(c) for c in columns)
