@@ -194,6 +194,19 @@ class Host:
                    stats=result.stats, timings=result.timings, warnings=result.warnings)
         return True
 
+    def _warm(self):
+        """Makes the programs of a first frame now, while Blender has asked for none
+        yet (engine/host/warmup.py); what arrives meanwhile waits in the inbox. A
+        warm-up that fails costs only its time: the first frame then makes them."""
+        from ...core.presets import DEFAULT
+        from .warmup import warm
+        try:
+            seconds = warm((p.INTERACTIVE_PRESET, DEFAULT))
+        except Exception as error:
+            print(f"lantern host: the warm-up failed: {error}", file=sys.stderr, flush=True)
+            return
+        print(f"lantern host: warmed up in {seconds:.2f} s", file=sys.stderr, flush=True)
+
     def run(self) -> int:
         from .. import shutdown
         threading.Thread(target=self._read, name="lantern-host-reader", daemon=True).start()
@@ -207,6 +220,7 @@ class Host:
         modules = {name: getattr(importlib.util.find_spec(name), "origin", None)
                    for name in ("lantern", "pxr", "numpy", "moderngl", "glcontext")}
         self._send(p.READY, pid=os.getpid(), gl=gl, executable=sys.executable, modules=modules)
+        self._warm()
         try:
             while True:
                 name, due = self._next()
