@@ -1,26 +1,40 @@
 """Starts the engine host before the first F12 or viewport draw, so that neither pays
 the process start: when the add-on registers, when a file is loaded, and when Lantern
-becomes a scene's render engine, if some scene renders with Lantern. The host then
-warms its programs up (engine/host/warmup.py) while the user works. A start that
+becomes a scene's render engine, if some scene renders with Lantern. It is then asked
+to warm up (WARM): to make the programs of a first frame at the interactive preset and
+at those scenes' presets (engine/host/warmup.py) while the user works. A start that
 fails is the host's `failure`, reported by the render that needs it."""
 import bpy
 
+from ..engine.host import protocol as p
 from . import host as host_module
 
 ENGINE = "LANTERN"
 _owner = object()           # the msgbus subscription's owner
+_warmed = [None]            # the host generation last asked to warm up
 
 
-def used() -> bool:
-    """True when some scene of the open file renders with Lantern."""
-    return any(scene.render.engine == ENGINE for scene in getattr(bpy.data, "scenes", ()))
+def presets() -> list:
+    """The presets a first frame of the open file is likely drawn with: the
+    interactive one, and those of the scenes that render with Lantern (none: [])."""
+    used = [s.lantern.preset for s in getattr(bpy.data, "scenes", ())
+            if s.render.engine == ENGINE]
+    return list(dict.fromkeys([p.INTERACTIVE_PRESET, *used])) if used else []
 
 
 def start_if_used():
     """Starts the host in the background if a scene needs it (Popen only: the child
-    boots and warms up on its own). Returns None, so that a timer runs it once."""
-    if used():
-        host_module.get().ensure()
+    boots on its own), and asks a new one to warm up. Returns None, so that a timer
+    runs it once."""
+    wanted = presets()
+    if wanted:
+        host = host_module.get()
+        try:
+            if host.ensure() and host.generation != _warmed[0]:
+                host.send(p.WARM, presets=wanted)
+                _warmed[0] = host.generation
+        except host_module.HostError:
+            pass    # the child died at once: its `failure` goes to the render that needs it
     return None
 
 

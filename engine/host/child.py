@@ -101,6 +101,9 @@ class Host:
         kind, f = message
         if kind == p.QUIT:
             return False
+        if kind == p.WARM:
+            self._warm(f["presets"])
+            return True
         name = f.get("scene")
         if kind == p.DROP:
             scene = self.scenes.pop(name, None)
@@ -194,14 +197,14 @@ class Host:
                    stats=result.stats, timings=result.timings, warnings=result.warnings)
         return True
 
-    def _warm(self):
-        """Makes the programs of a first frame now, while Blender has asked for none
-        yet (engine/host/warmup.py); what arrives meanwhile waits in the inbox. A
-        warm-up that fails costs only its time: the first frame then makes them."""
-        from ...core.presets import DEFAULT
+    def _warm(self, presets):
+        """Makes the programs of a first frame at these presets now, before Blender
+        asks for one (WARM, sent by addon/prestart.py; engine/host/warmup.py); what
+        arrives meanwhile waits in the inbox. A warm-up that fails costs only its
+        time: the first frame then makes them."""
         from .warmup import warm
         try:
-            seconds = warm((p.INTERACTIVE_PRESET, DEFAULT))
+            seconds = warm(presets)
         except Exception as error:
             print(f"lantern host: the warm-up failed: {error}", file=sys.stderr, flush=True)
             return
@@ -220,7 +223,6 @@ class Host:
         modules = {name: getattr(importlib.util.find_spec(name), "origin", None)
                    for name in ("lantern", "pxr", "numpy", "moderngl", "glcontext")}
         self._send(p.READY, pid=os.getpid(), gl=gl, executable=sys.executable, modules=modules)
-        self._warm()
         try:
             while True:
                 name, due = self._next()
