@@ -15,11 +15,11 @@ _warmed = [None]            # the host generation last asked to warm up
 
 
 def presets() -> list:
-    """The presets a first frame of the open file is likely drawn with: the
-    interactive one, and those of the scenes that render with Lantern (none: [])."""
+    """The presets a first frame of the open file is likely drawn with: those of the
+    scenes that render with Lantern (F12), then the interactive one (none: [])."""
     used = [s.lantern.preset for s in getattr(bpy.data, "scenes", ())
             if s.render.engine == ENGINE]
-    return list(dict.fromkeys([p.INTERACTIVE_PRESET, *used])) if used else []
+    return list(dict.fromkeys([*used, p.INTERACTIVE_PRESET])) if used else []
 
 
 def start_if_used():

@@ -199,12 +199,13 @@ class Host:
 
     def _warm(self, presets):
         """Makes the programs of a first frame at these presets now, before Blender
-        asks for one (WARM, sent by addon/prestart.py; engine/host/warmup.py); what
-        arrives meanwhile waits in the inbox. A warm-up that fails costs only its
-        time: the first frame then makes them."""
+        asks for one (WARM, sent by addon/prestart.py; engine/host/warmup.py). After
+        the first preset it stops when a message waits, which then makes what it needs
+        itself. A
+        warm-up that fails costs only its time: the first frame then makes them."""
         from .warmup import warm
         try:
-            seconds = warm(presets)
+            seconds = warm(presets, stop=lambda: not self.inbox.empty())
         except Exception as error:
             print(f"lantern host: the warm-up failed: {error}", file=sys.stderr, flush=True)
             return

@@ -44,12 +44,16 @@ def stage():
     return s
 
 
-def warm(presets) -> float:
-    """Renders the warm-up stage once per preset; returns the seconds it took."""
+def warm(presets, stop=lambda: False) -> float:
+    """Renders the warm-up stage once per preset, in order: the first always, the
+    others until stop() says a request waits (it then makes what it needs itself);
+    returns the seconds it took."""
     from ..session import RenderSettings, Session
     start = time.perf_counter()
     warm_stage = stage()
-    for preset in dict.fromkeys(presets):
+    for i, preset in enumerate(dict.fromkeys(presets)):
+        if i and stop():
+            break
         with Session(warm_stage, RenderSettings(width=SIZE, height=SIZE, preset=preset)) as s:
             s.render()
     return time.perf_counter() - start
