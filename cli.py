@@ -414,6 +414,8 @@ def _render(args):
 
 def _check_render_options(args):
     _check_farm(args)
+    if args.timings and args.frames is not None:
+        raise _usage("--timings is for single frames, not --frames")
     if args.frames is None and (args.scheduler is not None or args.collect or args.resume
                                 or args.chunk is not None):
         raise _usage("--scheduler, --collect, --resume and --chunk are for a sequence "
