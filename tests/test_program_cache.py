@@ -71,15 +71,20 @@ def test_a_second_process_loads_the_first_ones_programs(corpus, tmp_path, refere
 
 def test_damaged_entries_are_rebuilt_and_render_the_same(corpus, tmp_path, reference):
     cache, entries = _filled_cache(corpus, tmp_path, reference)
-    truncated, flipped, foreign, empty = entries[:4]
+    truncated, flipped, foreign, empty, rejected = entries[:5]
     truncated.write_bytes(truncated.read_bytes()[:-100])
     data = bytearray(flipped.read_bytes())
     data[-10] ^= 0xFF
     flipped.write_bytes(bytes(data))
-    foreign.write_bytes(entries[4].read_bytes())        # another program's entry
+    foreign.write_bytes(entries[5].read_bytes())        # another program's entry
     empty.write_bytes(b"")
+    # Well-formed, but not a binary the driver takes: glProgramBinary fails, and the
+    # program is compiled after all.
+    from lantern.engine.gpu import program_binaries as pb
+    fmt, _ = pb.decode_entry(bytes.fromhex(rejected.stem), rejected.read_bytes())
+    rejected.write_bytes(pb.encode_entry(bytes.fromhex(rejected.stem), fmt, b"not a program" * 50))
     stats, image = _render(corpus, tmp_path, cache, "damaged")
-    assert stats == {"compiled": 4, "loaded": reference[0] - 4, "binaries": True}
+    assert stats == {"compiled": 5, "loaded": reference[0] - 5, "binaries": True}
     assert np.array_equal(image, reference[1])
     # Rebuilt in place: the next process compiles nothing.
     stats, image = _render(corpus, tmp_path, cache, "repaired")
