@@ -606,9 +606,17 @@ def _render_frame(args, is_blend, phases):
     height_px, width_px = result.rgba.shape[:2]
     print(f"{args.scene} -> {args.output} ({width_px}x{height_px}, "
           f"{result.timings.get('total', 0.0) * 1000:.1f} ms)")
+    if args.debug:
+        print(_gl_line(result.stats))
     if args.timings:
         phases.report(args.scene, result)
     return 0
+
+
+def _gl_line(stats) -> str:
+    """--debug: the GL the engine got, and the paths it took."""
+    return (f"  GL: {stats.get('gl_renderer')}, {stats.get('gl_version')} (asked for "
+            f"{stats.get('gl_requested', 0) / 100:.1f}); paths: {stats.get('gl_path')}")
 
 
 class _Phases:

@@ -41,8 +41,8 @@ def pass_time(stage, size, fmt, runs=9):
         session.render()
         times = []
         for _ in range(runs):
-            timings = session.render().timings
-            times.append(sum(timings[p] for p in PASSES))
+            timings = session.render().gpu_timings
+            times.append(sum(timings.get(p, 0.0) for p in PASSES))
     return float(np.median(times)) * 1e3
 
 

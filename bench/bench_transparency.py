@@ -161,7 +161,7 @@ def area():
             s.render()
         for _ in range(5):
             for k, s in enumerate(sessions):
-                times[k].append(s.render().timings["lights"])
+                times[k].append(s.render().gpu_timings["lights"])
         for s in sessions:
             s.close()
         a, b = (1000 * float(np.median(t)) for t in times)
@@ -184,7 +184,7 @@ def cost():
             r = s.render()
             totals[k].append(r.timings["total"])
             if k == "blended":
-                passes.append(r.timings["transparency"])
+                passes.append(r.gpu_timings["transparency"])
     for s in sessions.values():
         s.close()
     b, o = (1000 * float(np.median(totals[k])) for k in ("blended", "opaque"))

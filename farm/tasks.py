@@ -216,10 +216,7 @@ def run_chunk(task: RenderChunk, stage_text=None) -> TaskResult:
             result.reason = f"{task.scene}: {_one_line(_text(error))}"
             result.failed = {frame: result.reason for frame in task.frames}
         else:
-            for frame in task.frames:
-                # The load counts in the first frame rendered: the cold cost.
-                _render_frame(task, session, frame, load if result.cold is None else None,
-                              result)
+            _render_frames(task, session, load, result)
     result.ok = not result.failed
     if result.failed and not result.reason:
         result.reason = next(iter(result.failed.values()))
@@ -227,32 +224,42 @@ def run_chunk(task: RenderChunk, stage_text=None) -> TaskResult:
     return result
 
 
-def _render_frame(task, session, frame, load, result):
-    """One frame into `result`: written, skipped (a lost attempt wrote it) or failed."""
+def _render_frames(task, session, load, result):
+    """The chunk's frames into `result`: written, skipped (a lost attempt wrote them)
+    or failed. Frame N+1 is drawn while frame N is copied and written
+    (Session.render_frames)."""
     from ..cli import _one_line, _text
-    path = frame_output(task.pattern, frame) if task.pattern else None
-    if path and not task.collect and _written_since(path, task.since_ns):
-        result.skipped.append(frame)
-        return
+    paths, todo = {}, []
+    for frame in task.frames:
+        path = paths[frame] = frame_output(task.pattern, frame) if task.pattern else None
+        if path and not task.collect and _written_since(path, task.since_ns):
+            result.skipped.append(frame)
+        else:
+            todo.append(frame)
     t0 = time.perf_counter()
-    try:
-        image = session.render(frame=frame)
-    except (ValueError, RuntimeError, OSError) as error:  # the engine's input errors
-        result.failed[frame] = f"{task.scene}: frame {frame:g}: {_one_line(_text(error))}"
-        return
-    seconds = time.perf_counter() - t0
-    if load is not None:
-        result.cold = load + seconds
-    else:
-        result.warm.append(seconds)
-    result.warnings += [w for w in image.warnings if w not in result.warnings]
+    for frame, image in session.render_frames(todo):
+        seconds, t0 = time.perf_counter() - t0, time.perf_counter()
+        if isinstance(image, Exception):      # the engine's input errors
+            result.failed[frame] = f"{task.scene}: frame {frame:g}: {_one_line(_text(image))}"
+            continue
+        if result.cold is None and load is not None:
+            result.cold = load + seconds        # the load counts in the first frame
+        else:
+            result.warm.append(seconds)
+        result.warnings += [w for w in image.warnings if w not in result.warnings]
+        _keep(task, frame, paths[frame], image.rgba, result)
+        t0 = time.perf_counter()
+
+
+def _keep(task, frame, path, rgba, result):
+    """A rendered frame written, encoded (collect) or kept in memory."""
     try:
         if path is None:
-            result.pixels[frame] = image.rgba
+            result.pixels[frame] = rgba
         elif task.collect:
-            result.files[path] = _encoded(path, image.rgba, task.colour)
+            result.files[path] = _encoded(path, rgba, task.colour)
         else:
-            _write(path, image.rgba, task.colour)
+            _write(path, rgba, task.colour)
     except (OSError, ValueError) as error:
         result.failed[frame] = f"{path}: cannot be written: " \
                                f"{getattr(error, 'strerror', None) or error}"

@@ -157,6 +157,16 @@ class MaterialTextures:
         tex.anisotropy = self.anisotropy
         return tex, decode
 
+    def set_anisotropy(self, anisotropy: float):
+        """The preset's anisotropic filtering, on the images and samplers already made."""
+        if anisotropy == self.anisotropy:
+            return
+        self.anisotropy = anisotropy
+        for tex, _ in self._tex.values():
+            tex.anisotropy = anisotropy
+        for sampler in self._samplers.values():
+            sampler.anisotropy = anisotropy
+
     def sampler(self, wrap_s: str, wrap_t: str):
         """Repeat for repeat/mirror (mirror folds st in the shader), clamp-to-edge for
         clamp/black (black masks outside [0,1] in the shader)."""

@@ -2,9 +2,9 @@
 
 One *scene* per stream Blender opens (a viewport, an F12 view layer, previews): an
 in-memory stage that Blender's edits (fragments) keep equal to Blender's mirror, the
-Sessions rendering it (one per preset: a progressive view draws with the interactive
-preset while it moves and with the scene's once it settles), the last render request
-and the shared-memory slots its frames go to.
+one Session rendering it (a progressive view draws with the interactive preset while
+it moves and with the scene's once it settles: a preset change reads and uploads
+nothing again), the last render request and the shared-memory slots its frames go to.
 
 The main loop applies every message that has arrived, then renders one frame of the
 scene that most needs one: a new request or edit first (the interactive preset when
@@ -31,19 +31,22 @@ class Scene:
     def __init__(self):
         from ..usd.fragments import receiver
         self.stage = receiver()
-        self.sessions = {}         # preset -> Session
+        self._session = None       # made at the first render
         self.request = None        # the last render request (its fields)
         self.level = 0             # 0: to render, 1: interactive frame shown, 2: done
         self.touched = 0.0         # when the request or the stage last changed
         self.blocks = {}           # slot name -> SharedMemory
         self.free = []             # slots this process may write
+        self.moving = (None, None)  # (scale, seconds) of the last moving frame
 
     def session(self, preset):
+        """The scene's Session, set to `preset`."""
         from ..session import RenderSettings, Session
-        if preset not in self.sessions:
-            self.sessions[preset] = Session(self.stage, RenderSettings(width=1, height=1,
-                                                                       preset=preset))
-        return self.sessions[preset]
+        if self._session is None:
+            self._session = Session(self.stage, RenderSettings(width=1, height=1,
+                                                               preset=preset))
+        self._session.configure(preset=preset)
+        return self._session
 
     def set_slots(self, names):
         self.close_slots(unlink=False)
@@ -56,9 +59,9 @@ class Scene:
         self.blocks, self.free = {}, []
 
     def close(self, unlink=False):
-        for session in self.sessions.values():
-            session.close()
-        self.sessions = {}
+        if self._session is not None:
+            self._session.close()
+            self._session = None
         self.close_slots(unlink)
 
 
@@ -157,21 +160,11 @@ class Host:
         preset = req["preset"] if final else p.INTERACTIVE_PRESET
         passes = [(n, PASSES[n].channels) for n in req["passes"]]
         w, h = req["width"], req["height"]
+        scale = 1.0
         if not final and w * h > p.INTERACTIVE_MIN_PIXELS:
-            w, h = max(1, round(w * p.INTERACTIVE_SCALE)), max(1, round(h * p.INTERACTIVE_SCALE))
+            scale = p.interactive_scale(*scene.moving)
+            w, h = max(1, round(w * scale)), max(1, round(h * scale))
         frame_layout, total = p.layout(w, h, passes)
-        try:
-            session = scene.session(preset)
-            session.configure(width=w, height=h, transparent=req["transparent"],
-                              passes=frozenset(req["passes"]), camera=req.get("camera"))
-            result = session.render(view_matrix=req.get("view"),
-                                    projection_matrix=req.get("projection"),
-                                    frame=req.get("frame"))
-        except Exception as error:
-            scene.level = 2
-            self._send(p.ERROR, scene=name, request=req["id"], message=str(error),
-                       detail=traceback.format_exc())
-            return True
         while not scene.free:                   # Blender still reads every slot
             for message in self._take(timeout=None):
                 if not self._handle(message):
@@ -186,12 +179,29 @@ class Host:
             self._send(p.ERROR, scene=name, request=req["id"],
                        message=f"a {w}x{h} frame does not fit its {block.size}-byte slot")
             return True
-        images = {"Combined": result.rgba, **result.passes}
-        for pass_name, channels, offset in frame_layout:
-            p.view(block, w, h, channels, offset)[:] = images[pass_name][::-1]
+        try:
+            session = scene.session(preset)
+            session.configure(width=w, height=h, transparent=req["transparent"],
+                              passes=frozenset(req["passes"]), camera=req.get("camera"))
+            # The image is read straight into the slot, in Blender's bottom-up rows.
+            result = session.render(view_matrix=req.get("view"),
+                                    projection_matrix=req.get("projection"),
+                                    frame=req.get("frame"), bottom_up=True,
+                                    out=p.view(block, w, h, 4, frame_layout[0][2]))
+        except Exception as error:
+            scene.free.append(slot)
+            scene.level = 2
+            self._send(p.ERROR, scene=name, request=req["id"], message=str(error),
+                       detail=traceback.format_exc())
+            return True
+        for pass_name, channels, offset in frame_layout[1:]:
+            p.view(block, w, h, channels, offset)[:] = result.passes[pass_name][::-1]
         scene.level = 2 if final else 1
         if not final:
             scene.touched = time.monotonic()    # settling counts from the frame shown
+            # GL work and read-back of the moving frame: what the next one's size is
+            # chosen from (the stage read is the same at any size).
+            scene.moving = (scale, result.timings["total"] - result.timings.get("load", 0.0))
         self._send(p.FRAME, scene=name, request=req["id"], tag=req.get("tag"), slot=slot,
                    width=w, height=h, layout=frame_layout, final=final, preset=preset,
                    stats=result.stats, timings=result.timings, warnings=result.warnings)
@@ -201,8 +211,8 @@ class Host:
         """Makes the programs of a first frame at these presets now, before Blender
         asks for one (WARM, sent by addon/prestart.py; engine/host/warmup.py). After
         the first preset it stops when a message waits, which then makes what it needs
-        itself. A
-        warm-up that fails costs only its time: the first frame then makes them."""
+        itself. A warm-up that fails costs only its time: the first frame then makes
+        them."""
         from .warmup import warm
         try:
             seconds = warm(presets, stop=lambda: not self.inbox.empty())
