@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from .session import RenderResult, RenderSettings, Session
-from .usd.stage import open_stage
+from .usd.opening import open_stage
 
 
 def render_stage(stage, settings: RenderSettings | None = None) -> RenderResult:

@@ -45,7 +45,7 @@ class RenderSettings:
     # Render passes (AOVs) to compute besides Combined, by Blender's names
     # (core/passes.py): only these are computed and read back.
     passes: frozenset = frozenset()
-    # Shading (issue 10). Ambient occlusion of the dome's light (the preset sets its
+    # Shading (docs/rendering.md). Ambient occlusion of the dome's light (the preset sets its
     # rays and steps); off: the dome lights every surface unoccluded.
     ambient_occlusion: bool = True
     # 8-bit sRGB textures: "encoded" filters the stored values and decodes after (as

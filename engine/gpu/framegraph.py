@@ -39,7 +39,6 @@ TARGETS = {
     "g_mat": "rgba16f",        # metallic, roughness, dielectric F0, clearcoat
     "g_emit": "rgba16f",       # emission
     "g_depth": "depth",         # 32-bit float, reversed (engine/view.py)
-    "ao_raw": "r32f",          # ambient occlusion before its blur
     "ao": "r32f",              # ambient occlusion of the dome's light
     "hdr": "rgba32f",          # light accumulation: float32, 1e-38..3e38 (a 1e-6 W and a
                                # 1e6 W light alike; float16 underflowed and overflowed)
