@@ -6,7 +6,7 @@ at those scenes' presets (engine/host/warmup.py) while the user works. A start t
 fails is the host's `failure`, reported by the render that needs it."""
 import bpy
 
-from ..engine.host import protocol as p
+from ..engine.host import protocol
 from . import host as host_module
 
 ENGINE = "LANTERN"
@@ -19,7 +19,7 @@ def presets() -> list:
     scenes that render with Lantern (F12), then the interactive one (none: [])."""
     used = [s.lantern.preset for s in getattr(bpy.data, "scenes", ())
             if s.render.engine == ENGINE]
-    return list(dict.fromkeys([*used, p.INTERACTIVE_PRESET])) if used else []
+    return list(dict.fromkeys([*used, protocol.INTERACTIVE_PRESET])) if used else []
 
 
 def start_if_used():
@@ -31,7 +31,7 @@ def start_if_used():
         host = host_module.get()
         try:
             if host.ensure() and host.generation != _warmed[0]:
-                host.send(p.WARM, presets=wanted)
+                host.send(protocol.WARM, presets=wanted)
                 _warmed[0] = host.generation
         except host_module.HostError:
             pass    # the child died at once: its `failure` goes to the render that needs it

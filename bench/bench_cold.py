@@ -160,7 +160,7 @@ def warm_session(runs):
     """Median seconds of a warm Session.render of the demo's view at 640x360 (the
     CLI's preset), in this process."""
     from lantern.engine import RenderSettings, Session
-    from lantern.engine.usd.stage import open_stage
+    from lantern.engine.usd.opening import open_stage
     with Session(open_stage(str(DEMO)), RenderSettings(width=SIZE[0], height=SIZE[1])) as s:
         s.render()
         s.render()

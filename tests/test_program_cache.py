@@ -17,7 +17,7 @@ import json, sys
 import numpy as np
 from lantern.engine import RenderSettings, Session
 from lantern.engine.gpu.context import run_gl
-from lantern.engine.usd.stage import open_stage
+from lantern.engine.usd.opening import open_stage
 with Session(open_stage(sys.argv[1]), RenderSettings(width=64, height=36, preset="low")) as s:
     result = s.render()
 np.save(sys.argv[2], result.rgba)

@@ -104,7 +104,7 @@ class Host:
         kind, f = message
         if kind == protocol.QUIT:
             return False
-        if kind == p.WARM:
+        if kind == protocol.WARM:
             self._warm(f["presets"])
             return True
         name = f.get("scene")
