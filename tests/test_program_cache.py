@@ -114,3 +114,29 @@ def test_a_cache_that_cannot_be_written_renders_the_same(corpus, tmp_path, refer
     finally:
         if kind == "read-only folder" and cache != "/proc/self":
             cache.chmod(0o755)
+
+
+def test_only_debug_says_an_entry_was_rebuilt(corpus, tmp_path):
+    cache = tmp_path / "cache"
+    environ = dict(os.environ, LANTERN_PROGRAM_CACHE_DIR=str(cache))
+    environ.pop("LANTERN_NO_PROGRAM_CACHE", None)
+
+    def render(*extra):
+        proc = subprocess.run([sys.executable, "-m", "lantern", "render", str(corpus / SCENE),
+                               "-o", str(tmp_path / "arm.exr"), "--size", "32x18", *extra],
+                              capture_output=True, text=True, env=environ)
+        assert proc.returncode == 0, proc.stderr
+        return proc.stderr
+
+    render()
+    entries = sorted(cache.iterdir())
+    if not entries:
+        pytest.skip("this GL driver offers no program binary format")
+    for entry in entries:
+        entry.write_bytes(entry.read_bytes()[:-1])
+    assert render() == ""
+    for entry in entries:
+        entry.write_bytes(entry.read_bytes()[:-1])
+    said = render("--debug")
+    assert said.count("program cache:") == len(entries), said
+    assert "truncated" in said
