@@ -294,6 +294,7 @@ def main():
             check=True).stdout.strip()
         code, commit = baseline_code(rev, tmp / "baseline")
         warm_cache = tmp / "warm-cache"
+        os.environ["LANTERN_PROGRAM_CACHE_DIR"] = str(warm_cache)   # this process's too
         cli_cold(environment(cache=warm_cache), tmp / "demo.png")   # fills the warm cache
         if "cli" in parts:
             cli_part(args, tmp, code, commit, warm_cache)
