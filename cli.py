@@ -99,7 +99,8 @@ class _Version(argparse.Action):
         super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
 
     def __call__(self, parser, namespace, values, option_string=None):
-        parser.exit(message=f"lantern {installed_version()}\n")
+        print(f"lantern {installed_version()}")     # on stdout, as argparse's own
+        parser.exit()
 
 
 def _build_parser(argv=None):
@@ -434,7 +435,9 @@ def _check_render_options(args):
 
 
 def _is_folder(output):
-    return output.endswith(("/", os.sep)) or os.path.isdir(output)
+    """-o names a folder for one scene when it ends with a separator (an image name that
+    is a directory stays a usage error); several scenes always take a folder."""
+    return output.endswith(("/", os.sep))
 
 
 def _render_files(args):
@@ -447,6 +450,8 @@ def _render_files(args):
     for scene in args.scenes:
         if not scene.lower().endswith(USD_SUFFIXES + (".blend",)):
             raise _usage(f"{scene}: expected a .usd, .usda, .usdc or .blend file")
+    if args.output.lower().endswith(IMAGE_SUFFIXES + (".gif",)):
+        raise _usage(f"{args.output}: several scenes need a folder for -o")
     if os.path.exists(args.output) and not os.path.isdir(args.output):
         raise _usage(f"{args.output}: is a file, not a folder")
     jobs = [(scene, os.path.join(args.output, os.path.splitext(os.path.basename(scene))[0]

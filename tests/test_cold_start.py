@@ -107,6 +107,9 @@ def test_several_files_render_in_one_command_past_a_bad_one(tmp_path):
     import imageio.v3 as iio
     a, b = (iio.imread(out / name) for name in ("first.png", "second.png"))
     assert a.shape[:2] == (18, 32) and np.array_equal(a, b)
+    # Several scenes need a folder: an image name is a usage error, before any work.
+    proc = _lantern("render", str(first), str(second), "-o", str(tmp_path / "one.png"))
+    assert proc.returncode == 2 and "folder" in proc.stderr, proc.stderr
 
 
 def test_timings_name_the_phases_of_a_cold_render(tmp_path):
