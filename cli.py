@@ -152,7 +152,8 @@ def _build_parser(argv=None):
     render.add_argument("-o", "--output", required=True,
                         help="an .exr (scene linear) or .png (sRGB); for --frames, a name "
                              "with '####' (the frame) or a .gif; for several scenes, a "
-                             "folder (outputs named after the inputs)")
+                             "folder (outputs named after the inputs; for one, end it "
+                             "with /)")
     render.add_argument("--format", choices=("png", "exr"), default="png",
                         help="image format of the outputs written into a folder (default png)")
     render.add_argument("--timings", action="store_true",
