@@ -591,8 +591,8 @@ def _import_render_path():
     """What rendering one frame imports, at once, so that --timings can tell imports
     from work: USD, the engine with ModernGL, and the image writer (OpenImageIO). Not
     the colour management (OpenColorIO), which only a display view asks for."""
-    from pxr import Usd  # noqa: F401
     from .engine import api, image_io  # noqa: F401
+    from .engine.usd import opening  # noqa: F401  (USD)
 
 
 def _render_frame(args, is_blend, phases):

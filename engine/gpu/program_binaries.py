@@ -31,7 +31,7 @@ import os
 import struct
 import sys
 
-from ...core.files import atomic_write
+from ...core.files import atomic_write_bytes
 from .stencil import entry_points
 
 log = logging.getLogger(__name__)
@@ -269,13 +269,8 @@ class ProgramStore:
         try:
             os.makedirs(self.folder, exist_ok=True)
             data = encode_entry(key, fmt, binary)
-            atomic_write(self.path(key), lambda tmp: _write_bytes(tmp, data))
+            atomic_write_bytes(self.path(key), data)
             return True
         except OSError as error:
             log.debug("program cache: %s cannot be written (%s)", self.folder, error)
             return False
-
-
-def _write_bytes(path, data):
-    with open(path, "wb") as f:
-        f.write(data)
