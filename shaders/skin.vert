@@ -12,9 +12,21 @@ out vec3 out_pos;
 out vec3 out_normal;
 out vec2 out_uv;
 out vec4 out_tangent;
+#ifdef SKIN_SURFACE_NORMALS
+uniform sampler2D u_surface_normals;   // per point: sum of its triangles' area normals
+#endif
 void main() {
     vec3 p = in_pos, n = in_normal, t = in_tangent.xyz;
     skin_vertex(p, n, t);
+#ifdef SKIN_SURFACE_NORMALS
+    // As engine/usd/mesh.py's smooth normals of a mesh without authored ones; the
+    // tangent is made orthogonal to the new normal again.
+    vec3 a = flat_texel(u_surface_normals, in_point).xyz;
+    n = a / max(length(a), 1e-30);
+    vec3 tt = t - n * dot(n, t);
+    float t_len = length(tt);
+    if (t_len > 0.0) t = tt / t_len;
+#endif
     out_pos = p;
     out_normal = n;
     out_uv = in_uv;

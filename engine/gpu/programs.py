@@ -25,7 +25,7 @@ UNITS = {name: unit for unit, name in enumerate((
     "hdr",
     "t_diffuse", "t_metallic", "t_roughness", "t_emissive", "t_opacity", "t_normal",
     "u_objects", "u_lights",
-    "u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences",
+    "u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences", "u_surface_normals",
     "dfg_lut", "env_specular", "radiance", "ao_tex", "post_src", "post_aux"))}
 
 
@@ -63,9 +63,10 @@ class ProgramCache:
         self._programs = {}
         self._screen = {}           # program key -> its VAO without buffers
 
-    def get(self, vert: str, frag: str | None = None, defines=(), varyings=(), compute=False):
+    def get(self, vert: str, frag: str | None = None, defines=(), varyings=(), compute=False,
+            geom: str | None = None):
         defines = tuple(sorted(set(defines)))
-        key = (vert, frag, defines, tuple(varyings), compute)
+        key = (vert, frag, defines, tuple(varyings), compute) + ((geom,) if geom else ())
         prog = self._programs.get(key)
         if prog is None:
             try:
@@ -75,8 +76,10 @@ class ProgramCache:
                     prog = self.ctx.program(vertex_shader=load_source(vert, defines),
                                             varyings=list(varyings))
                 else:
-                    prog = self.ctx.program(vertex_shader=load_source(vert, defines),
-                                            fragment_shader=load_source(frag, defines))
+                    prog = self.ctx.program(
+                        vertex_shader=load_source(vert, defines),
+                        geometry_shader=load_source(geom, defines) if geom else None,
+                        fragment_shader=load_source(frag, defines))
             except Exception as exc:
                 raise ShaderError(f"{vert} + {frag} [variant: {', '.join(defines) or 'base'}] "
                                   f"failed to compile: {exc}") from exc

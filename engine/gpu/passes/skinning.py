@@ -10,6 +10,11 @@ per-point texture past 8), blend-shape offsets. Per frame only joint matrices (o
 texture per skeleton, whatever number of meshes it drives) and the list of active
 blend shapes (a few texels per mesh) go up.
 
+A deformed mesh without authored normals gets its surface's own, as its baked twin
+(and Blender) would: its deformed triangles' area normals are summed per point by
+additive blending (surface_normals.geom) before the transform feedback that writes it
+reads them (SKIN_SURFACE_NORMALS). GL 3.3, no compute.
+
 reads: nothing   writes: skinned (this frame's posed boxes, and a readback)"""
 from __future__ import annotations
 
@@ -18,8 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ....core.transforms import transform_aabbs
-from ...skin import (active_texels, defines, flat_texels, joint_texels, local_bounds,
-                     shape_texels)
+from ...skin import (FLAT_TEX_W, active_texels, defines, flat_texels, joint_texels,
+                     local_bounds, shape_texels)
 from ..framegraph import Pass
 from ..geometry import VERTEX_FORMAT
 from ..programs import UNITS, set_uniform
@@ -36,11 +41,13 @@ class _Input:
     shapes: object = None        # blend-shape offsets texture
     influences: object = None    # per-point influences texture (past 8)
     active: object = None        # this frame's active blend shapes
+    indices: object = None       # the mesh's own triangles (surface normals only)
     n_active: int = 0
     vaos: dict = None
 
     def release(self):
-        for obj in [self.rest, self.attributes, self.shapes, self.influences, self.active] + \
+        for obj in [self.rest, self.attributes, self.shapes, self.influences, self.active,
+                    self.indices] + \
                 list((self.vaos or {}).values()):
             if obj is not None:
                 obj.release()
@@ -70,6 +77,7 @@ class SkinningPass(Pass):
         self.inputs = {}               # mesh key -> _Input
         self.joints = {}               # skel key -> texture
         self._fresh = set()            # mesh keys whose output is stale
+        self._sums = None              # (texture, framebuffer): per-point normal sums
 
     def needed(self, frame):
         return bool(self.inputs)
@@ -129,6 +137,8 @@ class SkinningPass(Pass):
         if skin.point_influences is not None:
             inp.influences = self.uploads.float_texture(flat_texels(skin.point_influences),
                                                         kind="mesh")
+        if mesh.surface_normals:
+            inp.indices = self.uploads.buffer(np.asarray(mesh.indices, np.uint32), kind="mesh")
         return inp
 
     def execute(self, frame, board):
@@ -157,12 +167,56 @@ class SkinningPass(Pass):
 
     def _deform(self, mesh, inp):
         skin = mesh.skin
-        defs = tuple(sorted(defines(skin)))
+        defs = defines(skin)
+        if mesh.surface_normals:
+            self._sum_surface_normals(mesh, inp, defs)
+            defs = defs + ["SKIN_SURFACE_NORMALS"]
         prog = self.programs.get("skin.vert", None, defs, varyings=VARYINGS)
+        vao = self._vao(prog, inp)
+        self._bind(prog, skin, inp)
+        if mesh.surface_normals:
+            self._sums[0].use(UNITS["u_surface_normals"])
+        store, slot = self.geometry.meshes[mesh.key]
+        vao.transform(store.vbo, mode=self.ctx.POINTS, vertices=slot.n_vertices,
+                      buffer_offset=slot.first_vertex * 48)
+
+    def _sum_surface_normals(self, mesh, inp, defs):
+        """Per point, the sum of its deformed triangles' area normals, into self._sums."""
+        ctx = self.ctx
+        rows = max(1, -(-mesh.skin.n_points // FLAT_TEX_W))
+        if self._sums is None or self._sums[0].height < rows:
+            self._release_sums()
+            tex = ctx.texture((FLAT_TEX_W, max(rows, 1)), 4, dtype="f4")
+            tex.filter = ctx.NEAREST, ctx.NEAREST
+            self._sums = tex, ctx.framebuffer(color_attachments=[tex])
+        tex, fbo = self._sums
+        fbo.use()
+        fbo.viewport = (0, 0, FLAT_TEX_W, rows)
+        fbo.clear(0.0, 0.0, 0.0, 0.0, viewport=(0, 0, FLAT_TEX_W, rows))
+        prog = self.programs.get("surface_normals.vert", "surface_normals.frag", defs,
+                                 geom="surface_normals.geom")
+        self._bind(prog, mesh.skin, inp)
+        set_uniform(prog, "u_texels", (float(FLAT_TEX_W), float(rows)))
+        ctx.disable(ctx.DEPTH_TEST | ctx.CULL_FACE)
+        ctx.enable(ctx.BLEND)
+        ctx.blend_func = ctx.ONE, ctx.ONE
+        ctx.blend_equation = ctx.FUNC_ADD
+        self._vao(prog, inp, triangles=True).render(ctx.TRIANGLES, vertices=len(mesh.indices))
+        ctx.disable(ctx.BLEND)
+        self.scratch.use()
+
+    def _vao(self, prog, inp, triangles=False):
+        """Vertices in order (transform feedback), or the mesh's triangles."""
         vao = inp.vaos.get(id(prog))
         if vao is None:
+            index = {"index_buffer": inp.indices, "index_element_size": 4} if triangles else {}
             vao = inp.vaos[id(prog)] = self.ctx.vertex_array(
-                prog, [(inp.rest, *VERTEX_FORMAT), (inp.attributes, *inp.fmt)], skip_errors=True)
+                prog, [(inp.rest, *VERTEX_FORMAT), (inp.attributes, *inp.fmt)],
+                skip_errors=True, **index)
+        return vao
+
+    def _bind(self, prog, skin, inp):
+        """The rig's textures and uniforms, for skin.vert or surface_normals.vert."""
         if skin.has_joints:
             self.joints[skin.skel_key].use(UNITS["u_joint_xforms"])
             if inp.influences is not None:
@@ -177,9 +231,6 @@ class SkinningPass(Pass):
             inp.active.use(UNITS["u_shape_active"])
             set_uniform(prog, "u_shape_count", int(inp.n_active))
             set_uniform(prog, "u_shape_points", int(skin.n_points))
-        store, slot = self.geometry.meshes[mesh.key]
-        vao.transform(store.vbo, mode=self.ctx.POINTS, vertices=slot.n_vertices,
-                      buffer_offset=slot.first_vertex * 48)
 
     def read(self, mesh_key) -> np.ndarray:
         """A skinned mesh's deformed vertices, (V, 12) float32, as drawn this frame."""
@@ -194,6 +245,13 @@ class SkinningPass(Pass):
             tex.release()
         self.inputs.clear()
         self.joints.clear()
+        self._release_sums()
+
+    def _release_sums(self):
+        if self._sums is not None:
+            self._sums[1].release()
+            self._sums[0].release()
+            self._sums = None
 
 
 def _world_box(lo, hi, world):
