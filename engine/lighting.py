@@ -2,10 +2,13 @@
 spherical harmonics, area-light polygons, and usdview's default rig.
 
 Light volumes: a light's volume reaches the distance R where the largest radiance it
-can reflect off a white Lambert surface, I_max / (pi R^2), falls below
-VOLUME_THRESHOLD = 1e-4 W/(sr m2) (I_max = max channel of I; for area lights I_max =
-L * area, the far-field intensity along the normal). Glossy highlights beyond R are
-cut off.
+can reflect off a white Lambert surface, I_max / (pi R^2), falls below the scene's
+threshold (I_max = max channel of I; for area lights I_max = L * area, the far-field
+intensity along the normal). Glossy highlights beyond R are cut off. The threshold is
+VOLUME_THRESHOLD = 1e-4 W/(sr m2), but never more than VOLUME_RELATIVE = 1% of what the
+scene's brightest light reflects at 1 m (so its volume reaches 10 m at least): an
+absolute cut alone drops every light of a dim scene (a 1e-6 W point light reflects
+~5e-10 W/(sr m2)), whose image must be the bright one's scaled.
 
 No UsdLux prim on the stage at all: a usdview-style default rig, a headlight (a
 distant light travelling along the camera's view direction, E = 2.5 W/m2) plus a
@@ -35,12 +38,14 @@ from ..core.lights import DISK, RECT, SUN
 from .scene import Dome, Light
 
 VOLUME_THRESHOLD = 1e-4
+VOLUME_RELATIVE = 1e-2
 HEADLIGHT_IRRADIANCE = 2.5
 DEFAULT_DOME_RADIANCE = 0.2
 
 
-def volume_radius(light: Light) -> float:
-    """Distance beyond which the light reflects < VOLUME_THRESHOLD off white Lambert."""
+def _far_intensity(light: Light):
+    """(I_max in W/sr, the light's extent in m) of a local light; a sun's E (W/m2)
+    reflects E / pi at any distance, as a light of I = E does at 1 m."""
     c = float(np.max(light.color)) * max(light.diffuse, light.specular, 0.0)
     if light.kind in (RECT, DISK):
         area = light.width * light.height if light.kind == RECT else math.pi * light.radius ** 2
@@ -48,9 +53,23 @@ def volume_radius(light: Light) -> float:
         extent = math.hypot(light.width, light.height) / 2 if light.kind == RECT else light.radius
     else:
         extent = light.radius
+    return c, extent
+
+
+def volume_threshold(lights) -> float:
+    """The scene's threshold (W/(sr m2)) for volume_radius, from all its lights."""
+    peak = max((_far_intensity(light)[0] for light in lights), default=0.0)
+    at_one_metre = peak / math.pi
+    return min(VOLUME_THRESHOLD, VOLUME_RELATIVE * at_one_metre) if peak > 0 else \
+        VOLUME_THRESHOLD
+
+
+def volume_radius(light: Light, threshold: float = VOLUME_THRESHOLD) -> float:
+    """Distance beyond which the light reflects < threshold off white Lambert."""
+    c, extent = _far_intensity(light)
     if c <= 0:
         return 0.0
-    return math.sqrt(c / (math.pi * VOLUME_THRESHOLD)) + extent
+    return math.sqrt(c / (math.pi * threshold)) + extent
 
 
 def disk_polygon(light: Light, sides: int) -> np.ndarray:
