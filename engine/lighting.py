@@ -176,10 +176,24 @@ def _hammersley(n: int) -> tuple[np.ndarray, np.ndarray]:
     return (i + 0.5) / n, bits.astype(np.float64) / 2.0 ** 32
 
 
-def dfg_terms(nov, roughness, samples: int = DFG_SAMPLES) -> np.ndarray:
+COAT_IOR = 1.5   # UsdPreviewSurface's clearcoat (and Blender's default dielectric)
+
+
+def fresnel_dielectric(cos_i, eta):
+    """Unpolarised Fresnel reflectance of a dielectric of relative IOR eta (> 1) at
+    incidence cosine cos_i, as lib.glsl's fresnel_dielectric (and Cycles)."""
+    c = np.abs(np.asarray(cos_i, float))
+    g2 = eta * eta - 1 + c * c
+    g = np.sqrt(np.maximum(g2, 0.0))
+    a, b = (g - c) / (g + c), (c * (g + c) - 1) / (c * (g - c) + 1)
+    return np.where(g2 > 0, 0.5 * a * a * (1 + b * b), 1.0)
+
+
+def dfg_terms(nov, roughness, samples: int = DFG_SAMPLES, fresnel_ior=None) -> np.ndarray:
     """(..., 2): the GGX integrals (sum of Fc G_vis, sum of G_vis) for n.v and
     perceptual roughness (broadcast), by importance sampling D (height-correlated
-    Smith visibility, lib.glsl's v_smith)."""
+    Smith visibility, lib.glsl's v_smith). With fresnel_ior, (...,): the integral of
+    F G_vis with a dielectric's exact Fresnel, its single-scattering albedo."""
     nov, roughness = np.broadcast_arrays(np.asarray(nov, float), np.asarray(roughness, float))
     shape = nov.shape
     nov = np.clip(nov.reshape(-1, 1), 1e-4, 1.0)
@@ -196,6 +210,8 @@ def dfg_terms(nov, roughness, samples: int = DFG_SAMPLES) -> np.ndarray:
     gl = nov * np.sqrt(np.maximum(nol, 0) ** 2 * (1 - a2) + a2)
     vis = 0.5 / np.maximum(gv + gl, 1e-12)
     weight = np.where(nol > 0, 4 * vis * nol * voh / cos_h, 0.0)
+    if fresnel_ior is not None:
+        return (weight * fresnel_dielectric(voh, fresnel_ior)).mean(axis=1).reshape(shape)
     fc = (1 - voh) ** 5
     out = np.stack([(weight * fc).mean(axis=1), weight.mean(axis=1)], axis=-1)
     return out.reshape(shape + (2,))
@@ -203,11 +219,14 @@ def dfg_terms(nov, roughness, samples: int = DFG_SAMPLES) -> np.ndarray:
 
 @functools.lru_cache(maxsize=1)
 def dfg_lut(size: int = DFG_SIZE) -> np.ndarray:
-    """(size, size, 2) float32, row j = roughness (j + 0.5) / size, column i = n.v
-    (i + 0.5) / size: the table the shaders read (texel centres at those values).
-    Computed once per process."""
+    """(size, size, 3) float32, row j = roughness (j + 0.5) / size, column i = n.v
+    (i + 0.5) / size: the table the shaders read (texel centres at those values);
+    channels: dfg_terms, then the exact-Fresnel albedo at COAT_IOR. Computed once per
+    process."""
     c = (np.arange(size) + 0.5) / size
-    return np.stack([dfg_terms(c, r) for r in c]).astype(np.float32)   # row by row: cache-sized
+    rows = [np.concatenate([dfg_terms(c, r), dfg_terms(c, r, fresnel_ior=COAT_IOR)[:, None]],
+                           axis=1) for r in c]                       # row by row: cache-sized
+    return np.stack(rows).astype(np.float32)
 
 
 def specular_albedo(f0, f90, nov, roughness) -> np.ndarray:
