@@ -15,8 +15,10 @@ import argparse
 import logging
 import math
 import os
-import re
 import sys
+
+from .core.text import error_text, one_line
+from .core.version import installed_version
 
 USD_SUFFIXES = (".usd", ".usda", ".usdc")
 IMAGE_SUFFIXES = (".exr", ".png")
@@ -86,19 +88,11 @@ def _parse_frames(text):
     return [first + i * step for i in range(count)]
 
 
-def _version():
-    from importlib.metadata import PackageNotFoundError, version
-    try:
-        return version("lantern")
-    except PackageNotFoundError:
-        return "unknown"
-
-
 def _build_parser():
     parser = argparse.ArgumentParser(
         prog="lantern", description=__doc__.splitlines()[0], epilog=EXIT_STATUSES,
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--version", action="version", version=f"lantern {_version()}")
+    parser.add_argument("--version", action="version", version=f"lantern {installed_version()}")
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--debug", action="store_true",
                         help="show the traceback of an unexpected error")
@@ -198,36 +192,13 @@ def main(argv=None):
     except Exception as error:  # a bug: one line, or the traceback with --debug
         if args.debug:
             raise
-        _fail(args, f"internal error: {type(error).__name__}: {_one_line(_text(error))} "
+        _fail(args, f"internal error: {type(error).__name__}: {one_line(error_text(error))} "
                     "(--debug shows the traceback)")
         return FAILED
 
 
 def _fail(args, message):
     print(f"lantern {args.command}: {message}", file=sys.stderr, flush=True)
-
-
-_PXR_ERROR = re.compile(r"^Error in '.*' at line \d+ in file .* : '(.*)'$")
-
-
-def _text(error):
-    """str(error), even when pxr's message holds bytes that are not UTF-8 (a damaged
-    file's contents quoted in a parse error)."""
-    try:
-        return str(error)
-    except UnicodeDecodeError:
-        return f"{type(error).__name__} (its message is not UTF-8 text: the file is damaged)"
-
-
-def _one_line(text):
-    """pxr's errors span lines ("Error in '...' at line N in file F : 'reason'"): keep
-    the reasons, on one line."""
-    reasons = []
-    for line in str(text).splitlines():
-        line = line.strip()
-        match = _PXR_ERROR.match(line)
-        reasons.append(match.group(1) if match else line)
-    return "; ".join(dict.fromkeys(r for r in reasons if r)) or "no reason given"
 
 
 def _check_output(path, kinds, what="output"):
@@ -303,7 +274,7 @@ def _export_one(blend, out_path, args):
     try:
         report = export_blend(blend, out_path, options)
     except ExportError as error:
-        raise CommandError(_one_line(str(error)))
+        raise CommandError(one_line(str(error)))
     except OSError as error:
         raise CommandError(f"{out_path}: cannot be written: {error.strerror or error}")
     _print_warnings(report.warnings, set())
@@ -314,6 +285,7 @@ def _export_one(blend, out_path, args):
 
 def _export_batch(args):
     from .farm.batch import FarmError, export_batch
+    from .farm.options import ExportBatchOptions
     jobs = []
     for blend in args.blends:
         stem = os.path.splitext(os.path.basename(blend))[0]
@@ -322,7 +294,9 @@ def _export_batch(args):
         raise _usage("two inputs share a file name; their outputs would collide")
     _make_folder(args.output)
     try:
-        return export_batch(args, jobs)
+        return export_batch(ExportBatchOptions(
+            scheduler=args.scheduler, jobs=args.jobs, collect=args.collect, resume=args.resume,
+            textures=args.textures, max_influences=args.max_influences), jobs)
     except FarmError as error:
         raise CommandError(str(error))
 
@@ -367,7 +341,7 @@ def _render(args):
     # A sequence's workers start first, and get ready while the stage is read here.
     from .farm.batch import FarmError, open_render_runner
     try:
-        runner = open_render_runner(args)
+        runner = open_render_runner(args.scheduler, args.jobs)
     except FarmError as error:
         raise CommandError(str(error))
     try:
@@ -411,7 +385,7 @@ def _colour(stage, args):
         if args.look is not None:       # the command line's look, for the scene's view
             raise _usage(str(error))
         _print_warnings([f"{args.scene}: the scene's colour management cannot be applied "
-                         f"({_one_line(str(error))}); using {STANDARD}"], set())
+                         f"({one_line(str(error))}); using {STANDARD}"], set())
         view, look, exposure = STANDARD, None, args.exposure or 0.0
     args.view, args.look, args.exposure = view, look, exposure
     return dict(view=view, look=look, exposure=exposure)
@@ -425,17 +399,14 @@ def _check_preset(name):
 
 def _open_usd(path):
     """A USD file opened with usd-core (no bpy)."""
-    from pxr import Tf, Usd
+    from .engine.usd.opening import UnreadableStage, composition_errors, open_stage
     try:
-        stage = Usd.Stage.Open(path)
-    except Tf.ErrorException as error:
-        raise CommandError(f"{path}: cannot be read as USD: {_one_line(_text(error))}")
-    if stage is None:
-        raise CommandError(f"{path}: cannot be read as USD")
+        stage = open_stage(path)
+    except UnreadableStage as error:
+        raise CommandError(str(error))
     # Missing or broken references, sublayers and payloads, and cycles: USD composes
     # what it can; say what it could not.
-    _print_warnings([f"{path}: {_one_line(_text(e))}" for e in stage.GetCompositionErrors()],
-                    set())
+    _print_warnings([f"{path}: {reason}" for reason in composition_errors(stage)], set())
     return stage
 
 
@@ -445,7 +416,7 @@ def _stage_from_blend(blend):
     try:
         stage, report = stage_from_blend(blend)
     except ExportError as error:
-        raise CommandError(_one_line(str(error)))
+        raise CommandError(one_line(str(error)))
     _print_warnings(report.warnings, set())
     return stage
 
@@ -453,22 +424,17 @@ def _stage_from_blend(blend):
 def _check_camera(stage, args):
     if args.camera is None:
         return
-    from pxr import Sdf, UsdGeom
-    if not Sdf.Path.IsValidPathString(args.camera):
-        raise _usage(f"--camera {args.camera}: not a valid prim path")
-    prim = stage.GetPrimAtPath(args.camera)
-    if not prim:
-        raise _usage(f"--camera {args.camera}: {args.scene} has no such prim")
-    if not prim.IsA(UsdGeom.Camera):
-        raise _usage(f"--camera {args.camera}: is a {prim.GetTypeName() or 'typeless prim'}, "
-                     "not a Camera")
+    from .engine.usd.camera import camera_path_problem
+    problem = camera_path_problem(stage, args.camera, args.scene)
+    if problem is not None:
+        raise _usage(f"--camera {args.camera}: {problem}")
 
 
 def _settings(args, frame=None):
     from .engine import RenderSettings
     width, height = args.size if args.size else (None, None)
-    extra = {"camera": args.camera} if args.camera is not None else {}
-    return RenderSettings(width=width, height=height, frame=frame, preset=args.preset, **extra)
+    return RenderSettings(width=width, height=height, frame=frame, preset=args.preset,
+                          camera=args.camera)
 
 
 def _rendered(scene, run):
@@ -476,7 +442,7 @@ def _rendered(scene, run):
     try:
         return run()
     except (ValueError, RuntimeError, OSError) as error:  # pxr's errors are RuntimeErrors
-        raise CommandError(f"{scene}: {_one_line(_text(error))}")
+        raise CommandError(f"{scene}: {one_line(error_text(error))}")
 
 
 def _write(path, write):
@@ -496,26 +462,31 @@ def _render_frame(stage, args):
     height_px, width_px = result.rgba.shape[:2]
     print(f"{args.scene} -> {args.output} ({width_px}x{height_px}, "
           f"{result.timings.get('total', 0.0) * 1000:.1f} ms)")
+    if args.debug:
+        print(_gl_line(result.stats))
     return 0
 
 
-def _frame_path(pattern, frame):
-    """'####' (any run of #) -> the frame zero-padded to that width; a fractional frame
-    keeps its fraction after the padded whole part (0012.5)."""
-    whole = math.floor(frame)
-    fraction = f"{frame - whole:.6f}".rstrip("0").rstrip(".")[1:] if frame != whole else ""
-    return re.sub(r"#+", lambda m: f"{int(whole):0{len(m.group(0))}d}{fraction}", pattern, count=1)
+def _gl_line(stats) -> str:
+    """--debug: the GL the engine got, and the paths it took."""
+    return (f"  GL: {stats.get('gl_renderer')}, {stats.get('gl_version')} (asked for "
+            f"{stats.get('gl_requested', 0) / 100:.1f}); paths: {stats.get('gl_path')}")
 
 
 def _render_sequence(stage, args, runner, stage_text):
     """--frames as tasks (farm/): chunks of frames on worker processes that keep the
     stage loaded, here or on a Dask cluster."""
     from .farm.batch import FarmError, render_frames
+    from .farm.options import SequenceOptions
     if not args.output.lower().endswith(".gif"):
         _make_folder(os.path.dirname(os.path.abspath(args.output)))
     seen = set()
     try:
-        status = render_frames(args, runner, stage_text, stage.GetFramesPerSecond() or 24.0,
+        options = SequenceOptions(
+            scheduler=args.scheduler, jobs=args.jobs, collect=args.collect, resume=args.resume,
+            scene=args.scene, output=args.output, frames=tuple(args.frames), size=args.size,
+            preset=args.preset, camera=args.camera, chunk=args.chunk, **args.colour)
+        status = render_frames(options, runner, stage_text, stage.GetFramesPerSecond() or 24.0,
                                lambda warnings: _print_warnings(warnings, seen))
     except FarmError as error:
         raise CommandError(str(error))

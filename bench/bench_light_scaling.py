@@ -73,7 +73,7 @@ def main():
     print(f"light scaling at {WIDTH}x{HEIGHT} ({time.strftime('%Y-%m-%d')}, llvmpipe):")
     for name, total, render, result in (("1 light", t1, render1, r1), ("256 lights", t256, render256, r256)):
         print(f"  {name:<11} render {render * 1000:7.1f} ms (light pass "
-              f"{result.timings['lights'] * 1000:.1f} ms, {result.stats['light_volumes']} volumes), "
+              f"{result.gpu_timings['lights'] * 1000:.1f} ms on the GPU, {result.stats['light_volumes']} volumes), "
               f"total with stage read {total * 1000:.1f} ms")
     print(f"  ratio 256/1: render {render256 / render1:.2f}x (target <= 2x), "
           f"total {t256 / t1:.2f}x")

@@ -84,7 +84,7 @@ def main():
     print(f"{'Cycles (reference)':<22}{cycles_s:>10.3f}{cycles_s / lantern_s:>11.1f}x")
     print(f"Lantern / EEVEE(64) time ratio: {lantern_s / eevee_s:.4f}")
     print(f"Lantern / EEVEE(1)  time ratio: {lantern_s / eevee1_s:.4f}")
-    print(f"Lantern render passes (s): " + ", ".join(f"{k} {v:.4f}" for k, v in result.timings.items()))
+    print(f"Lantern render passes, GPU (s): " + ", ".join(f"{k} {v:.4f}" for k, v in result.gpu_timings.items()))
 
 
 if __name__ == "__main__":

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from .session import RenderResult, RenderSettings, Session
-from .usd.stage import open_stage
+from .usd.opening import open_stage
 
 
 def render_stage(stage, settings: RenderSettings | None = None) -> RenderResult:
@@ -20,13 +20,16 @@ def render_file(path: str, settings: RenderSettings | None = None) -> RenderResu
 def render_sequence(stage, first: float, last: float,
                     settings: RenderSettings | None = None):
     """Yields (frame, RenderResult) for frames first..last with one Session: the
-    stage's static data is read and uploaded once, and each frame reads only what
-    varies in time."""
+    stage's static data is read and uploaded once, each frame reads only what varies
+    in time, and frame N+1 is drawn while frame N is copied (Session.render_frames)."""
     if last < first:
         raise ValueError(f"empty frame range {first}:{last}")
     with Session(stage, settings) as session:
-        for frame in np.arange(first, last + 0.5, 1.0):
-            yield float(frame), session.render(frame=float(frame))
+        frames = [float(f) for f in np.arange(first, last + 0.5, 1.0)]
+        for frame, result in session.render_frames(frames):
+            if isinstance(result, Exception):
+                raise result
+            yield frame, result
 
 
 def skinned_points(stage, frame: float) -> dict:

@@ -22,6 +22,7 @@ import numpy as np
 from ..core import passes as render_passes
 from ..core.presets import DEFAULT as DEFAULT_PRESET, preset as find_preset
 from .gpu.context import gl_thread, run_gl
+from .gpu.readback import FORMATS as READBACK_FORMATS, ReadbackRequest
 from .gpu.renderer import Renderer
 from .usd import camera as usd_camera
 from .usd.stage import StageReader
@@ -44,7 +45,7 @@ class RenderSettings:
     # Render passes (AOVs) to compute besides Combined, by Blender's names
     # (core/passes.py): only these are computed and read back.
     passes: frozenset = frozenset()
-    # Shading (issue 10). Ambient occlusion of the dome's light (the preset sets its
+    # Shading (docs/rendering.md). Ambient occlusion of the dome's light (the preset sets its
     # rays and steps); off: the dome lights every surface unoccluded.
     ambient_occlusion: bool = True
     # 8-bit sRGB textures: "encoded" filters the stored values and decodes after (as
@@ -64,6 +65,9 @@ class RenderSettings:
     blur: float = 0.0
     grayscale: bool = False
     mirror: str = ""
+    # The image's format in host memory: "float32" (F12, files, compare) or "half"
+    # (a viewport: half the bytes to copy; within float16 rounding of float32).
+    readback: str = "float32"
 
     def __post_init__(self):
         if self.supersample is not None and (int(self.supersample) != self.supersample
@@ -76,6 +80,9 @@ class RenderSettings:
             raise ValueError(f"exposure must be finite, not {self.exposure!r}")
         if self.mirror not in ("", "x", "y", "xy"):
             raise ValueError(f"mirror must be '', 'x', 'y' or 'xy', not {self.mirror!r}")
+        if self.readback not in READBACK_FORMATS:
+            raise ValueError(f"readback must be one of {', '.join(READBACK_FORMATS)}, not "
+                             f"{self.readback!r}")
         if self.srgb_filtering not in ("encoded", "linear"):
             raise ValueError(f"srgb_filtering must be 'encoded' or 'linear', not "
                              f"{self.srgb_filtering!r}")
@@ -83,11 +90,13 @@ class RenderSettings:
 
 @dataclass
 class RenderResult:
-    rgba: np.ndarray             # float32 (H, W, 4), scene-linear, row 0 = top
+    rgba: np.ndarray             # (H, W, 4) scene-linear, row 0 = top (unless asked
+                                 # bottom-up), float32 (or float16: settings.readback)
     # The passes asked for: name -> float32 (H, W, C), row 0 = top, scene-linear.
     passes: dict = field(default_factory=dict)
     warnings: list = field(default_factory=list)
-    timings: dict = field(default_factory=dict)  # load, per pass, total (seconds)
+    timings: dict = field(default_factory=dict)  # load, per pass (CPU), readback, total (s)
+    gpu_timings: dict = field(default_factory=dict)  # per pass that ran: GPU seconds
     stats: dict = field(default_factory=dict)    # prims_read, bytes_uploaded, draw_calls, ...
 
 
@@ -108,14 +117,16 @@ class Session:
         self._finalizer.atexit = False
 
     def configure(self, **fields):
-        """Changes settings for the renders that follow (size, transparent, passes,
-        camera, ...), keeping the session's state; the preset is the session's own
-        (a different one needs another Session)."""
+        """Changes settings for the renders that follow (size, preset, transparent,
+        passes, camera, ...), keeping the session's state: a new preset reads and
+        uploads nothing again (Renderer.set_preset)."""
         new = replace(self.settings, **fields)
-        if new.preset != self.settings.preset:
-            raise ValueError("a session keeps its preset; open another for "
-                             f"{new.preset!r}")
-        self._passes = render_passes.check(new.passes)
+        preset = find_preset(new.preset)
+        passes = render_passes.check(new.passes)
+        if preset is not self._preset:
+            run_gl(lambda gl: self._renderer.set_preset(preset))
+            self._preset = preset
+        self._passes = passes
         if (new.width, new.height) != (self.settings.width, self.settings.height):
             self.size = usd_camera.resolution(self.stage, new.width, new.height)
         if new.camera != self.settings.camera:
@@ -129,12 +140,60 @@ class Session:
         return self._reader.scene
 
     # --- rendering -------------------------------------------------------------------
-    def render(self, view_matrix=None, projection_matrix=None, frame=None) -> RenderResult:
+    def render(self, view_matrix=None, projection_matrix=None, frame=None, out=None,
+               bottom_up=False) -> RenderResult:
         """The stage at `frame` (None: settings.frame, else the stage's start) from the
         given view (None: settings' view, else the stage's camera, else the default
-        view framing what is drawn)."""
+        view framing what is drawn). `out`: a writable buffer of H * W * 4 values of
+        the readback format that the image is read into (result.rgba is a view of it);
+        `bottom_up`: rows in GL's order (Blender's), not top first."""
         self._check_open()
         t0 = time.perf_counter()
+        request = ReadbackRequest(self.settings.readback, top_down=not bottom_up, out=out)
+        frame_state = self._submit(view_matrix, projection_matrix, frame, request, t0)
+        return self._finish(frame_state, t0)
+
+    def render_frames(self, frames, view_matrix=None, projection_matrix=None):
+        """Renders `frames` in order, yielding (frame, RenderResult or the error that
+        frame raised). Pipelined: frame N+1 is read from the stage and drawn while
+        frame N's pixels are copied behind a fence, one frame of latency
+        (stats["readback_latency_frames"]); the images equal render()'s."""
+        self._check_open()
+        pending = None
+        try:
+            for when in frames:
+                t0 = time.perf_counter()
+                request = ReadbackRequest(self.settings.readback, queued=True)
+                try:
+                    submitted = (when, self._submit(view_matrix, projection_matrix, when,
+                                                    request, t0), t0)
+                except (ValueError, RuntimeError, OSError) as error:
+                    submitted = (when, error, t0)
+                done, pending = pending, submitted
+                if done is not None:
+                    yield self._finish_queued(*done, latest=False)
+            done, pending = pending, None
+            if done is not None:
+                yield self._finish_queued(*done, latest=True)
+        finally:
+            if pending is not None and not isinstance(pending[1], Exception):
+                # Stopped early (an interrupt, or the caller broke off): the queued
+                # frame's fence and buffer are freed for the next render.
+                run_gl(lambda gl: self._renderer.finish(pending[1]))
+
+    def _finish_queued(self, when, state, t0, latest: bool):
+        if isinstance(state, Exception):
+            return when, state
+        result = self._finish(state, t0)
+        result.stats["readback_latency_frames"] = 0 if latest else 1
+        if result.stats["nonfinite_pixels"] and not latest:
+            # The object ids that name the bad pixels must be drawn with this frame's
+            # geometry, which the next frame has replaced: draw this frame again.
+            again = self.render(frame=when)
+            result.warnings = again.warnings
+        return when, result
+
+    def _submit(self, view_matrix, projection_matrix, frame, request, t0):
         when = self._frame(frame)
         changes = self._reader.sync(when)
         if self._reader.settings_changed:
@@ -144,14 +203,22 @@ class Session:
         camera, read = self._view(view_matrix, projection_matrix, when, changes)
         t_load = time.perf_counter() - t0
         scene, size, s = self._reader.scene, self.size, self.settings
-        rgba, aovs, stats, timings = run_gl(lambda gl: self._renderer.render(
-            scene, changes, camera, size, s.transparent, s.cull_backfaces, self._passes, s))
-        stats["prims_read"] = changes.prims_read + read
-        timings["load"] = t_load
+        submitted = run_gl(lambda gl: self._renderer.submit(
+            scene, changes, camera, size, s.transparent, s.cull_backfaces, self._passes, s,
+            request))
+        submitted.stats["prims_read"] = changes.prims_read + read
+        submitted.timings["load"] = t_load
+        return submitted
+
+    def _finish(self, submitted, t0) -> RenderResult:
+        rgba, aovs, stats, timings, gpu = run_gl(lambda gl: self._renderer.finish(submitted))
         timings["total"] = time.perf_counter() - t0
+        # CPU work of the frame, outside the wait for the GPU's pixels.
+        stats["cpu_seconds"] = max(timings["total"] - timings.get("readback", 0.0), 0.0)
         return RenderResult(rgba=rgba, passes=aovs,
-                            warnings=scene.warning_list() + self._renderer.warnings(),
-                            timings=timings, stats=stats)
+                            warnings=self._reader.scene.warning_list() +
+                            self._renderer.warnings(),
+                            timings=timings, gpu_timings=gpu, stats=stats)
 
     def skinned_points(self, frame: float) -> dict:
         """GPU-deformed geometry read back: {mesh path: (points, normals)}, world space,

@@ -1,17 +1,15 @@
 #version 330 core
-#include "lib.glsl"
-// HDR accumulation -> float32 output. Alpha is 1, or coverage when transparent (the
-// HDR target's alpha: the ambient pass writes 1 where a surface was drawn, the
-// transparency pass composites blended layers over it, alpha too, and anti-aliasing
-// filters it). NaN and Inf are passed on as they are: the resolve pass counts them and
-// names the prims they lie on.
+#include "resolved.glsl"
+// HDR accumulation -> the output image, in the row order it is read back in: top row
+// first for numpy (`top_down`), GL's bottom-up for Blender, so no copy flips it. NaN
+// and Inf are passed on as they are: the resolve pass counts them and names the prims
+// they lie on.
 uniform sampler2D hdr;
 uniform bool transparent;
+uniform bool top_down;
 out vec4 frag;
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
-    vec4 light = texelFetch(hdr, px, 0);
-    vec3 c = light.rgb;
-    float coverage = clamp(light.a, 0.0, 1.0);
-    frag = vec4(c, transparent ? coverage : 1.0);
+    if (top_down) px.y = textureSize(hdr, 0).y - 1 - px.y;
+    frag = resolved(hdr, px, transparent);
 }

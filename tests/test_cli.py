@@ -39,8 +39,10 @@ def test_single_export_and_render_png_without_bpy(corpus, tmp_path):
     (blocker / "bpy.py").write_text("raise ImportError('bpy must not be imported by lantern render')\n")
     env = dict(os.environ, PYTHONPATH=str(blocker))
     proc = subprocess.run([sys.executable, "-m", "lantern", "render", str(usd), "-o", str(png),
-                           "--size", "64x36"], capture_output=True, text=True, env=env)
+                           "--size", "64x36", "--debug"], capture_output=True, text=True, env=env)
     assert proc.returncode == 0, proc.stderr
+    # --debug names the GL the engine got and the paths it took.
+    assert "GL: " in proc.stdout and "asked for" in proc.stdout and "paths: " in proc.stdout
     import imageio.v3 as iio
     pixels = iio.imread(png)
     assert pixels.shape[:2] == (36, 64)

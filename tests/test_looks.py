@@ -1,7 +1,7 @@
-"""Issue 10's image acceptances (the engine half but transparency), against the Cycles
-references in references/looks/ (direct light, Cycles' 1.5 px Blackman-Harris filter).
-Every scene comes from reference_scenes.build, exported in memory as `lantern render
-scene.blend` does, and renders at its reference size.
+"""The shading work's image acceptances (docs/rendering.md; the engine half but
+transparency), against the Cycles references in references/looks/ (direct light, Cycles'
+1.5 px Blackman-Harris filter). Every scene comes from reference_scenes.build, exported
+in memory as `lantern render scene.blend` does, and renders at its reference size.
 
 Figures are printed (pytest -s shows them); docs/rendering.md's tables come from
 bench/bench_presets.py."""
@@ -240,13 +240,13 @@ def test_exr_texture_of_four_renders_four():
 
 @pytest.mark.parametrize("name", CORPUS)
 def test_corpus_scene_against_cycles(name):
-    """FLIP against the Cycles reference, lower than before issue 10 (BEFORE.md), and
+    """FLIP against the Cycles reference, lower than before the shading work (BEFORE.md), and
     FXAA (the medium preset's) lowers it."""
     ref = reference(name)
     flip = mean_flip(render(name).rgba, ref)
     without = mean_flip(render(name, fxaa=False).rgba, ref)
     before, exporter = table("BEFORE.md")[name], table("EXPORTER.md")[name]
-    print(f"{name}: FLIP {flip:.4f} (FXAA off {without:.4f}; before issue 10 {before:.4f}, "
+    print(f"{name}: FLIP {flip:.4f} (FXAA off {without:.4f}; before the shading work {before:.4f}, "
           f"exporter half {exporter:.4f})")
     assert flip < before
     assert flip < without

@@ -1,6 +1,7 @@
-"""Shadow maps (issue 5), checked against geometry: a ray cast in numpy from every plane
-pixel to the light says where the shadow must be, and the closed form says how bright
-the rest is. Top-down orthographic views map pixels to plane points exactly."""
+"""Shadow maps (docs/design.md, Shadow maps), checked against geometry: a ray cast in
+numpy from every plane pixel to the light says where the shadow must be, and the closed
+form says how bright the rest is. Top-down orthographic views map pixels to plane points
+exactly."""
 import math
 
 import numpy as np

@@ -246,7 +246,12 @@ def test_edits_send_the_minimal_delta_and_the_image_follows(viewport):
     # The rig is right of the middle (its shadow and the sun's cascade fit, which
     # follows what casts, reach a few pixels further).
     assert bent[:, W // 2:].sum() > 0.8 * bent.sum() > 0
-    assert frame.stats["meshes_uploaded"] == 0 and frame.stats["meshes_skinned"] == 1, (frame.stats["bytes_by_kind"], frame.stats["prims_read"], fragment["copy"])
+    # Posed on the GPU once, no mesh re-uploaded: the moving frame (interactive preset)
+    # skins the rig, and the same Session draws the settled frame without skinning
+    # again, unless the settled frame was the first at this time.
+    assert frame.stats["meshes_uploaded"] == 0 and frame.stats["meshes_skinned"] in (0, 1), \
+        (frame.stats["bytes_by_kind"], frame.stats["prims_read"], fragment["copy"])
+    assert frame.stats["bytes_by_kind"].get("mesh", 0) == 0
     np.testing.assert_allclose(posed, _fresh(scene, view), atol=2e-3)
 
 

@@ -7,7 +7,10 @@ standalone context lazily on its first job and keeps it for the process.
 
 The context is made on a glcontext backend that Lantern creates itself (EGL on Linux,
 no display needed, else GLX; CGL on macOS, which stops at GL 4.1; WGL on Windows) and
-hands to ModernGL. The backend's `load` returns GL entry points on every platform,
+hands to ModernGL. It asks for the highest core profile first and steps down
+(GL_VERSIONS): Mesa answers any request with its highest version, but NVIDIA's EGL
+gives exactly the version asked for, so asking for 3.3 would turn every 4.x path off
+on the most common artist GPU. The backend's `load` returns GL entry points on every platform,
 for the few calls ModernGL lacks (stencil state, engine/gpu/stencil.py). Compiled
 programs belong to this context object and live as long as it does."""
 from __future__ import annotations
@@ -24,6 +27,9 @@ import moderngl
 from .programs import ProgramCache
 
 GL_FLOOR = 330
+# Core profiles asked for, best first: 4.6 and 4.5 (glClipControl), 4.3 (multi-draw
+# indirect, compute), 4.1 (macOS's last), 3.3 (the floor).
+GL_VERSIONS = (460, 450, 430, 410, 330)
 
 
 @dataclass(frozen=True)
@@ -54,7 +60,7 @@ def _version_cap():
 
 class GLContext:
     def __init__(self):
-        self.backend = _backend()
+        self.backend, self.requested = _backend()
         self.ctx = moderngl.create_context(standalone=True, context=self.backend, require=GL_FLOOR)
         self.programs = ProgramCache(self.ctx)
         # A surfaceless context has no default framebuffer, and some draws (transform
@@ -64,6 +70,13 @@ class GLContext:
     @property
     def version(self) -> int:
         return self.ctx.version_code
+
+    def describe(self) -> dict:
+        """What the driver gave: renderer, version string, the version asked for."""
+        info = self.ctx.info
+        return {"gl_renderer": str(info.get("GL_RENDERER", "")),
+                "gl_version": str(info.get("GL_VERSION", "")),
+                "gl_requested": self.requested}
 
     def proc(self, name: str) -> int:
         """The address of a GL entry point (0 when missing)."""
@@ -76,17 +89,23 @@ class GLContext:
 
 
 def _backend():
-    """A standalone glcontext backend, GL 3.3 core or newer."""
+    """(a standalone glcontext backend, the version it was asked for): the highest
+    core profile of GL_VERSIONS that the platform creates. LANTERN_MAX_GL caps the
+    paths taken (Features), not the request: the process's one context serves
+    sessions with and without the cap."""
     import glcontext
-    if sys.platform.startswith("linux"):
-        try:
-            return glcontext.get_backend_by_name("egl")(glversion=GL_FLOOR, mode="standalone")
-        except Exception as egl_error:  # no EGL: try GLX before giving up
+    versions = GL_VERSIONS
+    makers = [glcontext.default_backend]
+    if sys.platform.startswith("linux"):     # EGL needs no display; GLX is the fallback
+        makers.insert(0, lambda: glcontext.get_backend_by_name("egl"))
+    first_error = None
+    for make in makers:
+        for version in versions:
             try:
-                return glcontext.default_backend()(glversion=GL_FLOOR, mode="standalone")
-            except Exception:
-                raise RuntimeError(f"no headless OpenGL 3.3 context: {egl_error}") from egl_error
-    return glcontext.default_backend()(glversion=GL_FLOOR, mode="standalone")
+                return make()(glversion=version, mode="standalone"), version
+            except Exception as error:       # this version or this backend: try the next
+                first_error = first_error or error
+    raise RuntimeError(f"no headless OpenGL 3.3 context: {first_error}") from first_error
 
 
 class GLThread:

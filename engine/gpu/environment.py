@@ -1,5 +1,5 @@
-"""The environment's light on the GPU (seed 004's image-based lighting), made once and
-kept for the session:
+"""The environment's light on the GPU (docs/design.md, Image-based lighting), made once
+and kept for the session:
 
   dfg_lut         the split-sum table (engine/lighting.py dfg_lut, computed once per
                   process): every shading program reads its lobes' albedos from it.

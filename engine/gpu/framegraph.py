@@ -15,7 +15,12 @@ render passes it can write, each as (target, first channel). A frame asks for so
 (and a pass that only writes AOVs runs only then), so an AOV nobody asked for costs
 nothing. The graph keeps the asked-for AOV targets to the end of the frame and reads
 them back as float32 arrays, row 0 = top, into `board["aovs"]`. Lighting passes add
-theirs the same way: a target here, an entry in their `aovs`."""
+theirs the same way: a target here, an entry in their `aovs`.
+
+Each pass is timed twice: `timings` holds the CPU time spent issuing it, and GPU
+timestamps around it give its GPU time (engine/gpu/timers.py, `gpu_times`). Nothing
+waits between passes; the stamps are read once the frame's pixels are in host memory,
+so reading them never stalls the pipeline."""
 from __future__ import annotations
 
 import time
@@ -24,6 +29,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...core.passes import PASSES
+from .readback import SLOTS, ReadbackRequest
+from .timers import PassTimer
 
 # Render targets by name: their pool format, at the frame's size.
 TARGETS = {
@@ -32,7 +39,6 @@ TARGETS = {
     "g_mat": "rgba16f",        # metallic, roughness, dielectric F0, clearcoat
     "g_emit": "rgba16f",       # emission
     "g_depth": "depth",         # 32-bit float, reversed (engine/view.py)
-    "ao_raw": "r32f",          # ambient occlusion before its blur
     "ao": "r32f",              # ambient occlusion of the dome's light
     "hdr": "rgba32f",          # light accumulation: float32, 1e-38..3e38 (a 1e-6 W and a
                                # 1e6 W light alike; float16 underflowed and overflowed)
@@ -86,6 +92,10 @@ class Frame:
     # than `output_size`, the image's; `size` is what the passes draw at now.
     supersample: int = 1
     output_size: tuple | None = None
+    readback: ReadbackRequest = field(default_factory=ReadbackRequest)
+    slot: object = None            # the read-back slot the resolve pass used
+    stamps: object = None          # the GPU timestamps around its passes (timers.py)
+    board: dict | None = None      # what the graph handed on, until the frame is finished
 
     @property
     def fxaa(self) -> bool:
@@ -122,8 +132,9 @@ class Pass:
 
 
 class FrameGraph:
-    def __init__(self, ctx, pool, passes):
+    def __init__(self, ctx, pool, passes, proc):
         self.ctx, self.pool, self.passes = ctx, pool, list(passes)
+        self.timer = PassTimer(proc, SLOTS)     # a queued frame's stamps are read late
         written = set()
         self.producers = {}         # render pass name -> the pass that writes it
         for p in self.passes:
@@ -154,6 +165,7 @@ class FrameGraph:
                 if name in TARGETS and name not in kept:
                     last_use[name] = i
         frame.stats["passes"] = [p.name for p in live]
+        stamps = frame.stamps = self.timer.begin()
         try:
             for i, p in enumerate(live):
                 for name in writes[p]:
@@ -164,7 +176,7 @@ class FrameGraph:
                     raise RuntimeError(f"pass {p.name} reads {absent}, which no pass wrote")
                 t0 = time.perf_counter()
                 p.execute(frame, board)
-                self.ctx.finish()            # so each pass's time is its own
+                stamps.stamp(p.name)
                 frame.timings[p.name] = frame.timings.get(p.name, 0.0) + time.perf_counter() - t0
                 for name in [n for n, last in last_use.items() if last == i and n in board]:
                     self.pool.release(board.pop(name))
@@ -179,6 +191,12 @@ class FrameGraph:
         return board
 
     @staticmethod
+    def gpu_times(frame: Frame) -> dict:
+        """{pass: GPU seconds} of a frame whose pixels are in host memory (its stamps
+        are done then, so this does not wait)."""
+        return frame.stamps.seconds()
+
+    @staticmethod
     def _read_back(board, target, first, aov):
         tex = board[target]
         w, h = tex.size
@@ -187,5 +205,6 @@ class FrameGraph:
         return np.ascontiguousarray(data[::-1, :, first:first + channels])  # GL rows run bottom-up
 
     def release(self):
+        self.timer.release()
         for p in self.passes:
             p.release()

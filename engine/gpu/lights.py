@@ -52,22 +52,25 @@ def pack(light, R: float, disk_sides: int) -> np.ndarray:
 
 
 class LightTable:
-    def __init__(self, uploads, disk_sides: int):
+    def __init__(self, uploads):
         self.uploads = uploads
-        self.disk_sides = disk_sides
+        self.disk_sides = None     # the preset's polygon for disk lights, as packed
         self.texture = None
         self.index = {}            # light path -> row
         self.ranges = {}           # light path -> volume radius R
         self.threshold = None      # the scene's volume threshold the ranges use
 
-    def update(self, scene, changed: set):
+    def update(self, scene, changed: set, disk_sides: int):
         """Rows for the lights in `changed`; the whole table when lights were added or
-        removed (rows follow the scene's light order)."""
-        if not changed and self.texture is not None:
+        removed (rows follow the scene's light order) or the preset's disk polygon
+        changed."""
+        if not changed and self.texture is not None and disk_sides == self.disk_sides:
             return
         paths = list(scene.lights)
         threshold = volume_threshold(scene.lights.values())
-        if paths != list(self.index) or self.texture is None or threshold != self.threshold:
+        if paths != list(self.index) or self.texture is None or \
+                disk_sides != self.disk_sides or threshold != self.threshold:
+            self.disk_sides = disk_sides
             self.index = {p: i for i, p in enumerate(paths)}
             self.threshold = threshold
             self.ranges = {p: volume_radius(scene.lights[p], threshold) for p in paths}

@@ -26,6 +26,7 @@ from .passes.shadows import ShadowPass
 from .passes.skinning import SkinningPass
 from .passes.transparency import TransparencyPass
 from .passes.view import ViewPass
+from .readback import Readback, ReadbackRequest
 from .resources import TargetPool, Uploads
 from .stencil import Stencil
 from .textures import MaterialTextures
@@ -57,25 +58,35 @@ COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow
             "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws")
 
 
+def _path_name(features) -> str:
+    """The GL paths taken, for stats and --debug."""
+    draw = "multi-draw (GL 4.3)" if features.multi_draw else "draw per object (GL 3.3)"
+    depth = "reversed float depth (GL 4.5)" if features.clip_control else "[-1, 1] depth"
+    return f"{draw}, {depth}"
+
+
 class Renderer:
     def __init__(self, gl, preset, srgb_filtering: str = "encoded"):
         ctx = gl.ctx
         self.ctx = ctx
         self.preset = preset
         self.features = Features.of(gl.version)
+        self.gl_info = {**gl.describe(), "gl_path": _path_name(self.features)}
         self.uploads = Uploads(ctx)
         self.stencil = Stencil(gl.proc)
         self.depth = DepthConvention(gl.proc, self.features.clip_control)
         self.pool = TargetPool(ctx, self.stencil, self.depth)
         programs = gl.programs
         self.geometry = Geometry(ctx, self.uploads, programs, self.features)
-        self.lights = LightTable(self.uploads, preset.disk_sides)
+        self.lights = LightTable(self.uploads)
         self.textures = MaterialTextures(ctx, self.uploads, preset.anisotropy, srgb_filtering)
         self.environment = Environment(ctx, self.uploads, programs, gl.proc)
         self.skinning = SkinningPass(ctx, self.uploads, programs, self.geometry, gl.scratch)
-        self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights, preset,
+        self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights,
                                   self.depth, self.textures)
-        self.resolve = ResolvePass(ctx, self.pool, programs, self.geometry, self.depth)
+        self.readback = Readback(ctx, programs, gl.proc, compute=self.features.multi_draw)
+        self.resolve = ResolvePass(ctx, self.pool, programs, self.geometry, self.depth,
+                                   self.readback)
         self.graph = FrameGraph(ctx, self.pool, [
             self.skinning,
             ViewPass(self.geometry, self.depth),
@@ -85,13 +96,13 @@ class Renderer:
             AoPass(ctx, self.pool, programs),
             AmbientPass(ctx, self.pool, programs, self.environment),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
-                      self.geometry, preset, self.environment),
+                      self.geometry, self.environment),
             TransparencyPass(ctx, self.pool, programs, self.geometry, self.textures,
-                             self.lights, self.environment, self.depth, preset),
+                             self.lights, self.environment, self.depth),
             SupersamplePass(ctx, self.pool, programs),
             PostPass(ctx, self.pool, programs),
             self.resolve,
-        ])
+        ], gl.proc)
         self._cull_backfaces = None
 
     def update(self, scene, changes, cull_backfaces: bool) -> int:
@@ -102,22 +113,32 @@ class Renderer:
         meshes = self.geometry.update(scene, changes, cull_backfaces)
         self.geometry.set_see_through(name for name, m in scene.materials.items()
                                       if m.alpha != "opaque")
-        self.lights.update(scene, changes.lights)
+        self.lights.update(scene, changes.lights, self.preset.disk_sides)
         if changes.materials or changes.dropped_meshes:
             self.textures.prune(scene.materials.values())
         self.skinning.update(scene, changes)
         return meshes
 
     def render(self, scene, changes, camera, size, transparent, cull_backfaces,
-               aovs=frozenset(), settings=None):
-        """(rgba float32 (H, W, 4), {render pass: float32 (H, W, C)}, stats, timings)
-        of one frame; `aovs`: the render passes asked for (core/passes.py);
-        `settings`: the session's RenderSettings (shading and post options)."""
+               aovs=frozenset(), settings=None, readback=None):
+        """(rgba (H, W, 4), {render pass: float32 (H, W, C)}, stats, timings, gpu
+        timings) of one frame; `aovs`: the render passes asked for (core/passes.py);
+        `settings`: the session's RenderSettings (shading and post options);
+        `readback`: how the image reaches host memory (ReadbackRequest). A queued read
+        returns rgba None: `finish(frame)` completes it."""
+        frame = self.submit(scene, changes, camera, size, transparent, cull_backfaces,
+                            aovs, settings, readback)
+        return self.finish(frame)
+
+    def submit(self, scene, changes, camera, size, transparent, cull_backfaces,
+               aovs=frozenset(), settings=None, readback=None):
+        """Draws a frame and starts its read-back; returns the Frame for `finish`."""
         t0 = time.perf_counter()
         frame = Frame(scene=scene, changes=changes, size=tuple(size), preset=self.preset,
                       transparent=transparent, aovs=frozenset(aovs), camera=camera,
                       stats={name: 0 for name in COUNTERS},
-                      options=FrameOptions.of(settings))
+                      options=FrameOptions.of(settings),
+                      readback=readback or ReadbackRequest())
         frame.stats["meshes_uploaded"] = self.update(scene, changes, cull_backfaces)
         frame.timings["upload"] = time.perf_counter() - t0
         k = supersample_factor(frame, size, self.ctx.info.get("GL_MAX_TEXTURE_SIZE", 16384))
@@ -137,10 +158,32 @@ class Renderer:
         uploaded = self.uploads.take()
         frame.stats["bytes_uploaded"] = int(sum(uploaded.values()))
         frame.stats["bytes_by_kind"] = dict(uploaded)
-        frame.stats["gl_path"] = "multi-draw (GL 4.3)" if self.features.multi_draw else \
-            "draw per object (GL 3.3)"
+        frame.stats.update(self.gl_info)
+        frame.board = board
         self._restore_state()
-        return board["rgba"], board["aovs"], frame.stats, frame.timings
+        return frame
+
+    def finish(self, frame):
+        """(rgba, aovs, stats, timings, gpu timings) of a submitted frame, its pixels in
+        host memory. For a queued frame this waits for its fence, then copies."""
+        board = frame.board
+        rgba = board["rgba"]
+        if rgba is None:
+            t0 = time.perf_counter()
+            rgba = self.readback.finish(frame.slot)
+            frame.timings["readback"] = frame.timings.get("readback", 0.0) + \
+                time.perf_counter() - t0
+        self.resolve.finish(frame, board["view"], rgba)
+        self._restore_state()
+        frame.board = None
+        return rgba, board["aovs"], frame.stats, frame.timings, self.graph.gpu_times(frame)
+
+    def set_preset(self, preset):
+        """Renders that follow use `preset`: what depends on it is rebuilt from what
+        the GPU already holds (texture filtering now, the light table's disk polygons
+        at the next update, shadow maps at the next frame), nothing is read again."""
+        self.preset = preset
+        self.textures.set_anisotropy(preset.anisotropy)
 
     def warnings(self) -> list:
         """What the GL side could not use (images it could not read) and the last
@@ -183,6 +226,7 @@ class Renderer:
 
     def release(self):
         self.graph.release()
+        self.readback.release()
         self.textures.release()
         self.environment.release()
         self.lights.release()

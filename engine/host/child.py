@@ -2,9 +2,9 @@
 
 One *scene* per stream Blender opens (a viewport, an F12 view layer, previews): an
 in-memory stage that Blender's edits (fragments) keep equal to Blender's mirror, the
-Sessions rendering it (one per preset: a progressive view draws with the interactive
-preset while it moves and with the scene's once it settles), the last render request
-and the shared-memory slots its frames go to.
+one Session rendering it (a progressive view draws with the interactive preset while
+it moves and with the scene's once it settles: a preset change reads and uploads
+nothing again), the last render request and the shared-memory slots its frames go to.
 
 The main loop applies every message that has arrived, then renders one frame of the
 scene that most needs one: a new request or edit first (the interactive preset when
@@ -24,41 +24,44 @@ import traceback
 from multiprocessing import connection
 
 from ...core.passes import PASSES
-from . import protocol as p
+from . import protocol
 
 
 class Scene:
     def __init__(self):
         from ..usd.fragments import receiver
         self.stage = receiver()
-        self.sessions = {}         # preset -> Session
+        self._session = None       # made at the first render
         self.request = None        # the last render request (its fields)
         self.level = 0             # 0: to render, 1: interactive frame shown, 2: done
         self.touched = 0.0         # when the request or the stage last changed
         self.blocks = {}           # slot name -> SharedMemory
         self.free = []             # slots this process may write
+        self.moving = (None, None)  # (scale, seconds) of the last moving frame
 
     def session(self, preset):
+        """The scene's Session, set to `preset`."""
         from ..session import RenderSettings, Session
-        if preset not in self.sessions:
-            self.sessions[preset] = Session(self.stage, RenderSettings(width=1, height=1,
-                                                                       preset=preset))
-        return self.sessions[preset]
+        if self._session is None:
+            self._session = Session(self.stage, RenderSettings(width=1, height=1,
+                                                               preset=preset))
+        self._session.configure(preset=preset)
+        return self._session
 
     def set_slots(self, names):
         self.close_slots(unlink=False)
-        self.blocks = {name: p.attach_block(name) for name in names}
+        self.blocks = {name: protocol.attach_block(name) for name in names}
         self.free = list(names)
 
     def close_slots(self, unlink):
         for block in self.blocks.values():
-            p.release_block(block, unlink)
+            protocol.release_block(block, unlink)
         self.blocks, self.free = {}, []
 
     def close(self, unlink=False):
-        for session in self.sessions.values():
-            session.close()
-        self.sessions = {}
+        if self._session is not None:
+            self._session.close()
+            self._session = None
         self.close_slots(unlink)
 
 
@@ -73,12 +76,12 @@ class Host:
     def _read(self):
         try:
             while True:
-                self.inbox.put(p.loads(self.conn.recv_bytes()))
+                self.inbox.put(protocol.loads(self.conn.recv_bytes()))
         except (EOFError, OSError):
             self.inbox.put(None)           # Blender is gone (or closed the pipe)
 
     def _send(self, kind, **fields):
-        self.conn.send_bytes(p.dumps(kind, **fields))
+        self.conn.send_bytes(protocol.dumps(kind, **fields))
 
     def _take(self, timeout):
         """Every message waiting, after waiting up to `timeout` for the first (None:
@@ -99,34 +102,34 @@ class Host:
             self.parent_gone = True
             return False
         kind, f = message
-        if kind == p.QUIT:
+        if kind == protocol.QUIT:
             return False
         name = f.get("scene")
-        if kind == p.DROP:
+        if kind == protocol.DROP:
             scene = self.scenes.pop(name, None)
             if scene is not None:
                 scene.close()
             return True
         scene = self.scenes.setdefault(name, Scene())
         now = time.monotonic()
-        if kind == p.EDIT:
+        if kind == protocol.EDIT:
             from ..usd.fragments import apply
             try:
                 apply(scene.stage, f["fragment"])
             except Exception as error:
-                self._send(p.ERROR, scene=name, request=None,
+                self._send(protocol.ERROR, scene=name, request=None,
                            message=f"the stage edit failed: {error}")
                 return True
             if scene.request is not None and scene.request["progressive"]:
                 scene.level, scene.touched = 0, now     # a live view shows edits at once
-        elif kind == p.RENDER:
+        elif kind == protocol.RENDER:
             scene.request, scene.level, scene.touched = f, 0, now
-        elif kind == p.SLOTS:
+        elif kind == protocol.SLOTS:
             scene.set_slots(f["names"])
-        elif kind == p.RELEASE:
+        elif kind == protocol.RELEASE:
             if f["slot"] in scene.blocks and f["slot"] not in scene.free:
                 scene.free.append(f["slot"])
-        elif kind == p.FORGET:
+        elif kind == protocol.FORGET:
             scene.request = None
         return True
 
@@ -140,7 +143,7 @@ class Host:
             return min(waiting)[1], None
         for name, scene in self.scenes.items():
             if scene.request is not None and scene.level == 1:
-                left = scene.touched + p.SETTLE_SECONDS - now
+                left = scene.touched + protocol.SETTLE_SECONDS - now
                 if left <= 0:
                     return name, None
                 due = left if due is None else min(due, left)
@@ -149,26 +152,16 @@ class Host:
     def _render(self, name):
         scene = self.scenes[name]
         req = scene.request
-        progressive = req["progressive"] and req["preset"] != p.INTERACTIVE_PRESET
+        progressive = req["progressive"] and req["preset"] != protocol.INTERACTIVE_PRESET
         final = not progressive or scene.level >= 1
-        preset = req["preset"] if final else p.INTERACTIVE_PRESET
+        preset = req["preset"] if final else protocol.INTERACTIVE_PRESET
         passes = [(n, PASSES[n].channels) for n in req["passes"]]
         w, h = req["width"], req["height"]
-        if not final and w * h > p.INTERACTIVE_MIN_PIXELS:
-            w, h = max(1, round(w * p.INTERACTIVE_SCALE)), max(1, round(h * p.INTERACTIVE_SCALE))
-        frame_layout, total = p.layout(w, h, passes)
-        try:
-            session = scene.session(preset)
-            session.configure(width=w, height=h, transparent=req["transparent"],
-                              passes=frozenset(req["passes"]), camera=req.get("camera"))
-            result = session.render(view_matrix=req.get("view"),
-                                    projection_matrix=req.get("projection"),
-                                    frame=req.get("frame"))
-        except Exception as error:
-            scene.level = 2
-            self._send(p.ERROR, scene=name, request=req["id"], message=str(error),
-                       detail=traceback.format_exc())
-            return True
+        scale = 1.0
+        if not final and w * h > protocol.INTERACTIVE_MIN_PIXELS:
+            scale = protocol.interactive_scale(*scene.moving)
+            w, h = max(1, round(w * scale)), max(1, round(h * scale))
+        frame_layout, total = protocol.layout(w, h, passes)
         while not scene.free:                   # Blender still reads every slot
             for message in self._take(timeout=None):
                 if not self._handle(message):
@@ -180,16 +173,33 @@ class Host:
         if total > block.size:
             scene.free.append(slot)
             scene.level = 2
-            self._send(p.ERROR, scene=name, request=req["id"],
+            self._send(protocol.ERROR, scene=name, request=req["id"],
                        message=f"a {w}x{h} frame does not fit its {block.size}-byte slot")
             return True
-        images = {"Combined": result.rgba, **result.passes}
-        for pass_name, channels, offset in frame_layout:
-            p.view(block, w, h, channels, offset)[:] = images[pass_name][::-1]
+        try:
+            session = scene.session(preset)
+            session.configure(width=w, height=h, transparent=req["transparent"],
+                              passes=frozenset(req["passes"]), camera=req.get("camera"))
+            # The image is read straight into the slot, in Blender's bottom-up rows.
+            result = session.render(view_matrix=req.get("view"),
+                                    projection_matrix=req.get("projection"),
+                                    frame=req.get("frame"), bottom_up=True,
+                                    out=protocol.view(block, w, h, 4, frame_layout[0][2]))
+        except Exception as error:
+            scene.free.append(slot)
+            scene.level = 2
+            self._send(protocol.ERROR, scene=name, request=req["id"], message=str(error),
+                       detail=traceback.format_exc())
+            return True
+        for pass_name, channels, offset in frame_layout[1:]:
+            protocol.view(block, w, h, channels, offset)[:] = result.passes[pass_name][::-1]
         scene.level = 2 if final else 1
         if not final:
             scene.touched = time.monotonic()    # settling counts from the frame shown
-        self._send(p.FRAME, scene=name, request=req["id"], tag=req.get("tag"), slot=slot,
+            # GL work and read-back of the moving frame: what the next one's size is
+            # chosen from (the stage read is the same at any size).
+            scene.moving = (scale, result.timings["total"] - result.timings.get("load", 0.0))
+        self._send(protocol.FRAME, scene=name, request=req["id"], tag=req.get("tag"), slot=slot,
                    width=w, height=h, layout=frame_layout, final=final, preset=preset,
                    stats=result.stats, timings=result.timings, warnings=result.warnings)
         return True
@@ -202,11 +212,13 @@ class Host:
             gl = run_gl(lambda gl: f"OpenGL {gl.ctx.info['GL_VERSION']}, "
                                    f"{gl.ctx.info['GL_RENDERER']}")
         except Exception as error:
-            self._send(p.FATAL, message=f"the engine could not get an OpenGL context: {error}")
+            self._send(protocol.FATAL,
+                       message=f"the engine could not get an OpenGL context: {error}")
             return 3
         modules = {name: getattr(importlib.util.find_spec(name), "origin", None)
                    for name in ("lantern", "pxr", "numpy", "moderngl", "glcontext")}
-        self._send(p.READY, pid=os.getpid(), gl=gl, executable=sys.executable, modules=modules)
+        self._send(protocol.READY, pid=os.getpid(), gl=gl, executable=sys.executable,
+                   modules=modules)
         try:
             while True:
                 name, due = self._next()

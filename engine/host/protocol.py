@@ -21,13 +21,32 @@ EDIT, RENDER, SLOTS, RELEASE, FORGET, DROP, QUIT = (
 # host -> Blender
 READY, FRAME, ERROR, FATAL = "ready", "frame", "error", "fatal"
 
-# What a progressive view shows while it moves: the low preset, at half resolution
-# when the frame is larger than INTERACTIVE_MIN_PIXELS (drawn stretched); once no new
-# request came for SETTLE_SECONDS after that frame, the scene's preset at full size.
+# What a progressive view shows while it moves: the low preset, at the resolution
+# that its measured frame time allows within INTERACTIVE_BUDGET (about 30 frames a
+# second; interactive_scale), drawn stretched; once no new request came for
+# SETTLE_SECONDS after that frame, the scene's preset at full size. The first moving
+# frame is drawn at INTERACTIVE_SCALE, to measure. A GPU that draws the full size in
+# budget gets the full size; llvmpipe gets less.
 INTERACTIVE_PRESET = "low"
 INTERACTIVE_SCALE = 0.5
+INTERACTIVE_BUDGET = 1 / 30          # seconds
+INTERACTIVE_SCALES = (1.0, 0.75, 0.5, 0.375, 0.25)   # steps, so sizes do not jitter
 INTERACTIVE_MIN_PIXELS = 320 * 180
 SETTLE_SECONDS = 0.15
+
+
+def interactive_scale(last_scale: float | None, last_seconds: float | None,
+                      budget: float = INTERACTIVE_BUDGET) -> float:
+    """The scale of the next moving frame: the largest step whose pixels, at the cost
+    per pixel the last moving frame measured, fit the budget (frame time grows with
+    pixels on a fill-bound view; the smallest step when none fits)."""
+    if last_scale is None or not last_seconds or last_seconds <= 0:
+        return INTERACTIVE_SCALE
+    per_full_frame = last_seconds / (last_scale * last_scale)
+    for scale in INTERACTIVE_SCALES:
+        if per_full_frame * scale * scale <= budget:
+            return scale
+    return INTERACTIVE_SCALES[-1]
 SLOTS_PER_TARGET = 3         # one shown, one being written, one in flight
 
 

@@ -22,6 +22,8 @@ import tempfile
 import bpy
 import numpy as np
 
+from ...core.files import atomic_write
+
 _memory_dir = None
 # Blender's file formats -> extensions, for packed images with no file name of their own.
 EXTENSIONS = {"PNG": ".png", "JPEG": ".jpg", "OPEN_EXR": ".exr", "OPEN_EXR_MULTILAYER": ".exr",
@@ -72,9 +74,7 @@ def _write(folder, stem, ext, content, hashed, write):
     path = os.path.join(folder, stem + ext)
     if hashed and os.path.isfile(path):
         return path
-    tmp = os.path.join(folder, f".{stem}.tmp{ext}")
-    write(tmp)
-    os.replace(tmp, path)
+    atomic_write(path, write, suffix=ext)
     return path
 
 

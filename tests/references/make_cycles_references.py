@@ -8,14 +8,14 @@ threshold 0.
 - box: a box on the plane, shadows on (calibration.build_box_scene), 2048 spp,
   near-point pixel filter, cycles_box_<light>.exr. Lantern had no anti-aliasing then,
   so these measure light, not edges;
-- penumbra (issue 10, area-light shadows): penumbra_scenes.SCENES (a box under a
+- penumbra (area-light shadows, docs/rendering.md): penumbra_scenes.SCENES (a box under a
   rect and under a disk light, the demo lit by its area light only), 2048 spp,
   near-point pixel filter, penumbra/<scene>.exr;
 - clearcoat: a sphere in a white furnace, coat weight x coat roughness x dark and
   bright base (clearcoat_scenes.CASES), clearcoat_scenes.SAMPLES spp, Cycles' default
   pixel filter, clearcoat/<case>.exr (RGB, float32);
-- looks (issue 10): the scenes of reference_scenes.SCENES, each at its own size and
-  samples, with Cycles' default pixel filter (Blackman-Harris, 1.5 px): the images a
+- looks (the shading work, docs/rendering.md): the scenes of reference_scenes.SCENES,
+  each at its own size and samples, with Cycles' default pixel filter (Blackman-Harris, 1.5 px): the images a
   user compares against, anti-aliased edges included. 8 transparent bounces (blended
   planes and cut-outs are crossed by camera and shadow rays). Written as
   looks/<scene>.exr: RGB, half float (float32 for tex_gradient16, whose levels are
@@ -24,11 +24,11 @@ threshold 0.
 `before` renders each looks scene with the Lantern importable in this process (the
 medium preset, the same size) and writes looks/BEFORE.md (or --out): mean HDR-FLIP and
 PSNR against the reference, and the render time. The committed BEFORE.md was made with
-main as it was before issue 10 (commit a55bdc4) first on the import path:
+main as it was before the shading work (commit a55bdc4) first on the import path:
     git archive a55bdc4 | tar -x -C /tmp/base/lantern
     PYTHONPATH=/tmp/base .venv/bin/python tests/references/make_cycles_references.py before \
-        --label "Lantern at a55bdc4 (main before issue 10)"
-and EXPORTER.md with this branch (the exporter half of issue 10, the engine unchanged).
+        --label "Lantern at a55bdc4 (main before the shading work)"
+and EXPORTER.md with this branch (the exporter half of the shading work, the engine unchanged).
 
 Run from the repository root (no argument: all sets):
     .venv/bin/python tests/references/make_cycles_references.py [calibration|box|penumbra|clearcoat|looks] [NAME ...]

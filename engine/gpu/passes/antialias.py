@@ -1,4 +1,5 @@
-"""Anti-aliasing of the deferred image (seed 004: a G-buffer cannot be multisampled).
+"""Anti-aliasing of the deferred image (a G-buffer cannot be multisampled: docs/design.md,
+Deferred shading).
 
   supersample k > 1   (the presets high and ultra, for F12 and the command line) the
                       frame is drawn k times wider and taller, and this pass filters

@@ -93,11 +93,12 @@ class LightPass(Pass):
     reads = GBUFFER + ("hdr", "view", "shadow_maps")
     writes = ("hdr", "depth_stencil")
 
-    def __init__(self, ctx, pool, programs, uploads, stencil, table, geometry, preset, environment):
+    def __init__(self, ctx, pool, programs, uploads, stencil, table, geometry, environment):
         self.ctx, self.pool, self.programs, self.uploads = ctx, pool, programs, uploads
         self.environment = environment      # the split-sum table every BRDF reads
-        self.stencil, self.table, self.geometry, self.preset = stencil, table, geometry, preset
-        self._sphere = None
+        self.stencil, self.table, self.geometry = stencil, table, geometry
+        self.preset = None                  # the frame's being drawn (its taps, its sphere)
+        self._spheres = {}          # icosphere level -> vertex buffer
         self._cones = {}            # light path -> (cone params, vertex buffer, vertices)
         self._instances = None      # (light rows, instance buffer) of the batched draw
         self._vaos = {}
@@ -112,6 +113,7 @@ class LightPass(Pass):
 
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]
+        self.preset = frame.preset
         shadow_maps = board.get("shadow_maps", {})
         self._aovs = lighting_aovs(frame)
         colors = [board["hdr"]] + ([board["aov_diffuse"], board["aov_glossy"], board["aov_shadow"]]
@@ -169,9 +171,10 @@ class LightPass(Pass):
                 and not _crosses_far_plane(view, light.position - view.origin, R * 1.3))
 
     def _sphere_vbo(self):
-        if self._sphere is None:
-            self._sphere = self.uploads.buffer(icosphere(self.preset.ico_level), kind="lights")
-        return self._sphere
+        level = self.preset.ico_level
+        if level not in self._spheres:
+            self._spheres[level] = self.uploads.buffer(icosphere(level), kind="lights")
+        return self._spheres[level]
 
     def _vao(self, prog, vbo, instances=None):
         key = (prog.extra, id(vbo), id(instances))
@@ -303,9 +306,10 @@ class LightPass(Pass):
             vao.release()
         for entry in self._cones.values():
             entry[1].release()
-        for obj in (self._sphere, self._instances[1] if self._instances else None):
+        for obj in [*self._spheres.values(), self._instances[1] if self._instances else None]:
             if obj is not None:
                 obj.release()
+        self._spheres.clear()
         self._vaos.clear()
         self._cones.clear()
 

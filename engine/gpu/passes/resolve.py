@@ -1,14 +1,18 @@
-"""The resolve pass: the HDR accumulation into a float32 image, read back top row
-first. Alpha is 1, or coverage when the render is transparent (the HDR target's
-alpha: 1 where a surface was drawn, filtered by anti-aliasing).
+"""The resolve pass: the HDR accumulation into the output image, read back in one copy
+(engine/gpu/readback.py): in the caller's row order and format, into the caller's
+buffer, or queued behind a fence. Alpha is 1, or coverage when the render is
+transparent (the HDR target's alpha: 1 where a surface was drawn, filtered by
+anti-aliasing).
 
-Nothing masks a non-finite value: the pass counts the pixels holding NaN or Inf
-(`stats["nonfinite_pixels"]`) and, only when there are some, draws the scene's
-object ids (shaders/ids.vert, points.frag's POINTS_ID) to name the prims those
+Nothing masks a non-finite value: the GPU counts the pixels holding NaN or Inf
+(`stats["nonfinite_pixels"]`) and, only when there are some, the pass draws the
+scene's object ids (shaders/ids.vert, points.frag's POINTS_ID) to name the prims those
 pixels lie on, in one warning per render ("the background" where nothing is).
 
-reads: hdr, view   writes: output, rgba (the image, numpy)"""
+reads: hdr, view   writes: output, rgba (the image, numpy; None while queued)"""
 from __future__ import annotations
+
+import time
 
 import numpy as np
 
@@ -24,29 +28,40 @@ class ResolvePass(Pass):
     reads = ("hdr", "view")
     writes = ("output", "rgba")
 
-    def __init__(self, ctx, pool, programs, geometry, depth):
+    def __init__(self, ctx, pool, programs, geometry, depth, readback):
         self.ctx, self.pool, self.programs = ctx, pool, programs
-        self.geometry, self.depth = geometry, depth
-        self.warnings = []       # this render's
+        self.geometry, self.depth, self.readback = geometry, depth, readback
+        self.warnings = []       # the last finished render's
 
     def execute(self, frame, board):
-        ctx, (w, h) = self.ctx, frame.size
+        (w, h), request = frame.size, frame.readback
         fbo = self.pool.framebuffer([board["output"]])
         fbo.use()
-        ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
+        self.ctx.disable(self.ctx.BLEND | self.ctx.DEPTH_TEST | self.ctx.CULL_FACE)
         prog = self.programs.get("fullscreen.vert", "resolve.frag")
         board["hdr"].use(UNITS["hdr"])
         set_uniform(prog, "transparent", bool(frame.transparent))
+        set_uniform(prog, "top_down", bool(request.top_down))
         self.programs.fullscreen(prog)
-        data = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32)
-        rgba = data.reshape(h, w, 4)[::-1].copy()  # GL rows run bottom-up
-        board["rgba"] = rgba
-        bad = ~np.isfinite(rgba).all(axis=-1)
-        count = int(bad.sum())
+        slot = self.readback.slot()
+        self.readback.count(slot, board["hdr"], fbo, (w, h), frame.transparent)
+        t0 = time.perf_counter()
+        board["rgba"] = self.readback.read(slot, fbo, (w, h), request)
+        frame.timings["readback"] = time.perf_counter() - t0
+        frame.slot = slot
+
+    def finish(self, frame, view, rgba):
+        """The frame's non-finite count and warning, once its pixels are in host
+        memory. The object ids are drawn with the session's geometry as it is now:
+        the frame's own when it was not queued."""
+        count = self.readback.nonfinite(frame.slot)
         frame.stats["nonfinite_pixels"] = count
         self.warnings = []
         if count:
-            self.warnings.append(self._name(frame, board["view"], bad, count))
+            bad = ~np.isfinite(rgba).all(axis=-1)
+            if not frame.readback.top_down:
+                bad = bad[::-1]
+            self.warnings.append(self._name(frame, view, bad, count))
 
     def _name(self, frame, view, bad, count) -> str:
         """The warning: how many pixels, on which prims."""

@@ -254,9 +254,10 @@ class ShadowPass(Pass):
     reads = ("skinned", "view")
     writes = ("shadow_maps",)
 
-    def __init__(self, ctx, pool, programs, geometry, lights, preset, depth, textures):
+    def __init__(self, ctx, pool, programs, geometry, lights, depth, textures):
         self.ctx, self.pool, self.programs = ctx, pool, programs
-        self.geometry, self.lights, self.preset = geometry, lights, preset
+        self.geometry, self.lights = geometry, lights
+        self.preset = None         # what the kept maps were planned with
         self.depth, self.textures = depth, textures
         self.maps = {}             # light path -> ShadowMap, kept across frames
         self._see_through = None   # what the kept maps' see-through casters were drawn with
@@ -274,9 +275,11 @@ class ShadowPass(Pass):
         scene, view = frame.scene, board["view"]
         moved = self.geometry.moved
         see_through = _see_through(scene)
-        if see_through != self._see_through:
-            self._drop(list(self.maps))  # a cut-out or blended material changed: all again
-            self._see_through = see_through
+        if see_through != self._see_through or frame.preset != self.preset:
+            # A cut-out or blended material changed, or the preset (map sizes,
+            # cascades): all again.
+            self._drop(list(self.maps))
+            self._see_through, self.preset = see_through, frame.preset
         for path in [p for p in self.maps if p not in scene.lights or p in frame.changes.lights]:
             self._drop([path])           # stale: drawn again below if it still casts
         out = {}

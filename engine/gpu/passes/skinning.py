@@ -26,7 +26,7 @@ from ....core.transforms import transform_aabbs
 from ...skin import (FLAT_TEX_W, active_texels, defines, flat_texels, joint_texels,
                      local_bounds, shape_texels)
 from ..framegraph import Pass
-from ..geometry import VERTEX_FORMAT
+from ..stores import VERTEX_FORMAT
 from ..programs import UNITS, set_uniform
 
 VARYINGS = ("out_pos", "out_normal", "out_uv", "out_tangent")

@@ -53,11 +53,11 @@ class TransparencyPass(Pass):
     optional = ("shadow_maps",)
     writes = ("hdr",)
 
-    def __init__(self, ctx, pool, programs, geometry, textures, lights, environment, depth,
-                 preset):
+    def __init__(self, ctx, pool, programs, geometry, textures, lights, environment, depth):
         self.ctx, self.pool, self.programs = ctx, pool, programs
         self.geometry, self.textures, self.lights = geometry, textures, lights
-        self.environment, self.depth, self.preset = environment, depth, preset
+        self.environment, self.depth = environment, depth
+        self.preset = None             # the frame's being drawn (its shadow filter taps)
 
     def needed(self, frame) -> bool:
         blended = blended_materials(frame.scene)
@@ -66,6 +66,7 @@ class TransparencyPass(Pass):
 
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]
+        self.preset = frame.preset
         layers = self.back_to_front(frame, view)
         frame.count("transparent_objects", len(layers))
         if not layers:

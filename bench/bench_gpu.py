@@ -1,0 +1,207 @@
+"""Frame time on the machine at hand, with the CPU and GPU time of every pass and the
+read-back: the demo scene, the 16-character crowd's frame change and a view change on
+1,000 cubes, at 640x360, 1920x1080 and 3840x2160, presets low to ultra.
+
+    python bench/bench_gpu.py prepare DIR      # here, with bpy: the scenes as USD files
+    python bench/bench_gpu.py run DIR [--json F] [--images DIR] [--sizes ...] [--presets ...]
+    python bench/bench_gpu.py                  # both (make bench): out/gpu_scenes, low and
+                                               # medium at 640x360 and 1920x1080
+
+`run` needs no bpy, so it runs on the GPU machine (../shared/gpu/README.md) as well
+as on llvmpipe. A frame is `Session.render` until the image is in host memory, warm
+(the scene read, programs compiled and meshes uploaded before). The readback is timed
+three ways: float32 blocking (F12), half floats blocking (a viewport), and queued
+behind a fence in a sequence (Session.render_frames), whose figure is the frame
+interval. `--images` saves each scene's medium image at each size as .npy, to compare
+one machine's pixels with another's (`compare DIR_A DIR_B`)."""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import pathlib
+import shutil
+import statistics
+import sys
+import time
+
+import numpy as np
+
+HERE = pathlib.Path(__file__).resolve().parent
+SCENES = ("demo", "crowd", "cubes")
+SIZES = {"640x360": (640, 360), "1920x1080": (1920, 1080), "3840x2160": (3840, 2160)}
+PRESETS = ("low", "medium", "high", "ultra")
+RUNS = 3
+# Targets above this many drawn pixels (size x supersampling squared: 1080p) are skipped
+# unless --all: llvmpipe on 2 cores takes minutes and gigabytes for them.
+LLVMPIPE_PIXELS = 2_100_000
+
+
+# --- prepare (bpy) ---------------------------------------------------------------------
+def prepare(folder: pathlib.Path):
+    sys.path[:0] = [str(HERE), str(HERE.parent / "tests")]
+    import lantern.exporters  # noqa: F401  (Blender's pxr first)
+    import bpy
+    from lantern.exporters import stage_from_depsgraph
+    from bench_session import crowd_scene
+    import session_scenes
+    folder.mkdir(parents=True, exist_ok=True)
+    demo = HERE.parent / "out" / "demo.usdc"
+    if not demo.is_file():
+        raise SystemExit(f"{demo}: missing; run `make demo` first")
+    shutil.copy2(demo, folder / "demo.usdc")          # with its textures, by relative path
+    shutil.copytree(demo.parent / "demo_textures", folder / "demo_textures", dirs_exist_ok=True)
+    crowd_scene()
+    stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+    stage.Export(str(folder / "crowd.usdc"))
+    session_scenes.cubes_stage(1000, lights=("point", "spot")).Export(str(folder / "cubes.usdc"))
+    print(f"wrote {', '.join(f'{n}.usdc' for n in SCENES)} into {folder}")
+
+
+# --- run (no bpy) ----------------------------------------------------------------------
+def _changes(name, stage):
+    """(frame, view) per run: what changes between frames in this scene."""
+    if name == "crowd":
+        return [(float(2 + i), None) for i in range(RUNS + 1)]
+    if name == "cubes":
+        sys.path.insert(0, str(HERE.parent / "tests"))
+        import session_scenes
+        views = session_scenes.orbit_views(stage, RUNS + 1, 16 / 9)
+        return [(None, v) for v in views]
+    return [(None, None)] * (RUNS + 1)
+
+
+def _render(session, change, **kw):
+    frame, view = change
+    if view is None:
+        return session.render(frame=frame, **kw)
+    return session.render(view_matrix=view[0], projection_matrix=view[1], frame=frame, **kw)
+
+
+def measure(name, stage, size, preset, images):
+    from lantern.engine import RenderSettings, Session
+    from lantern.core.presets import preset as find_preset
+    k = find_preset(preset).supersample
+    changes = _changes(name, stage)
+    with Session(stage, RenderSettings(width=size[0], height=size[1], preset=preset)) as s:
+        _render(s, changes[0])
+        walls, results = [], []
+        for change in changes[1:]:
+            t0 = time.perf_counter()
+            results.append(_render(s, change))
+            walls.append(time.perf_counter() - t0)
+        last = results[-1]
+        s.configure(readback="half")
+        half = [_render(s, c).timings["readback"] for c in changes[1:]]
+        s.configure(readback="float32")
+        queued = None
+        if name == "crowd":               # a sequence: frames pipelined behind fences
+            t0 = time.perf_counter()
+            n = sum(1 for _ in s.render_frames([c[0] for c in changes[1:]]))
+            queued = (time.perf_counter() - t0) / n
+        if images is not None and preset == "medium":
+            np.save(images / f"{name}_{size[0]}x{size[1]}.npy", last.rgba)
+    med = statistics.median
+    return {
+        "scene": name, "size": list(size), "preset": preset, "supersample": k,
+        "frame_ms": med(walls) * 1e3,
+        "readback_ms": med(r.timings["readback"] for r in results) * 1e3,
+        "readback_half_ms": med(half) * 1e3,
+        "sequence_frame_ms": None if queued is None else queued * 1e3,
+        "cpu_ms": med(r.stats["cpu_seconds"] for r in results) * 1e3,
+        "cpu_pass_ms": {p: v * 1e3 for p, v in last.timings.items()
+                        if p in last.gpu_timings},
+        "gpu_pass_ms": {p: v * 1e3 for p, v in last.gpu_timings.items()},
+        "gpu_ms": sum(last.gpu_timings.values()) * 1e3,
+        "gl": {key: last.stats[key] for key in
+               ("gl_renderer", "gl_version", "gl_requested", "gl_path")},
+    }
+
+
+def run(folder, sizes, presets, json_path, images, everything):
+    from lantern.engine.usd.stage import open_stage
+    if images is not None:
+        images.mkdir(parents=True, exist_ok=True)
+    rows, gl = [], None
+    for name in SCENES:
+        stage = open_stage(str(folder / f"{name}.usdc"))
+        for size_name in sizes:
+            size = SIZES[size_name]
+            for preset in presets:
+                from lantern.core.presets import preset as find_preset
+                k = find_preset(preset).supersample
+                if not everything and size[0] * size[1] * k * k > LLVMPIPE_PIXELS \
+                        and "llvmpipe" in (gl or {}).get("gl_renderer", "llvmpipe"):
+                    print(f"  {name:<6} {size_name:>9} {preset:<7} skipped on llvmpipe "
+                          f"({size[0] * k}x{size[1] * k} drawn; --all runs it)", flush=True)
+                    continue
+                row = measure(name, stage, size, preset, images)
+                gl = row["gl"]
+                rows.append(row)
+                _print(row)
+    if gl:
+        print(f"GL: {gl['gl_renderer']}, {gl['gl_version']} (asked {gl['gl_requested']}); "
+              f"{gl['gl_path']}")
+    if json_path:
+        payload = {"date": time.strftime("%Y-%m-%d"), "gl": gl, "rows": rows}
+        tmp = f"{json_path}.tmp"
+        with open(tmp, "w") as f:
+            json.dump(payload, f, indent=1)
+        os.replace(tmp, json_path)
+        print(f"wrote {json_path}")
+
+
+def _print(row):
+    heavy = sorted(row["gpu_pass_ms"].items(), key=lambda kv: -kv[1])[:3]
+    seq = f", in a sequence {row['sequence_frame_ms']:.1f}" if row["sequence_frame_ms"] else ""
+    print(f"  {row['scene']:<6} {row['size'][0]}x{row['size'][1]:<5} {row['preset']:<7}"
+          f" frame {row['frame_ms']:8.1f} ms{seq} | GPU {row['gpu_ms']:7.1f} | CPU "
+          f"{row['cpu_ms']:6.1f} | readback f32 {row['readback_ms']:5.1f} "
+          f"({100 * row['readback_ms'] / row['frame_ms']:4.1f}%), f16 "
+          f"{row['readback_half_ms']:5.1f} | heaviest: "
+          + ", ".join(f"{p} {v:.1f}" for p, v in heavy), flush=True)
+
+
+def compare(a: pathlib.Path, b: pathlib.Path):
+    """Pixels of two machines' images: the share differing by more than 1e-2."""
+    for path in sorted(a.glob("*.npy")):
+        other = b / path.name
+        if not other.is_file():
+            print(f"  {path.name}: missing in {b}")
+            continue
+        x, y = np.load(path), np.load(other)
+        diff = np.abs(x.astype(np.float64) - y).max(axis=-1)
+        print(f"  {path.stem:<22} max {np.nanmax(diff):.4f}, "
+              f"{100 * np.mean(diff > 1e-2):.3f}% of pixels > 1e-2")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    sub.add_parser("prepare").add_argument("folder", type=pathlib.Path)
+    r = sub.add_parser("run")
+    r.add_argument("folder", type=pathlib.Path)
+    r.add_argument("--sizes", nargs="+", default=list(SIZES), choices=list(SIZES))
+    r.add_argument("--presets", nargs="+", default=list(PRESETS), choices=PRESETS)
+    r.add_argument("--json")
+    r.add_argument("--images", type=pathlib.Path)
+    r.add_argument("--all", action="store_true", help="also the largest targets on llvmpipe")
+    c = sub.add_parser("compare")
+    c.add_argument("a", type=pathlib.Path)
+    c.add_argument("b", type=pathlib.Path)
+    if len(sys.argv) == 1:
+        folder = HERE.parent / "out" / "gpu_scenes"
+        prepare(folder)
+        run(folder, ["640x360", "1920x1080"], ["low", "medium"], None, None, False)
+        return
+    args = parser.parse_args()
+    if args.command == "prepare":
+        prepare(args.folder)
+    elif args.command == "run":
+        run(args.folder, args.sizes, args.presets, args.json, args.images, args.all)
+    else:
+        compare(args.a, args.b)
+
+
+if __name__ == "__main__":
+    main()
