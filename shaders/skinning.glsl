@@ -6,8 +6,8 @@
 //   SKIN_JOINTS   joint influences (4 per vertex; SKIN_JOINTS8: 8; SKIN_JOINTS_TEX:
 //                 any number, read per point from the influence texture)
 //   SKIN_DQS      dual-quaternion skinning instead of linear blend
-//   SKIN_SURFACE_NORMALS  (skin.vert) normals are the deformed surface's own, summed
-//                 per point by surface_normals.geom, not the rest normals skinned
+//   SKIN_SURFACE_NORMALS  (skin.vert, on the already deformed vertices) normals are the
+//                 surface's own, gathered per point from its triangles
 // Joint texture: one row per joint, see engine/skin.py joint_texels.
 in int in_point;                // the mesh point this vertex is (per-point data)
 const int FLAT_TEX_W = 4096;   // engine/skin.py FLAT_TEX_W

@@ -25,7 +25,8 @@ UNITS = {name: unit for unit, name in enumerate((
     "hdr",
     "t_diffuse", "t_metallic", "t_roughness", "t_emissive", "t_opacity", "t_normal",
     "u_objects", "u_lights",
-    "u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences", "u_surface_normals",
+    "u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences", "u_deformed",
+    "u_incidence",
     "dfg_lut", "env_specular", "radiance", "ao_tex", "post_src", "post_aux"))}
 
 
@@ -63,10 +64,9 @@ class ProgramCache:
         self._programs = {}
         self._screen = {}           # program key -> its VAO without buffers
 
-    def get(self, vert: str, frag: str | None = None, defines=(), varyings=(), compute=False,
-            geom: str | None = None):
+    def get(self, vert: str, frag: str | None = None, defines=(), varyings=(), compute=False):
         defines = tuple(sorted(set(defines)))
-        key = (vert, frag, defines, tuple(varyings), compute) + ((geom,) if geom else ())
+        key = (vert, frag, defines, tuple(varyings), compute)
         prog = self._programs.get(key)
         if prog is None:
             try:
@@ -76,10 +76,8 @@ class ProgramCache:
                     prog = self.ctx.program(vertex_shader=load_source(vert, defines),
                                             varyings=list(varyings))
                 else:
-                    prog = self.ctx.program(
-                        vertex_shader=load_source(vert, defines),
-                        geometry_shader=load_source(geom, defines) if geom else None,
-                        fragment_shader=load_source(frag, defines))
+                    prog = self.ctx.program(vertex_shader=load_source(vert, defines),
+                                            fragment_shader=load_source(frag, defines))
             except Exception as exc:
                 raise ShaderError(f"{vert} + {frag} [variant: {', '.join(defines) or 'base'}] "
                                   f"failed to compile: {exc}") from exc

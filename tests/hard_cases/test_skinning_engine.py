@@ -61,14 +61,22 @@ def test_blend_shapes_through_a_non_identity_mapper(empty_scene, hard_case):
 
 SKEL_BAKE = ("usdskel", "usd", "usdSkel", "testenv", "testUsdSkelBakeSkinning")
 TWIN_MESHES = ("Mesh", "MeshWithNormals", "MeshWithFaceVaryingNormals")
+SPLIT = "Mesh+faceVarying st"   # Mesh with per-corner UVs: a point is several vertices
 
 
 def _one_mesh(path, keep, bake):
     """The corpus rig with only `keep` active (and /GroundTruth off); baked: UsdSkel's
     own BakeSkinning of it, flattened (points and normals time-sampled, no rig)."""
-    from pxr import Gf, Usd, UsdSkel
+    from pxr import Gf, Sdf, Usd, UsdGeom, UsdSkel
     stage = Usd.Stage.CreateInMemory()
     stage.GetRootLayer().TransferContent(Usd.Stage.Open(str(path)).Flatten())
+    if keep == SPLIT:
+        keep = "Mesh"
+        mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/Root/Mesh"))
+        corners = len(mesh.GetFaceVertexIndicesAttr().Get())
+        st = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray,
+                                                     UsdGeom.Tokens.faceVarying)
+        st.Set([(0.1 * (i % 7), 0.1 * (i % 5)) for i in range(corners)])
     for prim in list(stage.Traverse()):
         if prim.GetName() == "GroundTruth" or \
                 prim.GetParent().GetPath() == "/Root" and prim.GetName() in TWIN_MESHES and \
@@ -84,7 +92,7 @@ def _one_mesh(path, keep, bake):
 
 
 @pytest.mark.parametrize("method", ["lbs", "dqs"])
-@pytest.mark.parametrize("mesh", TWIN_MESHES)
+@pytest.mark.parametrize("mesh", TWIN_MESHES + (SPLIT,))
 def test_skinned_mesh_renders_as_its_baked_twin(corpus, hard_case, method, mesh):
     """A GPU-skinned mesh and UsdSkel's baking of it are one surface: authored normals
     are skinned and normalised as UsdSkel does, and a mesh without them gets its
