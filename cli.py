@@ -17,6 +17,7 @@ import math
 import os
 import sys
 
+from .core import interrupt
 from .core.text import error_text, one_line
 from .core.version import installed_version
 
@@ -29,7 +30,7 @@ MAX_SIDE = 16384
 # every core, and two measured no faster and costlier in CPU (bench/bench_distributed.py).
 RENDER_PROCESSES = 1
 
-USAGE, FAILED, INTERRUPTED = 2, 1, 130
+USAGE, FAILED, INTERRUPTED = 2, 1, interrupt.INTERRUPTED
 EXIT_STATUSES = """exit status:
   0    done
   1    an input could not be read, exported or rendered, or an output not written
@@ -102,6 +103,10 @@ def _build_parser():
                       help="run the tasks on this Dask scheduler (tcp://HOST:PORT), or on "
                            "an embedded Dask LocalCluster ('local'); default: "
                            "$LANTERN_SCHEDULER, else processes on this machine")
+    farm.add_argument("--status-fd", type=int, default=None, metavar="FD",
+                      help="write one line per state of a batch or sequence to this file "
+                           "descriptor ('running' once the first tasks are on the workers, "
+                           "'finished'), for the tools that drive lantern")
     farm.add_argument("--collect", action="store_true",
                       help="workers send the outputs back and this process writes them "
                            "(for outputs on a folder the workers do not share)")
@@ -174,11 +179,22 @@ def _check_farm(args):
 
 
 def main(argv=None):
+    previous = interrupt.exit_at_once()      # before the parser's (lazy) imports
+    try:
+        return _main(argv)
+    finally:
+        interrupt.restore(previous)
+
+
+def _main(argv):
     args = _build_parser().parse_args(argv)
     # The exporter logs its warnings and the CLI prints them: keep Python's last-resort
     # handler from printing each a second time.
     logging.getLogger("lantern").addHandler(logging.NullHandler())
     try:
+        # From here Ctrl-C is a KeyboardInterrupt: workers are closed and half-written
+        # files removed on the way out.
+        interrupt.raise_keyboard_interrupt()
         if args.command == "compare":
             from .compare.command import run as compare
             return compare(args, _usage, CommandError)
@@ -296,9 +312,23 @@ def _export_batch(args):
     try:
         return export_batch(ExportBatchOptions(
             scheduler=args.scheduler, jobs=args.jobs, collect=args.collect, resume=args.resume,
-            textures=args.textures, max_influences=args.max_influences), jobs)
+            status=_status_writer(args), textures=args.textures,
+            max_influences=args.max_influences), jobs)
     except FarmError as error:
         raise CommandError(str(error))
+
+
+def _status_writer(args):
+    """--status-fd: a function writing one state per line to that descriptor."""
+    if args.status_fd is None:
+        return None
+
+    def write(state):
+        try:
+            os.write(args.status_fd, f"{state}\n".encode())
+        except OSError:          # the reader went away: the work goes on
+            pass
+    return write
 
 
 # --- render -----------------------------------------------------------------------------
@@ -407,6 +437,7 @@ def _open_usd(path):
     # Missing or broken references, sublayers and payloads, and cycles: USD composes
     # what it can; say what it could not.
     _print_warnings([f"{path}: {reason}" for reason in composition_errors(stage)], set())
+    interrupt.check()               # a Ctrl-C that USD swallowed while it read
     return stage
 
 
@@ -446,6 +477,7 @@ def _rendered(scene, run):
 
 
 def _write(path, write):
+    interrupt.check()               # nothing is written after a Ctrl-C
     _make_folder(os.path.dirname(os.path.abspath(path)))
     try:
         write()
@@ -484,6 +516,7 @@ def _render_sequence(stage, args, runner, stage_text):
     try:
         options = SequenceOptions(
             scheduler=args.scheduler, jobs=args.jobs, collect=args.collect, resume=args.resume,
+            status=_status_writer(args),
             scene=args.scene, output=args.output, frames=tuple(args.frames), size=args.size,
             preset=args.preset, camera=args.camera, chunk=args.chunk, **args.colour)
         status = render_frames(options, runner, stage_text, stage.GetFramesPerSecond() or 24.0,
