@@ -26,7 +26,9 @@ tabulates, over n.v and perceptual roughness, the GGX directional albedo with F 
 first), so a lobe of Schlick reflectance (f0, f90) reflects
     E = f0 (dfg.y - dfg.x) + f90 dfg.x
 of a uniform world, and 1 + f0 (1 / dfg.y - 1) scales it for the energy single
-scattering loses at high roughness (Kulla and Conty 2017, as Filament does)."""
+scattering loses at high roughness (Kulla and Conty 2017, as Filament does). Its third
+channel is the albedo with a dielectric's exact Fresnel at IOR 1.5 (UsdPreviewSurface's
+clearcoat), which Cycles uses and Schlick's form undercuts by 10-15% in a furnace."""
 from __future__ import annotations
 
 import functools
@@ -231,7 +233,9 @@ def dfg_lut(size: int = DFG_SIZE) -> np.ndarray:
 
 def specular_albedo(f0, f90, nov, roughness) -> np.ndarray:
     """Directional albedo of a Schlick-GGX lobe with multiple scattering, as the
-    shaders compute it from the table: what it reflects of a uniform world."""
+    shaders compute it from the table for a metal: what it reflects of a uniform
+    world (a dielectric's they scale by the exact-Fresnel ratio, lib.glsl
+    make_surface)."""
     x, y = np.moveaxis(dfg_terms(nov, roughness), -1, 0)
     f0 = np.asarray(f0, float)
     return (f0 * (y - x) + f90 * x) * (1 + f0 * (1 / y - 1))
