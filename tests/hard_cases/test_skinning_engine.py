@@ -91,6 +91,21 @@ def _one_mesh(path, keep, bake):
     return stage
 
 
+def _worst_difference(deformed, baked):
+    """Largest pixel difference of two stages' renders at frames 5, 16 and 25 (48x48,
+    AO and FXAA off), each image checked to show a shaded mesh."""
+    from lantern.engine import RenderSettings, render_stage
+    worst = 0.0
+    for frame in (5.0, 16.0, 25.0):
+        settings = RenderSettings(width=48, height=48, frame=frame, preset="low",
+                                  ambient_occlusion=False, fxaa=False)
+        a = render_stage(deformed, settings).rgba[..., :3]
+        b = render_stage(baked, settings).rgba[..., :3]
+        assert (np.abs(a - a.mean()) > 1e-3).sum() > 200      # the mesh is in view, shaded
+        worst = max(worst, float(np.abs(a - b).max()))
+    return worst
+
+
 @pytest.mark.parametrize("method", ["lbs", "dqs"])
 @pytest.mark.parametrize("mesh", TWIN_MESHES + (SPLIT,))
 def test_skinned_mesh_renders_as_its_baked_twin(corpus, hard_case, method, mesh):
@@ -99,17 +114,8 @@ def test_skinned_mesh_renders_as_its_baked_twin(corpus, hard_case, method, mesh)
     deformed surface's own each frame (as the baked twin, whose normals are computed
     from its baked points). Before, unnormalised skinned normals and rest normals
     skinned instead of recomputed differed by up to 0.12."""
-    from lantern.engine import RenderSettings, render_stage
     path = corpus.joinpath(*SKEL_BAKE, f"{method}.usda")
-    skinned, baked = _one_mesh(path, mesh, False), _one_mesh(path, mesh, True)
-    worst = 0.0
-    for frame in (5.0, 16.0, 25.0):
-        settings = RenderSettings(width=48, height=48, frame=frame, preset="low",
-                                  ambient_occlusion=False, fxaa=False)
-        a = render_stage(skinned, settings).rgba[..., :3]
-        b = render_stage(baked, settings).rgba[..., :3]
-        assert (np.abs(a - a.mean()) > 1e-3).sum() > 200      # the mesh is in view, shaded
-        worst = max(worst, float(np.abs(a - b).max()))
+    worst = _worst_difference(_one_mesh(path, mesh, False), _one_mesh(path, mesh, True))
     hard_case(f"{method} {mesh}: skinned vs UsdSkel-baked twin, frames 5, 16, 25 (max pixel "
               f"difference)", worst, 1e-4)
 
@@ -158,18 +164,12 @@ def test_blend_shaped_mesh_renders_as_its_baked_twin(hard_case):
     """Blend shapes alone deform a mesh without normals: its normals are the deformed
     surface's too (0.062 apart before, rest normals drawn on the bump)."""
     from pxr import Gf, Usd, UsdSkel
-    from lantern.engine import RenderSettings, render_stage, skinned_points
+    from lantern.engine import skinned_points
     shaped = _blend_shaped_grid()
     assert list(skinned_points(shaped, 16.0)) == ["/Root/Grid"]     # the GPU deforms it
     baked = Usd.Stage.CreateInMemory()
     baked.GetRootLayer().TransferContent(shaped.GetRootLayer())
     assert UsdSkel.BakeSkinning(baked.Traverse(), Gf.Interval(1, 30))
-    worst = 0.0
-    for frame in (5.0, 16.0, 25.0):
-        settings = RenderSettings(width=48, height=48, frame=frame, preset="low",
-                                  ambient_occlusion=False, fxaa=False)
-        a = render_stage(shaped, settings).rgba[..., :3]
-        b = render_stage(baked, settings).rgba[..., :3]
-        worst = max(worst, float(np.abs(a - b).max()))
+    worst = _worst_difference(shaped, baked)
     hard_case("blend-shaped grid without normals: vs UsdSkel-baked twin, frames 5, 16, 25 "
               "(max pixel difference)", worst, 1e-4)
