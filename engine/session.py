@@ -234,7 +234,7 @@ class Session:
 
     def skinned_points(self, frame: float) -> dict:
         """GPU-deformed geometry read back: {mesh path: (points, normals)}, world space,
-        one row per mesh point (normals unnormalised, as skinned), for every mesh with
+        one row per mesh point (normals as drawn), for every mesh with
         a UsdSkel binding. For tests against UsdSkel."""
         self._check_open()
         changes = self._reader.sync(float(frame))

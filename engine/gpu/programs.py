@@ -34,7 +34,8 @@ UNITS = {name: unit for unit, name in enumerate((
     "hdr",
     "t_diffuse", "t_metallic", "t_roughness", "t_emissive", "t_opacity", "t_normal",
     "u_objects", "u_lights",
-    "u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences",
+    "u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences", "u_deformed",
+    "u_incidence",
     "dfg_lut", "env_specular", "radiance", "ao_tex", "post_src", "post_aux"))}
 
 

@@ -206,7 +206,7 @@ class Renderer:
 
     def skinned_points(self, scene, changes) -> dict:
         """{mesh path: (points, normals)} of every skinned mesh at this sync's time,
-        world space, one row per mesh point (normals unnormalised, as skinned)."""
+        world space, one row per mesh point (normals as drawn)."""
         self.update(scene, changes, bool(self._cull_backfaces))
         frame = Frame(scene=scene, changes=changes, size=(1, 1), preset=self.preset)
         board = {}
