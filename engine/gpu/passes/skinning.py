@@ -193,7 +193,7 @@ class SkinningPass(Pass):
         copy, deformed = self._scratch
         ctx.copy_buffer(copy, store.vbo, size=slot.n_vertices * VERTEX_BYTES,
                         read_offset=slot.first_vertex * VERTEX_BYTES)
-        deformed.write(copy, viewport=(0, 0, DEFORMED_TEX_W, rows))
+        self.uploads.copy_into_texture(deformed, copy, (0, 0, DEFORMED_TEX_W, rows))
         prog = self.programs.get("skin.vert", None, ["SKIN_SURFACE_NORMALS"], varyings=VARYINGS)
         deformed.use(UNITS["u_deformed"])
         inp.incidence.use(UNITS["u_incidence"])
