@@ -11,7 +11,8 @@ import numpy as np
 from .context import Features
 from .depth import DepthConvention
 from .environment import Environment
-from .framegraph import Frame, FrameGraph, FrameOptions
+from ..settings import RenderSettings
+from .framegraph import Frame, FrameGraph
 from .geometry import Geometry
 from .lights import LightTable
 from .passes.ambient import AmbientPass
@@ -138,7 +139,7 @@ class Renderer:
         frame = Frame(scene=scene, changes=changes, size=tuple(size), preset=self.preset,
                       transparent=transparent, aovs=frozenset(aovs), camera=camera,
                       stats={name: 0 for name in COUNTERS},
-                      options=FrameOptions.of(settings),
+                      options=settings or RenderSettings(),
                       readback=readback or ReadbackRequest())
         frame.stats["meshes_uploaded"] = self.update(scene, changes, cull_backfaces)
         frame.timings["upload"] = time.perf_counter() - t0

@@ -41,7 +41,8 @@ class Scene:
 
     def session(self, preset):
         """The scene's Session, set to `preset`."""
-        from ..session import RenderSettings, Session
+        from ..session import Session
+        from ..settings import RenderSettings
         if self._session is None:
             self._session = Session(self.stage, RenderSettings(width=1, height=1,
                                                                preset=preset))
