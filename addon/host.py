@@ -31,7 +31,7 @@ from collections import deque
 from dataclasses import dataclass, field
 from multiprocessing import Pipe
 
-from ..engine.host import protocol as p
+from ..engine.host import protocol
 
 RESTART_SECONDS = 2.0     # after a child that never got going, wait this long to retry
 QUIT_SECONDS = 3.0        # a child that does not stop by then is killed
@@ -206,7 +206,7 @@ class Host:
     def _read(self, conn, proc):
         try:
             while True:
-                kind, fields = p.loads(conn.recv_bytes())
+                kind, fields = protocol.loads(conn.recv_bytes())
                 self._receive(kind, fields)
         except (EOFError, OSError, ValueError):
             pass
@@ -222,17 +222,17 @@ class Host:
 
     def _receive(self, kind, f):
         with self._lock:
-            if kind == p.READY:
+            if kind == protocol.READY:
                 self.info = f
                 self._ready.set()
                 return
-            if kind == p.FATAL:
+            if kind == protocol.FATAL:
                 self.failure = f["message"]
                 return
             channel = self.channels.get(f["scene"])
             if channel is None:
                 return
-            if kind == p.ERROR:
+            if kind == protocol.ERROR:
                 channel.error = (f["request"], f["message"])
                 channel.event.set()
                 return
@@ -242,16 +242,16 @@ class Host:
             old = channel.held
             if old is not None and old != frame.slot:
                 if old in channel.retired:         # shown until now, of an older size
-                    p.release_block(channel.retired.pop(old), unlink=True)
+                    protocol.release_block(channel.retired.pop(old), unlink=True)
                 else:
-                    self._post(p.RELEASE, scene=channel.name, slot=old)
+                    self._post(protocol.RELEASE, scene=channel.name, slot=old)
             channel.frames += 1
             frame.number = channel.frames
             channel.held, channel.latest, channel.fresh = frame.slot, frame, True
             channel.event.set()
 
     def _post(self, kind, **fields) -> int:
-        data = p.dumps(kind, **fields)
+        data = protocol.dumps(kind, **fields)
         self.sent.append((kind, fields.get("scene"), len(data)))
         self.messages += 1
         self._outbox.put(data)
@@ -277,7 +277,7 @@ class Host:
             return self.channels[name]
 
     def edit(self, scene, fragment) -> int:
-        return self.send(p.EDIT, scene=scene, fragment=fragment)
+        return self.send(protocol.EDIT, scene=scene, fragment=fragment)
 
     def render(self, scene, *, width, height, preset, passes=(), transparent=False,
                view=None, projection=None, camera=None, frame=None, progressive=False,
@@ -293,24 +293,25 @@ class Host:
             channel.requested = request = next(self._ids)
             channel.error = None
             channel.event.clear()
-            self.send(p.RENDER, scene=scene, id=request, width=int(width), height=int(height),
-                      preset=preset, passes=list(passes), transparent=bool(transparent),
-                      view=view, projection=projection, camera=camera, frame=frame,
-                      progressive=bool(progressive), tag=tag)
+            self.send(protocol.RENDER, scene=scene, id=request, width=int(width),
+                      height=int(height), preset=preset, passes=list(passes),
+                      transparent=bool(transparent), view=view, projection=projection,
+                      camera=camera, frame=frame, progressive=bool(progressive), tag=tag)
             return request
 
     def _resize(self, channel, key, passes):
         """New slots for frames of another size or other passes."""
-        _, size = p.layout(key[0], key[1], passes)
+        _, size = protocol.layout(key[0], key[1], passes)
         for name, block in channel.blocks.items():
             if name == channel.held:
                 channel.retired[name] = block      # shown until a new frame arrives
             else:                                  # the child closes its mapping on SLOTS
-                p.release_block(block, unlink=True)
-        names = [f"lantern_{os.getpid()}_{next(self._blocks)}" for _ in range(p.SLOTS_PER_TARGET)]
-        channel.blocks = {name: p.create_block(name, max(size, 1)) for name in names}
+                protocol.release_block(block, unlink=True)
+        names = [f"lantern_{os.getpid()}_{next(self._blocks)}"
+                 for _ in range(protocol.SLOTS_PER_TARGET)]
+        channel.blocks = {name: protocol.create_block(name, max(size, 1)) for name in names}
         channel.key = key
-        self.send(p.SLOTS, scene=channel.name, names=names)
+        self.send(protocol.SLOTS, scene=channel.name, names=names)
 
     @contextlib.contextmanager
     def frame(self, scene):
@@ -323,7 +324,7 @@ class Host:
                 yield None
                 return
             block = channel.blocks.get(frame.slot) or channel.retired.get(frame.slot)
-            views = {name: p.view(block, frame.width, frame.height, c, offset)
+            views = {name: protocol.view(block, frame.width, frame.height, c, offset)
                      for name, c, offset in frame.layout}
             try:
                 yield frame, views
@@ -355,7 +356,7 @@ class Host:
                 channel.event.clear()
             if test_break():
                 with contextlib.suppress(HostError):
-                    self.send(p.FORGET, scene=scene)
+                    self.send(protocol.FORGET, scene=scene)
                 return None
             channel.event.wait(poll)
 
@@ -364,13 +365,13 @@ class Host:
         with self._lock:
             channel = self.channels.pop(scene, None)
             if self.running():
-                self._post(p.DROP, scene=scene)
+                self._post(protocol.DROP, scene=scene)
             if channel is not None:
                 self._close_channel(channel)
 
     def _close_channel(self, channel):
         for block in list(channel.blocks.values()) + list(channel.retired.values()):
-            p.release_block(block, unlink=True)
+            protocol.release_block(block, unlink=True)
         channel.blocks, channel.retired, channel.latest, channel.held = {}, {}, None, None
         channel.event.set()
 
@@ -380,7 +381,7 @@ class Host:
         lock); `_bury` then stops them (without it: the reader takes the lock)."""
         proc, conn, outbox, threads = self.proc, self.conn, self._outbox, self._threads
         if proc is not None and quit_first and proc.poll() is None and outbox is not None:
-            self._post(p.QUIT)
+            self._post(protocol.QUIT)
         for channel in self.channels.values():
             self._close_channel(channel)
         self.channels = {}

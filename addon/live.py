@@ -26,31 +26,12 @@ import time
 from collections import Counter
 
 import bpy
-from pxr import Usd
 
-from ..engine.usd.changes import ChangeTracker
-from ..engine.usd.fragments import encode
+from ..engine.usd.fragments import Mirror
 from ..exporters import export_depsgraph
-from ..exporters.gather.skin import animated
-from ..exporters.live import (NeedsFullExport, export_data, export_geometry, export_live,
-                              export_material, export_object, export_pose, export_world,
-                              settings_key)
-
-
-class Mirror:
-    """The sender's copy of a stage the host holds, and what changed in it since the
-    last fragment."""
-
-    def __init__(self):
-        self.stage = Usd.Stage.CreateInMemory()
-        self.tracker = ChangeTracker(self.stage)
-
-    def fragment(self):
-        """The edits since the last call, as a fragment (None: nothing changed)."""
-        return encode(self.stage.GetRootLayer(), *self.tracker.take())
-
-    def close(self):
-        self.tracker.close()
+from ..exporters.live import (NeedsFullExport, animated, export_data, export_geometry,
+                              export_live, export_material, export_object, export_pose,
+                              export_world, settings_key)
 
 
 class StillScene:
@@ -64,10 +45,8 @@ class StillScene:
         self.warnings = []
 
     def sync(self, depsgraph):
-        scratch = Usd.Stage.CreateInMemory()
-        report = export_depsgraph(depsgraph, scratch)
+        report = self.mirror.replace(lambda stage: export_depsgraph(depsgraph, stage))
         self.warnings = report.warnings
-        self.mirror.stage.GetRootLayer().TransferContent(scratch.GetRootLayer())
         return self.mirror.fragment()
 
     def close(self):

@@ -1,6 +1,6 @@
 """The light accumulation target: float16 against float32, on llvmpipe.
 
-Issue 13 asks that lights from 1e-6 W to 1e6 W add up without underflow or Inf:
+Lights from 1e-6 W to 1e6 W must add up without underflow or Inf:
 float16 holds 6e-8..65504 with 11 bits, float32 1e-38..3e38 with 24. An exposure
 pre-scale would only move float16's window (a scene with both lights spans 12 orders
 of magnitude, float16 about 12 in all, with 3 significant digits). This measures what

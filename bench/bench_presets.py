@@ -1,4 +1,4 @@
-"""Presets, cost against error on the reference suite (issue 10): every scene of
+"""Presets, cost against error on the reference suite (tests/reference_scenes.py): every scene of
 tests/reference_scenes.py, built as the Cycles references were, rendered at its
 reference size with each preset; mean HDR-FLIP against the committed Cycles reference
 and the warm render time (median of 3). Prints one row per scene and the suite's mean

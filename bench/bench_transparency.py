@@ -1,8 +1,8 @@
-"""Transparency and area-light shadows (issue 10): error against Cycles next to time.
+"""Transparency and area-light shadows (docs/rendering.md): error against Cycles next to time.
 Prints; asserts nothing.
 
 1. The transparency scenes against their Cycles references (tests/references/looks),
-   medium preset: mean HDR-FLIP before issue 10 (BEFORE.md) and now, render time.
+   medium preset: mean HDR-FLIP before the shading work (BEFORE.md) and now, render time.
 2. Hashed alpha, blended or stochastic: transparency_planes with its materials set to
    Blender's Dithered render method. Both treatments are composed from the same
    per-layer renders (each plane alone, opaque; none), so they differ only in how
@@ -193,7 +193,7 @@ def cost():
 
 
 if __name__ == "__main__":
-    print(f"issue 10 transparency and area shadows ({time.strftime('%Y-%m-%d')}, llvmpipe)")
+    print(f"transparency and area shadows ({time.strftime('%Y-%m-%d')}, llvmpipe)")
     looks()
     hashed()
     shadows()

@@ -15,7 +15,7 @@ Scenes, built or copied into a temporary folder by a Blender process (`--build`)
   reference_scenes.py repairs them in memory: each repair is listed in the scene's
   report and in the summary;
 - the 16-character rigged crowd of bench_skel_export.py, lit, at frame 25.
-- from tests/reference_scenes.py (issue 10): the environment-lit spheres (diffuse and
+- from tests/reference_scenes.py: the environment-lit spheres (diffuse and
   mirror), the AO corner under a uniform world and the grazing MIP checker, at their
   own sizes and samples;
 
@@ -45,7 +45,7 @@ REFERENCE_SAMPLES = 1024       # 4x the sweep's last point; calibration scenes u
 EEVEE_SAMPLES = (1, 4, 16)     # 64 would double the suite's time on 2 cores
 CROWD_FRAME = 25
 POINT_SAMPLED = 0.01           # pixel filter width of the calibration references
-# Calibration scenes of issue 10 (tests/reference_scenes.py builds them, at their own
+# Calibration scenes of the shading work (tests/reference_scenes.py builds them, at their own
 # size and samples, for its committed Cycles references): the environment-lit spheres
 # (diffuse and mirror), the AO corner, the grazing MIP checker.
 LOOKS_SCENES = ("environment_diffuse", "environment_mirror", "ao_corner", "tex_grazing_checker")
@@ -171,7 +171,7 @@ def build_crowd():
 
 def repair_copy(source, target, workdir):
     """Opens a corpus .blend, repairs its broken links as tests/reference_scenes.py does
-    for the Cycles references of issue 10 (one repair, shared), saves the copy; returns
+    for the Cycles references (tests/references/; one repair, shared), saves the copy; returns
     the repairs made (strings)."""
     import bpy
     import reference_scenes
@@ -187,7 +187,7 @@ def repair_copy(source, target, workdir):
             node.image = bpy.data.images.load(reference_scenes.write_sky(workdir))
             repairs.append(f"world '{world.name}': environment image {image.filepath} is not in "
                            "the corpus; shows reference_scenes.py's asymmetric lat-long sky "
-                           "(the one issue 10's references use) instead")
+                           "(the one tests/references/ uses) instead")
     for material in bpy.data.materials:
         groups = [n for n in (material.node_tree.nodes if material.node_tree else ())
                   if n.bl_idname == "ShaderNodeGroup" and n.node_tree is not None

@@ -2,7 +2,9 @@
 
 A tool beside the engine, not part of it: it drives Blender (Cycles, EEVEE, and the
 exporter for Lantern) in worker processes, so it may import bpy; the engine never
-imports it. Modules, in the order the data flows:
+imports it. Modules, in the order the data flows (and the imports run: command ->
+run -> tasks -> worker -> Blender-side rendering):
+- modes.py: the reference modes and the progress-line marker, shared by both sides;
 - command.py: the sub-command's options; run.py: the steps of one comparison;
 - worker.py: one render job per process (blender_scene.py opens and prepares the
   scene, blender_render.py configures and times Cycles and EEVEE,

@@ -19,7 +19,7 @@ import time
 import bpy
 
 from .files import atomic_write
-from .run import MODES
+from .modes import MODES
 
 
 def prepare_output(scene):

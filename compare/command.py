@@ -6,7 +6,8 @@ from __future__ import annotations
 import argparse
 import os
 
-from .run import MODES, Options, preset_names
+from .modes import MODES
+from .run import Options, preset_names
 
 DEFAULTS = Options(scene="", out="")   # one table of defaults: run.Options
 

@@ -13,7 +13,7 @@ def atomic_write(path: str, write, suffix: str = "") -> None:
     """core.files.atomic_write, making the folder first; files get the permissions a
     plain open() would, since others read the report."""
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-    _atomic_write(path, write, suffix=suffix, keep_mode=True)
+    _atomic_write(path, write, suffix=suffix)
 
 
 def write_text(path: str, text: str) -> None:

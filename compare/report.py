@@ -129,15 +129,19 @@ def validate(results: dict) -> None:
 
 # --- index.html -----------------------------------------------------------------------
 
-def _e(value):
+def _html(value):
+    """Any value as text safe inside HTML."""
     return html.escape(str(value))
 
 
-def _s(seconds):
+def _secs(seconds):
+    """A time for the page: three significant digits, or a dash when not measured."""
     return "–" if seconds is None else f"{seconds:.3g} s"
 
 
-def _n(value, digits=4):
+def _num(value, digits=4):
+    """A score for the page: `digits` significant digits, a dash when missing, inf and
+    nan as themselves."""
     if value is None:
         return "–"
     if isinstance(value, float) and not math.isfinite(value):
@@ -154,7 +158,7 @@ def _equal_cell(entry, name):
         prefix = {"reached": "", "already_below": "≤ ", "not_reached": "> "}[entry["status"]]
         text += f"; {prefix}{ratio:.0f}× Lantern warm" if ratio >= 100 else \
             f"; {prefix}{ratio:.3g}× Lantern warm"
-    return _e(text)
+    return _html(text)
 
 
 def _entry_result(entry):
@@ -164,16 +168,16 @@ def _entry_result(entry):
 
 
 def _table(header, rows):
-    head = "".join(f"<th>{_e(h)}</th>" for h in header)
+    head = "".join(f"<th>{_html(h)}</th>" for h in header)
     body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in row) + "</tr>" for row in rows)
     return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
 
 
 def _figure(src, caption, heatmap=None):
-    parts = [f'<img src="{_e(src)}" alt="{_e(caption)}">']
+    parts = [f'<img src="{_html(src)}" alt="{_html(caption)}">']
     if heatmap:
-        parts.append(f'<img src="{_e(heatmap)}" alt="FLIP heat map: {_e(caption)}">')
-    return f"<figure>{''.join(parts)}<figcaption>{_e(caption)}</figcaption></figure>"
+        parts.append(f'<img src="{_html(heatmap)}" alt="FLIP heat map: {_html(caption)}">')
+    return f"<figure>{''.join(parts)}<figcaption>{_html(caption)}</figcaption></figure>"
 
 
 def _render_label(render):
@@ -213,17 +217,17 @@ def _mode_section(results, mode, plot_file):
         lantern = next(r for r in renders if r["renderer"] == "lantern"
                        and r["preset"] == row["preset"])
         fg = (lantern["metrics"][mode].get("foreground") or {}).get("hdr_flip")
-        rows.append([_e(row["preset"]), _s(row["lantern_warm_seconds"]),
-                     _s(row["lantern_cold_seconds"]), _n(row["flip"]), _n(fg),
+        rows.append([_html(row["preset"]), _secs(row["lantern_warm_seconds"]),
+                     _secs(row["lantern_cold_seconds"]), _num(row["flip"]), _num(fg),
                      _equal_cell(row["cycles"], "cycles"),
                      _equal_cell(row["cycles_denoised"], "cycles_denoised"),
                      _equal_cell(row["eevee"], "eevee"),
-                     _e(_winner_text(row, "warm")), _e(_winner_text(row, "cold"))])
+                     _html(_winner_text(row, "warm")), _html(_winner_text(row, "cold"))])
     parts = [f"<h2>Against the {mode} reference</h2>"]
     reference = results["references"][mode]
     parts.append(f"<p>Reference: Cycles {reference['samples']} spp, seed {reference['seed']}"
                  f"{' (from the cache)' if reference['cached'] else ''}, "
-                 f"{_s(reference['seconds'])}.</p>")
+                 f"{_secs(reference['seconds'])}.</p>")
     if rows:
         parts.append("<h3>Equal error: the time each renderer needs for Lantern's FLIP</h3>")
         parts.append(_table(["preset", "Lantern warm", "Lantern cold", "HDR-FLIP",
@@ -232,14 +236,14 @@ def _mode_section(results, mode, plot_file):
     else:
         parts.append("<p class=bad>No Lantern image could be scored against this reference.</p>")
     if plot_file:
-        parts.append(f'<p><img class=plot src="{_e(plot_file)}" alt="error against time, {mode}"></p>')
+        parts.append(f'<p><img class=plot src="{_html(plot_file)}" alt="error against time, {mode}"></p>')
     pairs = _equal_time_pairs(renders, mode)
     if pairs:
         parts.append("<h3>Equal time: each Lantern preset beside the Cycles image closest "
                      "to it in time</h3>")
         parts.append("<div class=grid>" + "".join(
-            _figure(r["png"], f"{_render_label(r)}: {_s(r['seconds'])}, FLIP "
-                              f"{_n(r['metrics'][mode]['all']['hdr_flip'], 3)}")
+            _figure(r["png"], f"{_render_label(r)}: {_secs(r['seconds'])}, FLIP "
+                              f"{_num(r['metrics'][mode]['all']['hdr_flip'], 3)}")
             for pair in pairs for r in pair) + "</div>")
     figures = []
     if reference.get("png"):
@@ -250,7 +254,7 @@ def _mode_section(results, mode, plot_file):
             continue
         flip = (metric.get("all") or {}).get("hdr_flip")
         figures.append(_figure(render["png"], f"{_render_label(render)}: "
-                               f"{_s(render['seconds'])}, FLIP {_n(flip, 3)}", metric["heatmap"]))
+                               f"{_secs(render['seconds'])}, FLIP {_num(flip, 3)}", metric["heatmap"]))
     parts.append("<h3>Images (tone-mapped) and FLIP heat maps (black 0, yellow 1)</h3>")
     parts.append(f"<div class=grid>{''.join(figures)}</div>")
     metric_rows = []
@@ -259,10 +263,10 @@ def _mode_section(results, mode, plot_file):
         if metric is None:
             continue
         every, fg = metric.get("all") or {}, metric.get("foreground") or {}
-        metric_rows.append([_e(_render_label(render)), _s(render["seconds"])] +
-                           [_n(every.get(k)) for k in ("hdr_flip", "ldr_flip", "psnr", "ssim", "rel_mse")] +
-                           [_n(fg.get(k)) for k in ("hdr_flip", "ldr_flip", "psnr", "ssim", "rel_mse")] +
-                           [_e(render["problems"]["nonfinite_pixels"] or "")])
+        metric_rows.append([_html(_render_label(render)), _secs(render["seconds"])] +
+                           [_num(every.get(k)) for k in ("hdr_flip", "ldr_flip", "psnr", "ssim", "rel_mse")] +
+                           [_num(fg.get(k)) for k in ("hdr_flip", "ldr_flip", "psnr", "ssim", "rel_mse")] +
+                           [_html(render["problems"]["nonfinite_pixels"] or "")])
     parts.append("<h3>Every metric (all pixels | foreground)</h3>")
     parts.append(_table(["render", "time", "HDR-FLIP", "LDR-FLIP", "PSNR dB", "SSIM", "rel. MSE",
                          "fg HDR-FLIP", "fg LDR-FLIP", "fg PSNR", "fg SSIM", "fg rel. MSE",
@@ -284,42 +288,42 @@ code{background:#f3f3f3;padding:0 3px}
 def html_page(results: dict, plots: dict) -> str:
     scene, settings = results["scene"], results["settings"]
     head = (f"<!doctype html><html lang=en><head><meta charset=utf-8>"
-            f"<link rel=icon href=\"data:,\"><title>lantern compare: {_e(scene['name'])}</title>"
+            f"<link rel=icon href=\"data:,\"><title>lantern compare: {_html(scene['name'])}</title>"
             f"<style>{STYLE}</style></head><body>")
-    parts = [head, f"<h1>lantern compare: {_e(os.path.basename(scene['path']))}</h1>",
-             f"<p><b>{_e(results['summary'])}</b></p>"]
-    facts = [["scene", _e(scene["path"])], ["frame, size", _e(f"{scene['frame']:g}, "
+    parts = [head, f"<h1>lantern compare: {_html(os.path.basename(scene['path']))}</h1>",
+             f"<p><b>{_html(results['summary'])}</b></p>"]
+    facts = [["scene", _html(scene["path"])], ["frame, size", _html(f"{scene['frame']:g}, "
                                                           f"{scene['size'][0]}×{scene['size'][1]}")],
-             ["modes", _e(", ".join(settings["modes"]))],
-             ["Cycles sweep", _e(", ".join(map(str, settings["cycles_samples"])) + " spp")],
-             ["pixel filter", _e(f"Blackman-Harris, {settings['pixel_filter']['width']} px" + (
+             ["modes", _html(", ".join(settings["modes"]))],
+             ["Cycles sweep", _html(", ".join(map(str, settings["cycles_samples"])) + " spp")],
+             ["pixel filter", _html(f"Blackman-Harris, {settings['pixel_filter']['width']} px" + (
                  "; point-sampled, so Lantern renders without anti-aliasing"
                  if point_sampled(settings["pixel_filter"]["width"]) else ""))],
-             ["seeds", _e(f"reference {settings['seeds']['reference']}, "
+             ["seeds", _html(f"reference {settings['seeds']['reference']}, "
                           f"sweep {settings['seeds']['sweep']}")],
-             ["foreground mask", _e(results["mask"]["source"])],
-             ["images shown through", _e(f"view {scene['view']['transform']}, look "
+             ["foreground mask", _html(results["mask"]["source"])],
+             ["images shown through", _html(f"view {scene['view']['transform']}, look "
                                          f"{scene['view']['look'] or 'none'}, exposure "
                                          f"{scene['view']['exposure']:g}")],
-             ["machine", _e(f"{results['machine']['cpus']} CPUs, {results['machine']['platform']}, "
+             ["machine", _html(f"{results['machine']['cpus']} CPUs, {results['machine']['platform']}, "
                             f"Blender {results['machine']['blender']}, "
                             f"Lantern {results['machine']['lantern']}")],
-             ["created", _e(results["created"])]]
+             ["created", _html(results["created"])]]
     parts.append(_table(["", ""], facts))
     parts.append("<h2>What the times include</h2><ul>" + "".join(
-        f"<li><b>{_e(k)}</b>: {_e(v)}</li>" for k, v in results["timing"].items()) + "</ul>")
+        f"<li><b>{_html(k)}</b>: {_html(v)}</li>" for k, v in results["timing"].items()) + "</ul>")
     if results["broken_links"]:
         parts.append("<h2 class=bad>Broken links (the renders went on without them)</h2><ul>" +
-                     "".join(f"<li>{_e(l['kind'])} <code>{_e(l['name'])}</code>: "
-                             f"<code>{_e(l['path'])}</code> ({_e(l['resolved'])}) is missing</li>"
+                     "".join(f"<li>{_html(l['kind'])} <code>{_html(l['name'])}</code>: "
+                             f"<code>{_html(l['path'])}</code> ({_html(l['resolved'])}) is missing</li>"
                              for l in results["broken_links"]) + "</ul>")
     if results["failures"]:
         parts.append("<h2 class=bad>Failed renders</h2><ul>" + "".join(
-            f"<li>{_e(f['job'])}: {_e(f['error'])} (<a href=\"{_e(f['log'])}\">log</a>)</li>"
+            f"<li>{_html(f['job'])}: {_html(f['error'])} (<a href=\"{_html(f['log'])}\">log</a>)</li>"
             for f in results["failures"]) + "</ul>")
     if results["warnings"]:
         parts.append("<h2>Warnings</h2><ul>" + "".join(
-            f"<li>{_e(w)}</li>" for w in results["warnings"]) + "</ul>")
+            f"<li>{_html(w)}</li>" for w in results["warnings"]) + "</ul>")
     for mode in settings["modes"]:
         parts.append(_mode_section(results, mode, plots.get(mode)))
     parts.append("<p>Every number above is in <a href=\"results.json\">results.json</a> "

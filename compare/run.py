@@ -17,13 +17,13 @@ import platform
 import shutil
 from dataclasses import dataclass, field
 
+from ..core.version import installed_version
 from . import cache as reference_cache
 from .curves import EqualError, hdr_flip, sweep_points, time_to_reach
 from .files import atomic_write
 from .lantern_timing import point_sampled
 from .tasks import Job, run_job, run_jobs
 
-MODES = ("direct", "full")  # the Cycles references: see blender_render.configure_cycles
 DEFAULT_WIDTH = 320        # without --size: this wide, at the scene's aspect
 SWEEP_SEED = 0             # Blender's default seed
 REFERENCE_SEED = 7919      # any other: the reference's noise is independent of the sweep's
@@ -350,14 +350,6 @@ def _timing_notes(options):
     return notes
 
 
-def _version():
-    from importlib.metadata import PackageNotFoundError, version
-    try:
-        return version("lantern")
-    except PackageNotFoundError:
-        return "unknown"
-
-
 def compare(options: Options) -> dict:
     """Runs the comparison and writes the report; returns results.json's content."""
     from . import report
@@ -389,7 +381,7 @@ def compare(options: Options) -> dict:
                   "film_transparent": scan["scene"]["film_transparent"],
                   "camera": scan["scene"]["camera"], "view": view},
         "machine": {"cpus": os.cpu_count(), "platform": platform.platform(),
-                    "blender": scan["scene"]["blender"], "lantern": _version()},
+                    "blender": scan["scene"]["blender"], "lantern": installed_version()},
         "settings": {"presets": list(options.presets), "modes": list(options.modes),
                      "cycles_samples": list(options.cycles_samples),
                      "reference_samples": options.reference_samples,

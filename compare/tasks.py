@@ -17,7 +17,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 from .files import write_json
-from .worker import PROGRESS
+from .modes import PROGRESS
 
 
 @dataclass

@@ -16,7 +16,9 @@ import statistics
 import sys
 import time
 
-PROGRESS = "@@lantern-compare@@"
+from ..core.text import error_text
+from .modes import PROGRESS
+
 # Short renders are repeated (median) so that one scheduler hiccup does not decide a
 # point of the curve; a render longer than this is timed once.
 REPEAT_BELOW_SECONDS = 0.5
@@ -97,7 +99,8 @@ def main(argv=None):
     except Exception as error:  # one line for the report; --debug-like detail in the log
         import traceback
         traceback.print_exc()
-        print(f"error: {type(error).__name__}: {error}".splitlines()[0], file=sys.stderr)
+        print(f"error: {type(error).__name__}: {error_text(error)}".splitlines()[0],
+              file=sys.stderr)
         return 1
     result["finished_at"] = time.time()
     write_json(spec["result"], result)

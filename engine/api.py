@@ -3,8 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .session import RenderResult, RenderSettings, Session
-from .usd.stage import open_stage
+from .session import RenderResult, Session
+from .settings import RenderSettings
+from .usd.opening import open_stage
 
 
 def render_stage(stage, settings: RenderSettings | None = None) -> RenderResult:

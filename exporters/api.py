@@ -129,7 +129,7 @@ def export_depsgraph_to_file(depsgraph, out_path, options=None):
     def write(tmp):
         if not stage.GetRootLayer().Export(tmp):
             raise ExportError(f"{out_path}: USD could not write the layer")
-    atomic_write(out_path, write, suffix=ext, keep_mode=True)
+    atomic_write(out_path, write, suffix=ext)
     report.path = out_path
     return report
 

@@ -33,7 +33,7 @@ from .errors import require_finite
 from .gather.camera import gather_camera
 from .gather.light import gather_light
 from .gather.material import gather_material
-from .gather.scene import _gather_geometry, _is_shareable, gather_scene
+from .gather.scene import gather_geometry, gather_scene, is_shareable
 from .gather.shapes import shape_weights
 from .gather.skeleton import (decompose, local_matrices, pose_index, pose_matrices,
                               relative_matrix, trs)
@@ -253,11 +253,11 @@ def export_geometry(depsgraph, stage, index, key, warn):
     if key in index.rig_of and not index.meshes[obj.mesh][2]:
         raise NeedsFullExport(f"object {key} is skinned: its rest mesh changed")
     ob = _original(key)
-    shared = {ob.data.name_full} & index.shared_data if _is_shareable(ob) else set()
+    shared = {ob.data.name_full} & index.shared_data if is_shareable(ob) else set()
     rec = SceneRecord()
     fresh = ObjectRecord(key=key, name=ob.name, parent=obj.parent, matrix=obj.matrix,
                          kind="empty")
-    _gather_geometry(ob.evaluated_get(depsgraph), fresh, rec, shared, None, {}, warn)
+    gather_geometry(ob.evaluated_get(depsgraph), fresh, rec, shared, None, {}, warn)
     if fresh.mesh != obj.mesh or fresh.mesh not in rec.meshes:
         raise NeedsFullExport(f"object {key}: its mesh is no longer written as it was")
     slots = [m[0] if m else None for m in fresh.materials]

@@ -1,5 +1,7 @@
 """Batch export and sequence rendering as tasks, on this machine or on a Dask cluster.
 
+- `options.py`: what the CLI tells a batch (FarmOptions and the export and sequence
+  records), built once from the command line.
 - `tasks.py`: the two tasks (export one .blend file, render a chunk of frames) and what a
   worker does with each.
 - `sessions.py`: the worker-local cache of engine Sessions, so a chunk costs warm renders.

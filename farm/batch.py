@@ -19,11 +19,16 @@ import statistics
 import sys
 import tempfile
 from collections import deque
+from dataclasses import dataclass, field
+from typing import NamedTuple
 
+from ..core import interrupt
 from ..core.files import atomic_write
+from ..core.text import frame_path
 from . import chunking
+from .options import ExportBatchOptions, SequenceOptions
 from .runners import FarmError, open_runner
-from .tasks import EXPORT_NEEDS, RENDER_NEEDS, ExportTask, RenderChunk, frame_output
+from .tasks import EXPORT_NEEDS, RENDER_NEEDS, ExportTask, RenderChunk
 
 FAILED = 1
 STALL_SECONDS = 5.0  # how often a waiting client checks that some worker can run its tasks
@@ -52,30 +57,36 @@ def _print(table):
     Console(width=max(160, Console().width)).print(table)
 
 
-def _drive(runner, submit_more, on_done, needs):
+def _drive(runner, submit_more, on_done, needs, status=None):
     """Waits for every task, calling on_done for each finished one and submit_more
-    after it; gives the rest up if no worker can run them any more."""
+    after it; gives the rest up if no worker can run them any more. status(state): the
+    farm's progress for --status-fd (FarmOptions.status)."""
     submit_more()
+    if status is not None:
+        status("running")
     while runner.pending:
+        interrupt.check()           # a Ctrl-C that USD swallowed while the stage was read
         finished = runner.wait(timeout=STALL_SECONDS)
         if not finished and not runner.offers(needs):
             finished = runner.fail_pending(f"no worker offers {_needs_text(needs)} any more")
         for done in finished:
             on_done(done)
         submit_more()
+    if status is not None:
+        status("finished")
 
 
-def open_render_runner(args):
-    """The runner for a sequence, opened before the client reads the stage: local
-    workers import the engine meanwhile."""
-    return open_runner(args.scheduler, args.jobs, render=True)
+def open_render_runner(scheduler, jobs):
+    """The runner for a sequence (FarmOptions' scheduler and jobs), opened before the
+    client reads the stage: local workers import the engine meanwhile."""
+    return open_runner(scheduler, jobs, render=True)
 
 
-def _open(args, needs, runner=None):
-    runner = runner or open_runner(args.scheduler, args.jobs)
+def _open(options, needs, runner=None):
+    runner = runner or open_runner(options.scheduler, options.jobs)
     if not runner.offers(needs):
         runner.close()
-        raise FarmError(f"{args.scheduler}: no worker offers {_needs_text(needs)} (start "
+        raise FarmError(f"{options.scheduler}: no worker offers {_needs_text(needs)} (start "
                         f"workers with --resources \"{_needs_text(needs)}\")")
     if runner.dashboard:
         print(f"dashboard: {runner.dashboard}", file=sys.stderr, flush=True)
@@ -97,15 +108,18 @@ def _write_collected(files):
         def write(tmp, data=data):
             with open(tmp, "wb") as f:
                 f.write(data)
-        atomic_write(path, write, suffix=os.path.splitext(path)[1], keep_mode=True)
+        atomic_write(path, write, suffix=os.path.splitext(path)[1])
 
 
 def _sweep(outputs):
-    """Removes what a lost worker's atomic writes left: `.<name>.XXXXXXXX<suffix>`
-    beside each output (core/files.py's temporary names)."""
+    """Removes what a lost or killed worker's atomic writes left:
+    `.<name>.XXXXXXXX<suffix>` beside each output (core/files.py's temporary names).
+    An output may be a frame pattern ('####'): every frame's are removed."""
     for output in outputs:
         folder, name = os.path.split(output)
-        pattern = re.compile(re.escape("." + name + ".") + r"[a-z0-9_]{8}"
+        stem = "".join(r"\d+(?:\.\d+)?" if part.startswith("#") else re.escape(part)
+                       for part in re.split(r"(#+)", name) if part)
+        pattern = re.compile(r"\." + stem + r"\.[a-z0-9_]{8}"
                              + re.escape(os.path.splitext(name)[1]) + "$")
         try:
             names = os.listdir(folder)
@@ -137,20 +151,31 @@ def _retry_line(label, done):
 
 # --- export -----------------------------------------------------------------------------
 
-def export_batch(args, jobs):
+class _ExportRow(NamedTuple):
+    """One line of the export summary."""
+    blend: str
+    status: str             # ok, skipped or failed
+    seconds: float
+    warnings: int
+    worker: str
+    tries: int
+    detail: str             # the output, or why it failed
+
+
+def export_batch(options: ExportBatchOptions, jobs):
     """jobs: [(blend, output)] in the order given. Returns the exit status."""
     tasks, rows, skipped = [], {}, []
     for blend, output in jobs:
-        if args.resume and os.path.isfile(blend) and \
+        if options.resume and os.path.isfile(blend) and \
                 _up_to_date(output, os.stat(blend).st_mtime_ns):
             skipped.append(blend)
-            rows[blend] = (blend, "skipped", 0.0, 0, "", 1, f"{output} (up to date)")
+            rows[blend] = _ExportRow(blend, "skipped", 0.0, 0, "", 1, f"{output} (up to date)")
             continue
-        tasks.append(ExportTask(os.path.abspath(blend), os.path.abspath(output), args.textures,
-                                args.max_influences, args.collect))
+        tasks.append(ExportTask(os.path.abspath(blend), os.path.abspath(output),
+                                options.textures, options.max_influences, options.collect))
     retries, lost_outputs = [], []
     if tasks:
-        runner = _open(args, EXPORT_NEEDS)
+        runner = _open(options, EXPORT_NEEDS)
         queue = deque(tasks)
         try:
             with _progress() as progress:
@@ -168,37 +193,42 @@ def export_batch(args, jobs):
                         retries.append(_retry_line(os.path.basename(blend), done))
                         lost_outputs.extend(task.outputs)
                     if result is None:
-                        rows[blend] = (blend, "failed", done.latency, 0, "", tries, done.error)
+                        rows[blend] = _ExportRow(blend, "failed", done.latency, 0, "", tries,
+                                                 done.error)
                     elif result.ok:
                         _write_collected(result.files)
-                        rows[blend] = (blend, "ok", result.seconds, len(result.warnings),
-                                       result.worker, tries, task.output)
+                        rows[blend] = _ExportRow(blend, "ok", result.seconds,
+                                                 len(result.warnings), result.worker, tries,
+                                                 task.output)
                     else:
-                        rows[blend] = (blend, "failed", result.seconds, len(result.warnings),
-                                       result.worker, tries, result.reason)
+                        rows[blend] = _ExportRow(blend, "failed", result.seconds,
+                                                 len(result.warnings), result.worker, tries,
+                                                 result.reason)
                     progress.advance(bar)
 
-                _drive(runner, submit_more, on_done, EXPORT_NEEDS)
+                _drive(runner, submit_more, on_done, EXPORT_NEEDS, options.status)
         except BaseException:
             runner.close(interrupted=True)
+            _sweep(task.output for task in tasks)     # what the killed workers left
             raise
         else:
             runner.close()
-        if not args.collect:
+        if not options.collect:
             _sweep(lost_outputs)
 
     table = _table("lantern export", ("file", "status", "seconds", "warnings", "worker",
                                       "tries", "output / reason"))
     ordered = [rows[blend] for blend, _ in jobs]
-    for blend, status, seconds, warnings, worker, tries, detail in ordered:
-        style = {"ok": "green", "skipped": "blue"}.get(status, "red")
-        table.add_row(os.path.basename(blend), f"[{style}]{status}[/]", f"{seconds:.2f}",
-                      str(warnings), worker, str(tries), detail)
+    for row in ordered:
+        style = {"ok": "green", "skipped": "blue"}.get(row.status, "red")
+        table.add_row(os.path.basename(row.blend), f"[{style}]{row.status}[/]",
+                      f"{row.seconds:.2f}", str(row.warnings), row.worker, str(row.tries),
+                      row.detail)
     _print(table)
     for line in retries:
         print(line)
-    failed = sum(1 for row in ordered if row[1] == "failed")
-    exported = sum(1 for row in ordered if row[1] == "ok")
+    failed = sum(1 for row in ordered if row.status == "failed")
+    exported = sum(1 for row in ordered if row.status == "ok")
     tail = f", {len(skipped)} skipped (up to date)" if skipped else ""
     print(f"{exported} exported, {failed} failed{tail}")
     return FAILED if failed else 0
@@ -247,52 +277,65 @@ def _frames_text(frames):
     return ", ".join(runs)
 
 
-def render_frames(args, runner, stage_text=None, fps=24.0, print_warnings=None):
-    """Renders args.frames of args.scene into args.output ('####' or a .gif) as chunks
-    on `runner` (open_render_runner), which it closes. stage_text: the stage as USD text
-    when the client exported it (a .blend)."""
+@dataclass
+class _WorkerTally:
+    """What one worker did in a sequence, for the summary table."""
+    chunks: int = 0
+    frames: int = 0
+    seconds: float = 0.0
+    cold: list = field(default_factory=list)    # seconds of each chunk that loaded the stage
+    warm: list = field(default_factory=list)    # seconds of each warm render
+
+
+def render_frames(options: SequenceOptions, runner, stage_text=None, fps=24.0,
+                  print_warnings=None):
+    """Renders options.frames of options.scene into options.output ('####' or a .gif)
+    as chunks on `runner` (open_render_runner), which it closes. stage_text: the stage
+    as USD text when the client exported it (a .blend)."""
     try:
-        status = _render_frames(args, runner, stage_text, fps, print_warnings)
+        status = _render_frames(options, runner, stage_text, fps, print_warnings)
     except BaseException:
         runner.close(interrupted=True)
+        if not options.output.lower().endswith(".gif"):
+            _sweep([os.path.abspath(options.output)])   # what the killed workers left
         raise
     return status
 
 
-def _render_frames(args, runner, stage_text, fps, print_warnings):
-    gif = args.output.lower().endswith(".gif")
-    pattern = None if gif else os.path.abspath(args.output)
-    scene = os.path.abspath(args.scene)
+def _render_frames(options, runner, stage_text, fps, print_warnings):
+    gif = options.output.lower().endswith(".gif")
+    pattern = None if gif else os.path.abspath(options.output)
+    scene = os.path.abspath(options.scene)
     input_mtime = os.stat(scene).st_mtime_ns
-    frames = list(args.frames)
+    frames = list(options.frames)
     up_to_date = []
-    if args.resume:
+    if options.resume:
         if gif:
-            up_to_date = frames if _up_to_date(args.output, input_mtime) else []
+            up_to_date = frames if _up_to_date(options.output, input_mtime) else []
         else:
-            up_to_date = [f for f in frames if _up_to_date(frame_output(pattern, f), input_mtime)]
+            up_to_date = [f for f in frames if _up_to_date(frame_path(pattern, f), input_mtime)]
         frames = [f for f in frames if f not in set(up_to_date)]
     if not frames:
         runner.close()
         print(f"0 frames written, 0 failed, {len(up_to_date)} skipped (up to date)")
         return 0
-    folder = os.path.dirname(pattern or os.path.abspath(args.output))
+    folder = os.path.dirname(pattern or os.path.abspath(options.output))
     os.makedirs(folder, exist_ok=True)
     digest = hashlib.sha1(stage_text.encode()).hexdigest() if stage_text is not None else None
-    base = dict(scene=scene, pattern=pattern, width=args.size[0] if args.size else None,
-                height=args.size[1] if args.size else None, preset=args.preset,
-                camera=args.camera, stage_digest=digest, collect=args.collect,
-                colour=(args.view, args.look, args.exposure),
-                overlays=getattr(args, "overlays", None),
-                since_ns=None if (args.collect or gif) else _folder_clock(folder))
+    base = dict(scene=scene, pattern=pattern, width=options.size[0] if options.size else None,
+                height=options.size[1] if options.size else None, preset=options.preset,
+                camera=options.camera, stage_digest=digest, collect=options.collect,
+                colour=(options.view, options.look, options.exposure),
+                overlays=options.overlays,
+                since_ns=None if (options.collect or gif) else _folder_clock(folder))
 
-    _open(args, RENDER_NEEDS, runner)
+    _open(options, RENDER_NEEDS, runner)
     workers = max(1, runner.workers(RENDER_NEEDS))
     left = deque(frames)
     costs = _Costs()
     pixels, failed, per_worker, retries, lost_outputs = {}, {}, {}, [], []
     written = skipped_lost = 0
-    first = [] if args.chunk else chunking.first_wave(frames, workers)
+    first = [] if options.chunk else chunking.first_wave(frames, workers)
     for chunk in first:
         for _ in chunk:
             left.popleft()
@@ -307,8 +350,8 @@ def _render_frames(args, runner, stage_text, fps, print_warnings):
             while first:
                 submit(first.pop(0))
             # Two chunks per worker in flight: a worker never waits for its next.
-            while left and runner.pending < 2 * workers and (args.chunk or costs.measured):
-                size = args.chunk or costs.chunk(len(left), workers)
+            while left and runner.pending < 2 * workers and (options.chunk or costs.measured):
+                size = options.chunk or costs.chunk(len(left), workers)
                 submit([left.popleft() for _ in range(min(size, len(left)))])
             if left and not runner.pending:  # nothing measured: every chunk failed
                 for frame in left:
@@ -327,13 +370,13 @@ def _render_frames(args, runner, stage_text, fps, print_warnings):
                 progress.advance(bar, len(task.frames))
                 return
             print_warnings(result.warnings)
-            stats = per_worker.setdefault(result.worker, [0, 0, 0.0, [], []])
-            stats[0] += 1
-            stats[1] += len(result.written)
-            stats[2] += result.seconds
+            tally = per_worker.setdefault(result.worker, _WorkerTally())
+            tally.chunks += 1
+            tally.frames += len(result.written)
+            tally.seconds += result.seconds
             if result.cold is not None:
-                stats[3].append(result.cold)
-            stats[4] += result.warm
+                tally.cold.append(result.cold)
+            tally.warm += result.warm
             if result.written or result.skipped:
                 costs.add(done)
             _write_collected(result.files)
@@ -343,22 +386,22 @@ def _render_frames(args, runner, stage_text, fps, print_warnings):
             failed.update(result.failed)
             progress.advance(bar, len(task.frames))
 
-        _drive(runner, submit_more, on_done, RENDER_NEEDS)
+        _drive(runner, submit_more, on_done, RENDER_NEEDS, options.status)
     dashboard = runner.dashboard
     runner.close()
-    if pattern and not args.collect:
+    if pattern and not options.collect:
         _sweep(lost_outputs)
     if gif and not failed:
         from ..engine.image_io import write_animation
         images = [pixels[f] for f in sorted(pixels)]
-        write_animation(args.output, images, fps, **args.colour)
+        write_animation(options.output, images, fps, **options.colour)
 
     table = _table(f"lantern render ({runner.name})",
                    ("worker", "chunks", "frames", "seconds", "cold s", "warm ms/frame"))
-    for worker, (chunks, n, seconds, cold, warm) in sorted(per_worker.items()):
-        table.add_row(worker, str(chunks), str(n), f"{seconds:.2f}",
-                      f"{max(cold):.2f}" if cold else "-",
-                      f"{statistics.median(warm) * 1000:.1f}" if warm else "-")
+    for worker, tally in sorted(per_worker.items()):
+        table.add_row(worker, str(tally.chunks), str(tally.frames), f"{tally.seconds:.2f}",
+                      f"{max(tally.cold):.2f}" if tally.cold else "-",
+                      f"{statistics.median(tally.warm) * 1000:.1f}" if tally.warm else "-")
     _print(table)
     if dashboard:
         print(f"dashboard: {dashboard}")
@@ -373,7 +416,7 @@ def _render_frames(args, runner, stage_text, fps, print_warnings):
     for reason, frames_failed in reasons.items():
         print(f"failed: frames {_frames_text(frames_failed)}: {reason}")
     tail = f", {len(up_to_date)} skipped (up to date)" if up_to_date else ""
-    where = args.output if gif else os.path.dirname(args.output) or "."
+    where = options.output if gif else os.path.dirname(options.output) or "."
     print(f"{written + skipped_lost} frames written, {len(failed)} failed{tail} -> {where}")
     return FAILED if failed else 0
 

@@ -51,22 +51,16 @@ def session_for(task, stage_text=None):
 
 
 def _open(task, stage_text):
-    from pxr import Sdf, Usd
-
     from ..engine import RenderSettings, Session
+    from ..engine.usd.opening import open_stage, stage_from_text
     if task.stage_digest is not None:
         if stage_text is None:
             raise ValueError(f"{task.scene}: the stage's text did not reach the worker")
-        layer = Sdf.Layer.CreateAnonymous(".usda")
-        if not layer.ImportFromString(stage_text):
-            raise ValueError(f"{task.scene}: the exported stage could not be read back")
-        stage = Usd.Stage.Open(layer)
+        stage = stage_from_text(stage_text, task.scene)
     else:
-        stage = Usd.Stage.Open(task.scene)
-        if stage is None:
-            raise ValueError(f"{task.scene}: cannot be read as USD")
-    extra = {"camera": task.camera} if task.camera is not None else {}
-    settings = RenderSettings(width=task.width, height=task.height, preset=task.preset, **extra)
+        stage = open_stage(task.scene)
+    settings = RenderSettings(width=task.width, height=task.height, preset=task.preset,
+                              camera=task.camera)
     return Session(stage, settings)
 
 

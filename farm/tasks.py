@@ -21,6 +21,8 @@ import threading
 import time
 from dataclasses import dataclass, field
 
+from ..core.text import error_text, frame_path, one_line
+
 # Dask worker resources. A worker offers `bpy` when it can run Blender (a subprocess per
 # export) and `gl` when it can make an EGL context; a task is only ever given to a worker
 # that offers what it needs.
@@ -74,7 +76,7 @@ class RenderChunk:
 
     @property
     def outputs(self):
-        return [frame_output(self.pattern, f) for f in self.frames] if self.pattern else []
+        return [frame_path(self.pattern, f) for f in self.frames] if self.pattern else []
 
     @property
     def settings_key(self):
@@ -122,11 +124,6 @@ def worker_name():
         except ValueError:
             pass
     return f"local pid {os.getpid()}"
-
-
-def frame_output(pattern, frame):
-    from ..cli import _frame_path
-    return _frame_path(pattern, frame)
 
 
 # --- export -----------------------------------------------------------------------------
@@ -206,7 +203,6 @@ def run_chunk(task: RenderChunk, stage_text=None) -> TaskResult:
     """Renders the chunk's frames with the worker's Session for the stage, writing (or
     encoding, with collect) each image as it comes, as today's one-process loop does:
     a writer thread measured no faster on 2 cores (bench/bench_distributed.py)."""
-    from ..cli import _one_line, _text
     from . import sessions
     start = time.perf_counter()
     result = TaskResult(ok=True, seconds=0.0, worker=worker_name())
@@ -215,7 +211,7 @@ def run_chunk(task: RenderChunk, stage_text=None) -> TaskResult:
             session, load = sessions.session_for(task, stage_text)
         except (OSError, ValueError, RuntimeError) as error:
             # The stage could not be loaded: every frame of the chunk fails for it.
-            result.reason = f"{task.scene}: {_one_line(_text(error))}"
+            result.reason = f"{task.scene}: {one_line(error_text(error))}"
             result.failed = {frame: result.reason for frame in task.frames}
         else:
             _render_frames(task, session, load, result)
@@ -230,10 +226,9 @@ def _render_frames(task, session, load, result):
     """The chunk's frames into `result`: written, skipped (a lost attempt wrote them)
     or failed. Frame N+1 is drawn while frame N is copied and written
     (Session.render_frames)."""
-    from ..cli import _one_line, _text
     paths, todo = {}, []
     for frame in task.frames:
-        path = paths[frame] = frame_output(task.pattern, frame) if task.pattern else None
+        path = paths[frame] = frame_path(task.pattern, frame) if task.pattern else None
         if path and not task.collect and _written_since(path, task.since_ns):
             result.skipped.append(frame)
         else:
@@ -242,7 +237,7 @@ def _render_frames(task, session, load, result):
     for frame, image in session.render_frames(todo):
         seconds, t0 = time.perf_counter() - t0, time.perf_counter()
         if isinstance(image, Exception):      # the engine's input errors
-            result.failed[frame] = f"{task.scene}: frame {frame:g}: {_one_line(_text(image))}"
+            result.failed[frame] = f"{task.scene}: frame {frame:g}: {one_line(error_text(image))}"
             continue
         if result.cold is None and load is not None:
             result.cold = load + seconds        # the load counts in the first frame

@@ -1,13 +1,14 @@
 #version 330 core
 #include "lib.glsl"
-// Screen-space ambient occlusion (seed 002), the fraction of a surface's cosine-
-// weighted hemisphere that sees the dome within `radius` (Blender's AO distance), by
-// a horizon search (GTAO, Jimenez et al. 2016): per slice through the view vector,
-// the highest horizon on each side within the radius, and the cosine-weighted
-// visible arc between them, integrated in closed form about the normal projected into
-// the slice. `slices` directions (the preset's rays) x `steps` depth samples per side,
-// rotated per pixel over a 4x4 tile (a Bayer pattern) that the bilateral blur
-// (ao_blur.frag) then averages away. Depth is read through lib.glsl's helpers.
+// Screen-space ambient occlusion (docs/design.md, Ambient occlusion), the fraction of a
+// surface's cosine-weighted hemisphere that sees the dome within `radius` (Blender's AO
+// distance), by a horizon search (GTAO, Jimenez et al. 2016): per slice through the
+// view vector, the highest horizon on each side within the radius, and the
+// cosine-weighted visible arc between them, integrated in closed form about the normal
+// projected into the slice. `slices` directions (the preset's rays) x `steps` depth
+// samples per side, rotated per pixel over a 4x4 tile (a Bayer pattern) that the
+// bilateral blur (ao_blur.frag) then averages away. Depth is read through lib.glsl's
+// helpers.
 uniform sampler2D g_depth;
 uniform sampler2D g_normal;
 uniform mat4 inv_view_proj;
@@ -18,6 +19,9 @@ uniform float pixel_scale;   // pixels per world unit at view depth 1 (orthograp
 uniform float max_pixels;    // the search never reaches further across the screen
 uniform int slices;
 uniform int steps;
+// Drawn at 1/u_step of the G-buffer's size per side (a supersampled frame's AO at the
+// output's resolution): each AO pixel searches from the centre sub-pixel of its block.
+uniform int u_step;
 out float ao;
 
 // A 4x4 Bayer index in [0, 16): the tile's 16 pixels take 16 evenly spaced slice
@@ -74,7 +78,9 @@ vec3 depth_normal(ivec2 px, vec3 p, vec3 fallback) {
 }
 
 void main() {
-    ivec2 px = ivec2(gl_FragCoord.xy);
+    ivec2 cell = ivec2(gl_FragCoord.xy);
+    ivec2 px = cell * u_step + u_step / 2;
+    vec2 centre = vec2(px) + 0.5;
     ivec2 size = textureSize(g_depth, 0);
     float depth = texelFetch(g_depth, px, 0).r;
     ao = 1.0;
@@ -89,8 +95,8 @@ void main() {
     float z = cam_ortho ? 1.0 : max(dot(p, cam_forward), 1e-6);
     float r_px = min(radius * pixel_scale / z, max_pixels);
     if (r_px < 1.0) return;
-    float rotation = (bayer4(px) + 0.5) / 16.0;
-    float jitter = (bayer4(px.yx + ivec2(1, 2)) + 0.5) / 16.0;
+    float rotation = (bayer4(cell) + 0.5) / 16.0;
+    float jitter = (bayer4(cell.yx + ivec2(1, 2)) + 0.5) / 16.0;
     float visible = 0.0;
     for (int s = 0; s < slices; ++s) {
         float phi = (float(s) + rotation) * PI / float(slices);
@@ -112,7 +118,7 @@ void main() {
                 float t = (float(j) + jitter) / float(steps);
                 float offset = max(t * t * r_px, float(j) + 1.0);
                 if (offset > r_px) break;
-                vec2 w = gl_FragCoord.xy + d * offset;
+                vec2 w = centre + d * offset;
                 if (any(lessThan(w, vec2(0.0))) || any(greaterThanEqual(w, vec2(size)))) break;
                 bool drawn;
                 vec3 delta = position_at(w, drawn) - p;

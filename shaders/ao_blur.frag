@@ -3,8 +3,11 @@
 // Depth-aware (bilateral) blur of the raw occlusion over the 4x4 tile its noise
 // repeats on (ao.frag): neighbours on another surface (depth off the centre's plane
 // by more than a few percent, or a normal turned away) weigh nothing, so occlusion
-// never bleeds across edges.
+// never bleeds across edges. When the occlusion was drawn at 1/u_step of the size,
+// this is also its depth-aware upsampling: each raw value stands at the centre
+// sub-pixel of its block, and is weighed by that sub-pixel's surface.
 uniform sampler2D ao_tex;      // raw occlusion
+uniform int u_step;
 uniform sampler2D g_depth;
 uniform sampler2D g_normal;
 uniform mat4 inv_view_proj;
@@ -28,20 +31,23 @@ void main() {
     vec3 n = normalize(texelFetch(g_normal, px, 0).xyz);
     float scale = max(length(p), 1e-6);
     float sum = 0.0, weight = 0.0;
+    ivec2 cells = textureSize(ao_tex, 0);
+    ivec2 home = px / u_step;
     for (int y = -2; y < 2; ++y) {
         for (int x = -2; x < 2; ++x) {
-            ivec2 q = clamp(px + ivec2(x, y), ivec2(0), size - 1);
+            ivec2 c = clamp(home + ivec2(x, y), ivec2(0), cells - 1);
+            ivec2 q = min(c * u_step + u_step / 2, size - 1);
             float dq = texelFetch(g_depth, q, 0).r;
             if (is_background(dq)) continue;
             vec3 pq = position_from_depth((vec2(q) + 0.5) / vec2(size), dq, inv_view_proj);
             vec3 nq = normalize(texelFetch(g_normal, q, 0).xyz);
             float plane = abs(dot(pq - p, n)) / scale;       // distance off p's plane
             float w = exp(-plane * plane / (2.0 * 0.02 * 0.02)) * max(dot(n, nq), 0.0);
-            sum += texelFetch(ao_tex, q, 0).r * w;
+            sum += texelFetch(ao_tex, c, 0).r * w;
             weight += w;
         }
     }
-    ao = clamp(weight > 1e-6 ? sum / weight : texelFetch(ao_tex, px, 0).r, 0.0, 1.0);
+    ao = clamp(weight > 1e-6 ? sum / weight : texelFetch(ao_tex, home, 0).r, 0.0, 1.0);
 #ifdef WRITE_AOV
     aov_ao = vec4(vec3(ao), 1.0);
 #endif

@@ -2,7 +2,7 @@
 // after lights.glsl); the maps are made by engine/gpu/passes/shadows.py, which
 // documents the layouts.
 //
-// Bias, in three parts (seed 000 §8.5.1, surface acne):
+// Bias, in three parts (surface acne: docs/design.md, Shadow maps):
 //  * normal offset: the receiver is moved off its surface by ~1 texel, more at grazing
 //    angles (sin theta), so its own texel's depth never covers it;
 //  * receiver-plane depth: every PCF/blocker tap compares against the depth the

@@ -2,7 +2,7 @@
 orthographic camera, and the closed-form radiance Blender's light units give there.
 
 Shared by the tests and by `references/make_cycles_references.py`, which renders the
-same scenes with Cycles once. The forms (issue 2 / issue 5):
+same scenes with Cycles once. The forms (docs/rendering.md):
 - point/spot: I = Φ/(4π) W/sr; E = I·cosθ/(d²+r²) with soft falloff (r = radius);
 - spot mask: smoothstep(0, 1, (cosφ − cos(size/2)) / ((1 − cos(size/2))·blend));
 - sun: E = S·cosθ;
@@ -143,7 +143,7 @@ def build_scene(kind):
     return scene
 
 
-# --- Box on a plane: shadows against Cycles (issue 5) -------------------------------
+# --- Box on a plane: shadows against Cycles ---------------------------------------
 
 BOX_SIZE = (96, 54)
 BOX_LIGHTS = {

@@ -1,4 +1,4 @@
-"""Area-light penumbrae (issue 10): scenes lit by one area light only, shared by the
+"""Area-light penumbrae (docs/rendering.md): scenes lit by one area light only, shared by the
 Cycles reference script (references/make_cycles_references.py penumbra, point-sampled
 like the box set: they measure light, not edges) and the tests.
 
@@ -6,7 +6,7 @@ like the box set: they measure light, not edges) and the tests.
   scene) under a large area light behind it, so its soft shadow falls towards the
   camera: a 2 x 1 m rectangle (an anisotropic penumbra) and a 1.6 m disk;
 - demo: Lantern's demo at frame 13 with only its area light (`Panel`, 2 m square)
-  and a black world: the scene issue 10 measured "2.1-2.7x too bright" in its
+  and a black world: the scene measured "2.1-2.7x too bright" before the shading work in its
   penumbra.
 
 `penumbra(image, cycles, unshadowed)` is the measurement: the pixels Cycles shades

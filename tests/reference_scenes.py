@@ -1,6 +1,7 @@
-"""The scenes of issue 10's image acceptances, one builder each, shared by the Cycles
-reference script (references/make_cycles_references.py) and by the tests that compare
-Lantern against those references. Nothing here is copied elsewhere.
+"""The scenes of the shading work's image acceptances (tests/test_looks.py), one builder
+each, shared by the Cycles reference script (references/make_cycles_references.py) and
+by the tests that compare Lantern against those references. Nothing here is copied
+elsewhere.
 
 `build(name, workdir)` makes the scene current in this Blender session (factory-empty
 first, or the corpus .blend opened in place) and returns it with its camera, size and

@@ -1,4 +1,4 @@
-"""Area-light shadows against Cycles (issue 10): penumbrae sized by the light's shape
+"""Area-light shadows against Cycles (docs/rendering.md): penumbrae sized by the light's shape
 and size (PCSS over the light's extent, shaders/shadow_lookup.glsl).
 
 The scenes are penumbra_scenes' (a white box under a 2 x 1 m rect and under a 1.6 m
@@ -8,7 +8,7 @@ where Cycles shades between 10% and 90% of the unshadowed light (Lantern's own
 unshadowed render, which matches Cycles' light to 1e-4: tests/test_light_calibration);
 its ratio is Lantern's light there over Cycles'. Bounds: the measured figures
 (2026-11-23, llvmpipe) plus about 25% for FLIP (the demo's: 10%, so below its figure
-before issue 10), and the ratios within 5% of 1 for the boxes (before issue 10: 0.89
+before the shading work), and the ratios within 5% of 1 for the boxes (before: 0.89
 and 0.84). The demo's ratio is printed: its 2 m light
 over several occluders at once is where one shadow map from the light's centre is
 furthest from Cycles (docs/rendering.md, "Transparency and area-light shadows")."""
@@ -20,7 +20,7 @@ import penumbra_scenes
 from image_metrics import mean_flip
 
 REFERENCES = pathlib.Path(__file__).resolve().parent / "references" / "penumbra"
-# (FLIP bound, FLIP before issue 10, penumbra ratio bound or None)
+# (FLIP bound, FLIP before the shading work (BEFORE.md), penumbra ratio bound or None)
 BOUNDS = {"rect": (0.053, 0.0664, 0.05), "disk": (0.062, 0.0986, 0.05),
           "demo": (0.255, 0.2657, None)}
 
@@ -51,7 +51,7 @@ def test_area_light_penumbra_against_cycles(name):
     flip = mean_flip(shadowed.rgba, cycles)
     mask, ratio = penumbra_scenes.penumbra(shadowed.rgba, cycles, unshadowed.rgba)
     bound, was, ratio_bound = BOUNDS[name]
-    print(f"{name}: mean HDR-FLIP {flip:.4f} (before issue 10 {was:.4f}, bound {bound}); "
+    print(f"{name}: mean HDR-FLIP {flip:.4f} (before the shading work {was:.4f}, bound {bound}); "
           f"penumbra {int(mask.sum())} px, light vs Cycles there {ratio:.3f}")
     assert mask.sum() > 500
     assert flip < bound

@@ -17,8 +17,13 @@ and the engine's layering.
   keyed by a context's id (programs belong to the context object).
 - In `engine/gpu/`, bytes reach GL buffers and textures only through
   `resources.Uploads`, which counts them (`bytes_uploaded` cannot drift).
+- Across the package, pxr is imported only in `engine/usd/`, `exporters/usd/` and the
+  few modules PXR_ELSEWHERE names with the reason; no module imports another package's
+  private (`_`) names; the modules import one another without cycles (an AST walk,
+  module to module, lazy imports included); only `__main__` imports the CLI.
 """
 import ast
+import functools
 import pathlib
 import sys
 
@@ -221,3 +226,211 @@ def test_the_guard_sees_forbidden_imports(tmp_path, source, expected):
             test_engine_never_imports_blender_or_exporters()
     finally:
         planted.unlink()
+
+
+# --- the whole package: pxr, private names, cycles, the CLI -------------------------------
+
+# Modules outside engine/usd/ and exporters/usd/ that may import pxr, and why.
+PXR_ELSEWHERE = {
+    "exporters/api.py": "makes the in-memory stage an export writes into",
+    "exporters/validate.py": "runs pxr's validators on an exported stage",
+    "exporters/live.py": "edits the viewport's mirror stage in place, gathering and "
+                         "writing one changed object, material or pose at a time",
+}
+
+
+def _pxr_offences(root=REPO):
+    out = []
+    for path in _package_files_under(root):
+        rel = path.relative_to(root).as_posix()
+        if rel.startswith(("engine/usd/", "exporters/usd/")) or rel in PXR_ELSEWHERE:
+            continue
+        for module, level in _imports(path):
+            if level == 0 and _top(module) == "pxr":
+                out.append(f"{rel} imports pxr")
+    return out
+
+
+def test_pxr_only_in_the_usd_modules():
+    offences = _pxr_offences()
+    assert not offences, offences
+    for rel in PXR_ELSEWHERE:   # a named module that no longer needs pxr leaves the list
+        assert any(_top(m) == "pxr" for m, level in _imports(REPO / rel) if not level), rel
+
+
+def _package_files_under(root):
+    for path in sorted(root.rglob("*.py")):
+        parts = path.relative_to(root).parts
+        if parts[0] in SCRIPTS or path in SCENE_SCRIPTS:
+            continue
+        yield path
+
+
+def _module_name(path, root=REPO, package="lantern"):
+    parts = list(path.relative_to(root).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join([package, *parts])
+
+
+@functools.lru_cache(maxsize=None)
+def _module_names(root, package):
+    return frozenset(_module_name(p, root, package) for p in _package_files_under(root))
+
+
+def _module_imports(path, root=REPO, package="lantern"):
+    """(imported module, [names taken from it]) for every import of the package's own
+    modules in a file; `from A import b` where A.b is a module counts as importing A.b."""
+    modules = _module_names(root, package)
+    tree = ast.parse(path.read_text(), filename=str(path))
+    own = path.relative_to(root).parent.parts
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.split(".")[0] == package:
+                    yield alias.name, []
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = list(own[: len(own) - (node.level - 1)])
+                name = ".".join([package, *base, *([node.module] if node.module else [])])
+            elif (node.module or "").split(".")[0] == package:
+                name = node.module
+            else:
+                continue
+            taken = []
+            for alias in node.names:
+                if f"{name}.{alias.name}" in modules:
+                    yield f"{name}.{alias.name}", []
+                else:
+                    taken.append(alias.name)
+            if taken:
+                yield name, taken
+
+
+def _private(name):
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
+
+
+def _private_offences(root=REPO, package="lantern"):
+    out = []
+    for path in _package_files_under(root):
+        importer = _module_name(path, root, package)
+        own_package = importer if path.name == "__init__.py" else importer.rpartition(".")[0]
+        for module, names in _module_imports(path, root, package):
+            module_package = module.rpartition(".")[0] if module != package else module
+            hidden = [n for n in names if _private(n)]
+            if any(_private(part) for part in module.split(".")[1:]) and \
+                    module_package != own_package:
+                hidden.append(module)
+            if hidden and module_package != own_package and module != own_package:
+                out.append(f"{path.relative_to(root)} imports {', '.join(hidden)} from {module}")
+    return out
+
+
+def test_no_module_imports_another_packages_private_names():
+    offences = _private_offences()
+    assert not offences, offences
+
+
+def _import_graph(root=REPO, package="lantern"):
+    """module -> the package's modules it imports (anywhere in it, lazily or not)."""
+    files = {_module_name(p, root, package): p for p in _package_files_under(root)}
+    graph = {}
+    for name, path in files.items():
+        graph[name] = {m for m, _ in _module_imports(path, root, package)
+                       if m in files and m != name}
+    return graph
+
+
+def _cycles(graph):
+    """The import cycles of a graph, each as [a, b, ..., a] (Tarjan's strongly
+    connected components, then one path around each)."""
+    index, low, stack, on_stack, out = {}, {}, [], set(), []
+
+    def connect(node):
+        index[node] = low[node] = len(index)
+        stack.append(node)
+        on_stack.add(node)
+        for other in sorted(graph.get(node, ())):
+            if other not in index:
+                connect(other)
+                low[node] = min(low[node], low[other])
+            elif other in on_stack:
+                low[node] = min(low[node], index[other])
+        if low[node] == index[node]:
+            component = []
+            while True:
+                member = stack.pop()
+                on_stack.discard(member)
+                component.append(member)
+                if member == node:
+                    break
+            if len(component) > 1:
+                out.append(_loop(graph, set(component)))
+
+    for node in sorted(graph):
+        if node not in index:
+            connect(node)
+    return out
+
+
+def _loop(graph, component):
+    """One cycle through a strongly connected component, for the message."""
+    start = min(component)
+    path, seen = [start], {start}
+    while True:
+        step = next(m for m in sorted(graph[path[-1]]) if m in component)
+        if step in seen:
+            return path[path.index(step):] + [step]
+        path.append(step)
+        seen.add(step)
+
+
+def test_no_import_cycles():
+    cycles = _cycles(_import_graph())
+    assert not cycles, [" -> ".join(c) for c in cycles]
+
+
+def test_only_main_imports_the_cli():
+    offences = [f"{path.relative_to(REPO)} imports lantern.cli"
+                for path in _package_files_under(REPO) if path.name != "__main__.py"
+                for module, _ in _module_imports(path) if module == "lantern.cli"]
+    assert not offences, offences
+
+
+def _tree(root, files):
+    for rel, text in files.items():
+        (root / rel).parent.mkdir(parents=True, exist_ok=True)
+        (root / rel).write_text(text)
+
+
+def test_the_package_guards_can_fail(tmp_path):
+    """A temporary module tree with a deliberate cycle (through a lazy import), a
+    private name taken across packages and pxr outside the USD modules: each caught."""
+    _tree(tmp_path, {
+        "__init__.py": "",
+        "a/__init__.py": "",
+        "a/one.py": "from .two import helper\n",
+        "a/two.py": "def helper():\n    from ..b.three import _secret\n",
+        "b/__init__.py": "",
+        "b/three.py": "from pxr import Usd\nfrom ..a import one\n_secret = 1\n",
+        "c/__init__.py": "",
+        "c/free.py": "from ..a.one import helper\n",
+    })
+    graph = _import_graph(tmp_path, "pkg")
+    assert graph["pkg.a.one"] == {"pkg.a.two"} and graph["pkg.c.free"] == {"pkg.a.one"}
+    cycles = _cycles(graph)
+    assert [set(c) for c in cycles] == [{"pkg.a.one", "pkg.a.two", "pkg.b.three"}], cycles
+    assert cycles[0][0] == cycles[0][-1]
+    assert _private_offences(tmp_path, "pkg") == ["a/two.py imports _secret from pkg.b.three"]
+    assert _pxr_offences(tmp_path) == ["b/three.py imports pxr"]
+    (tmp_path / "b" / "three.py").write_text("_secret = 1\n")    # the cycle broken
+    assert _cycles(_import_graph(tmp_path, "pkg")) == []
+
+
+def test_every_module_says_what_it_is_for():
+    """Each of the package's modules opens with a docstring (its first sentence says
+    what the module is for)."""
+    missing = [str(path.relative_to(REPO)) for path in _package_files_under(REPO)
+               if not ast.get_docstring(ast.parse(path.read_text()))]
+    assert not missing, missing

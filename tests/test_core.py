@@ -103,3 +103,19 @@ def test_presets_table():
     assert sizes == sorted(sizes) and presets.DEFAULT in presets.PRESETS
     with pytest.raises(ValueError, match="low, medium, high, ultra"):
         presets.preset("insane")
+
+
+def test_frame_paths_and_one_line_errors():
+    from lantern.core.text import error_text, frame_path, one_line
+    assert frame_path("/out/f_####.png", 12) == "/out/f_0012.png"
+    assert frame_path("/out/f_##.exr", 12.5) == "/out/f_12.5.exr"
+    assert frame_path("a#_#.png", 3) == "a3_#.png"      # the first run of '#' only
+    pxr = ("Error in 'Parse' at line 3 in file x.usda : 'bad token'\n"
+           "Error in 'Parse' at line 3 in file x.usda : 'bad token'\nsecond reason")
+    assert one_line(pxr) == "bad token; second reason"
+    assert one_line("") == "no reason given"
+
+    class Undecodable(Exception):
+        def __str__(self):
+            raise UnicodeDecodeError("utf-8", b"\xff", 0, 1, "invalid start byte")
+    assert "not UTF-8" in error_text(Undecodable())

@@ -1,3 +1,5 @@
+"""The engine's image files: float EXR round trips exactly, PNG is sRGB-encoded with
+alpha kept, and writes are atomic."""
 import os
 
 import imageio.v3 as iio

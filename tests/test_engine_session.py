@@ -1,4 +1,4 @@
-"""engine.Session, the renderer that outlives a frame (issue 9): work follows what
+"""engine.Session, the renderer that outlives a frame: work follows what
 changed. Views, edits through the USD API and new times read and upload only what
 they touch, and every image equals a fresh render_stage of the same stage."""
 import os

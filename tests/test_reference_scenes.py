@@ -1,4 +1,4 @@
-"""The committed Cycles references of issue 10 match their scene list, and the sky map
+"""The committed Cycles references (tests/references/) match their scene list, and the sky map
 the environment scenes use is as asymmetric as documented (no builder runs here: the
 engine's image tests build the scenes they render)."""
 import pathlib

@@ -1,4 +1,4 @@
-"""The shading parts of issue 10 against independent answers: the split-sum table
+"""The shading (docs/rendering.md) against independent answers: the split-sum table
 against brute-force integration, the dome's harmonics against a function they hold
 exactly, a uniform world's exact hemisphere term, clearcoat read from USD, the sRGB
 mip chain, supersampling's GPU filter against the same filter in numpy, the post
@@ -121,7 +121,8 @@ def test_a_coat_adds_a_white_lobe_and_takes_from_the_base():
 def test_srgb_mip_chain_averages_cycles_lookups_in_linear_light():
     """A 0/255 two-texel image: its level-1 texel is the mean of Cycles' lookups
     (bilinear of the bytes, then decoded) over it, not decode(mean byte)."""
-    from lantern.engine.gpu.textures import cycles_srgb_mips, linear_to_srgb
+    from lantern.engine.color import linear_to_srgb
+    from lantern.engine.gpu.textures import cycles_srgb_mips
     from lantern.engine.textures import srgb_to_linear
     img = np.zeros((2, 2, 4), np.uint8)
     img[:, 1, :3] = 255

@@ -1,6 +1,7 @@
-"""Shadow maps (issue 5), checked against geometry: a ray cast in numpy from every plane
-pixel to the light says where the shadow must be, and the closed form says how bright
-the rest is. Top-down orthographic views map pixels to plane points exactly."""
+"""Shadow maps (docs/design.md, Shadow maps), checked against geometry: a ray cast in
+numpy from every plane pixel to the light says where the shadow must be, and the closed
+form says how bright the rest is. Top-down orthographic views map pixels to plane points
+exactly."""
 import math
 
 import numpy as np
@@ -178,7 +179,7 @@ def test_no_self_shadowing_at_grazing_angles(kind, spec):
 
 @pytest.mark.parametrize("kind", sorted(calibration.LIGHTS))
 def test_calibration_with_shadows_on(kind):
-    """The issue-2 calibration with Cast Shadow on: mean error ≤ 0.5% in the lit area."""
+    """The light calibration (tests/calibration.py) with Cast Shadow on: mean error ≤ 0.5% in the lit area."""
     import bpy
     from lantern.exporters import stage_from_depsgraph
     calibration.build_scene(kind)

@@ -5,8 +5,8 @@ from references/make_cycles_references.py box) and by Lantern at the medium pres
 The thresholds are the measured mean HDR-FLIP (2026-11-21, llvmpipe) plus about 25%,
 so a regression in lights or shadows fails here:
     sun 0.0006, point 0.0034, spot 0.0501, area 0.0073.
-Area lights filter over their own extent since issue 10 (shaders/shadow_lookup.glsl):
-area 0.0043 (2026-11-23; 0.0060 with issue 10's shading alone), its threshold
+Area lights filter over their own extent (shaders/shadow_lookup.glsl):
+area 0.0043 (2026-11-23; 0.0060 with the new shading alone), its threshold
 tightened to match.
 The spot's figure is the largest: its cone edge, softened by the light's radius, is
 approximated by a 7-point average over the light's disk (shaders/light.frag)."""

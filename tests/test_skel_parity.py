@@ -36,8 +36,8 @@ def _parented(arm, tube):
 
 def _gpu_parity(stage):
     """Largest |GPU-skinned − UsdSkel-skinned| over the stage's frames and skinned
-    meshes, as a fraction of each mesh's bounding-box diagonal (issue 4: Lantern's
-    own exports on the engine's GPU path)."""
+    meshes, as a fraction of each mesh's bounding-box diagonal (Lantern's own
+    exports on the engine's GPU path)."""
     from lantern.engine import skinned_points
     baked = skinned_stage(stage)
     worst, meshes = 0.0, set()

@@ -1,4 +1,4 @@
-"""Transparency (issue 10): blended surfaces in a forward pass, back to front, lit like
+"""Transparency (docs/rendering.md): blended surfaces in a forward pass, back to front, lit like
 the deferred surfaces; cut-out and transparent shadows; Blender's blend modes through
 the stage.
 
@@ -28,7 +28,7 @@ def render(stage, **settings):
 
 
 def before(name) -> float:
-    """The scene's FLIP in BEFORE.md (main before issue 10)."""
+    """The scene's FLIP in BEFORE.md (main before the shading work)."""
     for line in (LOOKS / "BEFORE.md").read_text().splitlines():
         cells = [c.strip() for c in line.split("|")]
         if len(cells) > 2 and cells[1] == name:
@@ -202,7 +202,7 @@ FLIP_BOUND = {"transparency_planes": 0.063, "cutout_shadow": 0.067, "01_alpha_bl
 def test_transparent_scene_against_cycles(name):
     result, cycles = look(name)
     flip = mean_flip(result.rgba, cycles)
-    print(f"{name}: mean HDR-FLIP {flip:.4f} (before issue 10 {before(name):.4f}, "
+    print(f"{name}: mean HDR-FLIP {flip:.4f} (before the shading work {before(name):.4f}, "
           f"bound {FLIP_BOUND[name]})")
     assert flip < before(name)
     assert flip < FLIP_BOUND[name]

@@ -1,5 +1,5 @@
-"""The environment's light on the GPU (seed 004's image-based lighting), made once and
-kept for the session:
+"""The environment's light on the GPU (docs/design.md, Image-based lighting), made once
+and kept for the session:
 
   dfg_lut         the split-sum table (engine/lighting.py dfg_lut, computed once per
                   process): every shading program reads its lobes' albedos from it.
@@ -78,7 +78,8 @@ class Environment:
         # Cube lookups filter across faces (core since GL 3.2; off by default).
         self._fn["glEnable"](GL_TEXTURE_CUBE_MAP_SEAMLESS)
         table = dfg_lut()
-        self.lut = uploads.texture(table.shape[1::-1], 2, table, kind="textures", dtype="f4")
+        self.lut = uploads.texture(table.shape[1::-1], table.shape[2], table, kind="textures",
+                                   dtype="f4")
         self.lut.filter = (ctx.LINEAR, ctx.LINEAR)
         self.lut.repeat_x = self.lut.repeat_y = False
         self.map: EnvironmentMap | None = None

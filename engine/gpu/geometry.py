@@ -1,19 +1,6 @@
 """Meshes and objects on the GPU, and how they are drawn: many objects cost little.
-
-Storage (seed 003's static and dynamic branches):
-  static store    every static mesh's vertices and indices in two large shared
-                  buffers, written when the mesh is read and never again (a
-                  time-sampled mesh is rewritten in place each frame).
-  dynamic store   the same layout, written every frame by the skinning pass (transform
-                  feedback); a skinned mesh's indices go up once.
-  object table    per object (a Mesh prim drawn), its model and normal matrices: 8
-                  RGBA32F texels in one texture, indexed by object id, so moving an
-                  object writes 128 bytes. The translation is a double split in two
-                  floats (hi in the matrix's fourth column, lo in texel 7): shaders
-                  subtract the frame's origin from it (camera-relative rendering,
-                  engine/view.py), so the table does not change when the view does.
-Indices are absolute in their store, so a draw needs no base vertex (GL 3.3 has none
-in ModernGL).
+Meshes live in a static and a dynamic vertex store (stores.py), each object's matrices
+in the object table (objects.py), Points prims apart (points.py).
 
 Drawing: every (object, material range) is one command, prepared in numpy when the
 set of objects changes. A view then culls objects against the frustum and orders the
@@ -30,13 +17,7 @@ prim path so any session draws in the same order as a fresh one.
 Shadow casters draw every object once (all of its ranges, one command) from a
 buffer made with the commands, but for ranges of see-through materials (cut-outs,
 blended), whose casters test their opacity: those are listed apart (alpha_casters).
-
-Measured (bench/bench_session.py, 320x180, llvmpipe, 2026-11-22): a view of 1,000
-separate cubes takes 1.13-1.23x the time of the same cubes merged into one mesh (e.g.
-14.2 against 12.4 ms), 1.28-1.41x on the GL 3.3 path; 4,004 bytes go up per view. The gather costs
-0.03 ms; what remains is llvmpipe's own cost per indirect sub-draw, about 3.5 us
-(1,000 commands 4.3 ms against 0.8 ms for one), which only merging objects' draws
-would remove, at the price of front-to-back order and per-material state."""
+What 1,000 separate objects cost against one merged mesh: docs/status.md."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -44,205 +25,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...core.transforms import transform_aabbs
-from ..view import split_double
+from .objects import ObjectTable
 from .points import PointClouds
 from .programs import set_uniform
+from .stores import Slot, VertexStore
 
-VERTEX_FORMAT = ("3f 3f 2f 4f", "in_pos", "in_normal", "in_uv", "in_tangent")
-VERTEX_BYTES = 48
-OBJECT_TEXELS = 8            # model matrix columns (4), normal matrix columns (3), lo translation
-OBJECT_TEX_W = 4096          # 512 objects per row: an object never straddles rows
 COMMAND_UINTS = 5            # DrawElementsIndirectCommand
-
-
-class _Arena:
-    """First-fit allocation of [start, start + n) ranges in a growable space."""
-
-    def __init__(self, capacity: int):
-        self.capacity = capacity
-        self.free = [(0, capacity)]
-
-    def alloc(self, n: int):
-        """Start of n units, or None when the space must grow first."""
-        for i, (start, length) in enumerate(self.free):
-            if length >= n:
-                self.free[i] = (start + n, length - n)
-                if self.free[i][1] == 0:
-                    del self.free[i]
-                return start
-        return None
-
-    def grow(self, capacity: int):
-        extra = (self.capacity, capacity - self.capacity)
-        self.capacity = capacity
-        self._insert(extra)
-
-    def release(self, start: int, n: int):
-        if n:
-            self._insert((start, n))
-
-    def _insert(self, rng):
-        self.free.append(rng)
-        self.free.sort()
-        merged = []
-        for s, n in self.free:
-            if merged and merged[-1][0] + merged[-1][1] == s:
-                merged[-1] = (merged[-1][0], merged[-1][1] + n)
-            else:
-                merged.append((s, n))
-        self.free = merged
-
-
-@dataclass
-class Slot:
-    first_vertex: int
-    n_vertices: int
-    first_index: int
-    n_indices: int
-
-
-class VertexStore:
-    """Vertices (VERTEX_FORMAT) and absolute uint32 indices of many meshes."""
-
-    def __init__(self, ctx, uploads, name: str, vertices: int = 1 << 14, indices: int = 1 << 15):
-        self.ctx, self.uploads, self.name = ctx, uploads, name
-        self.vertices = _Arena(vertices)
-        self.indices = _Arena(indices)
-        self.vbo = uploads.buffer(reserve=vertices * VERTEX_BYTES, kind="mesh")
-        self.ibo = uploads.buffer(reserve=indices * 4, kind="mesh")
-        self.generation = 0           # bumps when the buffers are replaced (VAOs go stale)
-        self._vaos = {}
-
-    def alloc(self, n_vertices: int, n_indices: int) -> Slot:
-        v = self._alloc(self.vertices, n_vertices, "vbo", VERTEX_BYTES)
-        i = self._alloc(self.indices, n_indices, "ibo", 4)
-        return Slot(v, n_vertices, i, n_indices)
-
-    def _alloc(self, arena, n, attr, unit):
-        start = arena.alloc(n)
-        if start is None:
-            old = getattr(self, attr)
-            capacity = max(arena.capacity * 2, arena.capacity + n)
-            new = self.uploads.buffer(reserve=capacity * unit, kind="mesh")
-            # A copy inside the GPU, not an upload.
-            self.ctx.copy_buffer(new, old, size=arena.capacity * unit)
-            old.release()
-            setattr(self, attr, new)
-            arena.grow(capacity)
-            self._drop_vaos()
-            start = arena.alloc(n)
-        return start
-
-    def free(self, slot: Slot):
-        self.vertices.release(slot.first_vertex, slot.n_vertices)
-        self.indices.release(slot.first_index, slot.n_indices)
-
-    def write_vertices(self, slot: Slot, vertices: np.ndarray):
-        self.uploads.write(self.vbo, np.ascontiguousarray(vertices, np.float32), kind="mesh",
-                           offset=slot.first_vertex * VERTEX_BYTES)
-
-    def write_indices(self, slot: Slot, indices: np.ndarray):
-        absolute = np.asarray(indices, np.uint32) + np.uint32(slot.first_vertex)
-        self.uploads.write(self.ibo, absolute, kind="mesh", offset=slot.first_index * 4)
-
-    def vao(self, prog, ids=None):
-        """The VAO of this store for `prog` (with the object-id attribute when `ids`)."""
-        key = (id(prog), id(ids))
-        vao = self._vaos.get(key)
-        if vao is None:
-            content = [(self.vbo, *VERTEX_FORMAT)]
-            if ids is not None:
-                content.append((ids, "1i/i", "in_object"))
-            vao = self._vaos[key] = self.ctx.vertex_array(
-                prog, content, index_buffer=self.ibo, index_element_size=4, skip_errors=True)
-        return vao
-
-    def _drop_vaos(self):
-        for vao in self._vaos.values():
-            vao.release()
-        self._vaos.clear()
-        self.generation += 1
-
-    def release(self):
-        self._drop_vaos()
-        self.vbo.release()
-        self.ibo.release()
-
-
-class ObjectTable:
-    """Per-object model and normal matrices in one RGBA32F texture (shaders/objects.glsl
-    reads them). The instances of an instanced draw take consecutive ids, so one
-    command (baseInstance = the first, instanceCount = n) draws them all."""
-
-    def __init__(self, ctx, uploads, rows: int = 1):
-        self.ctx, self.uploads = ctx, uploads
-        self.data = np.zeros((rows, OBJECT_TEX_W, 4), np.float32)
-        self.texture = None
-        self._id_space = _Arena(self.capacity)
-        self._next = 0                 # one past the highest id ever handed out
-        self._dirty = set()
-
-    @property
-    def capacity(self) -> int:
-        return len(self.data) * (OBJECT_TEX_W // OBJECT_TEXELS)
-
-    def new_ids(self, n: int = 1) -> int:
-        """The first of n consecutive free ids."""
-        first = self._id_space.alloc(n)
-        if first is None:
-            per_row = OBJECT_TEX_W // OBJECT_TEXELS
-            rows = max(len(self.data) * 2, -(-(self.capacity + n) // per_row))
-            grown = np.zeros((rows, OBJECT_TEX_W, 4), np.float32)
-            grown[:len(self.data)] = self.data
-            self.data = grown
-            if self.texture is not None:
-                self.texture.release()
-                self.texture = None
-            self._id_space.grow(self.capacity)
-            first = self._id_space.alloc(n)
-        self._next = max(self._next, first + n)
-        return first
-
-    def free_ids(self, first: int, n: int = 1):
-        self._id_space.release(first, n)
-
-    def set(self, first: int, worlds: np.ndarray, pass_index: int = 0):
-        """The matrices of objects first, first + 1, ...: (4, 4) or (n, 4, 4), and their
-        render-pass index (IndexOB)."""
-        worlds = np.asarray(worlds, np.float64).reshape(-1, 4, 4)
-        n = len(worlds)
-        texels = np.zeros((n, OBJECT_TEXELS, 4), np.float32)
-        texels[:, :4] = worlds.transpose(0, 2, 1)          # columns
-        hi, lo = split_double(worlds[:, :3, 3])
-        texels[:, 3, :3] = hi
-        texels[:, 4:7, :3] = normal_matrices(worlds).transpose(0, 2, 1)
-        texels[:, 7, :3] = lo
-        texels[:, 4, 3] = pass_index                       # render pass IndexOB
-        flat = self.data.reshape(-1, 4)
-        flat[first * OBJECT_TEXELS:(first + n) * OBJECT_TEXELS] = texels.reshape(-1, 4)
-        self._dirty.update(range(first, first + n))
-
-    def flush(self):
-        """Uploads the texels of objects set since the last flush (of every object
-        when the table was just made or grown), a span per texture row."""
-        if self.texture is None:
-            h, w = self.data.shape[:2]
-            self.texture = self.uploads.texture((w, h), 4, kind="objects", dtype="f4")
-            self.texture.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
-            self._dirty = set(range(self._next))
-        per_row = OBJECT_TEX_W // OBJECT_TEXELS
-        rows = {}
-        for oid in self._dirty:
-            rows.setdefault(oid // per_row, []).append(oid % per_row)
-        for row, cols in rows.items():
-            x0, x1 = min(cols) * OBJECT_TEXELS, (max(cols) + 1) * OBJECT_TEXELS
-            self.uploads.write_texture(self.texture, self.data[row, x0:x1], kind="objects",
-                                       viewport=(x0, row, x1 - x0, 1))
-        self._dirty.clear()
-
-    def release(self):
-        if self.texture is not None:
-            self.texture.release()
 
 
 @dataclass
@@ -648,17 +436,6 @@ class Geometry:
         if self.dynamic is not None:
             self.dynamic.release()
         self.objects.release()
-
-
-def normal_matrices(worlds) -> np.ndarray:
-    """(n, 3, 3) inverse transposes of the worlds' 3x3s (a singular one keeps its own,
-    as core.transforms.normal_matrix)."""
-    m3 = worlds[:, :3, :3]
-    out = m3.copy()
-    ok = np.abs(np.linalg.det(m3)) > 1e-30
-    if ok.any():
-        out[ok] = np.linalg.inv(m3[ok]).transpose(0, 2, 1)
-    return out
 
 
 def _ranges(mesh, slot: Slot) -> list:

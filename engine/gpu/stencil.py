@@ -3,7 +3,8 @@ needs, through the context backend's entry points (EGL, GLX, WGL or CGL alike, s
 engine/gpu/context.py). ModernGL does not track stencil state, so the two never
 disagree. GL 3.3 core calls only.
 
-Light-volume marking (seed 000 §8.6.1, two-sided stencil, Carmack's depth-fail):
+Light-volume marking (docs/design.md, Light volumes; two-sided stencil, Carmack's
+depth-fail):
 with the scene depth in the depth buffer, a depth test that passes in front of the
 scene (GREATER: depth is reversed, engine/view.py) and no culling, a back face
 behind the scene increments and a front face behind the scene decrements, so the

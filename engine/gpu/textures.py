@@ -29,22 +29,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..color import to_srgb8
 from ..textures import is_srgb, read_rgba, srgb_to_linear
 
 GL_SRGB8_ALPHA8 = 0x8C43
 SRGB_FILTERING = ("encoded", "linear")   # Cycles' way (the default), EEVEE's way
-
-
-def linear_to_srgb(x):
-    x = np.clip(x, 0.0, 1.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055)
-
-
-def _encode(lin: np.ndarray) -> np.ndarray:
-    out = np.empty(lin.shape, np.uint8)
-    out[..., :3] = np.round(linear_to_srgb(lin[..., :3]) * 255.0)
-    out[..., 3] = np.round(np.clip(lin[..., 3], 0.0, 1.0) * 255.0)
-    return out
 
 
 def _half(lin: np.ndarray) -> np.ndarray:
@@ -82,10 +71,10 @@ def cycles_srgb_mips(img: np.ndarray) -> list:
     lin = _half(_half(lin)) if img.shape[0] > 1 and img.shape[1] > 1 else _half(lin)
     h1, w1 = max(img.shape[0] // 2, 1), max(img.shape[1] // 2, 1)
     lin = lin[:h1, :w1]
-    levels.append(_encode(lin))
+    levels.append(to_srgb8(lin))
     while lin.shape[0] > 1 or lin.shape[1] > 1:
         lin = _half(lin)
-        levels.append(_encode(lin))
+        levels.append(to_srgb8(lin))
     return levels
 
 

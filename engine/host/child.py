@@ -24,7 +24,7 @@ import traceback
 from multiprocessing import connection
 
 from ...core.passes import PASSES
-from . import protocol as p
+from . import protocol
 
 
 class Scene:
@@ -41,7 +41,8 @@ class Scene:
 
     def session(self, preset):
         """The scene's Session, set to `preset`."""
-        from ..session import RenderSettings, Session
+        from ..session import Session
+        from ..settings import RenderSettings
         if self._session is None:
             self._session = Session(self.stage, RenderSettings(width=1, height=1,
                                                                preset=preset))
@@ -50,12 +51,12 @@ class Scene:
 
     def set_slots(self, names):
         self.close_slots(unlink=False)
-        self.blocks = {name: p.attach_block(name) for name in names}
+        self.blocks = {name: protocol.attach_block(name) for name in names}
         self.free = list(names)
 
     def close_slots(self, unlink):
         for block in self.blocks.values():
-            p.release_block(block, unlink)
+            protocol.release_block(block, unlink)
         self.blocks, self.free = {}, []
 
     def close(self, unlink=False):
@@ -76,12 +77,12 @@ class Host:
     def _read(self):
         try:
             while True:
-                self.inbox.put(p.loads(self.conn.recv_bytes()))
+                self.inbox.put(protocol.loads(self.conn.recv_bytes()))
         except (EOFError, OSError):
             self.inbox.put(None)           # Blender is gone (or closed the pipe)
 
     def _send(self, kind, **fields):
-        self.conn.send_bytes(p.dumps(kind, **fields))
+        self.conn.send_bytes(protocol.dumps(kind, **fields))
 
     def _take(self, timeout):
         """Every message waiting, after waiting up to `timeout` for the first (None:
@@ -102,34 +103,37 @@ class Host:
             self.parent_gone = True
             return False
         kind, f = message
-        if kind == p.QUIT:
+        if kind == protocol.QUIT:
             return False
+        if kind == protocol.WARM:
+            self._warm(f["presets"])
+            return True
         name = f.get("scene")
-        if kind == p.DROP:
+        if kind == protocol.DROP:
             scene = self.scenes.pop(name, None)
             if scene is not None:
                 scene.close()
             return True
         scene = self.scenes.setdefault(name, Scene())
         now = time.monotonic()
-        if kind == p.EDIT:
+        if kind == protocol.EDIT:
             from ..usd.fragments import apply
             try:
                 apply(scene.stage, f["fragment"])
             except Exception as error:
-                self._send(p.ERROR, scene=name, request=None,
+                self._send(protocol.ERROR, scene=name, request=None,
                            message=f"the stage edit failed: {error}")
                 return True
             if scene.request is not None and scene.request["progressive"]:
                 scene.level, scene.touched = 0, now     # a live view shows edits at once
-        elif kind == p.RENDER:
+        elif kind == protocol.RENDER:
             scene.request, scene.level, scene.touched = f, 0, now
-        elif kind == p.SLOTS:
+        elif kind == protocol.SLOTS:
             scene.set_slots(f["names"])
-        elif kind == p.RELEASE:
+        elif kind == protocol.RELEASE:
             if f["slot"] in scene.blocks and f["slot"] not in scene.free:
                 scene.free.append(f["slot"])
-        elif kind == p.FORGET:
+        elif kind == protocol.FORGET:
             scene.request = None
         return True
 
@@ -143,7 +147,7 @@ class Host:
             return min(waiting)[1], None
         for name, scene in self.scenes.items():
             if scene.request is not None and scene.level == 1:
-                left = scene.touched + p.SETTLE_SECONDS - now
+                left = scene.touched + protocol.SETTLE_SECONDS - now
                 if left <= 0:
                     return name, None
                 due = left if due is None else min(due, left)
@@ -152,16 +156,16 @@ class Host:
     def _render(self, name):
         scene = self.scenes[name]
         req = scene.request
-        progressive = req["progressive"] and req["preset"] != p.INTERACTIVE_PRESET
+        progressive = req["progressive"] and req["preset"] != protocol.INTERACTIVE_PRESET
         final = not progressive or scene.level >= 1
-        preset = req["preset"] if final else p.INTERACTIVE_PRESET
+        preset = req["preset"] if final else protocol.INTERACTIVE_PRESET
         passes = [(n, PASSES[n].channels) for n in req["passes"]]
         w, h = req["width"], req["height"]
         scale = 1.0
-        if not final and w * h > p.INTERACTIVE_MIN_PIXELS:
-            scale = p.interactive_scale(*scene.moving)
+        if not final and w * h > protocol.INTERACTIVE_MIN_PIXELS:
+            scale = protocol.interactive_scale(*scene.moving)
             w, h = max(1, round(w * scale)), max(1, round(h * scale))
-        frame_layout, total = p.layout(w, h, passes)
+        frame_layout, total = protocol.layout(w, h, passes)
         while not scene.free:                   # Blender still reads every slot
             for message in self._take(timeout=None):
                 if not self._handle(message):
@@ -173,7 +177,7 @@ class Host:
         if total > block.size:
             scene.free.append(slot)
             scene.level = 2
-            self._send(p.ERROR, scene=name, request=req["id"],
+            self._send(protocol.ERROR, scene=name, request=req["id"],
                        message=f"a {w}x{h} frame does not fit its {block.size}-byte slot")
             return True
         try:
@@ -184,26 +188,40 @@ class Host:
             result = session.render(view_matrix=req.get("view"),
                                     projection_matrix=req.get("projection"),
                                     frame=req.get("frame"), bottom_up=True,
-                                    out=p.view(block, w, h, 4, frame_layout[0][2]))
+                                    out=protocol.view(block, w, h, 4, frame_layout[0][2]))
         except Exception as error:
             scene.free.append(slot)
             scene.level = 2
-            self._send(p.ERROR, scene=name, request=req["id"], message=str(error),
+            self._send(protocol.ERROR, scene=name, request=req["id"], message=str(error),
                        detail=traceback.format_exc())
             return True
         for pass_name, channels, offset in frame_layout[1:]:
-            p.view(block, w, h, channels, offset)[:] = result.passes[pass_name][::-1]
+            protocol.view(block, w, h, channels, offset)[:] = result.passes[pass_name][::-1]
         scene.level = 2 if final else 1
         if not final:
             scene.touched = time.monotonic()    # settling counts from the frame shown
             # GL work and read-back of the moving frame: what the next one's size is
             # chosen from (the stage read is the same at any size).
             scene.moving = (scale, result.timings["total"] - result.timings.get("load", 0.0))
-        self._send(p.FRAME, scene=name, request=req["id"], tag=req.get("tag"), slot=slot,
+        self._send(protocol.FRAME, scene=name, request=req["id"], tag=req.get("tag"), slot=slot,
                    width=w, height=h, layout=frame_layout, final=final, preset=preset,
                    stats=result.stats, timings=result.timings, gpu_timings=result.gpu_timings,
                    warnings=result.warnings)
         return True
+
+    def _warm(self, presets):
+        """Makes the programs of a first frame at these presets now, before Blender
+        asks for one (WARM, sent by addon/prestart.py; engine/host/warmup.py). After
+        the first preset it stops when a message waits, which then makes what it needs
+        itself. A warm-up that fails costs only its time: the first frame then makes
+        them."""
+        from .warmup import warm
+        try:
+            seconds = warm(presets, stop=lambda: not self.inbox.empty())
+        except Exception as error:
+            print(f"lantern host: the warm-up failed: {error}", file=sys.stderr, flush=True)
+            return
+        print(f"lantern host: warmed up in {seconds:.2f} s", file=sys.stderr, flush=True)
 
     def run(self) -> int:
         from .. import shutdown
@@ -213,11 +231,13 @@ class Host:
             gl = run_gl(lambda gl: f"OpenGL {gl.ctx.info['GL_VERSION']}, "
                                    f"{gl.ctx.info['GL_RENDERER']}")
         except Exception as error:
-            self._send(p.FATAL, message=f"the engine could not get an OpenGL context: {error}")
+            self._send(protocol.FATAL,
+                       message=f"the engine could not get an OpenGL context: {error}")
             return 3
         modules = {name: getattr(importlib.util.find_spec(name), "origin", None)
                    for name in ("lantern", "pxr", "numpy", "moderngl", "glcontext")}
-        self._send(p.READY, pid=os.getpid(), gl=gl, executable=sys.executable, modules=modules)
+        self._send(protocol.READY, pid=os.getpid(), gl=gl, executable=sys.executable,
+                   modules=modules)
         try:
             while True:
                 name, due = self._next()

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from pxr import Gf, Usd, UsdGeom, UsdRender
+from pxr import Sdf, Usd, UsdGeom, UsdRender
 
 from ...core.transforms import frustum, ortho
 from ..view import camera, conform
@@ -123,6 +123,19 @@ def view_settings(stage: Usd.Stage) -> dict:
             if attr and attr.HasAuthoredValue():
                 out[key] = attr.Get()
     return out
+
+
+def camera_path_problem(stage: Usd.Stage, path: str, scene_name: str):
+    """Why `path` cannot be the camera to render through (`scene_name` names the
+    stage's file), or None when it is a Camera prim."""
+    if not Sdf.Path.IsValidPathString(path):
+        return "not a valid prim path"
+    prim = stage.GetPrimAtPath(path)
+    if not prim:
+        return f"{scene_name} has no such prim"
+    if not prim.IsA(UsdGeom.Camera):
+        return f"is a {prim.GetTypeName() or 'typeless prim'}, not a Camera"
+    return None
 
 
 def is_camera(prim: Usd.Prim) -> bool:

@@ -7,21 +7,23 @@ numeric arrays of ARRAY_MIN values or more, which travel beside it as numpy arra
 (exact, and a fraction of their text size). A fragment is plain data (str, lists,
 numpy arrays): it pickles across a process boundary and names no class of Lantern.
 
-The sender keeps a mirror of the receiver's stage. It edits the mirror with the USD
-API and encodes what USD reports changed (Usd.Notice.ObjectsChanged, collected by
-engine/usd/changes.py). USD skips a value set to what it was, and Sdf.CopySpec and
+The sender keeps a mirror of the receiver's stage (Mirror, below). It edits the mirror
+with the USD API and encodes what USD reports changed (Usd.Notice.ObjectsChanged,
+collected by engine/usd/changes.py). USD skips a value set to what it was, and Sdf.CopySpec and
 Sdf.Layer.TransferContent change only the fields that differ, so the report is the
 minimal edit, whatever was rewritten. The receiver applies a fragment the same way
 (CopySpec, TransferContent), so what listens to its stage (a Session) sees that same
 minimal edit and reads again only what it touches.
 
-    fragment = encode(mirror.GetRootLayer(), *tracker.take())   # sender
-    apply(stage, fragment)                                       # receiver
+    fragment = mirror.fragment()        # sender (a Mirror)
+    apply(stage, fragment)              # receiver
 """
 from __future__ import annotations
 
 import numpy as np
 from pxr import Sdf, Usd, Vt
+
+from .changes import ChangeTracker
 
 ARRAY_MIN = 16          # arrays with this many scalars or more travel as numpy
 ROOT = Sdf.Path.absoluteRootPath
@@ -74,12 +76,7 @@ def encode(layer: Sdf.Layer, resynced=(), changed=()) -> dict | None:
     frag = Sdf.Layer.CreateAnonymous(".usda")
     if todo["all"]:
         frag.TransferContent(layer)
-    for text in todo["copy"]:
-        path = Sdf.Path(text)
-        parent = path.GetPrimPath() if path.IsPropertyPath() else path.GetParentPath()
-        if parent != ROOT:
-            Sdf.CreatePrimInLayer(frag, parent)
-        Sdf.CopySpec(layer, path, frag, path)
+    _copy_specs(layer, frag, todo["copy"])
     for text in todo["fields"]:
         path = Sdf.Path(text)
         src = layer.GetObjectAtPath(path)
@@ -89,6 +86,17 @@ def encode(layer: Sdf.Layer, resynced=(), changed=()) -> dict | None:
     arrays = _take_arrays(frag)
     return {"all": todo["all"], "copy": todo["copy"], "fields": todo["fields"],
             "remove": todo["remove"], "text": frag.ExportToString(), "arrays": arrays}
+
+
+def _copy_specs(src: Sdf.Layer, dst: Sdf.Layer, paths) -> None:
+    """Copies each spec (a prim with its subtree, or one property) at the same path,
+    making its parent prim in `dst` first (as an `over`)."""
+    for text in paths:
+        path = Sdf.Path(text)
+        parent = path.GetPrimPath() if path.IsPropertyPath() else path.GetParentPath()
+        if parent != ROOT:
+            Sdf.CreatePrimInLayer(dst, parent)
+        Sdf.CopySpec(src, path, dst, path)
 
 
 def _is_numeric_array(value) -> bool:
@@ -154,12 +162,7 @@ def apply(stage, fragment: dict) -> None:
             return
         for text in fragment["remove"]:
             _remove(layer, Sdf.Path(text))
-        for text in fragment["copy"]:
-            path = Sdf.Path(text)
-            parent = path.GetPrimPath() if path.IsPropertyPath() else path.GetParentPath()
-            if parent != ROOT:
-                Sdf.CreatePrimInLayer(layer, parent)
-            Sdf.CopySpec(src, path, layer, path)
+        _copy_specs(src, layer, fragment["copy"])
         for text in fragment["fields"]:
             path = Sdf.Path(text)
             spec = src.GetObjectAtPath(path)
@@ -183,3 +186,27 @@ def _remove(layer: Sdf.Layer, path: Sdf.Path):
     parent = layer.pseudoRoot if path.GetParentPath() == ROOT else \
         layer.GetPrimAtPath(path.GetParentPath())
     del parent.nameChildren[path.name]
+
+
+class Mirror:
+    """The sender's copy of a stage the receiver holds, and what changed in it since
+    the last fragment."""
+
+    def __init__(self):
+        self.stage = Usd.Stage.CreateInMemory()
+        self.tracker = ChangeTracker(self.stage)
+
+    def fragment(self):
+        """The edits since the last call, as a fragment (None: nothing changed)."""
+        return encode(self.stage.GetRootLayer(), *self.tracker.take())
+
+    def replace(self, write):
+        """write(stage) fills a new in-memory stage, whose contents then replace the
+        mirror's (only the fields that differ change); returns what write returned."""
+        scratch = Usd.Stage.CreateInMemory()
+        result = write(scratch)
+        self.stage.GetRootLayer().TransferContent(scratch.GetRootLayer())
+        return result
+
+    def close(self):
+        self.tracker.close()

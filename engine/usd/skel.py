@@ -13,6 +13,7 @@ from pxr import Usd, UsdSkel, Vt
 
 from ..scene import SkelPose, SkinData
 from ..skin import MAX_ATTRIBUTE_INFLUENCES, influence_texels
+from .paths import under
 
 
 class BindingError(ValueError):
@@ -36,9 +37,9 @@ class SkelBindings:
         above it, if any)."""
         root = self.root_of(path) or path
         pred = Usd.TraverseInstanceProxies()
-        for old in [r for r in self.roots if _under(r, root)]:
+        for old in [r for r in self.roots if under(r, root)]:
             del self.roots[old]
-        for mesh in [m for m in self.by_mesh if _under(m, root)]:
+        for mesh in [m for m in self.by_mesh if under(m, root)]:
             del self.by_mesh[mesh]
         prim = self.stage.GetPrimAtPath(root)
         if not prim:
@@ -68,10 +69,6 @@ class SkelBindings:
 
     def get(self, path):
         return self.by_mesh.get(str(path))
-
-
-def _under(path: str, root: str) -> bool:
-    return root == "/" or path == root or path.startswith(root + "/")
 
 
 def skel_key(skel_query) -> str:

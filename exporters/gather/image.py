@@ -22,6 +22,8 @@ import tempfile
 import bpy
 import numpy as np
 
+from ...core.files import atomic_write, write_bytes
+
 _memory_dir = None
 # Blender's file formats -> extensions, for packed images with no file name of their own.
 EXTENSIONS = {"PNG": ".png", "JPEG": ".jpg", "OPEN_EXR": ".exr", "OPEN_EXR_MULTILAYER": ".exr",
@@ -57,7 +59,7 @@ def image_file(image, owner, warn, texture_dir):
             data = image.packed_file.data
             ext = os.path.splitext(image.filepath)[1] or EXTENSIONS.get(image.file_format, ".png")
             return _write(folder, stem, ext, data, in_memory,
-                          lambda path: _write_bytes(path, data))
+                          lambda path: write_bytes(path, data))
         return _write_pixels(image, folder, stem, in_memory)
     except (OSError, RuntimeError, ValueError) as error:
         warn(f"{owner}: image '{image.name}' could not be written out ({error})")
@@ -72,15 +74,8 @@ def _write(folder, stem, ext, content, hashed, write):
     path = os.path.join(folder, stem + ext)
     if hashed and os.path.isfile(path):
         return path
-    tmp = os.path.join(folder, f".{stem}.tmp{ext}")
-    write(tmp)
-    os.replace(tmp, path)
+    atomic_write(path, write, suffix=ext)
     return path
-
-
-def _write_bytes(path, data):
-    with open(path, "wb") as f:
-        f.write(data)
 
 
 def _write_pixels(image, folder, stem, hashed):

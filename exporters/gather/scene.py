@@ -58,7 +58,7 @@ def _settings(scene, warn):
         view_transform=view_transform, look=look, exposure=exposure)
 
 
-def _is_shareable(ob):
+def is_shareable(ob):
     """True when the evaluated mesh is exactly the mesh data, so objects can share it."""
     return ob.type == "MESH" and len(ob.modifiers) == 0 and ob.data.shape_keys is None
 
@@ -90,7 +90,7 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False):
     visible = render_visible(depsgraph.view_layer)
 
     originals, shown, materials = {}, {}, {}
-    instances = InstanceGatherer(rec, warn, _is_shareable, materials)
+    instances = InstanceGatherer(rec, warn, is_shareable, materials)
 
     def exported(ob):
         return ob.name_full in visible and not ob.hide_render
@@ -159,7 +159,7 @@ def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir, instance
 
     shared_users = {}
     for ob in evaluated.values():
-        if _is_shareable(ob.original):
+        if is_shareable(ob.original):
             shared_users.setdefault(ob.original.data.name_full, []).append(ob)
     shared = {k for k, users in shared_users.items() if len(users) > 1}
     shared |= instances.shared_data  # prototypes of instances hold it once already
@@ -195,7 +195,7 @@ def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir, instance
             obj.kind = "camera"
             obj.camera = gather_camera(ob.data.original, scene.render, warn)
         elif ob.type in MESH_LIKE and shown[key]:
-            _gather_geometry(ob, obj, rec, shared, rigs.get(key), groups, warn)
+            gather_geometry(ob, obj, rec, shared, rigs.get(key), groups, warn)
             for mat in obj.materials:
                 if mat is not None:
                     material_keys.setdefault(mat[0], mat[1])
@@ -230,9 +230,9 @@ def _gather_points(ob, obj, instances, world, warn):
         require_finite(obj.points.points, f"object '{obj.name}'", "particle positions")
 
 
-def _gather_geometry(ob, obj, rec, shared, rig, groups, warn):
+def gather_geometry(ob, obj, rec, shared, rig, groups, warn):
     orig = ob.original
-    is_shared = _is_shareable(orig) and orig.data.name_full in shared
+    is_shared = is_shareable(orig) and orig.data.name_full in shared
     mesh_key = ("proto:" + orig.data.name_full) if is_shared else ("object:" + orig.name_full)
     skinned = rig is not None and rig.reason is None
     owner = f"object '{orig.name}'"

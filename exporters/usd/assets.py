@@ -2,6 +2,8 @@
 import os
 import shutil
 
+from ...core.files import atomic_write
+
 
 def asset_resolver(layer_path, mode="reference"):
     """A function file -> asset path string.
@@ -27,7 +29,8 @@ def asset_resolver(layer_path, mode="reference"):
                     name, n = f"{base}_{n}{ext}", n + 1
                 target = os.path.join(target_dir, name)
                 if os.path.abspath(file) != os.path.abspath(target):
-                    shutil.copyfile(file, target)
+                    atomic_write(target, lambda tmp, src=file: shutil.copyfile(src, tmp),
+                                 suffix=ext)
                 copies[file] = target
             file = copies[file]
         rel = os.path.relpath(file, folder).replace(os.sep, "/")

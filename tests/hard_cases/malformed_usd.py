@@ -416,7 +416,7 @@ def cases():
     add("up_axis_bogus", "render", lambda s, f: s.SetMetadata("upAxis", "W"))
     add("time_codes_per_second_zero", "render", lambda s, f: s.SetTimeCodesPerSecond(0))
     add("start_after_end", "render", lambda s, f: (s.SetStartTimeCode(10), s.SetEndTimeCode(1)))
-    # Points and instancers (drawn by the engine after issue 9; never a crash before).
+    # Points and instancers (drawn by the engine; never a crash).
     add("points_prim_nan", "warning", lambda s, f: __import__("pxr").UsdGeom.Points.Define(
         s, "/root/Cloud").CreatePointsAttr(Vt.Vec3fArray([Gf.Vec3f(NAN)] * 3)))
     add("instancer_index_out_of_range", "warning", _instancer([0, 5]))

@@ -5,7 +5,7 @@ are written once; particles and point clouds become UsdGeom.Points.
 Each instance's transform, as USD computes it (PointInstancer.
 ComputeInstanceTransformsAtTime × the instancer's world), matches Blender's depsgraph
 instance matrix within 1e-5 of the scene's bounding-box diagonal. The engine draws
-them after issue 9 (the render test below is marked for it)."""
+them (engine/usd/read_instancers.py), and the render test below checks it."""
 import numpy as np
 import pytest
 

@@ -1,6 +1,6 @@
 """Lighting: the radiance range. Lights add up in a float32 target (1e-38..3e38), so a
 1e-6 W light and a 1e6 W one are both exact where they reach: float16 (the target
-before issue 13) flushed the first to zero and clamped the second at 65504.
+before, bench/bench_hdr_target.py) flushed the first to zero and clamped the second at 65504.
 
 - A point light 5 mm above a floor (a mm-sized view, near 1e-4), at 1e-6, 1e-3, 1,
   1e3 and 1e6 W: radiance / power equals the 1 W light's within 1e-5 relative

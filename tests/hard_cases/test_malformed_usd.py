@@ -14,7 +14,7 @@ from hard_cases import malformed_usd  # tests/ is on sys.path (conftest.py)
 
 BAD = {"traceback", "hang", "crash", "nan", "black", "no-reason"}
 
-# Every case that used to fail inside engine/ is handled there now (issue 13): the
+# Every case that used to fail inside engine/ is handled there now: the
 # table stays, empty, for the next engine-side case found.
 ENGINE = {}
 

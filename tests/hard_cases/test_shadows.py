@@ -7,8 +7,8 @@ relative to the scene, so a scaled scene casts the same shadows.
 - A light 1 mm and 1 cm above a floor, at the origin and 1e4 m away, shadowed, renders
   as the same light unshadowed at the origin: no streaks (relative <= 1e-2).
 - Sun shadows of a scene scaled by 1e-4 and 1e5 equal the unscaled ones (<= 1e-3).
-- An alpha-clipped surface whose alpha is 0 casts no shadow (issue 10's cut-out
-  shadows: marked until then)."""
+- An alpha-clipped surface whose alpha is 0 casts no shadow (cut-out shadows,
+  docs/rendering.md)."""
 import numpy as np
 import pytest
 from pxr import Gf, Sdf, UsdGeom, UsdLux, UsdShade

@@ -1,6 +1,6 @@
-"""Textures: what an image holds reaches the pixels. Issue 10's texture work (the
-shading engineer's: image reading on OpenImageIO, texture formats, the G-buffer's
-range) makes these hold; the cases that fail before it are marked for it.
+"""Textures: what an image holds reaches the pixels. The texture work (image reading on
+OpenImageIO, texture formats, the G-buffer's range) makes these hold; the cases that
+fail before it are marked for it.
 
 - A 16-bit PNG emission gradient below 8-bit resolution (linear, raw) renders its
   16-bit values: error <= 1e-4 (8-bit reading is off by up to 1/510).

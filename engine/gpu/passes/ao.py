@@ -1,4 +1,4 @@
-"""The ambient-occlusion pass (seed 002): screen-space occlusion of the dome's light
+"""The ambient-occlusion pass (docs/design.md, Ambient occlusion): screen-space occlusion of the dome's light
 by a horizon search (shaders/ao.frag), then a depth-aware blur (shaders/ao_blur.frag).
 The ambient pass multiplies the dome's diffuse light by it, and its specular light by
 the specular occlusion it implies; lights and emission are never occluded here
@@ -19,7 +19,14 @@ search is kept; what it misses is geometry off screen.
 Runs when the scene has a dome and the preset has AO, or the AO render pass is asked
 for.
 
-reads: g_depth, g_normal, view   writes: ao (R32F), ao_raw (scratch)
+A supersampled frame (high, ultra) searches at the output's resolution, one search
+per k x k block from its centre sub-pixel, and the blur upsamples it depth-aware to
+the drawn size: the search is k^2 times cheaper, and the occlusion it finds varies over
+the distance radius, far wider than a sub-pixel (GTAO in UE and EEVEE runs at reduced
+resolution too). Measured in docs/gpu.md ("Passes to budget").
+
+reads: g_depth, g_normal, view   writes: ao (R32F); its search (R32F, scratch) comes
+from the pool at the search's size
 render passes: AO (the blurred occlusion, grey)"""
 from __future__ import annotations
 
@@ -40,7 +47,7 @@ def occludes(frame) -> bool:
 class AoPass(Pass):
     name = "ao"
     reads = ("g_depth", "g_normal", "view")
-    writes = ("ao_raw", "ao")
+    writes = ("ao",)
     aovs = {"AO": ("aov_ao", 0)}
 
     def __init__(self, ctx, pool, programs):
@@ -58,9 +65,12 @@ class AoPass(Pass):
         dome = frame.scene.dome
         distance = getattr(dome, "ao_distance", None) or DEFAULT_DISTANCE
         cam = view.camera
-        self.pool.framebuffer([board["ao_raw"]]).use()
+        step = max(int(frame.supersample), 1)
+        raw = self.pool.acquire((-(-w // step), -(-h // step)), "r32f")
+        self.pool.framebuffer([raw]).use()
         prog = self.programs.get("fullscreen.vert", "ao.frag")
         view.set_camera(prog)
+        set_uniform(prog, "u_step", step)
         set_uniform(prog, "radius", float(distance))
         # Pixels per world unit at view depth 1 (perspective) or anywhere (orthographic).
         set_uniform(prog, "pixel_scale", 0.5 * h * float(cam.proj[1][1]))
@@ -72,6 +82,8 @@ class AoPass(Pass):
         self.pool.framebuffer(targets).use()
         prog = self.programs.get("fullscreen.vert", "ao_blur.frag",
                                  ["WRITE_AOV"] if len(targets) > 1 else [])
-        board["ao_raw"].use(UNITS["ao_tex"])
+        raw.use(UNITS["ao_tex"])
         view.set_camera(prog)
+        set_uniform(prog, "u_step", step)
         self.programs.fullscreen(prog)
+        self.pool.release(raw)

@@ -1,7 +1,7 @@
-"""The post chain (seed 001, seed 000 section 9): full-screen operations on the
-scene-linear image, each drawn from the current image into a fresh target of the same
-format that then becomes the image (ping-pong through the pool: two targets
-alternate). In order, each only when asked for:
+"""The post chain (docs/design.md, Framebuffers and post-processing): full-screen
+operations on the scene-linear image, each drawn from the current image into a fresh
+target of the same format that then becomes the image (ping-pong through the pool: two
+targets alternate). In order, each only when asked for:
 
   fxaa       frames not supersampled whose preset asks for it (antialias.py),
              at geometric edges only (depth or normal changes around the pixel)

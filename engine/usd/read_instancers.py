@@ -1,0 +1,126 @@
+"""The reading of PointInstancers (one batch of GPU instances per prototype mesh and
+mirroring) and Points prims into scene records."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..scene import Changes, Instance, PointCloud
+from .instancers import instance_matrices, points_data, prototype_meshes
+from .timeline import NOT_GEOMETRY, Dynamic, mesh_attributes_vary
+
+
+@dataclass
+class InstancerState:
+    """A PointInstancer read: its batches (Instance paths), the prototypes it draws,
+    whether anything of it may vary in time."""
+    batches: set = field(default_factory=set)
+    protos: tuple = ()
+    varies: bool = False
+
+
+class InstancerReading:
+    """StageReader's reading of PointInstancers and Points (state: stage.py)."""
+
+    def _read_instancer(self, prim, changes: Changes, rebuild: bool = False):
+        """(Re)reads a PointInstancer: one batch (an Instance with `worlds`) per
+        prototype mesh and mirroring, drawn with GPU instancing."""
+        path = str(prim.GetPath())
+        self._read.add(path)
+        warnings = self.scene.warnings[path] = []
+        state = self._instancers.get(path) or InstancerState()
+        old = set(state.batches)
+        state.batches = set()
+        protos, indices, mats, keep = instance_matrices(prim, self._t, warnings)
+        state.protos = tuple(protos)
+        world = self._world(path)
+        state.varies = self._xform_varies(prim) or any(
+            a.ValueMightBeTimeVarying() for a in prim.GetAuthoredAttributes()
+            if not a.GetName().startswith(NOT_GEOMETRY))
+        if not np.isfinite(world).all():
+            warnings.append(f"{path}: its world transform is not finite "
+                            f"({self._bad_op(prim) or path}); nothing drawn")
+            keep = np.zeros(len(indices), bool)
+        nested_warned = False
+        for k, proto in enumerate(protos):
+            sel = keep & (indices == k)
+            proto_prim = self.stage.GetPrimAtPath(proto)
+            if not proto_prim:
+                if sel.any():
+                    warnings.append(f"{path}: prototype {proto} does not exist; its "
+                                    f"{int(sel.sum())} instances are skipped")
+                continue
+            if not sel.any():
+                continue
+            meshes, nested = prototype_meshes(self.stage, proto, self._t)
+            if nested and not nested_warned:
+                nested_warned = True
+                warnings.append(f"{path}: nested PointInstancers ({nested[0]}) are not "
+                                f"drawn")
+            placed = world @ mats[sel]
+            for mesh_prim, rel in meshes:
+                worlds = placed @ rel
+                state.varies |= mesh_attributes_vary(mesh_prim)
+                mirrored = np.linalg.det(worlds[:, :3, :3]) < 0
+                for sign, part in (("", ~mirrored), ("-", mirrored)):
+                    if part.any():
+                        batch = f"{path}{{{mesh_prim.GetPath()}}}{sign}"
+                        if self._read_batch(batch, mesh_prim, worlds[part], warnings, changes,
+                                            rebuild):
+                            state.batches.add(batch)
+        for batch in old - state.batches:
+            self._drop_instance(batch, changes)
+        self._instancers[path] = state
+
+    def _read_batch(self, batch, mesh_prim, worlds, warnings, changes, rebuild=False) -> bool:
+        key = self._mesh_key(mesh_prim, batch, None, rebuild, warnings, changes)
+        if key is None:
+            return False
+        mesh = self.scene.meshes[key]
+        old = self.scene.instances.get(batch)
+        if old is not None and old.mesh_key != key:
+            self._unuse_mesh(old.mesh_key, batch, changes)
+        self._users.setdefault(key, set()).add(batch)
+        previous = self._inst.get(batch)
+        dyn = Dynamic(world_prim=batch, materials=tuple(mesh.materials))
+        for name in set(previous.materials if previous else ()) - set(dyn.materials):
+            self._unuse_material(name, batch)
+        for name in dyn.materials:
+            self._material_users.setdefault(name, set()).add(batch)
+        self._inst[batch] = dyn
+        self.scene.instances[batch] = Instance(batch, key, np.eye(4), worlds=worlds)
+        changes.instances.add(batch)
+        return True
+
+    def _read_points(self, prim, changes: Changes):
+        path = str(prim.GetPath())
+        self._read.add(path)
+        warnings = self.scene.warnings[path] = []
+        self._points[path] = self._xform_varies(prim) or any(
+            a.ValueMightBeTimeVarying() for a in prim.GetAuthoredAttributes()
+            if not a.GetName().startswith(NOT_GEOMETRY))
+        world = self._world(path)
+        try:
+            if not np.isfinite(world).all():
+                raise ValueError(f"its world transform is not finite ({self._bad_op(prim)})")
+            points, radii, colours = points_data(prim, self._t)
+        except ValueError as exc:
+            warnings.append(f"{path}: malformed points ({exc}); skipped")
+            self._drop_points(path, changes, keep_prim=True)
+            return
+        mats, _ = self._face_materials(prim, warnings)
+        old = self.scene.points.get(path)
+        if old is not None and old.material != mats[0].name:
+            self._unuse_material(old.material, path)
+        self._material_users.setdefault(mats[0].name, set()).add(path)
+        self.scene.points[path] = PointCloud(path, points, radii, colours, mats[0].name, world)
+        changes.points.add(path)
+
+    def _drop_points(self, path, changes: Changes, keep_prim=False):
+        if not keep_prim:
+            self._points.pop(path, None)
+        cloud = self.scene.points.pop(path, None)
+        if cloud is not None:
+            self._unuse_material(cloud.material, path)
+            changes.points.add(path)

@@ -1,0 +1,46 @@
+"""What a batch needs to know from the command line, as plain frozen records that the
+CLI builds once (farm/ never reads argparse's namespace)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True, kw_only=True)
+class FarmOptions:
+    """Where the tasks run, and what to skip or bring back."""
+    scheduler: str | None = None    # a Dask scheduler address, 'local', or None (a process pool)
+    jobs: int = 1                   # processes on this machine (no scheduler)
+    collect: bool = False           # workers send the outputs back; this process writes them
+    resume: bool = False            # skip outputs newer than their input
+    # Called with one word per state ("running": the first tasks are on the workers;
+    # "finished"), for `--status-fd`; None: nothing reported.
+    status: object = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class ExportBatchOptions(FarmOptions):
+    """`lantern export` with a folder for -o."""
+    textures: str = "reference"
+    max_influences: int | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class SequenceOptions(FarmOptions):
+    """`lantern render --frames`."""
+    scene: str                      # the file the user named
+    output: str                     # a name with '####', or a .gif
+    frames: tuple                   # the frames, in order
+    size: tuple | None = None       # (width, height), or the stage's own
+    preset: str = "medium"
+    camera: str | None = None
+    chunk: int | None = None        # frames per task; None: from the measured costs
+    # Blender's colour management for display outputs (engine/color.py).
+    view: str = "Standard"
+    look: str | None = None
+    exposure: float = 0.0
+    overlays: object = None         # engine/overlays.py BurnIn, drawn on each .png; or None
+
+    @property
+    def colour(self):
+        """The view settings as write_image's keywords."""
+        return dict(view=self.view, look=self.look, exposure=self.exposure)
