@@ -120,9 +120,8 @@ def write_image(path: str, rgba: np.ndarray, view: str = "Standard", look: str |
     rgba = np.asarray(rgba, dtype=np.float32)
     if rgba.ndim != 3 or rgba.shape[2] != 4:
         raise ValueError(f"expected an (H, W, 4) image, got {rgba.shape}")
-    extra = {"overlay": overlay} if ext == ".png" else {}
     atomic_write(path, lambda tmp: writers[ext](tmp, rgba, view=view, look=look,
-                                                exposure=exposure, **extra), suffix=ext)
+                                                exposure=exposure, overlay=overlay), suffix=ext)
 
 
 def write_animation(path: str, frames, fps: float, view: str = "Standard",
