@@ -198,3 +198,21 @@ def test_cli_burn_in_on_png_frames_and_clean_exr(tmp_path):
     two = read_image(tmp_path / "seq" / "f_0002.png")
     box = one[:20, :60] != two[:20, :60]
     assert box.any()                                       # the frame numbers differ
+
+
+def test_cli_burn_in_on_several_scenes_names_each(tmp_path):
+    """Several scenes into a folder: each image gets its own {scene}, and only there."""
+    from test_sequence import animated_stage
+    from lantern.engine.image_io import read_image
+    stage = animated_stage()
+    for name in ("shot010", "shot020"):
+        stage.GetRootLayer().Export(str(tmp_path / f"{name}.usda"))
+    proc = _lantern("render", str(tmp_path / "shot010.usda"), str(tmp_path / "shot020.usda"),
+                    "-o", str(tmp_path / "out") + os.sep, "--frame", "1", "--size", "160x60",
+                    "--preset", "low", "--burn-in", "{scene}", "--burn-in-size", "12",
+                    "--burn-in-position", "top-left")
+    assert proc.returncode == 0, proc.stderr
+    one = read_image(tmp_path / "out" / "shot010.png")
+    two = read_image(tmp_path / "out" / "shot020.png")
+    changed = np.any(one != two, axis=-1)
+    assert changed[:20, :80].any() and not changed[20:, :].any() and not changed[:, 80:].any()
