@@ -77,11 +77,8 @@ def from_args(args, stage, failed):
 def _camera_name(stage, camera):
     """The camera the engine renders through: --camera, the render settings', else the
     first camera; 'default' when there is none (the engine frames the scene)."""
-    from pxr import UsdGeom
-    from .engine.usd.camera import settings_camera_path
-    path = camera or settings_camera_path(stage)
-    if path is None:
-        path = next((str(p.GetPath()) for p in stage.Traverse() if p.IsA(UsdGeom.Camera)), None)
+    from .engine.usd.camera import rendered_camera_path
+    path = rendered_camera_path(stage, camera)
     return path.rsplit("/", 1)[-1] if path else "default"
 
 

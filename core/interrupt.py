@@ -13,6 +13,7 @@ refresh thread) does not interrupt the main thread's wait on its workers, so the
 also watches `wakeup_fd()`, which the signal writes to."""
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import sys
@@ -37,14 +38,31 @@ def exit_at_once():
 
 
 _requested = False
+_deferring = 0               # > 0 inside deferred(): a Ctrl-C is recorded, raised after
 _wakeup = None               # (read end, write end) of the signal's wake-up pipe
 
 
 def _raise(signum, frame):
     global _requested
     _requested = True
-    if not _importing(frame):     # inside an import USD would swallow it, with a warning:
-        raise KeyboardInterrupt   # check() raises it when the import is done
+    # Inside an import USD would swallow it (with a warning), and inside a worker's
+    # start it would leave a child reading half its start-up data: check() raises it
+    # when they are done.
+    if not _deferring and not _importing(frame):
+        raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def deferred():
+    """A block that a Ctrl-C does not cut in two: it is raised when the block ends."""
+    global _deferring
+    _deferring += 1
+    try:
+        yield
+    finally:
+        _deferring -= 1
+    if not _deferring:
+        check()
 
 
 def _importing(frame) -> bool:

@@ -48,3 +48,9 @@ def expand(template: str, values: dict) -> str:
     return template.format(**{**dict(date=now.strftime("%Y-%m-%d"),
                                      time=now.strftime("%H:%M:%S")),
                               **values, "frame": frame if frame is not None else 0})
+
+
+def halo_width(size: float) -> float:
+    """The SDF outline's width in pixels: one pixel, growing with the size (the layout
+    leaves room for it, the text shader draws it)."""
+    return max(1.0, size / 16.0)

@@ -77,11 +77,6 @@ def text_mode(text: Text) -> str:
     return "bitmap" if text.mode == "bitmap" or (text.mode == "auto" and exact) else "sdf"
 
 
-def halo_width(size: float) -> float:
-    """The SDF outline's width in pixels: one pixel, growing with the size."""
-    return max(1.0, size / 16.0)
-
-
 def text_box(text: Text) -> tuple[int, int, int, int]:
     """(x, y, width, height) in whole pixels that holds every pixel the text may touch,
     its outline or shadow included."""

@@ -87,12 +87,15 @@ class _Process:
         # blocked (the mask is kept across exec) and ignores it before unblocking.
         # Blocking, not ignoring, in the client meanwhile: an ignored Ctrl-C that
         # arrived while a worker started was lost, a blocked one comes after.
+        # A Ctrl-C that lands on another thread meanwhile is raised once the start is
+        # whole (interrupt.deferred), not in the middle of handing the child its data.
         if hasattr(signal, "pthread_sigmask"):
-            signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-            try:
-                self.process.start()
-            finally:
-                signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+            with interrupt.deferred():
+                signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+                try:
+                    self.process.start()
+                finally:
+                    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
         else:                                 # Windows: no signal masks
             previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
             try:
