@@ -13,6 +13,17 @@ uniform float u_opacity_threshold;
 uniform float u_clearcoat;
 uniform float u_clearcoat_roughness;
 
+#include "pattern.glsl"
+
+// The surface inputs a pattern graph feeds replace the constants and maps
+// (engine/gpu/pattern.py); without one this is the constants.
+void pattern_inputs(vec2 uv, inout vec3 diffuse, inout float metallic, inout float roughness,
+                    inout float opacity) {
+#ifdef HAS_PATTERN
+    pattern_eval(uv, diffuse, metallic, roughness, opacity);
+#endif
+}
+
 // A UsdUVTexture: wrap (0 repeat, 1 mirror, 2 clamp, 3 black), scale, bias, channel
 // (-1 rgb, 0..3 r g b a). srgb: an 8-bit sRGB image filtered as Cycles filters it
 // (engine/gpu/textures.py): magnified, its stored values are interpolated and then
@@ -95,6 +106,11 @@ float material_alpha(vec2 uv) {
 #ifdef HAS_OPACITY_MAP
     alpha = sample_map(t_opacity, m_opacity, uv).x;
 #endif
+#ifdef HAS_PATTERN
+    vec3 d = vec3(0.0);
+    float mt = 0.0, r = 0.0;
+    pattern_eval(uv, d, mt, r, alpha);
+#endif
     return alpha;
 }
 
@@ -122,6 +138,8 @@ MaterialSample material_sample(vec2 uv, vec3 normal, vec4 tangent, bool front) {
 #ifdef HAS_ROUGHNESS_MAP
     roughness = sample_map(t_roughness, m_roughness, uv).x;
 #endif
+    float opacity = 1.0;
+    pattern_inputs(uv, base, metallic, roughness, opacity);
     vec3 emissive = u_emissive;
 #ifdef HAS_EMISSIVE_MAP
     emissive = sample_map(t_emissive, m_emissive, uv).rgb;

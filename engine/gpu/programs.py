@@ -33,17 +33,23 @@ class ShaderError(RuntimeError):
     pass
 
 
-def load_source(name: str, defines=(), _seen=None) -> str:
+def load_source(name: str, defines=(), _seen=None, generated=()) -> str:
+    """`generated`: ((include name, source), ...) standing in for those shader files
+    (a material's pattern graph: engine/gpu/pattern.py)."""
     seen = set() if _seen is None else _seen
-    with open(os.path.join(SHADER_DIR, name), encoding="utf-8") as f:
-        src = f.read()
+    made = dict(generated)
+    if name in made:
+        src = made[name]
+    else:
+        with open(os.path.join(SHADER_DIR, name), encoding="utf-8") as f:
+            src = f.read()
 
     def include(m):
         inc = m.group(1)
         if inc in seen:
             return ""
         seen.add(inc)
-        return load_source(inc, (), seen)
+        return load_source(inc, (), seen, generated)
 
     src = _INCLUDE.sub(include, src)
     if defines:
@@ -62,10 +68,14 @@ class ProgramCache:
         self.ctx = ctx
         self._programs = {}
         self._screen = {}           # program key -> its VAO without buffers
+        self.compiled = 0           # programs compiled so far (stats: a graph edit's cost)
 
-    def get(self, vert: str, frag: str | None = None, defines=(), varyings=(), compute=False):
+    def get(self, vert: str, frag: str | None = None, defines=(), varyings=(), compute=False,
+            generated=()):
+        """`generated`: ((include name, source), ...) for load_source; part of the key."""
         defines = tuple(sorted(set(defines)))
-        key = (vert, frag, defines, tuple(varyings), compute)
+        generated = tuple(generated)
+        key = (vert, frag, defines, tuple(varyings), compute, generated)
         prog = self._programs.get(key)
         if prog is None:
             try:
@@ -75,8 +85,9 @@ class ProgramCache:
                     prog = self.ctx.program(vertex_shader=load_source(vert, defines),
                                             varyings=list(varyings))
                 else:
-                    prog = self.ctx.program(vertex_shader=load_source(vert, defines),
-                                            fragment_shader=load_source(frag, defines))
+                    prog = self.ctx.program(
+                        vertex_shader=load_source(vert, defines),
+                        fragment_shader=load_source(frag, defines, generated=generated))
             except Exception as exc:
                 raise ShaderError(f"{vert} + {frag} [variant: {', '.join(defines) or 'base'}] "
                                   f"failed to compile: {exc}") from exc
@@ -85,6 +96,7 @@ class ProgramCache:
                     prog[name].value = unit
             prog.extra = key
             self._programs[key] = prog
+            self.compiled += 1
         return prog
 
     def fullscreen(self, prog):

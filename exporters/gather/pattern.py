@@ -6,6 +6,7 @@ NODES anywhere upstream is one warning naming it; the caller then keeps its cons
 (the UsdPreviewSurface fallback)."""
 from __future__ import annotations
 
+from ...core.pattern_nodes import unsupported_setting
 from ..ir import PatternGraph, PatternNode
 
 SOCKET_TYPES = {"VALUE": "float", "INT": "float", "BOOLEAN": "float",
@@ -187,6 +188,9 @@ class PatternBuilder:
             raise Unsupported(node, "is in a cycle")
         visiting.add(node.name)
         kind, settings, inputs, outputs = NODES[node.bl_idname](node)
+        why = unsupported_setting(kind, settings)
+        if why is not None:
+            raise Unsupported(node, f"with {why.replace(' is not supported', '')} is not supported")
         rec = PatternNode(name=f"n{len(self.graph.nodes)}_{kind}", kind=kind,
                           settings=dict(settings),
                           outputs={o: socket_type(s) for o, s in outputs.items()})

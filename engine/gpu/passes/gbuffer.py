@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from ..framegraph import Pass
 from ..points import set_camera_facing
+from ..pattern import material_variant, set_parameters
 from ..programs import UNITS, set_uniform
 
 # Material input -> shader names and variant define.
@@ -65,7 +66,8 @@ class GBufferPass(Pass):
                 continue                   # wholly see-through: the transparency pass's
             defines = map_defines(mat) + self.geometry.object_defines() + \
                 (["WRITE_INDEX"] if index else [])
-            prog = self.programs.get("gbuffer.vert", "gbuffer.frag", defines)
+            prog = self.programs.get("gbuffer.vert", "gbuffer.frag", defines,
+                                     generated=material_variant(mat))
             set_uniform(prog, "view_proj", view.view_proj)
             set_uniform(prog, "u_far", view.far_clip)
             view.set_origin(prog)
@@ -113,6 +115,7 @@ def set_material(prog, mat, textures, threshold):
     set_uniform(prog, "u_clearcoat", mat.clearcoat)
     set_uniform(prog, "u_clearcoat_roughness", mat.clearcoat_roughness)
     set_uniform(prog, "u_material_index", float(mat.pass_index))
+    set_parameters(prog, mat)
     for name, short, _ in MAP_SLOTS:
         ref = mat.maps.get(name)
         if ref is None:

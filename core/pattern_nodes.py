@@ -1,0 +1,52 @@
+"""Pattern-graph node kinds and their settings: the one table. The exporter writes
+Blender's nodes as these kinds (ND_lantern_<kind>), the engine reads them and
+generates GLSL from them; an operation's position in its list is its number in
+shaders/pattern_lib.glsl."""
+from __future__ import annotations
+
+# Blender's Math node operations, as shaders/pattern_lib.glsl pt_math numbers them.
+MATH_OPS = (
+    "ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "MULTIPLY_ADD", "POWER", "LOGARITHM", "SQRT",
+    "INVERSE_SQRT", "ABSOLUTE", "EXPONENT", "MINIMUM", "MAXIMUM", "LESS_THAN", "GREATER_THAN",
+    "SIGN", "COMPARE", "SMOOTH_MIN", "SMOOTH_MAX", "ROUND", "FLOOR", "CEIL", "TRUNC", "FRACT",
+    "MODULO", "FLOORED_MODULO", "WRAP", "SNAP", "PINGPONG", "SINE", "COSINE", "TANGENT",
+    "ARCSINE", "ARCCOSINE", "ARCTANGENT", "ARCTAN2", "SINH", "COSH", "TANH", "RADIANS",
+    "DEGREES")
+# Vector Math operations (pt_vector_math).
+VECTOR_MATH_OPS = (
+    "ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "MULTIPLY_ADD", "CROSS_PRODUCT", "PROJECT",
+    "REFLECT", "DOT_PRODUCT", "DISTANCE", "LENGTH", "SCALE", "NORMALIZE", "SNAP", "FLOOR",
+    "CEIL", "MODULO", "WRAP", "FRACTION", "ABSOLUTE", "POWER", "SIGN", "MINIMUM", "MAXIMUM",
+    "SINE", "COSINE", "TANGENT")
+# Mix (colour) blend types (pt_blend).
+BLEND_TYPES = (
+    "MIX", "ADD", "MULTIPLY", "SUBTRACT", "SCREEN", "DIVIDE", "DIFFERENCE", "EXCLUSION",
+    "DARKEN", "LIGHTEN", "OVERLAY", "DODGE", "BURN", "HUE", "SATURATION", "VALUE", "COLOR",
+    "SOFT_LIGHT", "LINEAR_LIGHT")
+MAPPING_TYPES = ("POINT", "TEXTURE", "VECTOR", "NORMAL")
+RAMP_INTERPOLATIONS = ("LINEAR", "CONSTANT", "EASE")
+COLOR_MODES = ("RGB", "HSV")
+
+# kind -> {setting: allowed values}; a setting missing here is free (a count, a flag).
+KINDS = {
+    "uv": {}, "value": {}, "rgb": {},
+    "mix": {"data_type": ("FLOAT", "VECTOR", "RGBA"), "blend_type": BLEND_TYPES},
+    "math": {"operation": MATH_OPS},
+    "vector_math": {"operation": VECTOR_MATH_OPS},
+    "mapping": {"vector_type": MAPPING_TYPES},
+    "invert": {}, "separate_xyz": {}, "combine_xyz": {},
+    "separate_color": {"mode": COLOR_MODES}, "combine_color": {"mode": COLOR_MODES},
+    "color_ramp": {"interpolation": RAMP_INTERPOLATIONS},
+    "hue_saturation": {}, "checker": {},
+}
+
+
+def unsupported_setting(kind: str, settings: dict) -> str | None:
+    """'kind not supported' or 'operation X not supported', None when all is known."""
+    allowed = KINDS.get(kind)
+    if allowed is None:
+        return f"kind {kind} is not supported"
+    for name, values in allowed.items():
+        if name in settings and settings[name] not in values:
+            return f"{name} {settings[name]} is not supported"
+    return None

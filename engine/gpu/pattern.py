@@ -1,0 +1,244 @@
+"""GLSL for a material's pattern graph (engine/scene.py PatternGraph): one function,
+`pattern_eval`, computing the surface inputs the graph feeds, from Blender's node
+formulas in shaders/pattern_lib.glsl.
+
+The code depends only on the graph's shape (kinds, settings, links, which inputs are
+values): materials with equal shapes share one generated source, so one program
+variant. Every value is a parameter, a slot of `uniform vec4 u_pattern[]`, set per
+material from `parameters(graph)`."""
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...core.pattern_nodes import (BLEND_TYPES, MAPPING_TYPES, MATH_OPS,
+                                   RAMP_INTERPOLATIONS, VECTOR_MATH_OPS)
+
+SURFACE = {"diffuseColor": ("pt_diffuse", "color"), "metallic": ("pt_metallic", "float"),
+           "roughness": ("pt_roughness", "float"), "opacity": ("pt_opacity", "float")}
+
+
+@dataclass(frozen=True)
+class PatternCode:
+    source: str        # the generated pattern.glsl
+    key: str           # hash of the shape: the program variant's name
+    slots: int         # vec4 parameters
+
+
+def _slots(typ, value) -> int:
+    if typ == "float[]":
+        return (len(value) + 3) // 4
+    if typ == "color4[]":
+        return len(value)
+    return 1
+
+
+def parameters(graph) -> np.ndarray:
+    """(slots, 4) float32: every node value, in the generated code's order."""
+    rows = []
+    for node in graph.nodes:
+        for _, typ, value in node.values:
+            if typ == "float":
+                rows.append((value, 0.0, 0.0, 0.0))
+            elif typ in ("vector", "color"):
+                rows.append((*value, 0.0))
+            elif typ == "float[]":
+                flat = list(value) + [0.0] * (-len(value) % 4)
+                rows.extend(tuple(flat[i:i + 4]) for i in range(0, len(flat), 4))
+            else:
+                rows.extend(tuple(c) for c in value)
+    return np.asarray(rows, np.float32).reshape(-1, 4)
+
+
+def _convert(expr, have, want):
+    if have == want or (have != "float" and want != "float"):
+        return expr
+    if want == "float":
+        return f"pt_color_to_float({expr})" if have == "color" else f"pt_vector_to_float({expr})"
+    return f"vec3({expr})"
+
+
+class _Writer:
+    def __init__(self, graph):
+        self.lines, self.slot = [], 0
+        self.vars = {}                     # (node name, output) -> (GLSL name, type)
+        self.graph = graph
+
+    def node(self, index, node):
+        ins, values = {}, {}               # input -> (GLSL expression, type)
+        for name, typ, value in node.values:
+            values[name] = (self.slot, typ, value)
+            swizzle = "x" if typ == "float" else "xyz"
+            ins[name] = (f"u_pattern[{self.slot}].{swizzle}", typ)
+            self.slot += _slots(typ, value)
+        for name, typ, src, out, src_type in node.links:
+            var, have = self.vars[(src, out)]
+            ins[name] = (_convert(var, have, typ), typ)
+        settings = dict(node.settings)
+        p = f"p{index}"
+        emit = self.lines.append
+
+        def arg(name, want, default="0.0"):
+            if name not in ins:
+                return default if want == "float" else f"vec3({default})"
+            expr, typ = ins[name]
+            return _convert(expr, typ, want)
+
+        def out(name, typ, expr):
+            emit(f"    {'float' if typ == 'float' else 'vec3'} {p}_{name} = {expr};")
+            self.vars[(node.name, name)] = (f"{p}_{name}", typ)
+
+        kind = node.kind
+        if kind == "uv":
+            out("uv", "vector", "vec3(uv, 0.0)")
+        elif kind == "value":
+            out("value", "float", arg("value", "float"))
+        elif kind == "rgb":
+            out("color", "color", arg("color", "color"))
+        elif kind == "mix":
+            data = settings.get("data_type", "RGBA")
+            fac_type = ins.get("factor", ("", "float"))[1]
+            fac = arg("factor", fac_type)
+            if settings.get("clamp_factor", "1") == "1":
+                fac = f"clamp({fac}, 0.0, 1.0)"
+            if data == "FLOAT":
+                out("result", "float", f"mix({arg('a', 'float')}, {arg('b', 'float')}, {fac})")
+            elif data == "VECTOR":
+                out("result", "vector", f"mix({arg('a', 'vector')}, {arg('b', 'vector')}, {fac})")
+            else:
+                blend = BLEND_TYPES.index(settings.get("blend_type", "MIX"))
+                expr = f"pt_blend({blend}, {fac}, {arg('a', 'color')}, {arg('b', 'color')})"
+                if settings.get("clamp_result", "0") == "1":
+                    expr = f"clamp({expr}, 0.0, 1.0)"
+                out("result", "color", expr)
+        elif kind == "math":
+            op = MATH_OPS.index(settings["operation"])
+            expr = f"pt_math({op}, {arg('a', 'float')}, {arg('b', 'float')}, {arg('c', 'float')})"
+            if settings.get("clamp", "0") == "1":
+                expr = f"clamp({expr}, 0.0, 1.0)"
+            out("value", "float", expr)
+        elif kind == "vector_math":
+            op = VECTOR_MATH_OPS.index(settings["operation"])
+            emit(f"    vec3 {p}_vector; float {p}_value;")
+            emit(f"    pt_vector_math({op}, {arg('a', 'vector')}, {arg('b', 'vector')}, "
+                 f"{arg('c', 'vector')}, {arg('scale', 'float', '1.0')}, {p}_vector, {p}_value);")
+            self.vars[(node.name, "vector")] = (f"{p}_vector", "vector")
+            self.vars[(node.name, "value")] = (f"{p}_value", "float")
+        elif kind == "mapping":
+            t = MAPPING_TYPES.index(settings.get("vector_type", "POINT"))
+            out("vector", "vector", f"pt_mapping({t}, {arg('vector', 'vector')}, "
+                f"{arg('location', 'vector')}, {arg('rotation', 'vector')}, "
+                f"{arg('scale', 'vector', '1.0')})")
+        elif kind == "invert":
+            c = arg("color", "color")
+            out("color", "color", f"mix({c}, vec3(1.0) - {c}, {arg('fac', 'float')})")
+        elif kind in ("separate_xyz", "separate_color"):
+            src = arg("vector", "vector") if kind == "separate_xyz" else arg("color", "color")
+            if settings.get("mode") == "HSV":
+                src = f"pt_rgb_to_hsv({src})"
+            emit(f"    vec3 {p}_src = {src};")
+            for i, axis in enumerate("xyz"):
+                out(axis, "float", f"{p}_src[{i}]")
+        elif kind in ("combine_xyz", "combine_color"):
+            expr = f"vec3({arg('x', 'float')}, {arg('y', 'float')}, {arg('z', 'float')})"
+            if settings.get("mode") == "HSV":
+                expr = f"pt_hsv_to_rgb({expr})"
+            out("vector" if kind == "combine_xyz" else "color",
+                "vector" if kind == "combine_xyz" else "color", expr)
+        elif kind == "color_ramp":
+            self._ramp(p, node, values, settings, arg("fac", "float"))
+        elif kind == "hue_saturation":
+            out("color", "color", f"pt_hsv_adjust({arg('hue', 'float')}, "
+                f"{arg('saturation', 'float')}, {arg('value', 'float')}, {arg('fac', 'float')}, "
+                f"{arg('color', 'color')})")
+        elif kind == "checker":
+            emit(f"    float {p}_fac = pt_checker({arg('vector', 'vector')} * "
+                 f"{arg('scale', 'float')});")
+            self.vars[(node.name, "fac")] = (f"{p}_fac", "float")
+            out("color", "color", f"{p}_fac > 0.5 ? {arg('color1', 'color')} : "
+                f"{arg('color2', 'color')}")
+        else:
+            raise ValueError(f"pattern node kind {kind!r} has no GLSL")
+
+    def _ramp(self, p, node, values, settings, fac):
+        """Blender's colour band (BKE_colorband_evaluate): below the first stop its
+        colour, above the last the last's, between two stops by interpolation."""
+        pos_slot, _, positions = values["positions"]
+        col_slot = values["colors"][0]
+        n = len(positions)
+        interp = RAMP_INTERPOLATIONS.index(settings.get("interpolation", "LINEAR"))
+        emit = self.lines.append
+
+        def pos(i):
+            return f"u_pattern[{pos_slot + i // 4}][{i % 4}]"
+
+        emit(f"    float {p}_t = {fac};")
+        emit(f"    vec4 {p}_c = u_pattern[{col_slot}];")
+        for i in range(n - 1):
+            lo, hi = pos(i), pos(i + 1)
+            if interp == 1:
+                step = f"u_pattern[{col_slot + i}]"
+            else:
+                f = f"clamp(({p}_t - {lo}) / max({hi} - {lo}, 1e-9), 0.0, 1.0)"
+                if interp == 2:
+                    f = f"smoothstep(0.0, 1.0, {f})"
+                step = f"mix(u_pattern[{col_slot + i}], u_pattern[{col_slot + i + 1}], {f})"
+            emit(f"    if ({p}_t >= {lo}) {p}_c = {step};")
+        emit(f"    if ({p}_t >= {pos(n - 1)}) {p}_c = u_pattern[{col_slot + n - 1}];")
+        self.vars[(node.name, "color")] = (f"{p}_c.rgb", "color")
+        self.vars[(node.name, "alpha")] = (f"{p}_c.a", "float")
+
+
+def generate(graph) -> PatternCode:
+    writer = _Writer(graph)
+    for i, node in enumerate(graph.nodes):
+        writer.node(i, node)
+    body = writer.lines
+    for target, node, out, _ in graph.outputs:
+        name, want = SURFACE[target]
+        var, have = writer.vars[(node, out)]
+        body.append(f"    {name} = {_convert(var, have, want)};")
+    outs = ", ".join(f"inout {'float' if t == 'float' else 'vec3'} {n}" for n, t in SURFACE.values())
+    source = "\n".join([
+        "// Generated by engine/gpu/pattern.py for one graph shape.",
+        "#define HAS_PATTERN",
+        '#include "pattern_lib.glsl"',
+        f"uniform vec4 u_pattern[{max(writer.slot, 1)}];",
+        f"void pattern_eval(vec2 uv, {outs}) {{",
+        *body,
+        "}",
+        ""])
+    return PatternCode(source=source, key=hashlib.sha1(source.encode()).hexdigest()[:16],
+                       slots=writer.slot)
+
+
+# Shape -> PatternCode: generation is a pure function of the shape, so one memo serves
+# every context in the process.
+_CODES: dict = {}
+
+
+def code_of(graph) -> PatternCode:
+    shape = graph.shape
+    code = _CODES.get(shape)
+    if code is None:
+        code = _CODES[shape] = generate(graph)
+    return code
+
+
+def material_variant(mat) -> tuple:
+    """The `generated` argument of ProgramCache.get for a material: its graph's code
+    in place of shaders/pattern.glsl, or nothing (the fast path)."""
+    if mat.pattern is None:
+        return ()
+    return (("pattern.glsl", code_of(mat.pattern).source),)
+
+
+def set_parameters(prog, mat) -> int:
+    """Uploads the material's pattern parameters; returns the bytes written."""
+    if mat.pattern is None or "u_pattern" not in prog:
+        return 0
+    data = parameters(mat.pattern).tobytes()
+    prog["u_pattern"].write(data)
+    return len(data)
