@@ -239,6 +239,8 @@ def set_parameters(prog, mat) -> int:
     """Uploads the material's pattern parameters; returns the bytes written."""
     if mat.pattern is None or "u_pattern" not in prog:
         return 0
-    data = parameters(mat.pattern).tobytes()
-    prog["u_pattern"].write(data)
+    uniform = prog["u_pattern"]
+    # The compiler may drop the array's unread tail.
+    data = parameters(mat.pattern)[:uniform.array_length].tobytes()
+    uniform.write(data)
     return len(data)

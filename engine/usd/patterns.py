@@ -45,7 +45,11 @@ def _producer(inp):
 
 
 def read_pattern(mat: UsdShade.Material, time, warnings: list) -> PatternGraph | None:
-    surface = mat.ComputeSurfaceSource(["mtlx"])[0]
+    out = mat.GetSurfaceOutput("mtlx")
+    if not out:
+        return None
+    attrs = out.GetValueProducingAttributes()
+    surface = UsdShade.Shader(attrs[0].GetPrim()) if attrs else None
     if not surface or str(surface.GetIdAttr().Get() or "") != MTLX_SURFACE:
         return None
     path = str(mat.GetPath())

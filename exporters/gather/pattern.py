@@ -191,8 +191,7 @@ class PatternBuilder:
         why = unsupported_setting(kind, settings)
         if why is not None:
             raise Unsupported(node, f"with {why.replace(' is not supported', '')} is not supported")
-        rec = PatternNode(name=f"n{len(self.graph.nodes)}_{kind}", kind=kind,
-                          settings=dict(settings),
+        rec = PatternNode(name="", kind=kind, settings=dict(settings),
                           outputs={o: socket_type(s) for o, s in outputs.items()})
         if kind == "color_ramp":
             rec.values.update(_ramp_values(node))
@@ -212,6 +211,7 @@ class PatternBuilder:
         elif kind == "value":
             rec.values["value"] = ("float", socket_value(node.outputs[0], "float"))
         visiting.discard(node.name)
+        rec.name = f"n{len(self.graph.nodes)}_{kind}"     # after its sources: unique
         self.graph.nodes.append(rec)
         self._names[node.name] = rec.name
         return rec.name

@@ -40,8 +40,8 @@ import numpy as np
 from ....core.lights import SUN
 from ...scene import OPAQUE_ALPHA
 from ..framegraph import Pass
-from ..programs import UNITS, set_uniform
 from ..pattern import material_variant
+from ..programs import UNITS, set_uniform
 from .gbuffer import map_defines, set_material
 
 MAX_FORWARD_LIGHTS = 32       # shaders/transparent.frag

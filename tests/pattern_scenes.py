@@ -1,0 +1,334 @@
+"""The node-network scenes (docs/materials.md), one per node family, shared by the
+Cycles reference script (references/make_pattern_references.py) and by
+tests/test_patterns.py. Nothing here is copied elsewhere.
+
+Every scene is a grid of unit quads seen straight down by an orthographic camera, one
+material per quad, lit by a sun of strength pi straight down with a black world, so
+that (Principled BSDF, Specular IOR Level 0) each pixel is the base colour the
+network computes. Cycles renders direct light only (as references/looks/)."""
+import math
+
+from reference_scenes import _camera, _mesh_object, _sun, _world
+
+SIZE = (128, 128)
+SAMPLES = 64
+COLUMNS = 5
+
+
+def _principled(name):
+    import bpy
+    mat = bpy.data.materials.new(name)
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Roughness"].default_value = 1.0
+    bsdf.inputs["Specular IOR Level"].default_value = 0.0
+    return mat, mat.node_tree, bsdf
+
+
+def _uv_xyz(tree):
+    """(Separate XYZ of the UV coordinates) -> its node."""
+    coord = tree.nodes.new("ShaderNodeTexCoord")
+    sep = tree.nodes.new("ShaderNodeSeparateXYZ")
+    tree.links.new(coord.outputs["UV"], sep.inputs[0])
+    return coord, sep
+
+
+def _grid(name, builders):
+    """One quad per (label, build(tree, bsdf)) in a grid of COLUMNS, rows downwards."""
+    import bpy
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.resolution_x, scene.render.resolution_y = SIZE
+    scene.render.resolution_percentage = 100
+    scene.render.pixel_aspect_x = scene.render.pixel_aspect_y = 1.0
+    _world(scene, color=(0.0, 0.0, 0.0), strength=0.0)
+    _sun(scene, math.pi)
+    rows = (len(builders) + COLUMNS - 1) // COLUMNS
+    for i, (label, build) in enumerate(builders):
+        mat, tree, bsdf = _principled(f"{name}_{label}")
+        build(tree, bsdf)
+        x, y = i % COLUMNS, -(i // COLUMNS)
+        corners = [(x, y - 1, 0), (x + 1, y - 1, 0), (x + 1, y, 0), (x, y, 0)]
+        _mesh_object(scene, f"{name}_{label}", corners, [(0, 1, 2, 3)], mat,
+                     [(0, 0), (1, 0), (1, 1), (0, 1)])
+    extent = max(COLUMNS, rows)
+    centre = (COLUMNS / 2.0, -rows / 2.0)
+    _camera(scene, (centre[0], centre[1], 10.0), (centre[0], centre[1], 0.0),
+            ortho_scale=extent)
+    bpy.context.view_layer.update()
+    return scene
+
+
+def _to_base(tree, bsdf, socket):
+    tree.links.new(socket, bsdf.inputs["Base Color"])
+
+
+def _mix_blend(blend):
+    def build(tree, bsdf):
+        _, sep = _uv_xyz(tree)
+        comb = tree.nodes.new("ShaderNodeCombineColor")
+        tree.links.new(sep.outputs["X"], comb.inputs[0])
+        tree.links.new(sep.outputs["Y"], comb.inputs[1])
+        comb.inputs[2].default_value = 0.5
+        mix = tree.nodes.new("ShaderNodeMix")
+        mix.data_type, mix.blend_type = "RGBA", blend
+        mix.inputs["Factor"].default_value = 0.7
+        tree.links.new(comb.outputs[0], mix.inputs[6])          # A_Color
+        mix.inputs[7].default_value = (0.8, 0.3, 0.1, 1.0)     # B_Color
+        _to_base(tree, bsdf, mix.outputs[2])                    # Result_Color
+    return build
+
+
+def _mix_float(tree, bsdf):
+    _, sep = _uv_xyz(tree)
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type = "FLOAT"
+    tree.links.new(sep.outputs["X"], mix.inputs[0])             # Factor_Float
+    mix.inputs[2].default_value = 0.1                           # A_Float
+    mix.inputs[3].default_value = 0.9                           # B_Float
+    _to_base(tree, bsdf, mix.outputs[0])
+
+
+def _mix_vector(tree, bsdf):
+    coord, sep = _uv_xyz(tree)
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type, mix.factor_mode = "VECTOR", "NON_UNIFORM"
+    mix.inputs[1].default_value = (0.2, 0.8, 0.5)               # Factor_Vector
+    tree.links.new(coord.outputs["UV"], mix.inputs[4])          # A_Vector
+    mix.inputs[5].default_value = (0.9, 0.1, 0.4)               # B_Vector
+    _to_base(tree, bsdf, mix.outputs[1])
+
+
+def build_mix(workdir=None):
+    from lantern.core.pattern_nodes import BLEND_TYPES
+    return _grid("mix", [(b.lower(), _mix_blend(b)) for b in BLEND_TYPES] +
+                 [("float", _mix_float), ("vector", _mix_vector)])
+
+
+def _math(op, b=0.5, c=0.3):
+    def build(tree, bsdf):
+        _, sep = _uv_xyz(tree)
+        pre = tree.nodes.new("ShaderNodeMath")          # u * 4 - 2 spans [-2, 2]
+        pre.operation = "MULTIPLY_ADD"
+        tree.links.new(sep.outputs["X"], pre.inputs[0])
+        pre.inputs[1].default_value, pre.inputs[2].default_value = 4.0, -2.0
+        node = tree.nodes.new("ShaderNodeMath")
+        node.operation = op
+        tree.links.new(pre.outputs[0], node.inputs[0])
+        if b is None:
+            tree.links.new(sep.outputs["Y"], node.inputs[1])
+        else:
+            node.inputs[1].default_value = b
+        node.inputs[2].default_value = c
+        post = tree.nodes.new("ShaderNodeMath")         # [-2, 2] -> [0, 1]
+        post.operation, post.use_clamp = "MULTIPLY_ADD", False
+        tree.links.new(node.outputs[0], post.inputs[0])
+        post.inputs[1].default_value, post.inputs[2].default_value = 0.25, 0.5
+        _to_base(tree, bsdf, post.outputs[0])
+    return build
+
+
+MATH_SHOWN = ["ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "POWER", "LOGARITHM", "SQRT",
+              "ABSOLUTE", "MINIMUM", "GREATER_THAN", "SMOOTH_MIN", "ROUND", "FRACT",
+              "MODULO", "FLOORED_MODULO", "WRAP", "SNAP", "PINGPONG", "SINE", "ARCTAN2",
+              "TANH", "COMPARE", "SIGN", "EXPONENT", "INVERSE_SQRT"]
+
+
+def build_math(workdir=None):
+    return _grid("math", [(op.lower(), _math(op, None if op in ("ARCTAN2", "POWER") else 0.7))
+                          for op in MATH_SHOWN])
+
+
+def _vector_math(op):
+    def build(tree, bsdf):
+        coord, _ = _uv_xyz(tree)
+        pre = tree.nodes.new("ShaderNodeVectorMath")    # uv * 2 - 1
+        pre.operation = "MULTIPLY_ADD"
+        tree.links.new(coord.outputs["UV"], pre.inputs[0])
+        pre.inputs[1].default_value, pre.inputs[2].default_value = (2, 2, 2), (-1, -1, 0.5)
+        node = tree.nodes.new("ShaderNodeVectorMath")
+        node.operation = op
+        tree.links.new(pre.outputs[0], node.inputs[0])
+        node.inputs[1].default_value = (0.3, -0.6, 0.9)
+        node.inputs[2].default_value = (0.5, 0.5, 0.5)
+        node.inputs[3].default_value = 0.7
+        out = node.outputs[1] if op in ("DOT_PRODUCT", "DISTANCE", "LENGTH") else node.outputs[0]
+        post = tree.nodes.new("ShaderNodeVectorMath")
+        post.operation = "MULTIPLY_ADD"
+        tree.links.new(out, post.inputs[0])
+        post.inputs[1].default_value, post.inputs[2].default_value = (0.4,) * 3, (0.5,) * 3
+        _to_base(tree, bsdf, post.outputs[0])
+    return build
+
+
+VECTOR_MATH_SHOWN = ["ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "CROSS_PRODUCT", "PROJECT",
+                     "REFLECT", "DOT_PRODUCT", "DISTANCE", "LENGTH", "SCALE", "NORMALIZE",
+                     "SNAP", "FLOOR", "MODULO", "WRAP", "FRACTION", "ABSOLUTE", "MINIMUM",
+                     "MAXIMUM", "SINE", "COSINE", "CEIL", "SIGN", "MULTIPLY_ADD"]
+
+
+def build_vector_math(workdir=None):
+    return _grid("vector_math", [(op.lower(), _vector_math(op)) for op in VECTOR_MATH_SHOWN])
+
+
+def _mapped_checker(vector_type, scale=4.0):
+    def build(tree, bsdf):
+        coord = tree.nodes.new("ShaderNodeTexCoord")
+        mapping = tree.nodes.new("ShaderNodeMapping")
+        mapping.vector_type = vector_type
+        tree.links.new(coord.outputs["UV"], mapping.inputs["Vector"])
+        if vector_type in ("POINT", "TEXTURE"):
+            mapping.inputs["Location"].default_value = (0.13, 0.27, 0.0)
+        mapping.inputs["Rotation"].default_value = (0.0, 0.0, 0.5)
+        mapping.inputs["Scale"].default_value = (1.3, 0.8, 1.0)
+        checker = tree.nodes.new("ShaderNodeTexChecker")
+        checker.inputs["Scale"].default_value = scale
+        checker.inputs["Color1"].default_value = (0.9, 0.8, 0.2, 1.0)
+        checker.inputs["Color2"].default_value = (0.1, 0.2, 0.6, 1.0)
+        tree.links.new(mapping.outputs[0], checker.inputs["Vector"])
+        _to_base(tree, bsdf, checker.outputs["Color"])
+    return build
+
+
+def _plain_checker(scale):
+    def build(tree, bsdf):
+        coord = tree.nodes.new("ShaderNodeTexCoord")
+        checker = tree.nodes.new("ShaderNodeTexChecker")
+        checker.inputs["Scale"].default_value = scale
+        tree.links.new(coord.outputs["UV"], checker.inputs["Vector"])
+        _to_base(tree, bsdf, checker.outputs["Color"])
+    return build
+
+
+def _mapped_gradient(vector_type):
+    """The mapped coordinates themselves as colour (fract), where a checker would hide
+    a small offset."""
+    def build(tree, bsdf):
+        coord = tree.nodes.new("ShaderNodeTexCoord")
+        mapping = tree.nodes.new("ShaderNodeMapping")
+        mapping.vector_type = vector_type
+        tree.links.new(coord.outputs["UV"], mapping.inputs["Vector"])
+        if vector_type in ("POINT", "TEXTURE"):
+            mapping.inputs["Location"].default_value = (0.13, 0.27, 0.1)
+        mapping.inputs["Rotation"].default_value = (0.2, 0.3, 0.5)
+        mapping.inputs["Scale"].default_value = (1.3, 0.8, 1.2)
+        frac = tree.nodes.new("ShaderNodeVectorMath")
+        frac.operation = "FRACTION"
+        tree.links.new(mapping.outputs[0], frac.inputs[0])
+        _to_base(tree, bsdf, frac.outputs[0])
+    return build
+
+
+def build_mapping(workdir=None):
+    types = ("POINT", "TEXTURE", "VECTOR", "NORMAL")
+    return _grid("mapping", [(f"checker_{t.lower()}", _mapped_checker(t)) for t in types] +
+                 [(f"coords_{t.lower()}", _mapped_gradient(t)) for t in types] +
+                 [("checker_3", _plain_checker(3.0)), ("checker_7", _plain_checker(7.0))])
+
+
+def _ramp(interpolation):
+    def build(tree, bsdf):
+        _, sep = _uv_xyz(tree)
+        ramp = tree.nodes.new("ShaderNodeValToRGB")
+        ramp.color_ramp.interpolation = interpolation
+        els = ramp.color_ramp.elements
+        els[0].position, els[0].color = 0.1, (0.9, 0.1, 0.1, 1.0)
+        els[1].position, els[1].color = 0.9, (0.1, 0.2, 0.9, 1.0)
+        mid = els.new(0.45)
+        mid.color = (0.2, 0.9, 0.3, 1.0)
+        tree.links.new(sep.outputs["X"], ramp.inputs["Fac"])
+        _to_base(tree, bsdf, ramp.outputs["Color"])
+    return build
+
+
+def _ramp_alpha_to_roughness(tree, bsdf):
+    _, sep = _uv_xyz(tree)
+    ramp = tree.nodes.new("ShaderNodeValToRGB")
+    els = ramp.color_ramp.elements
+    els[0].color, els[1].color = (0.2, 0.2, 0.2, 0.2), (0.8, 0.8, 0.8, 0.9)
+    tree.links.new(sep.outputs["Y"], ramp.inputs["Fac"])
+    tree.links.new(ramp.outputs["Alpha"], bsdf.inputs["Base Color"])
+
+
+def build_color_ramp(workdir=None):
+    return _grid("color_ramp", [(i.lower(), _ramp(i)) for i in ("LINEAR", "CONSTANT", "EASE")] +
+                 [("alpha", _ramp_alpha_to_roughness)])
+
+
+def _uv_color(tree):
+    _, sep = _uv_xyz(tree)
+    comb = tree.nodes.new("ShaderNodeCombineColor")
+    tree.links.new(sep.outputs["X"], comb.inputs[0])
+    tree.links.new(sep.outputs["Y"], comb.inputs[1])
+    comb.inputs[2].default_value = 0.4
+    return comb.outputs[0]
+
+
+def _rgb_value(tree, bsdf):
+    rgb = tree.nodes.new("ShaderNodeRGB")
+    rgb.outputs[0].default_value = (0.7, 0.35, 0.1, 1.0)
+    value = tree.nodes.new("ShaderNodeValue")
+    value.outputs[0].default_value = 0.6
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type, mix.blend_type = "RGBA", "MULTIPLY"
+    tree.links.new(_uv_color(tree), mix.inputs[0])   # colour -> float factor (luminance)
+    tree.links.new(rgb.outputs[0], mix.inputs[6])
+    tree.links.new(value.outputs[0], mix.inputs[7])
+    _to_base(tree, bsdf, mix.outputs[2])
+
+
+def _invert(tree, bsdf):
+    inv = tree.nodes.new("ShaderNodeInvert")
+    inv.inputs["Fac"].default_value = 0.8
+    tree.links.new(_uv_color(tree), inv.inputs["Color"])
+    _to_base(tree, bsdf, inv.outputs[0])
+
+
+def _hsv(hue, sat, val):
+    def build(tree, bsdf):
+        node = tree.nodes.new("ShaderNodeHueSaturation")
+        node.inputs["Hue"].default_value = hue
+        node.inputs["Saturation"].default_value = sat
+        node.inputs["Value"].default_value = val
+        tree.links.new(_uv_color(tree), node.inputs["Color"])
+        _to_base(tree, bsdf, node.outputs[0])
+    return build
+
+
+def _separate_combine(mode):
+    def build(tree, bsdf):
+        sep = tree.nodes.new("ShaderNodeSeparateColor")
+        sep.mode = mode
+        tree.links.new(_uv_color(tree), sep.inputs[0])
+        comb = tree.nodes.new("ShaderNodeCombineColor")
+        comb.mode = mode
+        tree.links.new(sep.outputs[2], comb.inputs[0])     # rotate the channels
+        tree.links.new(sep.outputs[0], comb.inputs[1])
+        tree.links.new(sep.outputs[1], comb.inputs[2])
+        _to_base(tree, bsdf, comb.outputs[0])
+    return build
+
+
+def _xyz_to_float(tree, bsdf):
+    """Combine XYZ into a float socket (Blender's vector -> float average)."""
+    _, sep = _uv_xyz(tree)
+    comb = tree.nodes.new("ShaderNodeCombineXYZ")
+    tree.links.new(sep.outputs["Y"], comb.inputs[0])
+    tree.links.new(sep.outputs["X"], comb.inputs[1])
+    comb.inputs[2].default_value = 0.9
+    math_node = tree.nodes.new("ShaderNodeMath")
+    math_node.operation = "MULTIPLY"
+    tree.links.new(comb.outputs[0], math_node.inputs[0])
+    math_node.inputs[1].default_value = 1.0
+    _to_base(tree, bsdf, math_node.outputs[0])
+
+
+def build_color(workdir=None):
+    return _grid("color", [
+        ("rgb_value", _rgb_value), ("invert", _invert),
+        ("hsv_hue", _hsv(0.3, 1.0, 1.0)), ("hsv_sat", _hsv(0.5, 1.8, 0.9)),
+        ("hsv_val", _hsv(0.5, 0.4, 1.3)), ("sep_comb_rgb", _separate_combine("RGB")),
+        ("sep_comb_hsv", _separate_combine("HSV")), ("xyz_float", _xyz_to_float)])
+
+
+SCENES = {"mix": build_mix, "math": build_math, "vector_math": build_vector_math,
+          "mapping": build_mapping, "color_ramp": build_color_ramp, "color": build_color}
