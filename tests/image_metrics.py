@@ -18,11 +18,3 @@ def mean_flip(image, reference):
     _, mean, _ = flip.evaluate(ref, test, "HDR")
     return float(mean)
 
-
-def flip_map(image, reference):
-    """Per-pixel HDR-FLIP (flip-evaluator) of linear RGB, (H, W)."""
-    import flip_evaluator as flip
-    ref = np.ascontiguousarray(reference[..., :3], dtype=np.float32)
-    test = np.ascontiguousarray(image[..., :3], dtype=np.float32)
-    errors, _, _ = flip.evaluate(ref, test, "HDR", applyMagma=False)
-    return np.asarray(errors).reshape(ref.shape[:2])
