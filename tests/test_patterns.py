@@ -129,3 +129,46 @@ def test_materials_without_networks_load_no_generator_and_keep_the_fast_path():
     from lantern.engine.gpu.pattern import material_variant
     from lantern.engine.scene import Material
     assert material_variant(Material(name="plain")) == ()
+
+
+def _one_quad_stage(build):
+    """A stage of one pattern quad (pattern_scenes' lighting), exported afresh."""
+    import bpy
+    from lantern.exporters import stage_from_depsgraph
+    pattern_scenes._grid("live", [("quad", build)])
+    stage, report = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+    assert not report.warnings, report.warnings
+    return stage
+
+
+def _pattern_node(stage, kind):
+    from pxr import UsdShade
+    graph = stage.GetPrimAtPath("/root/_materials/live_quad/Pattern")
+    return next(UsdShade.Shader(p) for p in graph.GetChildren()
+                if UsdShade.Shader(p).GetIdAttr().Get() == f"ND_lantern_{kind}")
+
+
+def test_a_value_edit_uploads_parameters_and_compiles_nothing():
+    from lantern.engine import RenderSettings, Session
+    stage = _one_quad_stage(pattern_scenes._invert)
+    with Session(stage, RenderSettings(width=32, height=32)) as session:
+        session.render()
+        before = session.render()
+        assert before.stats["programs_compiled"] == 0
+        _pattern_node(stage, "invert").GetInput("fac").Set(0.1)
+        after = session.render()
+    assert after.stats["programs_compiled"] == 0
+    assert 0 < after.stats["pattern_bytes"] <= 1024
+    assert np.abs(after.rgba[16, 3, :3] - before.rgba[16, 3, :3]).max() > 0.1
+
+
+def test_a_graph_shape_edit_compiles_one_variant():
+    from lantern.engine import RenderSettings, Session
+    stage = _one_quad_stage(pattern_scenes._mix_blend("MULTIPLY"))
+    with Session(stage, RenderSettings(width=32, height=32)) as session:
+        session.render()
+        before = session.render()
+        _pattern_node(stage, "mix").GetInput("blend_type").Set("SCREEN")
+        after = session.render()
+    assert after.stats["programs_compiled"] == 1
+    assert np.abs(after.rgba[16, 3, :3] - before.rgba[16, 3, :3]).max() > 0.05

@@ -55,7 +55,8 @@ def supersample_factor(frame, size, max_texture: int) -> int:
 COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow_maps",
             "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
             "light_volumes", "stencil_marks", "batched_lights", "instances_drawn",
-            "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws")
+            "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws",
+            "programs_compiled", "pattern_bytes")
 
 
 def _path_name(features) -> str:
@@ -76,7 +77,7 @@ class Renderer:
         self.stencil = Stencil(gl.proc)
         self.depth = DepthConvention(gl.proc, self.features.clip_control)
         self.pool = TargetPool(ctx, self.stencil, self.depth)
-        programs = gl.programs
+        programs = self.programs = gl.programs
         self.geometry = Geometry(ctx, self.uploads, programs, self.features)
         self.lights = LightTable(self.uploads)
         self.textures = MaterialTextures(ctx, self.uploads, preset.anisotropy, srgb_filtering)
@@ -145,10 +146,12 @@ class Renderer:
         frame.supersample, frame.output_size = k, tuple(size)
         frame.size = (size[0] * k, size[1] * k)
         self.depth.begin()
+        compiled = self.programs.compiled
         try:
             board = self.graph.run(frame)
         finally:
             self.depth.end()
+        frame.stats["programs_compiled"] = self.programs.compiled - compiled
         # Render passes were drawn at the supersampled size too: light is filtered as
         # the image is, data (depth, normals, indices) keeps the centre sub-pixel.
         board["aovs"] = {name: (centre_samples(a, k) if name in DATA_PASSES else downsample(a, k))

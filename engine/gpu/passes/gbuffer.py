@@ -13,6 +13,8 @@ writes: g_base (base colour + alpha), g_normal (world normal, clearcoat roughnes
         g_mat (metallic, roughness, dielectric F0, clearcoat), g_emit (emission), all
         RGBA16F; g_depth (32-bit
         float, reversed: cleared to 0, tested GREATER; engine/view.py)
+A material with a pattern graph (engine/gpu/pattern.py) draws with its shape's
+generated variant and its parameters (stats: pattern_bytes).
 render passes: IndexOB, IndexMA into g_index (RG32F), only when asked for (a
         shader variant with a fifth output)"""
 from __future__ import annotations
@@ -71,7 +73,7 @@ class GBufferPass(Pass):
             set_uniform(prog, "view_proj", view.view_proj)
             set_uniform(prog, "u_far", view.far_clip)
             view.set_origin(prog)
-            set_material(prog, mat, self.textures, threshold)
+            frame.count("pattern_bytes", set_material(prog, mat, self.textures, threshold))
             # A mirroring transform turns counter-clockwise triangles clockwise.
             ctx.front_face = "cw" if batch.mirrored else "ccw"
             if batch.cull:
@@ -104,7 +106,7 @@ class GBufferPass(Pass):
 
 def set_material(prog, mat, textures, threshold):
     """A material's uniforms and maps (shaders/material.glsl); `threshold`: the alpha
-    test, discarding below it (0: none)."""
+    test, discarding below it (0: none). Returns the pattern parameters' bytes."""
     set_uniform(prog, "u_diffuse", mat.diffuse)
     set_uniform(prog, "u_metallic", mat.metallic)
     set_uniform(prog, "u_roughness", mat.roughness)
@@ -115,7 +117,7 @@ def set_material(prog, mat, textures, threshold):
     set_uniform(prog, "u_clearcoat", mat.clearcoat)
     set_uniform(prog, "u_clearcoat_roughness", mat.clearcoat_roughness)
     set_uniform(prog, "u_material_index", float(mat.pass_index))
-    set_parameters(prog, mat)
+    pattern_bytes = set_parameters(prog, mat)
     for name, short, _ in MAP_SLOTS:
         ref = mat.maps.get(name)
         if ref is None:
@@ -129,6 +131,7 @@ def set_material(prog, mat, textures, threshold):
         set_uniform(prog, f"m_{short}.scale", tuple(ref.scale))
         set_uniform(prog, f"m_{short}.bias", tuple(ref.bias))
         set_uniform(prog, f"m_{short}.channel", CHANNEL.get(ref.channel, -1))
+    return pattern_bytes
 
 
 def map_defines(mat) -> list:
