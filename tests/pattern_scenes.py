@@ -32,26 +32,26 @@ def _uv_xyz(tree):
     return coord, sep
 
 
-def _grid(name, builders):
-    """One quad per (label, build(tree, bsdf)) in a grid of COLUMNS, rows downwards."""
+def _grid(name, builders, columns=COLUMNS, size=SIZE):
+    """One quad per (label, build(tree, bsdf)) in a grid of `columns`, rows downwards."""
     import bpy
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
-    scene.render.resolution_x, scene.render.resolution_y = SIZE
+    scene.render.resolution_x, scene.render.resolution_y = size
     scene.render.resolution_percentage = 100
     scene.render.pixel_aspect_x = scene.render.pixel_aspect_y = 1.0
     _world(scene, color=(0.0, 0.0, 0.0), strength=0.0)
     _sun(scene, math.pi)
-    rows = (len(builders) + COLUMNS - 1) // COLUMNS
+    rows = (len(builders) + columns - 1) // columns
     for i, (label, build) in enumerate(builders):
         mat, tree, bsdf = _principled(f"{name}_{label}")
         build(tree, bsdf)
-        x, y = i % COLUMNS, -(i // COLUMNS)
+        x, y = i % columns, -(i // columns)
         corners = [(x, y - 1, 0), (x + 1, y - 1, 0), (x + 1, y, 0), (x, y, 0)]
         _mesh_object(scene, f"{name}_{label}", corners, [(0, 1, 2, 3)], mat,
                      [(0, 0), (1, 0), (1, 1), (0, 1)])
-    extent = max(COLUMNS, rows)
-    centre = (COLUMNS / 2.0, -rows / 2.0)
+    extent = max(columns, rows)
+    centre = (columns / 2.0, -rows / 2.0)
     _camera(scene, (centre[0], centre[1], 10.0), (centre[0], centre[1], 0.0),
             ortho_scale=extent)
     bpy.context.view_layer.update()
@@ -328,6 +328,20 @@ def build_color(workdir=None):
         ("hsv_hue", _hsv(0.3, 1.0, 1.0)), ("hsv_sat", _hsv(0.5, 1.8, 0.9)),
         ("hsv_val", _hsv(0.5, 0.4, 1.3)), ("sep_comb_rgb", _separate_combine("RGB")),
         ("sep_comb_hsv", _separate_combine("HSV")), ("xyz_float", _xyz_to_float)])
+
+
+def family_builders():
+    """Every quad builder of the six family scenes: (label, build)."""
+    from lantern.core.pattern_nodes import BLEND_TYPES
+    return ([(b.lower(), _mix_blend(b)) for b in BLEND_TYPES] +
+            [("float", _mix_float), ("vector", _mix_vector)] +
+            [(op.lower(), _math(op, None if op in ("ARCTAN2", "POWER") else 0.7))
+             for op in MATH_SHOWN] +
+            [(op.lower(), _vector_math(op)) for op in VECTOR_MATH_SHOWN] +
+            [(t.lower(), _mapped_checker(t)) for t in ("POINT", "TEXTURE", "VECTOR", "NORMAL")] +
+            [(i.lower(), _ramp(i)) for i in ("LINEAR", "CONSTANT", "EASE")] +
+            [("invert", _invert), ("rgb_value", _rgb_value), ("hsv", _hsv(0.3, 1.2, 0.9)),
+             ("sep_comb_hsv", _separate_combine("HSV"))])
 
 
 SCENES = {"mix": build_mix, "math": build_math, "vector_math": build_vector_math,

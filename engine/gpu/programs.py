@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import re
+import time
 
 import numpy as np
 
@@ -69,6 +70,7 @@ class ProgramCache:
         self._programs = {}
         self._screen = {}           # program key -> its VAO without buffers
         self.compiled = 0           # programs compiled so far (stats: a graph edit's cost)
+        self.compile_seconds = 0.0  # and the time they took
 
     def get(self, vert: str, frag: str | None = None, defines=(), varyings=(), compute=False,
             generated=()):
@@ -78,6 +80,7 @@ class ProgramCache:
         key = (vert, frag, defines, tuple(varyings), compute, generated)
         prog = self._programs.get(key)
         if prog is None:
+            start = time.perf_counter()
             try:
                 if compute:
                     prog = self.ctx.compute_shader(load_source(vert, defines))
@@ -97,6 +100,7 @@ class ProgramCache:
             prog.extra = key
             self._programs[key] = prog
             self.compiled += 1
+            self.compile_seconds += time.perf_counter() - start
         return prog
 
     def fullscreen(self, prog):

@@ -146,12 +146,13 @@ class Renderer:
         frame.supersample, frame.output_size = k, tuple(size)
         frame.size = (size[0] * k, size[1] * k)
         self.depth.begin()
-        compiled = self.programs.compiled
+        compiled, compile_seconds = self.programs.compiled, self.programs.compile_seconds
         try:
             board = self.graph.run(frame)
         finally:
             self.depth.end()
         frame.stats["programs_compiled"] = self.programs.compiled - compiled
+        frame.stats["compile_ms"] = 1000.0 * (self.programs.compile_seconds - compile_seconds)
         # Render passes were drawn at the supersampled size too: light is filtered as
         # the image is, data (depth, normals, indices) keeps the centre sub-pixel.
         board["aovs"] = {name: (centre_samples(a, k) if name in DATA_PASSES else downsample(a, k))
