@@ -102,7 +102,9 @@ void pt_vector_math(int op, vec3 a, vec3 b, vec3 c, float s, out vec3 v, out flo
     else if (op == 23) v = max(a, b);
     else if (op == 24) v = sin(a);
     else if (op == 25) v = cos(a);
-    else v = tan(a);
+    else if (op == 26) v = tan(a);
+    else if (op == 27) v = refract(a, length(b) > 0.0 ? normalize(b) : vec3(0.0), s);
+    else v = dot(c, b) < 0.0 ? a : -a;     // faceforward(a, b, c): Cycles' argument order
 }
 
 // Blender's Euler XYZ rotation (Cycles euler_to_transform): rows of Rz * Ry * Rx.

@@ -163,7 +163,8 @@ def _vector_math(op):
 VECTOR_MATH_SHOWN = ["ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "CROSS_PRODUCT", "PROJECT",
                      "REFLECT", "DOT_PRODUCT", "DISTANCE", "LENGTH", "SCALE", "NORMALIZE",
                      "SNAP", "FLOOR", "MODULO", "WRAP", "FRACTION", "ABSOLUTE", "MINIMUM",
-                     "MAXIMUM", "SINE", "COSINE", "CEIL", "SIGN", "MULTIPLY_ADD"]
+                     "MAXIMUM", "SINE", "COSINE", "CEIL", "SIGN", "MULTIPLY_ADD", "REFRACT",
+                     "FACEFORWARD", "POWER", "TANGENT"]
 
 
 def build_vector_math(workdir=None):
