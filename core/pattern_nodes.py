@@ -26,6 +26,8 @@ BLEND_TYPES = (
 MAPPING_TYPES = ("POINT", "TEXTURE", "VECTOR", "NORMAL")
 RAMP_INTERPOLATIONS = ("LINEAR", "CONSTANT", "EASE")
 COLOR_MODES = ("RGB", "HSV")
+GRADIENT_TYPES = ("LINEAR", "QUADRATIC", "EASING", "DIAGONAL", "SPHERICAL", "QUADRATIC_SPHERE",
+                  "RADIAL")
 
 # kind -> {setting: allowed values}; a setting missing here is free (a count, a flag).
 KINDS = {
@@ -37,7 +39,7 @@ KINDS = {
     "invert": {}, "separate_xyz": {}, "combine_xyz": {},
     "separate_color": {"mode": COLOR_MODES}, "combine_color": {"mode": COLOR_MODES},
     "color_ramp": {"interpolation": RAMP_INTERPOLATIONS},
-    "hue_saturation": {}, "checker": {},
+    "hue_saturation": {}, "checker": {}, "gradient": {"gradient_type": GRADIENT_TYPES},
 }
 
 

@@ -234,6 +234,21 @@ float pt_checker(vec3 p) {
     return ((i.x % 2 == i.y % 2) == (i.z % 2 == 1)) ? 1.0 : 0.0;
 }
 
+// Cycles' svm_gradient, clamped to [0, 1] as the node does.
+float pt_gradient(int type, vec3 p) {
+    float f;
+    if (type == 0) f = p.x;
+    else if (type == 1) { float r = max(p.x, 0.0); f = r * r; }
+    else if (type == 2) { float r = clamp(p.x, 0.0, 1.0); float t = r * r; f = 3.0 * t - 2.0 * t * r; }
+    else if (type == 3) f = (p.x + p.y) * 0.5;
+    else if (type == 6) f = atan(p.y, p.x) / 6.28318530717958647692 + 0.5;
+    else {
+        float r = max(1.0 - length(p), 0.0);
+        f = type == 5 ? r * r : r;
+    }
+    return clamp(f, 0.0, 1.0);
+}
+
 // Blender's implicit socket conversions: colour -> float is luminance (Rec. 709, the
 // scene-linear role of Blender's default OCIO config), vector -> float the average.
 float pt_color_to_float(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }

@@ -345,5 +345,28 @@ def family_builders():
              ("sep_comb_hsv", _separate_combine("HSV"))])
 
 
-SCENES = {"mix": build_mix, "math": build_math, "vector_math": build_vector_math,
+def _gradient(gradient_type, centred=True):
+    def build(tree, bsdf):
+        node = tree.nodes.new("ShaderNodeTexGradient")
+        node.gradient_type = gradient_type
+        if centred:                                   # UV to [-1, 1]
+            coord = tree.nodes.new("ShaderNodeTexCoord")
+            mapping = tree.nodes.new("ShaderNodeMapping")
+            mapping.inputs["Location"].default_value = (-1.0, -1.0, 0.0)
+            mapping.inputs["Scale"].default_value = (2.0, 2.0, 1.0)
+            tree.links.new(coord.outputs["UV"], mapping.inputs["Vector"])
+            tree.links.new(mapping.outputs[0], node.inputs["Vector"])
+        _to_base(tree, bsdf, node.outputs["Color"])
+    return build
+
+
+def build_gradient(workdir=None):
+    """Every gradient type on centred UVs, and Linear with its Vector unlinked (Blender's
+    Generated coordinates, which on these quads equal the UVs)."""
+    from lantern.core.pattern_nodes import GRADIENT_TYPES
+    return _grid("gradient", [(t.lower(), _gradient(t)) for t in GRADIENT_TYPES] +
+                 [("linear_generated", _gradient("LINEAR", centred=False))])
+
+
+SCENES = {"gradient": build_gradient, "mix": build_mix, "math": build_math, "vector_math": build_vector_math,
           "mapping": build_mapping, "color_ramp": build_color_ramp, "color": build_color}

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...core.pattern_nodes import (BLEND_TYPES, MAPPING_TYPES, MATH_OPS,
+from ...core.pattern_nodes import (BLEND_TYPES, GRADIENT_TYPES, MAPPING_TYPES, MATH_OPS,
                                    RAMP_INTERPOLATIONS, VECTOR_MATH_OPS)
 
 SURFACE = {"diffuseColor": ("pt_diffuse", "color"), "metallic": ("pt_metallic", "float"),
@@ -159,6 +159,10 @@ class _Writer:
             self.vars[(node.name, "fac")] = (f"{p}_fac", "float")
             out("color", "color", f"{p}_fac > 0.5 ? {arg('color1', 'color')} : "
                 f"{arg('color2', 'color')}")
+        elif kind == "gradient":
+            t = GRADIENT_TYPES.index(settings.get("gradient_type", "LINEAR"))
+            out("fac", "float", f"pt_gradient({t}, {arg('vector', 'vector')})")
+            out("color", "color", f"vec3({p}_fac)")
         else:
             raise ValueError(f"pattern node kind {kind!r} has no GLSL")
 

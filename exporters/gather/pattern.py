@@ -125,10 +125,13 @@ NODES = {
     "ShaderNodeTexChecker": lambda n: ("checker", {}, {
         "vector": n.inputs["Vector"], "color1": n.inputs["Color1"], "color2": n.inputs["Color2"],
         "scale": n.inputs["Scale"]}, {"color": n.outputs["Color"], "fac": n.outputs["Fac"]}),
+    "ShaderNodeTexGradient": lambda n: ("gradient", {"gradient_type": n.gradient_type},
+                                        {"vector": n.inputs["Vector"]},
+                                        {"color": n.outputs["Color"], "fac": n.outputs["Fac"]}),
 }
 # Texture nodes whose unlinked Vector is Blender's Generated coordinates: UV stands in
 # (docs/materials.md, "approximated").
-GENERATED_DEFAULT = {"ShaderNodeTexChecker"}
+GENERATED_DEFAULT = {"ShaderNodeTexChecker", "ShaderNodeTexGradient"}
 
 
 def socket_type(socket) -> str:
