@@ -18,9 +18,9 @@ uniform float u_clearcoat_roughness;
 // The surface inputs a pattern graph feeds replace the constants and maps
 // (engine/gpu/pattern.py); without one this is the constants.
 void pattern_inputs(vec2 uv, inout vec3 diffuse, inout float metallic, inout float roughness,
-                    inout float opacity) {
+                    inout float opacity, inout vec3 emissive) {
 #ifdef HAS_PATTERN
-    pattern_eval(uv, diffuse, metallic, roughness, opacity);
+    pattern_eval(uv, diffuse, metallic, roughness, opacity, emissive);
 #endif
 }
 
@@ -107,9 +107,9 @@ float material_alpha(vec2 uv) {
     alpha = sample_map(t_opacity, m_opacity, uv).x;
 #endif
 #ifdef HAS_PATTERN
-    vec3 d = vec3(0.0);
+    vec3 d = vec3(0.0), e = vec3(0.0);
     float mt = 0.0, r = 0.0;
-    pattern_eval(uv, d, mt, r, alpha);
+    pattern_eval(uv, d, mt, r, alpha, e);
 #endif
     return alpha;
 }
@@ -138,12 +138,12 @@ MaterialSample material_sample(vec2 uv, vec3 normal, vec4 tangent, bool front) {
 #ifdef HAS_ROUGHNESS_MAP
     roughness = sample_map(t_roughness, m_roughness, uv).x;
 #endif
-    float opacity = 1.0;
-    pattern_inputs(uv, base, metallic, roughness, opacity);
     vec3 emissive = u_emissive;
 #ifdef HAS_EMISSIVE_MAP
     emissive = sample_map(t_emissive, m_emissive, uv).rgb;
 #endif
+    float opacity = 1.0;
+    pattern_inputs(uv, base, metallic, roughness, opacity, emissive);
 
     // Back faces only reach here on double-sided meshes: face the viewer.
     vec3 n = normalize(normal);

@@ -368,5 +368,40 @@ def build_gradient(workdir=None):
                  [("linear_generated", _gradient("LINEAR", centred=False))])
 
 
-SCENES = {"gradient": build_gradient, "mix": build_mix, "math": build_math, "vector_math": build_vector_math,
+def _emission_shader(tree, bsdf):
+    """An Emission shader (strength 2) whose colour is a network."""
+    out = tree.nodes["Material Output"]
+    emission = tree.nodes.new("ShaderNodeEmission")
+    emission.inputs["Strength"].default_value = 2.0
+    tree.links.new(_uv_color(tree), emission.inputs["Color"])
+    tree.links.new(emission.outputs[0], out.inputs["Surface"])
+
+
+def _principled_emission(tree, bsdf):
+    """A Principled BSDF's Emission Color from a network, strength 1.5, over a dark base."""
+    bsdf.inputs["Base Color"].default_value = (0.1, 0.1, 0.1, 1.0)
+    bsdf.inputs["Emission Strength"].default_value = 1.5
+    inv = tree.nodes.new("ShaderNodeInvert")
+    tree.links.new(_uv_color(tree), inv.inputs["Color"])
+    tree.links.new(inv.outputs[0], bsdf.inputs["Emission Color"])
+
+
+def _emission_from_float(tree, bsdf):
+    """A float output (Math) into Emission Color: Blender's float -> colour splat."""
+    _, sep = _uv_xyz(tree)
+    node = tree.nodes.new("ShaderNodeMath")
+    node.operation = "MULTIPLY"
+    tree.links.new(sep.outputs["X"], node.inputs[0])
+    node.inputs[1].default_value = 0.5
+    bsdf.inputs["Base Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+    bsdf.inputs["Emission Strength"].default_value = 1.0
+    tree.links.new(node.outputs[0], bsdf.inputs["Emission Color"])
+
+
+def build_emission(workdir=None):
+    return _grid("emission", [("shader", _emission_shader), ("principled", _principled_emission),
+                              ("float", _emission_from_float)])
+
+
+SCENES = {"emission": build_emission, "gradient": build_gradient, "mix": build_mix, "math": build_math, "vector_math": build_vector_math,
           "mapping": build_mapping, "color_ramp": build_color_ramp, "color": build_color}

@@ -17,7 +17,8 @@ from ...core.pattern_nodes import (BLEND_TYPES, GRADIENT_TYPES, MAPPING_TYPES, M
                                    RAMP_INTERPOLATIONS, VECTOR_MATH_OPS)
 
 SURFACE = {"diffuseColor": ("pt_diffuse", "color"), "metallic": ("pt_metallic", "float"),
-           "roughness": ("pt_roughness", "float"), "opacity": ("pt_opacity", "float")}
+           "roughness": ("pt_roughness", "float"), "opacity": ("pt_opacity", "float"),
+           "emissiveColor": ("pt_emissive", "color")}
 
 
 @dataclass(frozen=True)

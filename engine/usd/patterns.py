@@ -15,7 +15,7 @@ from ..scene import PatternGraph, PatternNode
 MTLX_SURFACE = "ND_UsdPreviewSurface_surfaceshader"
 PREFIX = "ND_lantern_"
 SURFACE_INPUTS = {"diffuseColor": "color", "metallic": "float", "roughness": "float",
-                  "opacity": "float"}
+                  "opacity": "float", "emissiveColor": "color"}
 TYPES = {Sdf.ValueTypeNames.Float: "float", Sdf.ValueTypeNames.Vector3f: "vector",
          Sdf.ValueTypeNames.Color3f: "color", Sdf.ValueTypeNames.Float3: "vector",
          Sdf.ValueTypeNames.FloatArray: "float[]", Sdf.ValueTypeNames.Color4fArray: "color4[]"}

@@ -233,8 +233,20 @@ class _Walker:
         factor = _constant(strength_socket, "float") * weight
         if factor == 0.0:
             return
-        color = self.value(color_socket, "color")
         have = inputs.get("emissiveColor", (0.0, 0.0, 0.0))
+        link = _link(color_socket)
+        if link is not None and is_pattern(link.from_node):
+            if isinstance(have, TexInput) or any(have) or "emissiveColor" in self.pattern.graph.outputs:
+                self.warn(f"material '{self.material.name}': an emission from nodes cannot be "
+                          f"added to another emission; keeping the first")
+                return
+            try:
+                self.pattern.connect_scaled("emissiveColor", link, factor)
+            except Unsupported as exc:
+                self.unsupported(exc.node, exc.why)
+            inputs["emissiveColor"] = tuple(c * factor for c in _constant(color_socket, "color"))
+            return
+        color = self.value(color_socket, "color")
         if isinstance(color, TexInput):
             if isinstance(have, TexInput) or any(have):
                 self.warn(f"material '{self.material.name}': a textured emission cannot be "

@@ -176,6 +176,19 @@ class PatternBuilder:
             raise
         self.graph.outputs[target] = (name, self._output_name(link.from_node, link.from_socket))
 
+    def connect_scaled(self, target, link, factor) -> None:
+        """As connect, times a constant `factor` (an emission's strength and weight):
+        a Vector Math Scale node after the output."""
+        self.connect(target, link)
+        src, out = self.graph.outputs[target]
+        rec = PatternNode(name=f"n{len(self.graph.nodes)}_vector_math", kind="vector_math",
+                          settings={"operation": "SCALE"},
+                          values={"scale": ("float", float(factor))},
+                          links={"a": ("vector", src, out)},
+                          outputs={"vector": "vector", "value": "float"})
+        self.graph.nodes.append(rec)
+        self.graph.outputs[target] = (rec.name, "vector")
+
     def _output_name(self, node, socket):
         for out, s in NODES[node.bl_idname](node)[3].items():
             if s == socket:
