@@ -168,7 +168,10 @@ def test_a_graph_shape_edit_compiles_one_variant():
     with Session(stage, RenderSettings(width=32, height=32)) as session:
         session.render()
         before = session.render()
-        _pattern_node(stage, "mix").GetInput("blend_type").Set("SCREEN")
+        # A shape no other test draws (the process's program cache is shared).
+        mix = _pattern_node(stage, "mix")
+        mix.GetInput("blend_type").Set("LINEAR_LIGHT")
+        mix.GetInput("clamp_result").Set("1")
         after = session.render()
     assert after.stats["programs_compiled"] == 1
     assert np.abs(after.rgba[16, 3, :3] - before.rgba[16, 3, :3]).max() > 0.05
