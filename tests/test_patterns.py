@@ -175,3 +175,22 @@ def test_a_graph_shape_edit_compiles_one_variant():
         after = session.render()
     assert after.stats["programs_compiled"] == 1
     assert np.abs(after.rgba[16, 3, :3] - before.rgba[16, 3, :3]).max() > 0.05
+
+
+@pytest.mark.parametrize("edit, says", [
+    (lambda node: node.CreateIdAttr("ND_image_color3"), "is not supported"),
+    (lambda node: node.GetInput("fac").Set(float("nan")), "is not finite"),
+])
+def test_a_bad_node_is_one_warning_and_the_preview_value(edit, says):
+    """A network the engine cannot draw: the warning names the material and the node,
+    and the input draws the UsdPreviewSurface constant (here the socket's colour)."""
+    from lantern.engine import RenderSettings, render_stage
+    stage = _one_quad_stage(pattern_scenes._invert)
+    good = render_stage(stage, RenderSettings(width=32, height=32))
+    edit(_pattern_node(stage, "invert"))
+    bad = render_stage(stage, RenderSettings(width=32, height=32))
+    named = [w for w in bad.warnings if "live_quad" in w and "invert" in w]
+    assert len(named) == 1 and says in named[0], bad.warnings
+    assert np.isfinite(bad.rgba).all()
+    # Invert's fallback: its Color socket's default, lit as the base colour.
+    assert np.abs(bad.rgba[16, 3, :3] - good.rgba[16, 3, :3]).max() > 0.01

@@ -2,11 +2,12 @@
 ND_UsdPreviewSurface_surfaceshader fed by ND_lantern_<kind> nodes) -> PatternGraph.
 
 Only the surface's connected inputs are read here; its constants and textures are the
-UsdPreviewSurface's (materials.py). A node whose id is not Lantern's, or a link to a
-missing prim, is a warning naming the material and the node, and that surface input
-keeps its UsdPreviewSurface value."""
+UsdPreviewSurface's (materials.py). A node whose id or setting is not Lantern's, a
+value that is not finite, or a link to a missing prim is a warning naming the material
+and the node, and that surface input keeps its UsdPreviewSurface value."""
 from __future__ import annotations
 
+import numpy as np
 from pxr import Sdf, UsdShade
 
 from ...core.pattern_nodes import unsupported_setting
@@ -81,7 +82,10 @@ def read_pattern(mat: UsdShade.Material, time, warnings: list) -> PatternGraph |
                     raise _Bad(f"{path}: {name} is in a cycle")
                 links.append((base, typ, src_name, src[1], src[2]))
             else:
-                values.append((base, typ, _value(typ, inp.Get(time))))
+                value = _value(typ, inp.Get(time))
+                if not np.all(np.isfinite(np.asarray(value, np.float64))):
+                    raise _Bad(f"{path}: input {base} of {name} is not finite ({value})")
+                values.append((base, typ, value))
         why = unsupported_setting(ident[len(PREFIX):], dict(settings))
         if why is not None:
             raise _Bad(f"{path}: node {name}: {why}")
