@@ -171,16 +171,23 @@ def build_vector_math(workdir=None):
     return _grid("vector_math", [(op.lower(), _vector_math(op)) for op in VECTOR_MATH_SHOWN])
 
 
+def _uv_mapping(tree, vector_type, location, rotation, scale):
+    """Texture Coordinate UV through a Mapping node (Location only where the type has it)."""
+    coord = tree.nodes.new("ShaderNodeTexCoord")
+    mapping = tree.nodes.new("ShaderNodeMapping")
+    mapping.vector_type = vector_type
+    tree.links.new(coord.outputs["UV"], mapping.inputs["Vector"])
+    if vector_type in ("POINT", "TEXTURE"):
+        mapping.inputs["Location"].default_value = location
+    mapping.inputs["Rotation"].default_value = rotation
+    mapping.inputs["Scale"].default_value = scale
+    return mapping
+
+
 def _mapped_checker(vector_type, scale=4.0):
     def build(tree, bsdf):
-        coord = tree.nodes.new("ShaderNodeTexCoord")
-        mapping = tree.nodes.new("ShaderNodeMapping")
-        mapping.vector_type = vector_type
-        tree.links.new(coord.outputs["UV"], mapping.inputs["Vector"])
-        if vector_type in ("POINT", "TEXTURE"):
-            mapping.inputs["Location"].default_value = (0.13, 0.27, 0.0)
-        mapping.inputs["Rotation"].default_value = (0.0, 0.0, 0.5)
-        mapping.inputs["Scale"].default_value = (1.3, 0.8, 1.0)
+        mapping = _uv_mapping(tree, vector_type, (0.13, 0.27, 0.0), (0.0, 0.0, 0.5),
+                              (1.3, 0.8, 1.0))
         checker = tree.nodes.new("ShaderNodeTexChecker")
         checker.inputs["Scale"].default_value = scale
         checker.inputs["Color1"].default_value = (0.9, 0.8, 0.2, 1.0)
@@ -204,14 +211,8 @@ def _mapped_gradient(vector_type):
     """The mapped coordinates themselves as colour (fract), where a checker would hide
     a small offset."""
     def build(tree, bsdf):
-        coord = tree.nodes.new("ShaderNodeTexCoord")
-        mapping = tree.nodes.new("ShaderNodeMapping")
-        mapping.vector_type = vector_type
-        tree.links.new(coord.outputs["UV"], mapping.inputs["Vector"])
-        if vector_type in ("POINT", "TEXTURE"):
-            mapping.inputs["Location"].default_value = (0.13, 0.27, 0.1)
-        mapping.inputs["Rotation"].default_value = (0.2, 0.3, 0.5)
-        mapping.inputs["Scale"].default_value = (1.3, 0.8, 1.2)
+        mapping = _uv_mapping(tree, vector_type, (0.13, 0.27, 0.1), (0.2, 0.3, 0.5),
+                              (1.3, 0.8, 1.2))
         frac = tree.nodes.new("ShaderNodeVectorMath")
         frac.operation = "FRACTION"
         tree.links.new(mapping.outputs[0], frac.inputs[0])
@@ -350,11 +351,8 @@ def _gradient(gradient_type, centred=True):
         node = tree.nodes.new("ShaderNodeTexGradient")
         node.gradient_type = gradient_type
         if centred:                                   # UV to [-1, 1]
-            coord = tree.nodes.new("ShaderNodeTexCoord")
-            mapping = tree.nodes.new("ShaderNodeMapping")
-            mapping.inputs["Location"].default_value = (-1.0, -1.0, 0.0)
-            mapping.inputs["Scale"].default_value = (2.0, 2.0, 1.0)
-            tree.links.new(coord.outputs["UV"], mapping.inputs["Vector"])
+            mapping = _uv_mapping(tree, "POINT", (-1.0, -1.0, 0.0), (0.0, 0.0, 0.0),
+                                  (2.0, 2.0, 1.0))
             tree.links.new(mapping.outputs[0], node.inputs["Vector"])
         _to_base(tree, bsdf, node.outputs["Color"])
     return build
