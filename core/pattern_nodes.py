@@ -40,6 +40,8 @@ KINDS = {
     "separate_color": {"mode": COLOR_MODES}, "combine_color": {"mode": COLOR_MODES},
     "color_ramp": {"interpolation": RAMP_INTERPOLATIONS},
     "hue_saturation": {}, "checker": {}, "gradient": {"gradient_type": GRADIENT_TYPES},
+    # Blender's Perlin fBm in 3D (shaders/pattern_lib.glsl pt_noise_fbm).
+    "noise": {"dimensions": ("3D",), "noise_type": ("FBM",)},
 }
 
 
@@ -52,3 +54,33 @@ def unsupported_setting(kind: str, settings: dict) -> str | None:
         if name in settings and settings[name] not in values:
             return f"{name} {settings[name]} is not supported"
     return None
+
+
+def _final(a, b, c):
+    """Bob Jenkins' lookup3 final mix on uint32, as Cycles' hash.h."""
+    def rot(x, k):
+        return ((x << k) | (x >> (32 - k))) & 0xFFFFFFFF
+    m = 0xFFFFFFFF
+    c ^= b; c = (c - rot(b, 14)) & m
+    a ^= c; a = (a - rot(c, 11)) & m
+    b ^= a; b = (b - rot(a, 25)) & m
+    c ^= b; c = (c - rot(b, 16)) & m
+    a ^= c; a = (a - rot(c, 4)) & m
+    b ^= a; b = (b - rot(a, 14)) & m
+    c ^= b; c = (c - rot(b, 24)) & m
+    return c
+
+
+def random_offset(seed: float) -> tuple:
+    """Cycles' random_float3_offset(seed): the shifts between a Noise texture's
+    distortion and colour channels (100 + hash_float2_to_float((seed, i)) * 100)."""
+    import struct
+    bits = struct.unpack("<I", struct.pack("<f", seed))[0]
+    out = []
+    for i in range(3):
+        ky = struct.unpack("<I", struct.pack("<f", float(i)))[0]
+        a = b = c = (0xdeadbeef + (2 << 2) + 13) & 0xFFFFFFFF
+        b = (b + ky) & 0xFFFFFFFF
+        a = (a + bits) & 0xFFFFFFFF
+        out.append(100.0 + _final(a, b, c) / 4294967295.0 * 100.0)
+    return tuple(out)

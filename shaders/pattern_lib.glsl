@@ -249,6 +249,69 @@ float pt_gradient(int type, vec3 p) {
     return clamp(f, 0.0, 1.0);
 }
 
+// Blender's Perlin noise (Cycles noise.h): lookup3 hashes of the lattice corners,
+// gradients by grad3, quintic fade, scaled by 0.9820 to [-1, 1].
+uint pt_rot(uint x, int k) { return (x << uint(k)) | (x >> uint(32 - k)); }
+
+uint pt_hash3(uint kx, uint ky, uint kz) {
+    uint a = 0xdeadbeefu + (3u << 2u) + 13u, b = a, c = a;
+    c += kz; b += ky; a += kx;
+    c ^= b; c -= pt_rot(b, 14);
+    a ^= c; a -= pt_rot(c, 11);
+    b ^= a; b -= pt_rot(a, 25);
+    c ^= b; c -= pt_rot(b, 16);
+    a ^= c; a -= pt_rot(c, 4);
+    b ^= a; b -= pt_rot(a, 14);
+    c ^= b; c -= pt_rot(b, 24);
+    return c;
+}
+
+float pt_grad3(uint hash, float x, float y, float z) {
+    uint h = hash & 15u;
+    float u = h < 8u ? x : y;
+    float vt = (h == 12u || h == 14u) ? x : z;
+    float v = h < 4u ? y : vt;
+    return ((h & 1u) != 0u ? -u : u) + ((h & 2u) != 0u ? -v : v);
+}
+
+float pt_fade(float t) { return t * t * t * (t * (t * 6.0 - 15.0) + 10.0); }
+
+float pt_snoise(vec3 p) {
+    vec3 i = floor(p), f = p - i;
+    uvec3 c = uvec3(ivec3(i));
+    float u = pt_fade(f.x), v = pt_fade(f.y), w = pt_fade(f.z);
+    float n000 = pt_grad3(pt_hash3(c.x, c.y, c.z), f.x, f.y, f.z);
+    float n100 = pt_grad3(pt_hash3(c.x + 1u, c.y, c.z), f.x - 1.0, f.y, f.z);
+    float n010 = pt_grad3(pt_hash3(c.x, c.y + 1u, c.z), f.x, f.y - 1.0, f.z);
+    float n110 = pt_grad3(pt_hash3(c.x + 1u, c.y + 1u, c.z), f.x - 1.0, f.y - 1.0, f.z);
+    float n001 = pt_grad3(pt_hash3(c.x, c.y, c.z + 1u), f.x, f.y, f.z - 1.0);
+    float n101 = pt_grad3(pt_hash3(c.x + 1u, c.y, c.z + 1u), f.x - 1.0, f.y, f.z - 1.0);
+    float n011 = pt_grad3(pt_hash3(c.x, c.y + 1u, c.z + 1u), f.x, f.y - 1.0, f.z - 1.0);
+    float n111 = pt_grad3(pt_hash3(c.x + 1u, c.y + 1u, c.z + 1u), f.x - 1.0, f.y - 1.0, f.z - 1.0);
+    float lo = (1.0 - v) * ((1.0 - u) * n000 + u * n100) + v * ((1.0 - u) * n010 + u * n110);
+    float hi = (1.0 - v) * ((1.0 - u) * n001 + u * n101) + v * ((1.0 - u) * n011 + u * n111);
+    return 0.9820 * ((1.0 - w) * lo + w * hi);
+}
+
+// Cycles' noise_fbm: octaves 0..floor(detail), the fraction blending one more.
+float pt_noise_fbm(vec3 p, float detail, float roughness, float lacunarity, bool normalize) {
+    float fscale = 1.0, amp = 1.0, maxamp = 0.0, sum = 0.0;
+    int octaves = int(detail);
+    for (int i = 0; i <= octaves; i++) {
+        sum += pt_snoise(fscale * p) * amp;
+        maxamp += amp;
+        amp *= roughness;
+        fscale *= lacunarity;
+    }
+    float rmd = detail - floor(detail);
+    if (rmd != 0.0) {
+        float sum2 = sum + pt_snoise(fscale * p) * amp;
+        return normalize ? mix(0.5 * sum / maxamp + 0.5, 0.5 * sum2 / (maxamp + amp) + 0.5, rmd)
+                         : mix(sum, sum2, rmd);
+    }
+    return normalize ? 0.5 * sum / maxamp + 0.5 : sum;
+}
+
 // Blender's implicit socket conversions: colour -> float is luminance (Rec. 709, the
 // scene-linear role of Blender's default OCIO config), vector -> float the average.
 float pt_color_to_float(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }

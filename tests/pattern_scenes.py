@@ -401,5 +401,30 @@ def build_emission(workdir=None):
                               ("float", _emission_from_float)])
 
 
-SCENES = {"emission": build_emission, "gradient": build_gradient, "mix": build_mix, "math": build_math, "vector_math": build_vector_math,
+def _noise(output="Fac", scale=5.0, detail=2.0, roughness=0.5, distortion=0.0,
+           normalize=True):
+    def build(tree, bsdf):
+        coord = tree.nodes.new("ShaderNodeTexCoord")
+        node = tree.nodes.new("ShaderNodeTexNoise")
+        node.normalize = normalize
+        node.inputs["Scale"].default_value = scale
+        node.inputs["Detail"].default_value = detail
+        node.inputs["Roughness"].default_value = roughness
+        node.inputs["Distortion"].default_value = distortion
+        tree.links.new(coord.outputs["UV"], node.inputs["Vector"])
+        _to_base(tree, bsdf, node.outputs[output])
+    return build
+
+
+def build_noise(workdir=None):
+    """Blender's Perlin fBm: the defaults, its colour, fractional and zero detail,
+    distortion, and unnormalised (scaled into range by the base colour's clamp)."""
+    return _grid("noise", [("default", _noise()), ("color", _noise("Color")),
+                           ("detail_0", _noise(detail=0.0, scale=3.0)),
+                           ("detail_3_7", _noise(detail=3.7, roughness=0.6)),
+                           ("distortion", _noise("Color", distortion=1.5, scale=2.0)),
+                           ("coarse", _noise(scale=1.5, detail=0.0))])
+
+
+SCENES = {"noise": build_noise, "emission": build_emission, "gradient": build_gradient, "mix": build_mix, "math": build_math, "vector_math": build_vector_math,
           "mapping": build_mapping, "color_ramp": build_color_ramp, "color": build_color}

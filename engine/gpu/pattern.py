@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...core.pattern_nodes import (BLEND_TYPES, GRADIENT_TYPES, MAPPING_TYPES, MATH_OPS,
-                                   RAMP_INTERPOLATIONS, VECTOR_MATH_OPS)
+                                   RAMP_INTERPOLATIONS, VECTOR_MATH_OPS, random_offset)
 
 SURFACE = {"diffuseColor": ("pt_diffuse", "color"), "metallic": ("pt_metallic", "float"),
            "roughness": ("pt_roughness", "float"), "opacity": ("pt_opacity", "float"),
@@ -92,6 +92,7 @@ class _Writer:
             self.vars[(node.name, name)] = (f"{p}_{name}", typ)
 
         kind = node.kind
+        self.current = node.name
         if kind == "uv":
             out("uv", "vector", "vec3(uv, 0.0)")
         elif kind == "value":
@@ -164,8 +165,33 @@ class _Writer:
             t = GRADIENT_TYPES.index(settings.get("gradient_type", "LINEAR"))
             out("fac", "float", f"pt_gradient({t}, {arg('vector', 'vector')})")
             out("color", "color", f"vec3({p}_fac)")
+        elif kind == "noise":
+            self._noise(p, settings, arg)
         else:
             raise ValueError(f"pattern node kind {kind!r} has no GLSL")
+
+    def _noise(self, p, settings, arg):
+        """Cycles' svm_node_tex_noise, 3D fBm: Vector x Scale, distorted by three
+        offset noises, then the value and two offset copies for the colour."""
+        emit = self.lines.append
+        norm = "true" if settings.get("normalize", "1") == "1" else "false"
+        emit(f"    vec3 {p}_p = {arg('vector', 'vector')} * {arg('scale', 'float', '5.0')};")
+        emit(f"    float {p}_detail = clamp({arg('detail', 'float', '2.0')}, 0.0, 15.0);")
+        emit(f"    float {p}_rough = max({arg('roughness', 'float', '0.5')}, 0.0);")
+        emit(f"    float {p}_lac = {arg('lacunarity', 'float', '2.0')};")
+        emit(f"    float {p}_dist = {arg('distortion', 'float')};")
+
+        def offset(seed):
+            return "vec3(" + ", ".join(f"{c:.9g}" for c in random_offset(seed)) + ")"
+
+        emit(f"    if ({p}_dist != 0.0) {p}_p += vec3(pt_snoise({p}_p + {offset(0.0)}), "
+             f"pt_snoise({p}_p + {offset(1.0)}), pt_snoise({p}_p + {offset(2.0)})) * {p}_dist;")
+        fbm = f"{p}_detail, {p}_rough, {p}_lac, {norm})"
+        emit(f"    float {p}_fac = pt_noise_fbm({p}_p, {fbm};")
+        emit(f"    vec3 {p}_color = vec3({p}_fac, pt_noise_fbm({p}_p + {offset(3.0)}, {fbm}, "
+             f"pt_noise_fbm({p}_p + {offset(4.0)}, {fbm});")
+        self.vars[(self.current, "fac")] = (f"{p}_fac", "float")
+        self.vars[(self.current, "color")] = (f"{p}_color", "color")
 
     def _ramp(self, p, node, values, settings, fac):
         """Blender's colour band (BKE_colorband_evaluate): below the first stop its

@@ -125,13 +125,20 @@ NODES = {
     "ShaderNodeTexChecker": lambda n: ("checker", {}, {
         "vector": n.inputs["Vector"], "color1": n.inputs["Color1"], "color2": n.inputs["Color2"],
         "scale": n.inputs["Scale"]}, {"color": n.outputs["Color"], "fac": n.outputs["Fac"]}),
+    "ShaderNodeTexNoise": lambda n: ("noise", {
+        "dimensions": n.noise_dimensions, "noise_type": n.noise_type,
+        "normalize": str(int(n.normalize))}, {
+        "vector": n.inputs["Vector"], "scale": n.inputs["Scale"], "detail": n.inputs["Detail"],
+        "roughness": n.inputs["Roughness"], "lacunarity": n.inputs["Lacunarity"],
+        "distortion": n.inputs["Distortion"]},
+        {"fac": n.outputs["Fac"], "color": n.outputs["Color"]}),
     "ShaderNodeTexGradient": lambda n: ("gradient", {"gradient_type": n.gradient_type},
                                         {"vector": n.inputs["Vector"]},
                                         {"color": n.outputs["Color"], "fac": n.outputs["Fac"]}),
 }
 # Texture nodes whose unlinked Vector is Blender's Generated coordinates: UV stands in
 # (docs/materials.md, "approximated").
-GENERATED_DEFAULT = {"ShaderNodeTexChecker", "ShaderNodeTexGradient"}
+GENERATED_DEFAULT = {"ShaderNodeTexChecker", "ShaderNodeTexGradient", "ShaderNodeTexNoise"}
 
 
 def socket_type(socket) -> str:
