@@ -312,6 +312,28 @@ float pt_noise_fbm(vec3 p, float detail, float roughness, float lacunarity, bool
     return normalize ? 0.5 * sum / maxamp + 0.5 : sum;
 }
 
+// Cycles' svm_wave: bands or rings along a direction (core/pattern_nodes.py numbers),
+// distorted by fBm noise, through a sine, saw or triangle profile.
+float pt_wave(int type, int dir, int profile, vec3 p, float distortion, float detail,
+              float dscale, float droughness, float phase) {
+    p = (p + 0.000001) * 0.999999;
+    float n;
+    if (type == 0) {
+        n = dir == 3 ? (p.x + p.y + p.z) * 10.0 : p[dir] * 20.0;
+    } else {
+        vec3 rp = p;
+        if (dir < 3) rp[dir] = 0.0;
+        n = length(rp) * 20.0;
+    }
+    n += phase;
+    if (distortion != 0.0)
+        n += distortion * (pt_noise_fbm(p * dscale, detail, droughness, 2.0, true) * 2.0 - 1.0);
+    if (profile == 0) return 0.5 + 0.5 * sin(n - 1.57079632679489661923);
+    n /= 6.28318530717958647692;
+    if (profile == 1) return n - floor(n);
+    return abs(n - floor(n + 0.5)) * 2.0;
+}
+
 // Blender's implicit socket conversions: colour -> float is luminance (Rec. 709, the
 // scene-linear role of Blender's default OCIO config), vector -> float the average.
 float pt_color_to_float(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }

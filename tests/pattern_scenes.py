@@ -426,5 +426,30 @@ def build_noise(workdir=None):
                            ("coarse", _noise(scale=1.5, detail=0.0))])
 
 
-SCENES = {"noise": build_noise, "emission": build_emission, "gradient": build_gradient, "mix": build_mix, "math": build_math, "vector_math": build_vector_math,
+def _wave(wave_type="BANDS", direction="X", profile="SIN", distortion=0.0, scale=2.0):
+    def build(tree, bsdf):
+        coord = tree.nodes.new("ShaderNodeTexCoord")
+        node = tree.nodes.new("ShaderNodeTexWave")
+        node.wave_type, node.wave_profile = wave_type, profile
+        if wave_type == "BANDS":
+            node.bands_direction = direction
+        else:
+            node.rings_direction = direction
+        node.inputs["Scale"].default_value = scale
+        node.inputs["Distortion"].default_value = distortion
+        node.inputs["Phase Offset"].default_value = 0.7
+        tree.links.new(coord.outputs["UV"], node.inputs["Vector"])
+        _to_base(tree, bsdf, node.outputs["Color"])
+    return build
+
+
+def build_wave(workdir=None):
+    return _grid("wave", [("bands_x", _wave()), ("bands_y_saw", _wave(direction="Y", profile="SAW")),
+                          ("bands_diagonal_tri", _wave(direction="DIAGONAL", profile="TRI")),
+                          ("rings_spherical", _wave("RINGS", "SPHERICAL")),
+                          ("rings_z_saw", _wave("RINGS", "Z", "SAW", scale=1.0)),
+                          ("bands_distorted", _wave(distortion=3.0, scale=1.0))])
+
+
+SCENES = {"wave": build_wave, "noise": build_noise, "emission": build_emission, "gradient": build_gradient, "mix": build_mix, "math": build_math, "vector_math": build_vector_math,
           "mapping": build_mapping, "color_ramp": build_color_ramp, "color": build_color}

@@ -14,7 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...core.pattern_nodes import (BLEND_TYPES, GRADIENT_TYPES, MAPPING_TYPES, MATH_OPS,
-                                   RAMP_INTERPOLATIONS, VECTOR_MATH_OPS, random_offset)
+                                   RAMP_INTERPOLATIONS, VECTOR_MATH_OPS, WAVE_DIRECTIONS,
+                                   WAVE_PROFILES, WAVE_TYPES, random_offset)
 
 SURFACE = {"diffuseColor": ("pt_diffuse", "color"), "metallic": ("pt_metallic", "float"),
            "roughness": ("pt_roughness", "float"), "opacity": ("pt_opacity", "float"),
@@ -164,6 +165,16 @@ class _Writer:
         elif kind == "gradient":
             t = GRADIENT_TYPES.index(settings.get("gradient_type", "LINEAR"))
             out("fac", "float", f"pt_gradient({t}, {arg('vector', 'vector')})")
+            out("color", "color", f"vec3({p}_fac)")
+        elif kind == "wave":
+            numbers = (WAVE_TYPES.index(settings.get("wave_type", "BANDS")),
+                       WAVE_DIRECTIONS.index(settings.get("direction", "X")),
+                       WAVE_PROFILES.index(settings.get("wave_profile", "SIN")))
+            out("fac", "float", f"pt_wave({numbers[0]}, {numbers[1]}, {numbers[2]}, "
+                f"{arg('vector', 'vector')} * {arg('scale', 'float', '5.0')}, "
+                f"{arg('distortion', 'float')}, clamp({arg('detail', 'float', '2.0')}, 0.0, 15.0), "
+                f"{arg('detail_scale', 'float', '1.0')}, "
+                f"max({arg('detail_roughness', 'float', '0.5')}, 0.0), {arg('phase', 'float')})")
             out("color", "color", f"vec3({p}_fac)")
         elif kind == "noise":
             self._noise(p, settings, arg)

@@ -132,13 +132,21 @@ NODES = {
         "roughness": n.inputs["Roughness"], "lacunarity": n.inputs["Lacunarity"],
         "distortion": n.inputs["Distortion"]},
         {"fac": n.outputs["Fac"], "color": n.outputs["Color"]}),
+    "ShaderNodeTexWave": lambda n: ("wave", {
+        "wave_type": n.wave_type, "wave_profile": n.wave_profile,
+        "direction": n.bands_direction if n.wave_type == "BANDS" else n.rings_direction}, {
+        "vector": n.inputs["Vector"], "scale": n.inputs["Scale"],
+        "distortion": n.inputs["Distortion"], "detail": n.inputs["Detail"],
+        "detail_scale": n.inputs["Detail Scale"], "detail_roughness": n.inputs["Detail Roughness"],
+        "phase": n.inputs["Phase Offset"]}, {"fac": n.outputs["Fac"], "color": n.outputs["Color"]}),
     "ShaderNodeTexGradient": lambda n: ("gradient", {"gradient_type": n.gradient_type},
                                         {"vector": n.inputs["Vector"]},
                                         {"color": n.outputs["Color"], "fac": n.outputs["Fac"]}),
 }
 # Texture nodes whose unlinked Vector is Blender's Generated coordinates: UV stands in
 # (docs/materials.md, "approximated").
-GENERATED_DEFAULT = {"ShaderNodeTexChecker", "ShaderNodeTexGradient", "ShaderNodeTexNoise"}
+GENERATED_DEFAULT = {"ShaderNodeTexChecker", "ShaderNodeTexGradient", "ShaderNodeTexNoise",
+                     "ShaderNodeTexWave"}
 
 
 def socket_type(socket) -> str:
