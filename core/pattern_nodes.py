@@ -26,6 +26,7 @@ BLEND_TYPES = (
 MAPPING_TYPES = ("POINT", "TEXTURE", "VECTOR", "NORMAL")
 RAMP_INTERPOLATIONS = ("LINEAR", "CONSTANT", "EASE")
 COLOR_MODES = ("RGB", "HSV")
+VORONOI_METRICS = ("EUCLIDEAN", "MANHATTAN", "CHEBYCHEV", "MINKOWSKI")
 WAVE_TYPES = ("BANDS", "RINGS")
 # Bands X Y Z DIAGONAL, rings X Y Z SPHERICAL: one number each (pt_wave).
 WAVE_DIRECTIONS = ("X", "Y", "Z", "DIAGONAL", "SPHERICAL")
@@ -46,6 +47,8 @@ KINDS = {
     "hue_saturation": {}, "checker": {}, "gradient": {"gradient_type": GRADIENT_TYPES},
     # Blender's Perlin fBm in 3D (shaders/pattern_lib.glsl pt_noise_fbm).
     "noise": {"dimensions": ("3D",), "noise_type": ("FBM",)},
+    "voronoi": {"dimensions": ("3D",), "feature": ("F1",), "distance": VORONOI_METRICS,
+                "normalize": ("0",)},
     "wave": {"wave_type": WAVE_TYPES, "direction": WAVE_DIRECTIONS, "wave_profile": WAVE_PROFILES},
 }
 

@@ -312,6 +312,76 @@ float pt_noise_fbm(vec3 p, float detail, float roughness, float lacunarity, bool
     return normalize ? 0.5 * sum / maxamp + 0.5 : sum;
 }
 
+// Cycles' hash_int3_to_float3 (PCG 3D on signed integers, JCGT 2020), in [0, 1].
+vec3 pt_hash_int3(ivec3 v) {
+    v = v * 1664525 + 1013904223;
+    v.x += v.y * v.z; v.y += v.z * v.x; v.z += v.x * v.y;
+    v ^= v >> 16;
+    v.x += v.y * v.z; v.y += v.z * v.x; v.z += v.x * v.y;
+    v &= 0x7FFFFFFF;
+    return vec3(v) * (1.0 / 2147483648.0);
+}
+
+float pt_voronoi_distance(vec3 d, int metric, float exponent) {
+    if (metric == 0) return length(d);
+    d = abs(d);
+    if (metric == 1) return d.x + d.y + d.z;
+    if (metric == 2) return max(d.x, max(d.y, d.z));
+    return pow(pow(d.x, exponent) + pow(d.y, exponent) + pow(d.z, exponent), 1.0 / exponent);
+}
+
+// Cycles' voronoi_f1 in 3D: the nearest of the 27 cells' jittered points, the cells
+// hashed by their integer positions.
+void pt_voronoi_f1(vec3 coord, int metric, float exponent, float randomness,
+                   out float dist, out vec3 color, out vec3 position) {
+    vec3 cell_f = floor(coord), local = coord - cell_f;
+    ivec3 cell = ivec3(cell_f), target_offset = ivec3(0);
+    dist = 3.402823466e38;
+    vec3 target = vec3(0.0);
+    for (int k = -1; k <= 1; k++)
+        for (int j = -1; j <= 1; j++)
+            for (int i = -1; i <= 1; i++) {
+                ivec3 offset = ivec3(i, j, k);
+                vec3 point = vec3(offset) + pt_hash_int3(cell + offset) * randomness;
+                float d = pt_voronoi_distance(point - local, metric, exponent);
+                if (d < dist) { dist = d; target_offset = offset; target = point; }
+            }
+    color = pt_hash_int3(cell + target_offset);
+    position = target + cell_f;
+}
+
+// Cycles' fractal_voronoi_x_fx for F1, unnormalised: octaves up to ceil(detail).
+void pt_voronoi(vec3 coord, float scale, float detail, float roughness, float lacunarity,
+                float exponent, float randomness, int metric,
+                out float dist, out vec3 color, out vec3 position) {
+    float amplitude = 1.0, max_amplitude = 0.0, s = 1.0;
+    dist = 0.0; color = vec3(0.0); position = vec3(0.0);
+    bool zero_input = detail == 0.0 || roughness == 0.0;
+    for (int i = 0; i <= int(ceil(detail)); i++) {
+        float od; vec3 oc, op;
+        pt_voronoi_f1(coord * s, metric, exponent, randomness, od, oc, op);
+        if (zero_input) {
+            dist = od; color = oc; position = op;
+            break;
+        } else if (float(i) <= detail) {
+            max_amplitude += amplitude;
+            dist += od * amplitude;
+            color += oc * amplitude;
+            position = mix(position, op / s, amplitude);
+            s *= lacunarity;
+            amplitude *= roughness;
+        } else {
+            float r = detail - floor(detail);
+            if (r != 0.0) {
+                dist = mix(dist, dist + od * amplitude, r);
+                color = mix(color, color + oc * amplitude, r);
+                position = mix(position, mix(position, op / s, amplitude), r);
+            }
+        }
+    }
+    position = scale != 0.0 ? position / scale : vec3(0.0);
+}
+
 // Cycles' svm_wave: bands or rings along a direction (core/pattern_nodes.py numbers),
 // distorted by fBm noise, through a sine, saw or triangle profile.
 float pt_wave(int type, int dir, int profile, vec3 p, float distortion, float detail,

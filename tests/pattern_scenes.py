@@ -451,5 +451,33 @@ def build_wave(workdir=None):
                           ("bands_distorted", _wave(distortion=3.0, scale=1.0))])
 
 
-SCENES = {"wave": build_wave, "noise": build_noise, "emission": build_emission, "gradient": build_gradient, "mix": build_mix, "math": build_math, "vector_math": build_vector_math,
+def _voronoi(output="Distance", metric="EUCLIDEAN", detail=0.0, scale=4.0, randomness=1.0):
+    def build(tree, bsdf):
+        coord = tree.nodes.new("ShaderNodeTexCoord")
+        node = tree.nodes.new("ShaderNodeTexVoronoi")
+        node.distance = metric
+        node.inputs["Scale"].default_value = scale
+        node.inputs["Detail"].default_value = detail
+        node.inputs["Randomness"].default_value = randomness
+        tree.links.new(coord.outputs["UV"], node.inputs["Vector"])
+        out = node.outputs[output]
+        if output == "Position":                    # into [0, 1)
+            frac = tree.nodes.new("ShaderNodeVectorMath")
+            frac.operation = "FRACTION"
+            tree.links.new(out, frac.inputs[0])
+            out = frac.outputs[0]
+        _to_base(tree, bsdf, out)
+    return build
+
+
+def build_voronoi(workdir=None):
+    return _grid("voronoi", [("distance", _voronoi()), ("color", _voronoi("Color")),
+                             ("position", _voronoi("Position", scale=2.0)),
+                             ("manhattan", _voronoi(metric="MANHATTAN")),
+                             ("chebychev", _voronoi(metric="CHEBYCHEV", randomness=0.6)),
+                             ("minkowski", _voronoi(metric="MINKOWSKI")),
+                             ("detail_1_5", _voronoi("Color", detail=1.5, scale=2.0))])
+
+
+SCENES = {"voronoi": build_voronoi, "wave": build_wave, "noise": build_noise, "emission": build_emission, "gradient": build_gradient, "mix": build_mix, "math": build_math, "vector_math": build_vector_math,
           "mapping": build_mapping, "color_ramp": build_color_ramp, "color": build_color}

@@ -14,7 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...core.pattern_nodes import (BLEND_TYPES, GRADIENT_TYPES, MAPPING_TYPES, MATH_OPS,
-                                   RAMP_INTERPOLATIONS, VECTOR_MATH_OPS, WAVE_DIRECTIONS,
+                                   RAMP_INTERPOLATIONS, VECTOR_MATH_OPS, VORONOI_METRICS,
+                                   WAVE_DIRECTIONS,
                                    WAVE_PROFILES, WAVE_TYPES, random_offset)
 
 SURFACE = {"diffuseColor": ("pt_diffuse", "color"), "metallic": ("pt_metallic", "float"),
@@ -166,6 +167,18 @@ class _Writer:
             t = GRADIENT_TYPES.index(settings.get("gradient_type", "LINEAR"))
             out("fac", "float", f"pt_gradient({t}, {arg('vector', 'vector')})")
             out("color", "color", f"vec3({p}_fac)")
+        elif kind == "voronoi":
+            metric = VORONOI_METRICS.index(settings.get("distance", "EUCLIDEAN"))
+            emit(f"    float {p}_distance; vec3 {p}_color, {p}_position;")
+            emit(f"    float {p}_scale = {arg('scale', 'float', '5.0')};")
+            emit(f"    pt_voronoi({arg('vector', 'vector')} * {p}_scale, {p}_scale, "
+                 f"clamp({arg('detail', 'float')}, 0.0, 15.0), "
+                 f"clamp({arg('roughness', 'float', '0.5')}, 0.0, 1.0), "
+                 f"{arg('lacunarity', 'float', '2.0')}, {arg('exponent', 'float', '0.5')}, "
+                 f"clamp({arg('randomness', 'float', '1.0')}, 0.0, 1.0), {metric}, "
+                 f"{p}_distance, {p}_color, {p}_position);")
+            for name, typ in (("distance", "float"), ("color", "color"), ("position", "vector")):
+                self.vars[(node.name, name)] = (f"{p}_{name}", typ)
         elif kind == "wave":
             numbers = (WAVE_TYPES.index(settings.get("wave_type", "BANDS")),
                        WAVE_DIRECTIONS.index(settings.get("direction", "X")),

@@ -132,6 +132,17 @@ NODES = {
         "roughness": n.inputs["Roughness"], "lacunarity": n.inputs["Lacunarity"],
         "distortion": n.inputs["Distortion"]},
         {"fac": n.outputs["Fac"], "color": n.outputs["Color"]}),
+    "ShaderNodeTexVoronoi": lambda n: ("voronoi", {
+        "dimensions": n.voronoi_dimensions, "feature": n.feature, "distance": n.distance,
+        "normalize": str(int(n.normalize))}, {
+        "vector": n.inputs["Vector"], "scale": n.inputs["Scale"], "detail": n.inputs["Detail"],
+        "roughness": n.inputs["Roughness"], "lacunarity": n.inputs["Lacunarity"],
+        # Exponent only shows for Minkowski: by identifier, as unavailable sockets
+        # are not found by name.
+        "exponent": {i.identifier: i for i in n.inputs}["Exponent"],
+        "randomness": n.inputs["Randomness"]},
+        {"distance": n.outputs["Distance"], "color": n.outputs["Color"],
+         "position": n.outputs["Position"]}),
     "ShaderNodeTexWave": lambda n: ("wave", {
         "wave_type": n.wave_type, "wave_profile": n.wave_profile,
         "direction": n.bands_direction if n.wave_type == "BANDS" else n.rings_direction}, {
@@ -146,7 +157,7 @@ NODES = {
 # Texture nodes whose unlinked Vector is Blender's Generated coordinates: UV stands in
 # (docs/materials.md, "approximated").
 GENERATED_DEFAULT = {"ShaderNodeTexChecker", "ShaderNodeTexGradient", "ShaderNodeTexNoise",
-                     "ShaderNodeTexWave"}
+                     "ShaderNodeTexWave", "ShaderNodeTexVoronoi"}
 
 
 def socket_type(socket) -> str:
