@@ -479,5 +479,36 @@ def build_voronoi(workdir=None):
                              ("detail_1_5", _voronoi("Color", detail=1.5, scale=2.0))])
 
 
-SCENES = {"voronoi": build_voronoi, "wave": build_wave, "noise": build_noise, "emission": build_emission, "gradient": build_gradient, "mix": build_mix, "math": build_math, "vector_math": build_vector_math,
+def _alpha(method, source):
+    """Alpha from a network, over the black world: Blended or Dithered render method."""
+    def build(tree, bsdf):
+        bsdf.inputs["Base Color"].default_value = (0.8, 0.5, 0.2, 1.0)
+        tree.links.new(source(tree), bsdf.inputs["Alpha"])
+        import bpy
+        next(m for m in bpy.data.materials if m.node_tree == tree).surface_render_method = method
+    return build
+
+
+def _alpha_gradient(tree):
+    node = tree.nodes.new("ShaderNodeTexGradient")
+    return node.outputs["Fac"]
+
+
+def _alpha_checker(tree):
+    coord = tree.nodes.new("ShaderNodeTexCoord")
+    node = tree.nodes.new("ShaderNodeTexChecker")
+    node.inputs["Scale"].default_value = 3.0
+    node.inputs["Color1"].default_value = (1.0, 1.0, 1.0, 1.0)
+    node.inputs["Color2"].default_value = (0.3, 0.3, 0.3, 1.0)
+    tree.links.new(coord.outputs["UV"], node.inputs["Vector"])
+    return node.outputs["Fac"]
+
+
+def build_alpha(workdir=None):
+    return _grid("alpha", [("gradient_blended", _alpha("BLENDED", _alpha_gradient)),
+                           ("gradient_dithered", _alpha("DITHERED", _alpha_gradient)),
+                           ("checker_blended", _alpha("BLENDED", _alpha_checker))])
+
+
+SCENES = {"alpha": build_alpha, "voronoi": build_voronoi, "wave": build_wave, "noise": build_noise, "emission": build_emission, "gradient": build_gradient, "mix": build_mix, "math": build_math, "vector_math": build_vector_math,
           "mapping": build_mapping, "color_ramp": build_color_ramp, "color": build_color}
