@@ -47,10 +47,15 @@ KINDS = {
     "hue_saturation": {}, "checker": {}, "gradient": {"gradient_type": GRADIENT_TYPES},
     # Blender's Perlin fBm in 3D (shaders/pattern_lib.glsl pt_noise_fbm).
     "noise": {"dimensions": ("3D",), "noise_type": ("FBM",)},
+    # An image inside a network (one directly on a surface input stays a UsdUVTexture).
+    "image": {"wrap": ("repeat", "clamp", "black", "mirror"), "color_space": ("sRGB", "raw")},
     "voronoi": {"dimensions": ("3D",), "feature": ("F1",), "distance": VORONOI_METRICS,
                 "normalize": ("0",)},
     "wave": {"wave_type": WAVE_TYPES, "direction": WAVE_DIRECTIONS, "wave_profile": WAVE_PROFILES},
 }
+
+
+MAX_IMAGES = 4   # images per network: texture units t_pattern0..3 (engine/gpu/programs.py)
 
 
 def unsupported_setting(kind: str, settings: dict) -> str | None:

@@ -30,7 +30,8 @@ class TextureRef:
 @dataclass(frozen=True)
 class PatternNode:
     """One node of a material's pattern graph (ND_lantern_<kind>, docs/materials.md).
-    Types: "float", "vector", "color", "float[]", "color4[]"."""
+    Types: "float", "vector", "color", "float[]", "color4[]", "asset" (an image's
+    resolved path: bound as a texture, not a parameter)."""
     name: str
     kind: str
     settings: tuple                # ((name, str), ...) sorted: part of the graph's shape

@@ -13,16 +13,6 @@ uniform float u_opacity_threshold;
 uniform float u_clearcoat;
 uniform float u_clearcoat_roughness;
 
-#include "pattern.glsl"
-
-// The surface inputs a pattern graph feeds replace the constants and maps
-// (engine/gpu/pattern.py); without one this is the constants.
-void pattern_inputs(vec2 uv, inout vec3 diffuse, inout float metallic, inout float roughness,
-                    inout float opacity, inout vec3 emissive) {
-#ifdef HAS_PATTERN
-    pattern_eval(uv, diffuse, metallic, roughness, opacity, emissive);
-#endif
-}
 
 // A UsdUVTexture: wrap (0 repeat, 1 mirror, 2 clamp, 3 black), scale, bias, channel
 // (-1 rgb, 0..3 r g b a). srgb: an 8-bit sRGB image filtered as Cycles filters it
@@ -80,6 +70,17 @@ vec4 sample_map(sampler2D t, Map m, vec2 uv) {
     c = c * m.scale + m.bias;
     if (m.channel >= 0) return vec4(c[m.channel]);
     return c;
+}
+
+#include "pattern.glsl"
+
+// The surface inputs a pattern graph feeds replace the constants and maps
+// (engine/gpu/pattern.py); without one this is the constants.
+void pattern_inputs(vec2 uv, inout vec3 diffuse, inout float metallic, inout float roughness,
+                    inout float opacity, inout vec3 emissive) {
+#ifdef HAS_PATTERN
+    pattern_eval(uv, diffuse, metallic, roughness, opacity, emissive);
+#endif
 }
 
 #ifdef HAS_DIFFUSE_MAP

@@ -510,5 +510,54 @@ def build_alpha(workdir=None):
                            ("checker_blended", _alpha("BLENDED", _alpha_checker))])
 
 
-SCENES = {"alpha": build_alpha, "voronoi": build_voronoi, "wave": build_wave, "noise": build_noise, "emission": build_emission, "gradient": build_gradient, "mix": build_mix, "math": build_math, "vector_math": build_vector_math,
+def _image_file():
+    """A 16 x 16 8-bit sRGB PNG: a colour gradient with a dark checker (one file a
+    process, in the temporary folder)."""
+    import os
+    import tempfile
+    import numpy as np
+    from reference_scenes import _write_image
+    path = os.path.join(tempfile.gettempdir(), f"lantern-pattern-image-{os.getpid()}.png")
+    if not os.path.exists(path):
+        y, x = np.mgrid[0:16, 0:16]
+        rgba = np.stack([x * 16, y * 16, 255 - x * 8, np.full_like(x, 255)], -1)
+        rgba[((x // 4 + y // 4) % 2) == 1, :3] //= 3
+        _write_image(path, rgba.astype(np.uint8))
+    return path
+
+
+def _image(tree, extension="REPEAT"):
+    import bpy
+    node = tree.nodes.new("ShaderNodeTexImage")
+    node.image = bpy.data.images.load(_image_file(), check_existing=True)
+    node.extension = extension
+    return node
+
+
+def _image_multiplied(tree, bsdf):
+    """Image x colour (Mix Multiply): the glTF importer's vertex-colour-free tint."""
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type, mix.blend_type = "RGBA", "MULTIPLY"
+    mix.inputs[0].default_value = 1.0
+    tree.links.new(_image(tree).outputs["Color"], mix.inputs[6])
+    mix.inputs[7].default_value = (1.0, 0.6, 0.3, 1.0)
+    _to_base(tree, bsdf, mix.outputs[2])
+
+
+def _image_mapped(tree, bsdf):
+    """A mapped, rotated image, mirrored, through Hue/Saturation/Value."""
+    mapping = _uv_mapping(tree, "POINT", (0.1, 0.2, 0.0), (0.0, 0.0, 0.4), (2.0, 1.5, 1.0))
+    image = _image(tree, "MIRROR")
+    tree.links.new(mapping.outputs[0], image.inputs["Vector"])
+    hsv = tree.nodes.new("ShaderNodeHueSaturation")
+    hsv.inputs["Hue"].default_value = 0.7
+    tree.links.new(image.outputs["Color"], hsv.inputs["Color"])
+    _to_base(tree, bsdf, hsv.outputs[0])
+
+
+def build_image(workdir=None):
+    return _grid("image", [("multiplied", _image_multiplied), ("mapped", _image_mapped)])
+
+
+SCENES = {"image": build_image, "alpha": build_alpha, "voronoi": build_voronoi, "wave": build_wave, "noise": build_noise, "emission": build_emission, "gradient": build_gradient, "mix": build_mix, "math": build_math, "vector_math": build_vector_math,
           "mapping": build_mapping, "color_ramp": build_color_ramp, "color": build_color}

@@ -19,15 +19,16 @@ _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.M)
 
 # Sampler name -> texture unit, for every sampler of every program. The G-buffer and
 # the light pass share units 0-8, materials 9-14, tables and rigs, then the
-# environment, ambient occlusion and post-processing inputs; GL 3.3 guarantees 16
-# units per stage and 48 in all.
+# environment, ambient occlusion and post-processing inputs, then a pattern graph's
+# images (engine/gpu/pattern.py); GL 3.3 guarantees 16 units per stage and 48 in all.
 UNITS = {name: unit for unit, name in enumerate((
     "g_base", "g_normal", "g_mat", "g_emit", "g_depth", "latlong", "shadow_cmp", "shadow_raw",
     "hdr",
     "t_diffuse", "t_metallic", "t_roughness", "t_emissive", "t_opacity", "t_normal",
     "u_objects", "u_lights",
     "u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences",
-    "dfg_lut", "env_specular", "radiance", "ao_tex", "post_src", "post_aux"))}
+    "dfg_lut", "env_specular", "radiance", "ao_tex", "post_src", "post_aux",
+    "t_pattern0", "t_pattern1", "t_pattern2", "t_pattern3"))}
 
 
 class ShaderError(RuntimeError):

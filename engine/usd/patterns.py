@@ -7,6 +7,8 @@ value that is not finite, or a link to a missing prim is a warning naming the ma
 and the node, and that surface input keeps its UsdPreviewSurface value."""
 from __future__ import annotations
 
+import os
+
 import numpy as np
 from pxr import Sdf, UsdShade
 
@@ -70,6 +72,14 @@ def read_pattern(mat: UsdShade.Material, time, warnings: list) -> PatternGraph |
             typ = TYPES.get(inp.GetTypeName())
             if inp.GetTypeName() == Sdf.ValueTypeNames.String:
                 settings.append((base, str(inp.Get(time))))
+                continue
+            if inp.GetTypeName() == Sdf.ValueTypeNames.Asset:
+                asset = inp.Get(time)
+                resolved = asset.resolvedPath if asset is not None else ""
+                if not resolved or not os.path.isfile(resolved):
+                    raise _Bad(f"{path}: texture file {asset.path if asset else ''!r} of {name} "
+                               f"not found")
+                values.append((base, "asset", resolved))
                 continue
             if typ is None:
                 raise _Bad(f"{path}: input {base} of {name} has type {inp.GetTypeName()}")

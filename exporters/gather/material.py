@@ -99,7 +99,7 @@ class _Walker:
         self.material = material
         self.warn = warn
         self.texture_dir = texture_dir
-        self.pattern = PatternBuilder(_link)
+        self.pattern = PatternBuilder(_link, self.image_path)
 
     def unsupported(self, node, why="not supported"):
         self.warn(f"material '{self.material.name}': node '{node.name}' ({node.bl_idname}) "
@@ -122,6 +122,10 @@ class _Walker:
                       f"as texture coordinates is not supported; using the UV map")
             return None
         return None
+
+    def image_path(self, node):
+        return image_file(node.image, f"material '{self.material.name}', node '{node.name}'",
+                          self.warn, self.texture_dir)
 
     def texture(self, node, raw=False):
         path = image_file(node.image, f"material '{self.material.name}', node '{node.name}'",

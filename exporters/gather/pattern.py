@@ -6,11 +6,12 @@ NODES anywhere upstream is one warning naming it; the caller then keeps its cons
 (the UsdPreviewSurface fallback)."""
 from __future__ import annotations
 
-from ...core.pattern_nodes import unsupported_setting
+from ...core.pattern_nodes import MAX_IMAGES, unsupported_setting
 from ..ir import PatternGraph, PatternNode
 
 SOCKET_TYPES = {"VALUE": "float", "INT": "float", "BOOLEAN": "float",
                 "VECTOR": "vector", "RGBA": "color"}
+WRAP = {"REPEAT": "repeat", "EXTEND": "clamp", "CLIP": "black", "MIRROR": "mirror"}
 MIX_TYPES = {"FLOAT": ("Float", "float"), "VECTOR": ("Vector", "vector"), "RGBA": ("Color", "color")}
 
 
@@ -132,6 +133,11 @@ NODES = {
         "roughness": n.inputs["Roughness"], "lacunarity": n.inputs["Lacunarity"],
         "distortion": n.inputs["Distortion"]},
         {"fac": n.outputs["Fac"], "color": n.outputs["Color"]}),
+    "ShaderNodeTexImage": lambda n: ("image", {
+        "wrap": WRAP.get(n.extension, "repeat"),
+        "color_space": "sRGB" if n.image is not None and
+        n.image.colorspace_settings.name == "sRGB" else "raw"},
+        {"vector": n.inputs["Vector"]}, {"color": n.outputs["Color"], "alpha": n.outputs["Alpha"]}),
     "ShaderNodeTexVoronoi": lambda n: ("voronoi", {
         "dimensions": n.voronoi_dimensions, "feature": n.feature, "distance": n.distance,
         "normalize": str(int(n.normalize))}, {
@@ -183,10 +189,12 @@ def is_pattern(node) -> bool:
 
 class PatternBuilder:
     """Builds one material's PatternGraph across its surface inputs (shared nodes once).
-    `link_of(socket)`: the link feeding a socket through reroutes, or None."""
+    `link_of(socket)`: the link feeding a socket through reroutes, or None;
+    `image_path(node)`: an Image Texture node's file, or None (it has warned)."""
 
-    def __init__(self, link_of):
+    def __init__(self, link_of, image_path):
         self.link_of = link_of
+        self.image_path = image_path
         self.graph = PatternGraph()
         self._names = {}          # Blender node name -> PatternNode name
 
@@ -237,11 +245,18 @@ class PatternBuilder:
                           outputs={o: socket_type(s) for o, s in outputs.items()})
         if kind == "color_ramp":
             rec.values.update(_ramp_values(node))
+        elif kind == "image":
+            if sum(n.kind == "image" for n in self.graph.nodes) >= MAX_IMAGES:
+                raise Unsupported(node, f"is a network's image beyond {MAX_IMAGES}: not supported")
+            path = self.image_path(node)
+            if path is None:
+                raise Unsupported(node, "has no image file")
+            rec.values["file"] = ("asset", path)
         for name, socket in inputs.items():
             typ = socket_type(socket)
             link = self.link_of(socket)
             if link is None:
-                if name == "vector" and node.bl_idname in GENERATED_DEFAULT:
+                if name == "vector" and (node.bl_idname in GENERATED_DEFAULT or kind == "image"):
                     rec.links[name] = (typ, self._uv_node(), "uv")
                 else:
                     rec.values[name] = (typ, socket_value(socket, typ))

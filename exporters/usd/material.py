@@ -66,7 +66,7 @@ def write_material(stage, path, rec, default_uv, asset_path):
         else:
             inp.Set(float(value))
     if rec.graph is not None:
-        write_pattern(stage, path, material, surface, rec.graph)
+        write_pattern(stage, path, material, surface, rec.graph, asset_path)
     if rec.alpha_mode:
         material.GetPrim().CreateAttribute(ALPHA_MODE, Sdf.ValueTypeNames.Token,
                                            custom=True).Set(rec.alpha_mode)
@@ -76,7 +76,7 @@ def write_material(stage, path, rec, default_uv, asset_path):
 # PatternNode value types -> USD value types (docs/stage_contract.md, "Pattern graph").
 PATTERN_TYPES = {"float": Sdf.ValueTypeNames.Float, "vector": Sdf.ValueTypeNames.Vector3f,
                  "color": Sdf.ValueTypeNames.Color3f, "float[]": Sdf.ValueTypeNames.FloatArray,
-                 "color4[]": Sdf.ValueTypeNames.Color4fArray}
+                 "color4[]": Sdf.ValueTypeNames.Color4fArray, "asset": Sdf.ValueTypeNames.Asset}
 MTLX_SURFACE = "ND_UsdPreviewSurface_surfaceshader"
 
 
@@ -88,7 +88,7 @@ def _pattern_value(typ, value):
     return value
 
 
-def write_pattern(stage, path, material, preview, graph):
+def write_pattern(stage, path, material, preview, graph, asset_path):
     """The graph as a NodeGraph `Pattern` of ND_lantern_<kind> shaders (settings are
     string inputs, values typed inputs, links connections), read by an
     ND_UsdPreviewSurface_surfaceshader on `outputs:mtlx:surface` whose unconnected
@@ -101,7 +101,8 @@ def write_pattern(stage, path, material, preview, graph):
         for name, value in sorted(node.settings.items()):
             shader.CreateInput(name, Sdf.ValueTypeNames.String).Set(str(value))
         for name, (typ, value) in sorted(node.values.items()):
-            shader.CreateInput(name, PATTERN_TYPES[typ]).Set(_pattern_value(typ, value))
+            value = asset_path(value) if typ == "asset" else _pattern_value(typ, value)
+            shader.CreateInput(name, PATTERN_TYPES[typ]).Set(value)
         for name, typ in sorted(node.outputs.items()):
             shader.CreateOutput(name, PATTERN_TYPES[typ])
         for name, (typ, src, out) in sorted(node.links.items()):

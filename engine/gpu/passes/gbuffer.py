@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from ..framegraph import Pass
 from ..points import set_camera_facing
-from ..pattern import material_variant, set_parameters
+from ..pattern import material_variant, pattern_images, set_parameters
 from ..programs import UNITS, set_uniform
 
 # Material input -> shader names and variant define.
@@ -120,18 +120,24 @@ def set_material(prog, mat, textures, threshold):
     pattern_bytes = set_parameters(prog, mat)
     for name, short, _ in MAP_SLOTS:
         ref = mat.maps.get(name)
-        if ref is None:
-            continue
-        unit = UNITS[f"t_{short}"]
-        tex, decode = textures.get(ref.path, ref.colorspace)
-        tex.use(unit)
-        set_uniform(prog, f"m_{short}.srgb", bool(decode))
-        textures.sampler(ref.wrap_s, ref.wrap_t).use(unit)
-        set_uniform(prog, f"m_{short}.wrap", (WRAP.get(ref.wrap_s, 0), WRAP.get(ref.wrap_t, 0)))
-        set_uniform(prog, f"m_{short}.scale", tuple(ref.scale))
-        set_uniform(prog, f"m_{short}.bias", tuple(ref.bias))
-        set_uniform(prog, f"m_{short}.channel", CHANNEL.get(ref.channel, -1))
+        if ref is not None:
+            _bind_map(prog, short, ref, textures)
+    for k, ref in enumerate(pattern_images(mat)):
+        _bind_map(prog, f"pattern{k}", ref, textures)
     return pattern_bytes
+
+
+def _bind_map(prog, short, ref, textures):
+    """Texture t_<short> and its Map m_<short> (shaders/material.glsl sample_map)."""
+    unit = UNITS[f"t_{short}"]
+    tex, decode = textures.get(ref.path, ref.colorspace)
+    tex.use(unit)
+    set_uniform(prog, f"m_{short}.srgb", bool(decode))
+    textures.sampler(ref.wrap_s, ref.wrap_t).use(unit)
+    set_uniform(prog, f"m_{short}.wrap", (WRAP.get(ref.wrap_s, 0), WRAP.get(ref.wrap_t, 0)))
+    set_uniform(prog, f"m_{short}.scale", tuple(ref.scale))
+    set_uniform(prog, f"m_{short}.bias", tuple(ref.bias))
+    set_uniform(prog, f"m_{short}.channel", CHANNEL.get(ref.channel, -1))
 
 
 def map_defines(mat) -> list:
