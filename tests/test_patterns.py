@@ -21,11 +21,13 @@ FLIP_BOUND = 0.05
 
 @functools.lru_cache(maxsize=None)
 def exported(name):
-    """(stage, export warnings) of a pattern scene, once per test session."""
+    """(stage, export warnings) of a pattern scene, once per test session; the stage
+    passes pxr's validators."""
     import bpy
-    from lantern.exporters import stage_from_depsgraph
+    from lantern.exporters import stage_from_depsgraph, validation_errors
     pattern_scenes.SCENES[name]()
     stage, report = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+    assert validation_errors(stage) == []
     return stage, tuple(report.warnings)
 
 
@@ -86,7 +88,7 @@ def test_network_is_written_on_the_mtlx_context_with_preview_fallback():
     out = mat.GetSurfaceOutput("mtlx")
     mtlx = UsdShade.Shader(out.GetValueProducingAttributes()[0].GetPrim())
     assert mtlx.GetIdAttr().Get() == "ND_UsdPreviewSurface_surfaceshader"
-    ids = {UsdShade.Shader(p).GetIdAttr().Get() for p in
+    ids = {p.GetAttribute("lantern:nodeDef").Get() for p in
            stage.GetPrimAtPath("/root/_materials/color_invert/Pattern").GetChildren()}
     assert {"ND_lantern_invert", "ND_lantern_combine_color", "ND_lantern_uv"} <= ids
 
@@ -145,7 +147,7 @@ def _pattern_node(stage, kind):
     from pxr import UsdShade
     graph = stage.GetPrimAtPath("/root/_materials/live_quad/Pattern")
     return next(UsdShade.Shader(p) for p in graph.GetChildren()
-                if UsdShade.Shader(p).GetIdAttr().Get() == f"ND_lantern_{kind}")
+                if p.GetAttribute("lantern:nodeDef").Get() == f"ND_lantern_{kind}")
 
 
 def test_a_value_edit_uploads_parameters_and_compiles_nothing():
@@ -178,7 +180,8 @@ def test_a_graph_shape_edit_compiles_one_variant():
 
 
 @pytest.mark.parametrize("edit, says", [
-    (lambda node: node.CreateIdAttr("ND_image_color3"), "is not supported"),
+    (lambda node: node.GetPrim().GetAttribute("lantern:nodeDef").Set("ND_image_color3"),
+     "is not supported"),
     (lambda node: node.GetInput("fac").Set(float("nan")), "is not finite"),
 ])
 def test_a_bad_node_is_one_warning_and_the_preview_value(edit, says):

@@ -1,5 +1,6 @@
 """A material's MaterialX-style pattern network (outputs:mtlx:surface, an
-ND_UsdPreviewSurface_surfaceshader fed by ND_lantern_<kind> nodes) -> PatternGraph.
+ND_UsdPreviewSurface_surfaceshader fed by nodes whose lantern:nodeDef is
+ND_lantern_<kind>) -> PatternGraph.
 
 Only the surface's connected inputs are read here; its constants and textures are the
 UsdPreviewSurface's (materials.py). A node whose id or setting is not Lantern's, a
@@ -17,6 +18,7 @@ from ..scene import PatternGraph, PatternNode
 
 MTLX_SURFACE = "ND_UsdPreviewSurface_surfaceshader"
 PREFIX = "ND_lantern_"
+NODE_DEF = "lantern:nodeDef"   # a node's definition (docs/stage_contract.md), else info:id
 SURFACE_INPUTS = {"diffuseColor": "color", "metallic": "float", "roughness": "float",
                   "opacity": "float", "emissiveColor": "color"}
 TYPES = {Sdf.ValueTypeNames.Float: "float", Sdf.ValueTypeNames.Vector3f: "vector",
@@ -62,7 +64,8 @@ def read_pattern(mat: UsdShade.Material, time, warnings: list) -> PatternGraph |
         name = str(shader.GetPath())
         if name in nodes:
             return name
-        ident = str(shader.GetIdAttr().Get() or "")
+        node_def = shader.GetPrim().GetAttribute(NODE_DEF)
+        ident = str((node_def.Get() if node_def else None) or shader.GetIdAttr().Get() or "")
         if not ident.startswith(PREFIX):
             raise _Bad(f"{path}: node {name} ({ident or 'no id'}) is not supported")
         nodes[name] = None                       # a cycle reads as a missing node

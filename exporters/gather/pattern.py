@@ -184,6 +184,8 @@ def socket_value(socket, kind):
 
 
 def is_pattern(node) -> bool:
+    """Whether `node` can start a network (an Image Texture straight on an input stays
+    a UsdUVTexture: the callers look for that first)."""
     return node.bl_idname in NODES
 
 

@@ -78,6 +78,9 @@ PATTERN_TYPES = {"float": Sdf.ValueTypeNames.Float, "vector": Sdf.ValueTypeNames
                  "color": Sdf.ValueTypeNames.Color3f, "float[]": Sdf.ValueTypeNames.FloatArray,
                  "color4[]": Sdf.ValueTypeNames.Color4fArray, "asset": Sdf.ValueTypeNames.Asset}
 MTLX_SURFACE = "ND_UsdPreviewSurface_surfaceshader"
+# A pattern node's MaterialX node-definition name. Not `info:id`: no Sdr registry has
+# Lantern's definitions, and UsdValidation reports an unregistered id as an error.
+NODE_DEF = "lantern:nodeDef"
 
 
 def _pattern_value(typ, value):
@@ -89,15 +92,17 @@ def _pattern_value(typ, value):
 
 
 def write_pattern(stage, path, material, preview, graph, asset_path):
-    """The graph as a NodeGraph `Pattern` of ND_lantern_<kind> shaders (settings are
-    string inputs, values typed inputs, links connections), read by an
+    """The graph as a NodeGraph `Pattern` of shaders named by `lantern:nodeDef`
+    ND_lantern_<kind> (settings are string inputs, values typed inputs, links
+    connections), read by an
     ND_UsdPreviewSurface_surfaceshader on `outputs:mtlx:surface` whose unconnected
     inputs are the UsdPreviewSurface's."""
     ng = UsdShade.NodeGraph.Define(stage, path.AppendChild("Pattern"))
     shaders = {}
     for node in graph.nodes:
         shader = UsdShade.Shader.Define(stage, ng.GetPath().AppendChild(node.name))
-        shader.CreateIdAttr(f"ND_lantern_{node.kind}")
+        shader.GetPrim().CreateAttribute(NODE_DEF, Sdf.ValueTypeNames.Token,
+                                         custom=True).Set(f"ND_lantern_{node.kind}")
         for name, value in sorted(node.settings.items()):
             shader.CreateInput(name, Sdf.ValueTypeNames.String).Set(str(value))
         for name, (typ, value) in sorted(node.values.items()):
