@@ -555,8 +555,17 @@ def _image_mapped(tree, bsdf):
     _to_base(tree, bsdf, hsv.outputs[0])
 
 
+def _image_mapping_only(tree, bsdf):
+    """Image <- Mapping straight on Base Color (the corpus's "Mapping is ignored" case)."""
+    mapping = _uv_mapping(tree, "TEXTURE", (0.25, 0.0, 0.0), (0.0, 0.0, 0.3), (0.5, 0.7, 1.0))
+    image = _image(tree)
+    tree.links.new(mapping.outputs[0], image.inputs["Vector"])
+    _to_base(tree, bsdf, image.outputs["Color"])
+
+
 def build_image(workdir=None):
-    return _grid("image", [("multiplied", _image_multiplied), ("mapped", _image_mapped)])
+    return _grid("image", [("multiplied", _image_multiplied), ("mapped", _image_mapped),
+                           ("mapping_only", _image_mapping_only)])
 
 
 SCENES = {"image": build_image, "alpha": build_alpha, "voronoi": build_voronoi, "wave": build_wave, "noise": build_noise, "emission": build_emission, "gradient": build_gradient, "mix": build_mix, "math": build_math, "vector_math": build_vector_math,

@@ -36,6 +36,16 @@ def _link(socket):
     return None
 
 
+def _computed_coordinates(tex_node) -> bool:
+    """Whether an Image Texture's Vector is more than a UV map (a UsdUVTexture's st)."""
+    link = _link(tex_node.inputs["Vector"])
+    if link is None:
+        return False
+    node = link.from_node
+    return not (node.bl_idname == "ShaderNodeUVMap" or
+                (node.bl_idname == "ShaderNodeTexCoord" and link.from_socket.name == "UV"))
+
+
 def _constant(socket, kind):
     value = getattr(socket, "default_value", None)
     if value is None:
@@ -145,6 +155,16 @@ class _Walker:
         if link is None:
             return _constant(socket, kind)
         node = link.from_node
+        if node.bl_idname == "ShaderNodeTexImage" and target is not None and \
+                _computed_coordinates(node):
+            # Mapped (or otherwise computed) coordinates: the image as a network node;
+            # failing that, the image on plain UVs as before (uv_of warns).
+            try:
+                self.pattern.connect(target, link)
+                return _constant(socket, kind)
+            except Unsupported as exc:
+                self.warn(f"material '{self.material.name}': node '{exc.node.name}' "
+                          f"({exc.node.bl_idname}) {exc.why}; the image uses plain UVs")
         if node.bl_idname == "ShaderNodeTexImage":
             tex = self.texture(node, raw=(kind == "float"))
             if tex is None:

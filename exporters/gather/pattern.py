@@ -107,6 +107,9 @@ NODES = {
     "ShaderNodeVectorMath": _vector_math,
     "ShaderNodeMapping": _mapping,
     "ShaderNodeTexCoord": _texcoord,
+    # A UV Map node reads the mesh's render-active UV map (the engine draws one UV set
+    # per material): exact for that map, approximated for another.
+    "ShaderNodeUVMap": lambda n: ("uv", {}, {}, {"uv": n.outputs["UV"]}),
     "ShaderNodeRGB": lambda n: ("rgb", {}, {}, {"color": n.outputs[0]}),
     "ShaderNodeValue": lambda n: ("value", {}, {}, {"value": n.outputs[0]}),
     "ShaderNodeInvert": lambda n: ("invert", {}, {"fac": n.inputs["Fac"], "color": n.inputs["Color"]},
