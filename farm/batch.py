@@ -22,6 +22,7 @@ from collections import deque
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
+from ..core import interrupt
 from ..core.files import atomic_write
 from ..core.text import frame_path
 from . import chunking
@@ -56,17 +57,23 @@ def _print(table):
     Console(width=max(160, Console().width)).print(table)
 
 
-def _drive(runner, submit_more, on_done, needs):
+def _drive(runner, submit_more, on_done, needs, status=None):
     """Waits for every task, calling on_done for each finished one and submit_more
-    after it; gives the rest up if no worker can run them any more."""
+    after it; gives the rest up if no worker can run them any more. status(state): the
+    farm's progress for --status-fd (FarmOptions.status)."""
     submit_more()
+    if status is not None:
+        status("running")
     while runner.pending:
+        interrupt.check()           # a Ctrl-C that USD swallowed while the stage was read
         finished = runner.wait(timeout=STALL_SECONDS)
         if not finished and not runner.offers(needs):
             finished = runner.fail_pending(f"no worker offers {_needs_text(needs)} any more")
         for done in finished:
             on_done(done)
         submit_more()
+    if status is not None:
+        status("finished")
 
 
 def open_render_runner(scheduler, jobs):
@@ -105,11 +112,14 @@ def _write_collected(files):
 
 
 def _sweep(outputs):
-    """Removes what a lost worker's atomic writes left: `.<name>.XXXXXXXX<suffix>`
-    beside each output (core/files.py's temporary names)."""
+    """Removes what a lost or killed worker's atomic writes left:
+    `.<name>.XXXXXXXX<suffix>` beside each output (core/files.py's temporary names).
+    An output may be a frame pattern ('####'): every frame's are removed."""
     for output in outputs:
         folder, name = os.path.split(output)
-        pattern = re.compile(re.escape("." + name + ".") + r"[a-z0-9_]{8}"
+        stem = "".join(r"\d+(?:\.\d+)?" if part.startswith("#") else re.escape(part)
+                       for part in re.split(r"(#+)", name) if part)
+        pattern = re.compile(r"\." + stem + r"\.[a-z0-9_]{8}"
                              + re.escape(os.path.splitext(name)[1]) + "$")
         try:
             names = os.listdir(folder)
@@ -196,9 +206,10 @@ def export_batch(options: ExportBatchOptions, jobs):
                                                  result.reason)
                     progress.advance(bar)
 
-                _drive(runner, submit_more, on_done, EXPORT_NEEDS)
+                _drive(runner, submit_more, on_done, EXPORT_NEEDS, options.status)
         except BaseException:
             runner.close(interrupted=True)
+            _sweep(task.output for task in tasks)     # what the killed workers left
             raise
         else:
             runner.close()
@@ -285,6 +296,8 @@ def render_frames(options: SequenceOptions, runner, stage_text=None, fps=24.0,
         status = _render_frames(options, runner, stage_text, fps, print_warnings)
     except BaseException:
         runner.close(interrupted=True)
+        if not options.output.lower().endswith(".gif"):
+            _sweep([os.path.abspath(options.output)])   # what the killed workers left
         raise
     return status
 
@@ -372,7 +385,7 @@ def _render_frames(options, runner, stage_text, fps, print_warnings):
             failed.update(result.failed)
             progress.advance(bar, len(task.frames))
 
-        _drive(runner, submit_more, on_done, RENDER_NEEDS)
+        _drive(runner, submit_more, on_done, RENDER_NEEDS, options.status)
     dashboard = runner.dashboard
     runner.close()
     if pattern and not options.collect:

@@ -12,6 +12,9 @@ class FarmOptions:
     jobs: int = 1                   # processes on this machine (no scheduler)
     collect: bool = False           # workers send the outputs back; this process writes them
     resume: bool = False            # skip outputs newer than their input
+    # Called with one word per state ("running": the first tasks are on the workers;
+    # "finished"), for `--status-fd`; None: nothing reported.
+    status: object = None
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -23,6 +23,7 @@ from collections import deque
 from dataclasses import dataclass, field
 from multiprocessing.connection import wait as wait_for_any
 
+from ..core import interrupt
 from . import tasks as farm_tasks
 
 RETRIES = 3  # a pool task runs at most 1 + RETRIES times when its process dies
@@ -55,6 +56,8 @@ def _serve(conn, preload):
     """A pool process: run tasks until told to stop, then release the sessions."""
     import signal
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(signal, "pthread_sigmask"):   # started with it blocked: see _Process
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     try:
         if preload:
             farm_tasks.preload()
@@ -79,14 +82,23 @@ class _Process:
         import signal
         self.conn, child = context.Pipe()
         self.process = context.Process(target=_serve, args=(child, preload), daemon=True)
-        # Started with SIGINT ignored (kept across exec, and Python then installs no
-        # handler of its own): Ctrl-C reaches the whole process group, and only the
-        # client answers it, even while a new process is still importing.
-        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-        try:
-            self.process.start()
-        finally:
-            signal.signal(signal.SIGINT, previous)
+        # Ctrl-C reaches the whole process group, and only the client answers it,
+        # even while a new process is still importing: the worker starts with SIGINT
+        # blocked (the mask is kept across exec) and ignores it before unblocking.
+        # Blocking, not ignoring, in the client meanwhile: an ignored Ctrl-C that
+        # arrived while a worker started was lost, a blocked one comes after.
+        if hasattr(signal, "pthread_sigmask"):
+            signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+            try:
+                self.process.start()
+            finally:
+                signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+        else:                                 # Windows: no signal masks
+            previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+            try:
+                self.process.start()
+            finally:
+                signal.signal(signal.SIGINT, previous)
         child.close()
         self.jobs: deque[_Job] = deque()  # sent, in order; the first is running
 
@@ -150,8 +162,11 @@ class PoolRunner:
         busy = [p for p in self._processes if p.jobs]
         if not busy:
             return []
-        ready = set(wait_for_any([p.conn for p in busy] + [p.process.sentinel for p in busy],
-                                 timeout))
+        wakeup = interrupt.wakeup_fd()       # Ctrl-C ends the wait, whatever thread got it
+        ready = set(wait_for_any([p.conn for p in busy] + [p.process.sentinel for p in busy]
+                                 + ([wakeup] if wakeup is not None else []), timeout))
+        if wakeup in ready:
+            interrupt.drain()
         done = []
         for proc in busy:
             if proc.conn not in ready and proc.process.sentinel not in ready:

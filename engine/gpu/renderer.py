@@ -11,7 +11,8 @@ import numpy as np
 from .context import Features
 from .depth import DepthConvention
 from .environment import Environment
-from .framegraph import Frame, FrameGraph, FrameOptions
+from ..settings import RenderSettings
+from .framegraph import Frame, FrameGraph
 from .geometry import Geometry
 from .lights import LightTable
 from .passes.ambient import AmbientPass
@@ -56,7 +57,7 @@ COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow
             "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
             "light_volumes", "stencil_marks", "batched_lights", "instances_drawn",
             "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws",
-            "programs_compiled", "pattern_bytes")
+            "pattern_bytes")
 
 
 def _path_name(features) -> str:
@@ -78,6 +79,7 @@ class Renderer:
         self.depth = DepthConvention(gl.proc, self.features.clip_control)
         self.pool = TargetPool(ctx, self.stencil, self.depth)
         programs = self.programs = gl.programs
+        self._programs_seen = (programs.compiled, programs.loaded, programs.seconds)
         self.geometry = Geometry(ctx, self.uploads, programs, self.features)
         self.lights = LightTable(self.uploads)
         self.textures = MaterialTextures(ctx, self.uploads, preset.anisotropy, srgb_filtering)
@@ -138,7 +140,7 @@ class Renderer:
         frame = Frame(scene=scene, changes=changes, size=tuple(size), preset=self.preset,
                       transparent=transparent, aovs=frozenset(aovs), camera=camera,
                       stats={name: 0 for name in COUNTERS},
-                      options=FrameOptions.of(settings),
+                      options=settings or RenderSettings(),
                       readback=readback or ReadbackRequest())
         frame.stats["meshes_uploaded"] = self.update(scene, changes, cull_backfaces)
         frame.timings["upload"] = time.perf_counter() - t0
@@ -146,13 +148,10 @@ class Renderer:
         frame.supersample, frame.output_size = k, tuple(size)
         frame.size = (size[0] * k, size[1] * k)
         self.depth.begin()
-        compiled, compile_seconds = self.programs.compiled, self.programs.compile_seconds
         try:
             board = self.graph.run(frame)
         finally:
             self.depth.end()
-        frame.stats["programs_compiled"] = self.programs.compiled - compiled
-        frame.stats["compile_ms"] = 1000.0 * (self.programs.compile_seconds - compile_seconds)
         # Render passes were drawn at the supersampled size too: light is filtered as
         # the image is, data (depth, normals, indices) keeps the centre sub-pixel.
         board["aovs"] = {name: (centre_samples(a, k) if name in DATA_PASSES else downsample(a, k))
@@ -162,6 +161,7 @@ class Renderer:
         uploaded = self.uploads.take()
         frame.stats["bytes_uploaded"] = int(sum(uploaded.values()))
         frame.stats["bytes_by_kind"] = dict(uploaded)
+        self._count_programs(frame)
         frame.stats.update(self.gl_info)
         frame.board = board
         self._restore_state()
@@ -189,6 +189,18 @@ class Renderer:
         self.preset = preset
         self.textures.set_anisotropy(preset.anisotropy)
 
+    def _count_programs(self, frame):
+        """The programs this session made since it last said (its first render counts
+        what it made at construction): compiled, or loaded from the persistent cache
+        (engine/gpu/program_binaries.py), and the seconds that took, which the passes'
+        timings include."""
+        p = self.programs
+        compiled, loaded, seconds = self._programs_seen
+        frame.stats["programs_compiled"] = p.compiled - compiled
+        frame.stats["programs_loaded"] = p.loaded - loaded
+        frame.timings["programs"] = p.seconds - seconds
+        self._programs_seen = (p.compiled, p.loaded, p.seconds)
+
     def warnings(self) -> list:
         """What the GL side could not use (images it could not read) and the last
         render's non-finite pixels, named by the prims they lie on."""
@@ -196,7 +208,7 @@ class Renderer:
 
     def skinned_points(self, scene, changes) -> dict:
         """{mesh path: (points, normals)} of every skinned mesh at this sync's time,
-        world space, one row per mesh point (normals unnormalised, as skinned)."""
+        world space, one row per mesh point (normals as drawn)."""
         self.update(scene, changes, bool(self._cull_backfaces))
         frame = Frame(scene=scene, changes=changes, size=(1, 1), preset=self.preset)
         board = {}
