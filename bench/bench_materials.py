@@ -6,8 +6,9 @@ material, seen from above (tests/pattern_scenes.py's layout), in three versions:
 - distinct: the node-family quads of tests/pattern_scenes.py plus Hue/Saturation/Value
             ones, 100 materials of about 80 graph shapes.
 
-For each: the first render of a new Session (cold: compiles its programs), a new
-Session on the same stage afterwards (the process's program cache), and the warm
+For each: the first render of a new Session (cold: makes its programs, compiled or
+loaded from the persistent program cache), a new Session on the same stage afterwards
+(the process's programs), and the warm
 G-buffer GPU time per frame (result.gpu_timings["gbuffer"], median of 7 frames),
 640 x 640, medium preset. Prints; asserts nothing.
 
@@ -89,7 +90,7 @@ def main():
         rows[kind] = measure(scene(kind))
         print(kind, rows[kind], flush=True)
     base = rows["plain"]["gbuffer_ms"]
-    print("\n| materials | first render ms (programs compiled, compile ms) | new session ms "
+    print("\n| materials | first render ms (programs made, ms making them) | new session ms "
           "(compiled) | G-buffer GPU ms/frame | vs plain | pattern bytes/frame |")
     print("|---|---|---|---|---|---|")
     for kind, r in rows.items():
