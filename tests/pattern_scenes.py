@@ -568,5 +568,16 @@ def build_image(workdir=None):
                            ("mapping_only", _image_mapping_only)])
 
 
-SCENES = {"image": build_image, "alpha": build_alpha, "voronoi": build_voronoi, "wave": build_wave, "noise": build_noise, "emission": build_emission, "gradient": build_gradient, "mix": build_mix, "math": build_math, "vector_math": build_vector_math,
-          "mapping": build_mapping, "color_ramp": build_color_ramp, "color": build_color}
+SCENES = {"image": build_image,
+          "alpha": build_alpha,
+          "voronoi": build_voronoi,
+          "wave": build_wave,
+          "noise": build_noise,
+          "emission": build_emission,
+          "gradient": build_gradient,
+          "mix": build_mix,
+          "math": build_math,
+          "vector_math": build_vector_math,
+          "mapping": build_mapping,
+          "color_ramp": build_color_ramp,
+          "color": build_color}

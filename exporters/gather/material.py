@@ -261,7 +261,8 @@ class _Walker:
         link = _link(color_socket)
         if link is not None and is_pattern(link.from_node) and \
                 link.from_node.bl_idname != "ShaderNodeTexImage":
-            if isinstance(have, TexInput) or any(have) or "emissiveColor" in self.pattern.graph.outputs:
+            if isinstance(have, TexInput) or any(have) or \
+                    "emissiveColor" in self.pattern.graph.outputs:
                 self.warn(f"material '{self.material.name}': an emission from nodes cannot be "
                           f"added to another emission; keeping the first")
                 return
