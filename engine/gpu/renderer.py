@@ -56,7 +56,8 @@ def supersample_factor(frame, size, max_texture: int) -> int:
 COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow_maps",
             "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
             "light_volumes", "stencil_marks", "batched_lights", "instances_drawn",
-            "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws")
+            "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws",
+            "pattern_bytes")
 
 
 def _path_name(features) -> str:
