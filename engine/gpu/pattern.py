@@ -17,6 +17,7 @@ from ...core.pattern_nodes import (BLEND_TYPES, GRADIENT_TYPES, MAPPING_TYPES, M
                                    RAMP_INTERPOLATIONS, VECTOR_MATH_OPS, VORONOI_METRICS,
                                    WAVE_DIRECTIONS, WAVE_PROFILES, WAVE_TYPES, random_offset)
 from ..scene import TextureRef
+from .programs import set_uniform_array
 
 SURFACE = {"diffuseColor": ("pt_diffuse", "color"), "metallic": ("pt_metallic", "float"),
            "roughness": ("pt_roughness", "float"), "opacity": ("pt_opacity", "float"),
@@ -322,10 +323,6 @@ def pattern_images(mat) -> list:
 
 def set_parameters(prog, mat) -> int:
     """Uploads the material's pattern parameters; returns the bytes written."""
-    if mat.pattern is None or "u_pattern" not in prog:
+    if mat.pattern is None:
         return 0
-    uniform = prog["u_pattern"]
-    # The compiler may drop the array's unread tail.
-    data = parameters(mat.pattern)[:uniform.array_length].tobytes()
-    uniform.write(data)
-    return len(data)
+    return set_uniform_array(prog, "u_pattern", parameters(mat.pattern))

@@ -172,6 +172,17 @@ class ProgramCache:
         self._programs.clear()
 
 
+def set_uniform_array(prog, name, values) -> int:
+    """An array uniform from `values` (as many as the compiler kept: it may drop an
+    array's unread tail); returns the bytes written, 0 when the uniform is gone."""
+    if name not in prog:
+        return 0
+    uniform = prog[name]
+    data = np.asarray(values)[:uniform.array_length].tobytes()
+    uniform.write(data)
+    return len(data)
+
+
 def set_uniform(prog, name, value):
     """Sets a uniform if the compiler kept it; numpy matrices go up column-major."""
     if name not in prog:
