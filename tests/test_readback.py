@@ -223,3 +223,27 @@ def test_a_new_preset_reads_and_uploads_nothing_and_equals_a_fresh_session(prese
     assert np.array_equal(changed.rgba, fresh.rgba)
     again = render_stage(stage, RenderSettings(width=W, height=H))
     assert np.array_equal(back.rgba, again.rgba)
+
+
+def test_each_preset_keeps_its_shadow_maps_until_the_scene_changes():
+    """A view that settles from the interactive preset back to the scene's finds that
+    preset's shadow maps drawn; an edit in between draws them again."""
+    stage = session_scenes.cubes_stage(n=9, lights=("point", "spot"))
+    with Session(stage, RenderSettings(width=W, height=H)) as session:
+        first = session.render()
+        session.configure(preset="low")
+        session.render()
+        session.configure(preset="medium")
+        back = session.render()
+        assert first.stats["shadow_maps_rendered"] > 0
+        assert back.stats["shadow_maps_rendered"] == 0
+        assert np.array_equal(back.rgba, first.rgba)
+        session.configure(preset="low")
+        op = UsdGeom.Xformable(stage.GetPrimAtPath("/root/c0004")).GetOrderedXformOps()[0]
+        op.Set(op.Get() + Gf.Vec3d(0.3, 0.0, 0.2))
+        session.render()
+        session.configure(preset="medium")
+        edited = session.render()
+    assert edited.stats["shadow_maps_rendered"] > 0
+    fresh = render_stage(stage, RenderSettings(width=W, height=H))
+    assert np.array_equal(edited.rgba, fresh.rgba)

@@ -257,7 +257,8 @@ class ShadowPass(Pass):
     def __init__(self, ctx, pool, programs, geometry, lights, depth, textures):
         self.ctx, self.pool, self.programs = ctx, pool, programs
         self.geometry, self.lights = geometry, lights
-        self.preset = None         # what the kept maps were planned with
+        self.preset = None         # what self.maps were planned with
+        self._kept = {}            # other presets' maps: name -> (maps, see-through)
         self.depth, self.textures = depth, textures
         self.maps = {}             # light path -> ShadowMap, kept across frames
         self._see_through = None   # what the kept maps' see-through casters were drawn with
@@ -269,17 +270,25 @@ class ShadowPass(Pass):
             for path, light in frame.scene.lights.items())
         if not wanted:
             self._drop(list(self.maps))
+            self._drop_kept()
         return wanted
 
     def execute(self, frame, board):
         scene, view = frame.scene, board["view"]
         moved = self.geometry.moved
         see_through = _see_through(scene)
-        if see_through != self._see_through or frame.preset != self.preset:
-            # A cut-out or blended material changed, or the preset (map sizes,
-            # cascades): all again.
-            self._drop(list(self.maps))
-            self._see_through, self.preset = see_through, frame.preset
+        if frame.preset != self.preset:
+            # Each preset keeps its own maps (their sizes and cascades differ), so a
+            # view that settles from the interactive preset finds its maps drawn.
+            if self.preset is not None:
+                self._kept[self.preset.name] = (self.maps, self._see_through)
+            self.maps, self._see_through = self._kept.pop(frame.preset.name, ({}, None))
+            self.preset = frame.preset
+        if frame.changes.lights or moved:
+            self._drop_kept()            # they missed what this frame's maps will see
+        if see_through != self._see_through:
+            self._drop(list(self.maps))  # a cut-out or blended material changed: all again
+            self._see_through = see_through
         for path in [p for p in self.maps if p not in scene.lights or p in frame.changes.lights]:
             self._drop([path])           # stale: drawn again below if it still casts
         out = {}
@@ -411,8 +420,15 @@ class ShadowPass(Pass):
             self.pool.release(sm.texture)
             sm.texture = sm.cmp = sm.raw = None
 
+    def _drop_kept(self):
+        for maps, _ in self._kept.values():
+            for sm in maps.values():
+                self._release_map(sm)
+        self._kept = {}
+
     def release(self):
         self._drop(list(self.maps))
+        self._drop_kept()
 
 
 def _see_through(scene) -> tuple:
