@@ -1,6 +1,6 @@
 """`lantern render`'s overlay options (--burn-in, --watermark) and the BurnIn they make.
 
-Kept apart from cli.py so the command line only wires them: add_options() to the
+Kept apart from render.py so the command line only wires them: add_options() to the
 render parser, check() before any work (a bad template is a usage error), and
 from_args() once the stage is open (the camera's name is read from it)."""
 from __future__ import annotations
@@ -8,7 +8,7 @@ from __future__ import annotations
 import os
 import sys
 
-from .engine.overlay_options import ANCHORS, BURN_IN_FIELDS, TEXT_MODES, OverlayError, \
+from ..engine.overlay_options import ANCHORS, BURN_IN_FIELDS, TEXT_MODES, OverlayError, \
     check_template
 
 FIELDS_HELP = "fields: " + "; ".join(f"{{{name}}} {text}" for name, text in
@@ -65,7 +65,7 @@ def from_args(args, stage, failed):
         print(f"warning: {args.output}: overlays are drawn on .png outputs only (an .exr "
               "stays scene linear; a .gif preview has none)", file=sys.stderr, flush=True)
         return None
-    from .engine.overlays import BurnIn
+    from ..engine.overlays import BurnIn
     watermark = _watermark(args.watermark, failed) if args.watermark else None
     values = dict(scene=os.path.splitext(os.path.basename(args.scene))[0],
                   camera=_camera_name(stage, args.camera), preset=args.preset)
@@ -77,7 +77,7 @@ def from_args(args, stage, failed):
 def _camera_name(stage, camera):
     """The camera the engine renders through: --camera, the render settings', else the
     first camera; 'default' when there is none (the engine frames the scene)."""
-    from .engine.usd.camera import rendered_camera_path
+    from ..engine.usd.camera import rendered_camera_path
     path = rendered_camera_path(stage, camera)
     return path.rsplit("/", 1)[-1] if path else "default"
 
@@ -85,7 +85,7 @@ def _camera_name(stage, camera):
 def _watermark(path, failed):
     """(H, W, 4) uint8 straight alpha; grey and RGB images get an opaque alpha."""
     import numpy as np
-    from .engine.image_io import ImageError, read_image
+    from ..engine.image_io import ImageError, read_image
     try:
         pixels = read_image(path)
     except (ImageError, OSError) as error:
