@@ -14,12 +14,15 @@ Prints figures, asserts nothing. Runs without Blender (usd-core).
 """
 import json
 import math
+import pathlib
 import resource
 import subprocess
 import sys
 import time
 
 import numpy as np
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "tests"))
 
 WIDTH, HEIGHT = 640, 360
 COUNTS = (1, 16, 256, 1024, 4096, 16384)
@@ -30,6 +33,8 @@ def stage_with_lights(positions, power, shadows):
     """A 24 m white plane seen from above at an angle, and a sphere light of `power`
     watts at each position."""
     from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade
+
+    from light_grids import add_sphere_lights
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     UsdGeom.Xform.Define(stage, "/root")
@@ -50,19 +55,8 @@ def stage_with_lights(positions, power, shadows):
     camera.CreateVerticalApertureAttr(36.0 * HEIGHT / WIDTH)
     look = Gf.Matrix4d().SetLookAt(Gf.Vec3d(0, -14, 10), Gf.Vec3d(0, 0, 0), Gf.Vec3d(0, 0, 1))
     camera.AddTransformOp().Set(look.GetInverse())
-    root, types = stage.GetRootLayer().GetPrimAtPath("/root"), Sdf.ValueTypeNames
-    with Sdf.ChangeBlock():
-        for i, position in enumerate(positions):
-            spec = Sdf.PrimSpec(root, f"light_{i:05d}", Sdf.SpecifierDef, "SphereLight")
-            spec.SetInfo("apiSchemas", Sdf.TokenListOp.Create(prependedItems=["ShadowAPI"]))
-            for name, kind, value in (("inputs:intensity", types.Float, power / math.pi),
-                                      ("inputs:radius", types.Float, 0.02),
-                                      ("inputs:normalize", types.Bool, True),
-                                      ("inputs:shadow:enable", types.Bool, shadows),
-                                      ("xformOp:translate", types.Double3, Gf.Vec3d(*position))):
-                Sdf.AttributeSpec(spec, name, kind).default = value
-            Sdf.AttributeSpec(spec, "xformOpOrder", types.TokenArray,
-                              variability=Sdf.VariabilityUniform).default = ["xformOp:translate"]
+    add_sphere_lights(stage, "/root", positions,
+                      {"intensity": power / math.pi, "radius": 0.02, "normalize": True}, shadows)
     return stage
 
 

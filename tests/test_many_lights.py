@@ -16,7 +16,9 @@ SIZE = 24
 def many_lights_stage(positions, shadows):
     """A 100 m plane, a camera above it at an angle, and a sphere light (intensity 50,
     radius 0.05, treatAsPoint) at each position."""
-    from pxr import Gf, Sdf, Usd, UsdGeom
+    from pxr import Gf, Usd, UsdGeom
+
+    from light_grids import add_sphere_lights
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     UsdGeom.Xform.Define(stage, "/root")
@@ -29,21 +31,8 @@ def many_lights_stage(positions, shadows):
     camera.CreateFocalLengthAttr(18.0)
     look = Gf.Matrix4d().SetLookAt(Gf.Vec3d(0, -60, 60), Gf.Vec3d(0, 0, 0), Gf.Vec3d(0, 0, 1))
     camera.AddTransformOp().Set(look.GetInverse())
-    # Authored as specs in one change block: 20,000 UsdLux.SphereLight.Define calls
-    # would cost the test more than its renders.
-    root, types = stage.GetRootLayer().GetPrimAtPath("/root"), Sdf.ValueTypeNames
-    with Sdf.ChangeBlock():
-        for i, position in enumerate(positions):
-            spec = Sdf.PrimSpec(root, f"l{i}", Sdf.SpecifierDef, "SphereLight")
-            spec.SetInfo("apiSchemas", Sdf.TokenListOp.Create(prependedItems=["ShadowAPI"]))
-            for name, kind, value in (("inputs:intensity", types.Float, 50.0),
-                                      ("inputs:radius", types.Float, 0.05),
-                                      ("treatAsPoint", types.Bool, True),
-                                      ("inputs:shadow:enable", types.Bool, shadows),
-                                      ("xformOp:translate", types.Double3, Gf.Vec3d(*position))):
-                Sdf.AttributeSpec(spec, name, kind).default = value
-            Sdf.AttributeSpec(spec, "xformOpOrder", types.TokenArray,
-                              variability=Sdf.VariabilityUniform).default = ["xformOp:translate"]
+    add_sphere_lights(stage, "/root", positions, {"intensity": 50.0, "radius": 0.05}, shadows,
+                      treat_as_point=True)
     return stage
 
 
