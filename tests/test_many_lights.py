@@ -90,6 +90,8 @@ def test_20000_shadowed_lights_stay_in_memory_and_warn_once():
     assert got["rss_mib"] < 2048, got
     assert got["finite"] and got["mean"] > 1.0, got
     assert got["shadow_maps"] > 0 and got["unshadowed"] == LIGHTS - got["shadow_maps"], got
+    from lantern.engine.gpu.passes.shadows import SHADOW_BUDGET_BYTES
     budget = [w for w in got["warnings"] if "lit without shadows" in w]
     assert budget == [f"{got['unshadowed']} of {LIGHTS} shadow-casting lights are lit without "
-                      "shadows: their shadow maps would pass the 1024 MiB shadow memory budget"], got
+                      f"shadows: their shadow maps would pass the {SHADOW_BUDGET_BYTES >> 20} "
+                      "MiB shadow memory budget"], got
