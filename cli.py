@@ -16,6 +16,7 @@ import logging
 import math
 import os
 import sys
+import time
 
 from .core import interrupt
 from .core.text import error_text, one_line
@@ -89,11 +90,24 @@ def _parse_frames(text):
     return [first + i * step for i in range(count)]
 
 
-def _build_parser():
+class _Version(argparse.Action):
+    """--version, looked up only when asked for (importlib.metadata costs a plain
+    render 20 ms)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS,
+                 help="show the version and exit"):
+        super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f"lantern {installed_version()}")     # on stdout, as argparse's own
+        parser.exit()
+
+
+def _build_parser(argv=None):
     parser = argparse.ArgumentParser(
         prog="lantern", description=__doc__.splitlines()[0], epilog=EXIT_STATUSES,
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--version", action="version", version=f"lantern {installed_version()}")
+    parser.add_argument("--version", action=_Version)
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--debug", action="store_true",
                         help="show the traceback of an unexpected error")
@@ -134,10 +148,18 @@ def _build_parser():
                                  help="render a USD stage or a .blend file",
                                  epilog=EXIT_STATUSES,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    render.add_argument("scene", metavar="scene.usd|scene.blend")
+    render.add_argument("scenes", nargs="+", metavar="scene.usd|scene.blend")
     render.add_argument("-o", "--output", required=True,
                         help="an .exr (scene linear) or .png (sRGB); for --frames, a name "
-                             "with '####' (the frame) or a .gif")
+                             "with '####' (the frame) or a .gif; for several scenes, a "
+                             "folder (outputs named after the inputs; for one, end it "
+                             "with /)")
+    render.add_argument("--format", choices=("png", "exr"), default="png",
+                        help="image format of the outputs written into a folder (default png)")
+    render.add_argument("--timings", action="store_true",
+                        help="print the phases of the render: process start to main, "
+                             "imports, GL context, stage open, scene read, programs, "
+                             "uploads, first frame, encode and write")
     render.add_argument("--frame", type=_number, default=None, help="time code / frame to render")
     render.add_argument("--frames", type=_parse_frames, default=None, metavar="A:B[:STEP]",
                         help="render frames A..B every STEP (default 1); '####' in -o becomes "
@@ -164,10 +186,18 @@ def _build_parser():
                         help="worker processes for a sequence on this machine "
                              f"(default {RENDER_PROCESSES})")
 
-    from .compare.command import add_parser as add_compare_parser
-    add_compare_parser(commands, [common], _parse_size, EXIT_STATUSES,
-                       argparse.RawDescriptionHelpFormatter)
+    # `lantern compare` brings its package's imports: a render or export goes without.
+    if _command(argv) not in ("render", "export"):
+        from .compare.command import add_parser as add_compare_parser
+        add_compare_parser(commands, [common], _parse_size, EXIT_STATUSES,
+                           argparse.RawDescriptionHelpFormatter)
     return parser
+
+
+def _command(argv):
+    """The sub-command named on the command line (its first word that is no option)."""
+    words = sys.argv[1:] if argv is None else argv
+    return next((w for w in words if not w.startswith("-")), None)
 
 
 def _check_farm(args):
@@ -179,18 +209,24 @@ def _check_farm(args):
 
 
 def main(argv=None):
+    started = (_seconds_since_start(), time.perf_counter())
     previous = interrupt.exit_at_once()      # before the parser's (lazy) imports
     try:
-        return _main(argv)
+        return _main(argv, started)
     finally:
         interrupt.restore(previous)
 
 
-def _main(argv):
-    args = _build_parser().parse_args(argv)
+def _main(argv, started):
+    args = _build_parser(argv).parse_args(argv)
+    args.started = started
     # The exporter logs its warnings and the CLI prints them: keep Python's last-resort
     # handler from printing each a second time.
     logging.getLogger("lantern").addHandler(logging.NullHandler())
+    if args.debug:      # what the engine only logs (a program cache entry rebuilt)
+        engine_log = logging.getLogger("lantern.engine")
+        engine_log.setLevel(logging.DEBUG)
+        engine_log.addHandler(logging.StreamHandler(sys.stderr))
     try:
         # From here Ctrl-C is a KeyboardInterrupt: workers are closed and half-written
         # files removed on the way out.
@@ -208,9 +244,13 @@ def _main(argv):
     except Exception as error:  # a bug: one line, or the traceback with --debug
         if args.debug:
             raise
-        _fail(args, f"internal error: {type(error).__name__}: {one_line(error_text(error))} "
-                    "(--debug shows the traceback)")
+        _fail(args, _internal_error(error))
         return FAILED
+
+
+def _internal_error(error):
+    return (f"internal error: {type(error).__name__}: {one_line(error_text(error))} "
+            "(--debug shows the traceback)")
 
 
 def _fail(args, message):
@@ -334,6 +374,9 @@ def _status_writer(args):
 # --- render -----------------------------------------------------------------------------
 
 def _render(args):
+    if len(args.scenes) > 1 or _is_folder(args.output):
+        return _render_files(args)
+    args.scene = args.scenes[0]
     if args.frames is not None and args.frame is not None:
         raise _usage("--frame and --frames cannot be used together")
     if args.frames is None:
@@ -344,15 +387,7 @@ def _render(args):
         _check_output(args.output, IMAGE_SUFFIXES)
         if "#" not in args.output:
             raise _usage(f"{args.output}: a sequence needs '####' in an .exr/.png name, or a .gif")
-    _check_farm(args)
-    if args.frames is None and (args.scheduler is not None or args.collect or args.resume
-                                or args.chunk is not None):
-        raise _usage("--scheduler, --collect, --resume and --chunk are for a sequence "
-                     "(--frames)")
-    if args.chunk is not None and args.chunk < 1:
-        raise _usage("--chunk must be at least 1")
-    if args.camera is not None and not args.camera.startswith("/"):
-        raise _usage(f"--camera {args.camera}: must be an absolute prim path, like /root/Camera")
+    _check_render_options(args)
     if not os.path.isfile(args.scene):
         raise CommandError(f"{args.scene}: no such file")
     is_blend = args.scene.lower().endswith(".blend")
@@ -364,10 +399,10 @@ def _render(args):
     _check_colour(args)
 
     if args.frames is None:
-        stage = _stage_from_blend(args.scene) if is_blend else _open_usd(args.scene)
-        _check_camera(stage, args)
-        args.colour = _colour(stage, args)
-        return _render_frame(stage, args)
+        phases = _Phases(args.started)
+        _import_render_path()
+        phases.mark("imports")
+        return _render_frame(args, is_blend, phases)
     # A sequence's workers start first, and get ready while the stage is read here.
     from .farm.batch import FarmError, open_render_runner
     try:
@@ -384,6 +419,73 @@ def _render(args):
         runner.close(interrupted=True)
         raise
     return _render_sequence(stage, args, runner, text)
+
+
+def _check_render_options(args):
+    _check_farm(args)
+    if args.timings and args.frames is not None:
+        raise _usage("--timings is for single frames, not --frames")
+    if args.frames is None and (args.scheduler is not None or args.collect or args.resume
+                                or args.chunk is not None):
+        raise _usage("--scheduler, --collect, --resume and --chunk are for a sequence "
+                     "(--frames)")
+    if args.chunk is not None and args.chunk < 1:
+        raise _usage("--chunk must be at least 1")
+    if args.camera is not None and not args.camera.startswith("/"):
+        raise _usage(f"--camera {args.camera}: must be an absolute prim path, like /root/Camera")
+
+
+def _is_folder(output):
+    """-o names a folder for one scene when it ends with a separator (an image name that
+    is a directory stays a usage error); several scenes always take a folder."""
+    return output.endswith(("/", os.sep))
+
+
+def _render_files(args):
+    """Several scenes, one image each, into the folder -o, in this process: one GL
+    context and one program cache for all. A file that cannot be read or rendered is
+    one line, and the others go on; the exit status is then 1."""
+    if args.frames is not None:
+        raise _usage("--frames renders one scene: give several scenes one frame each")
+    _check_render_options(args)
+    for scene in args.scenes:
+        if not scene.lower().endswith(USD_SUFFIXES + (".blend",)):
+            raise _usage(f"{scene}: expected a .usd, .usda, .usdc or .blend file")
+    if args.output.lower().endswith(IMAGE_SUFFIXES + (".gif",)):
+        raise _usage(f"{args.output}: several scenes need a folder for -o")
+    if os.path.exists(args.output) and not os.path.isdir(args.output):
+        raise _usage(f"{args.output}: is a file, not a folder")
+    jobs = [(scene, os.path.join(args.output, os.path.splitext(os.path.basename(scene))[0]
+                                 + "." + args.format)) for scene in args.scenes]
+    if len({out for _, out in jobs}) != len(jobs):
+        raise _usage("two inputs share a file name; their outputs would collide")
+    _check_folder(os.path.abspath(args.output))
+    _check_preset(args.preset)
+    _check_colour(args)
+    if any(scene.lower().endswith(".blend") for scene in args.scenes):
+        from . import exporters  # noqa: F401  (Blender's pxr before the engine's)
+    phases = _Phases(args.started)
+    _import_render_path()
+    phases.mark("imports")
+    given = dict(view=args.view, look=args.look, exposure=args.exposure)
+    failed = 0
+    for scene, output in jobs:
+        vars(args).update(given, scene=scene, output=output)
+        try:
+            if not os.path.isfile(scene):
+                raise CommandError(f"{scene}: no such file")
+            _render_frame(args, scene.lower().endswith(".blend"), phases)
+        except CommandError as error:
+            _fail(args, str(error))
+            failed += 1
+        except Exception as error:  # a bug on this file: one line, and the others go on
+            if args.debug:
+                raise
+            _fail(args, f"{scene}: {_internal_error(error)}")
+            failed += 1
+        phases = _Phases(None)
+    print(f"{len(jobs) - failed} rendered, {failed} failed")
+    return FAILED if failed else 0
 
 
 def _check_colour(args):
@@ -485,17 +587,36 @@ def _write(path, write):
         raise CommandError(f"{path}: cannot be written: {error.strerror or error}")
 
 
-def _render_frame(stage, args):
+def _import_render_path():
+    """What rendering one frame imports, at once, so that --timings can tell imports
+    from work: USD, the engine with ModernGL, and the image writer (OpenImageIO). Not
+    the colour management (OpenColorIO), which only a display view asks for."""
+    from .engine import api, image_io  # noqa: F401
+    from .engine.usd import opening  # noqa: F401  (USD)
+
+
+def _render_frame(args, is_blend, phases):
+    """args.scene, one frame, into args.output."""
     from .engine import render_stage
     from .engine.image_io import write_image
+    stage = _stage_from_blend(args.scene) if is_blend else _open_usd(args.scene)
+    _check_camera(stage, args)
+    phases.mark("stage open")
+    # An .exr is scene linear: the scene's view transform (OpenColorIO) is for displays.
+    args.colour = {} if args.output.lower().endswith(".exr") else _colour(stage, args)
+    phases.mark("encode and write")
     result = _rendered(args.scene, lambda: render_stage(stage, _settings(args, args.frame)))
+    phases.mark("render")
     _print_warnings(result.warnings, set())
     _write(args.output, lambda: write_image(args.output, result.rgba, **args.colour))
+    phases.mark("encode and write")
     height_px, width_px = result.rgba.shape[:2]
     print(f"{args.scene} -> {args.output} ({width_px}x{height_px}, "
           f"{result.timings.get('total', 0.0) * 1000:.1f} ms)")
     if args.debug:
         print(_gl_line(result.stats))
+    if args.timings:
+        phases.report(args.scene, result)
     return 0
 
 
@@ -503,6 +624,58 @@ def _gl_line(stats) -> str:
     """--debug: the GL the engine got, and the paths it took."""
     return (f"  GL: {stats.get('gl_renderer')}, {stats.get('gl_version')} (asked for "
             f"{stats.get('gl_requested', 0) / 100:.1f}); paths: {stats.get('gl_path')}")
+
+
+class _Phases:
+    """--timings: the seconds of the phases of a render, as they pass."""
+
+    def __init__(self, started):
+        # started: (seconds from process start to main, or None; perf_counter at main)
+        self.started = started
+        self.seconds = {}
+        self._last = time.perf_counter()
+
+    def mark(self, name):
+        now = time.perf_counter()
+        self.seconds[name] = self.seconds.get(name, 0.0) + now - self._last
+        self._last = now
+
+    def report(self, scene, result):
+        """Prints the phases, the render split by what the engine measured: its GL
+        context and set-up, the scene read, the first frame (of which programs and
+        uploads)."""
+        t, s = result.timings, result.stats
+        rows = []
+        if self.started is not None:
+            rows.append(("process start to main", self.started[0]))
+        rows += [("imports", self.seconds.get("imports")),
+                 ("stage open", self.seconds.get("stage open")),
+                 ("GL context", t.get("context")), ("session setup", t.get("setup")),
+                 ("scene read", t.get("load")),
+                 ("programs", t.get("programs")), ("uploads", t.get("upload")),
+                 ("first frame", t.get("total", 0.0) - t.get("load", 0.0)),
+                 ("encode and write", self.seconds.get("encode and write"))]
+        if self.started is not None and self.started[0] is not None:
+            rows.append(("wall", self.started[0] + time.perf_counter() - self.started[1]))
+        print(f"timings of {scene} (ms; programs and uploads are part of the first frame):")
+        for name, seconds in rows:
+            if seconds is not None:
+                print(f"  {name:<24}{seconds * 1000:8.1f}")
+        print(f"  programs: {s.get('programs_compiled', 0)} compiled, "
+              f"{s.get('programs_loaded', 0)} loaded from the program cache")
+
+
+def _seconds_since_start():
+    """Wall seconds since this process started, from /proc (Linux, to 10 ms); None
+    elsewhere."""
+    try:
+        with open("/proc/self/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        with open("/proc/uptime") as f:
+            uptime = float(f.read().split()[0])
+        return max(uptime - int(fields[19]) / os.sysconf("SC_CLK_TCK"), 0.0)
+    except (OSError, ValueError, IndexError, AttributeError):
+        return None
 
 
 def _render_sequence(stage, args, runner, stage_text):

@@ -1,7 +1,7 @@
 """Blender UI: the LANTERN render engine, its properties, panels and operators."""
-from . import operators, panels, properties, render_engine, scene_render
+from . import operators, panels, prestart, properties, render_engine, scene_render
 
-_MODULES = (properties, render_engine, panels, operators)
+_MODULES = (properties, render_engine, panels, operators, prestart)
 
 
 def register():

@@ -119,7 +119,7 @@ def measure(name, stage, size, preset, images):
 
 
 def run(folder, sizes, presets, json_path, images, everything):
-    from lantern.engine.usd.stage import open_stage
+    from lantern.engine.usd.opening import open_stage
     if images is not None:
         images.mkdir(parents=True, exist_ok=True)
     rows, gl = [], None

@@ -7,7 +7,12 @@ The first frame (upload, shader compile) is left out. "cpu" is the time spent in
 Python reading the frame (UsdSkel poses, blend weights, transforms) plus the
 renderer's Python work, i.e. the frame's wall time less the GPU-bound passes as
 timed after ctx.finish(); on llvmpipe the "GPU" is the CPU too, so frame time is
-dominated by vertex shading at 1M vertices."""
+dominated by vertex shading at 1M vertices.
+
+Each case runs twice: with authored normals (skinned, as UsdSkel skins them), and
+without (the deformed surface's own, gathered per point on the GPU each frame, as the
+baked twin and Blender have them): the skinning pass's time (median) both ways, and
+the ratio of frame times."""
 import time
 
 import lantern.exporters  # noqa: F401  (Blender's pxr first)
@@ -21,7 +26,7 @@ JOINTS = 64
 FRAMES = 4
 
 
-def add_character(stage, k, n_verts, offset):
+def add_character(stage, k, n_verts, offset, normals=False):
     root = UsdSkel.Root.Define(stage, f"/c{k}")
     UsdGeom.Xformable(root).AddTranslateOp().Set(Gf.Vec3d(*offset))
     skel = UsdSkel.Skeleton.Define(stage, f"/c{k}/skel")
@@ -52,6 +57,10 @@ def add_character(stage, k, n_verts, offset):
     mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(pts.astype(np.float32)))
     mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(quads), 4, np.int32)))
     mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(quads.ravel().astype(np.int32)))
+    if normals:
+        up = np.tile(np.float32([0, 0, 1]), (len(pts), 1))
+        mesh.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(up))
+        mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
     j = np.clip((pts[:, 0] * JOINTS).astype(np.int32)[:, None] + np.arange(4)[None] - 1, 0, JOINTS - 1)
     w = np.full((len(pts), 4), 0.25, np.float32)
     b = UsdSkel.BindingAPI.Apply(mesh.GetPrim())
@@ -60,29 +69,34 @@ def add_character(stage, k, n_verts, offset):
     return len(quads) * 6       # soup vertices drawn (two triangles per quad)
 
 
-def case(n_chars, verts_per_char):
+def case(n_chars, verts_per_char, normals):
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     side = int(np.ceil(np.sqrt(n_chars)))
-    drawn = sum(add_character(stage, k, verts_per_char, ((k % side) * 1.5, (k // side) * 1.5, 0))
-                for k in range(n_chars))
-    frames, cpu = [], []
+    drawn = sum(add_character(stage, k, verts_per_char, ((k % side) * 1.5, (k // side) * 1.5, 0),
+                              normals) for k in range(n_chars))
+    frames, cpu, skinning = [], [], []
     for i, (_, res) in enumerate(render_sequence(stage, 1, FRAMES, RenderSettings(width=320, height=180))):
         if i == 0:
             continue                       # upload and compile
         t = res.timings
         frames.append(t["total"])
         cpu.append(t["load"])
-    return drawn, np.median(frames) * 1000, np.median(cpu) * 1000
+        skinning.append(t["skinning"])
+    return drawn, np.median(frames) * 1000, np.median(cpu) * 1000, np.median(skinning) * 1000
 
 
 def main():
-    print(f"{'chars':>6} {'points/char':>12} {'skinned verts':>14} {'frame ms':>10} {'cpu read ms':>12}")
+    print(f"{'chars':>6} {'points/char':>12} {'skinned verts':>14} {'frame ms':>10} "
+          f"{'cpu read ms':>12} {'skinning ms':>12} {'+surface normals':>17} "
+          f"{'frame x':>8}")
     for n_chars, pts in [(1, 10_000), (1, 100_000), (1, 1_000_000), (10, 10_000), (100, 1_000),
                          (100, 10_000)]:
         t0 = time.perf_counter()
-        drawn, frame_ms, cpu_ms = case(n_chars, pts)
-        print(f"{n_chars:>6} {pts:>12,} {drawn:>14,} {frame_ms:>10.1f} {cpu_ms:>12.2f}"
+        drawn, frame_ms, cpu_ms, skin_ms = case(n_chars, pts, normals=True)
+        _, surface_ms, _, surface_skin_ms = case(n_chars, pts, normals=False)
+        print(f"{n_chars:>6} {pts:>12,} {drawn:>14,} {frame_ms:>10.1f} {cpu_ms:>12.2f} "
+              f"{skin_ms:>12.1f} {surface_skin_ms:>17.1f} {surface_ms / frame_ms:>8.2f}"
               f"   (case {time.perf_counter() - t0:.0f} s)", flush=True)
 
 

@@ -27,6 +27,21 @@ def atomic_write(path: str, write, suffix: str = "") -> None:
         raise
 
 
+def atomic_write_bytes(path: str, data: bytes, suffix: str = "") -> None:
+    """atomic_write of bytes already in memory."""
+    atomic_write(path, lambda tmp: _write_bytes(tmp, data), suffix=suffix)
+
+
+def write_bytes(path: str, data: bytes) -> None:
+    """Bytes into a file, not atomically (for a file atomic_write is making)."""
+    _write_bytes(path, data)
+
+
+def _write_bytes(path, data):
+    with open(path, "wb") as f:
+        f.write(data)
+
+
 def current_umask() -> int:
     """The process's umask (reading it means setting it: set it straight back)."""
     umask = os.umask(0o022)

@@ -25,7 +25,7 @@ import struct
 
 import numpy as np
 
-from ..core.files import atomic_write
+from ..core.files import atomic_write, atomic_write_bytes
 from .color import linear_to_srgb, to_display8, to_srgb8  # noqa: F401 (re-exported)
 
 
@@ -130,12 +130,7 @@ def write_animation(path: str, frames, fps: float, view: str = "Standard",
     if not images:
         raise ValueError(f"{path}: no frames to write")
     data = encode_gif(images, fps)
-    atomic_write(path, lambda tmp: _write_bytes(tmp, data), suffix=".gif")
-
-
-def _write_bytes(path, data):
-    with open(path, "wb") as f:
-        f.write(data)
+    atomic_write_bytes(path, data, suffix=".gif")
 
 
 # --- GIF ------------------------------------------------------------------------------

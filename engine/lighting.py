@@ -2,10 +2,13 @@
 spherical harmonics, area-light polygons, and usdview's default rig.
 
 Light volumes: a light's volume reaches the distance R where the largest radiance it
-can reflect off a white Lambert surface, I_max / (pi R^2), falls below
-VOLUME_THRESHOLD = 1e-4 W/(sr m2) (I_max = max channel of I; for area lights I_max =
-L * area, the far-field intensity along the normal). Glossy highlights beyond R are
-cut off.
+can reflect off a white Lambert surface, I_max / (pi R^2), falls below the scene's
+threshold (I_max = max channel of I; for area lights I_max = L * area, the far-field
+intensity along the normal). Glossy highlights beyond R are cut off. The threshold is
+VOLUME_THRESHOLD = 1e-4 W/(sr m2), but never more than VOLUME_RELATIVE = 1% of what the
+scene's brightest light reflects at 1 m (so its volume reaches 10 m at least): an
+absolute cut alone drops every light of a dim scene (a 1e-6 W point light reflects
+~5e-10 W/(sr m2)), whose image must be the bright one's scaled.
 
 No UsdLux prim on the stage at all: a usdview-style default rig, a headlight (a
 distant light travelling along the camera's view direction, E = 2.5 W/m2) plus a
@@ -23,7 +26,9 @@ tabulates, over n.v and perceptual roughness, the GGX directional albedo with F 
 first), so a lobe of Schlick reflectance (f0, f90) reflects
     E = f0 (dfg.y - dfg.x) + f90 dfg.x
 of a uniform world, and 1 + f0 (1 / dfg.y - 1) scales it for the energy single
-scattering loses at high roughness (Kulla and Conty 2017, as Filament does)."""
+scattering loses at high roughness (Kulla and Conty 2017, as Filament does). Its third
+channel is the albedo with a dielectric's exact Fresnel at IOR 1.5 (UsdPreviewSurface's
+clearcoat), which Cycles uses and Schlick's form undercuts by 10-15% in a furnace."""
 from __future__ import annotations
 
 import functools
@@ -35,12 +40,14 @@ from ..core.lights import DISK, RECT, SUN
 from .scene import Dome, Light
 
 VOLUME_THRESHOLD = 1e-4
+VOLUME_RELATIVE = 1e-2
 HEADLIGHT_IRRADIANCE = 2.5
 DEFAULT_DOME_RADIANCE = 0.2
 
 
-def volume_radius(light: Light) -> float:
-    """Distance beyond which the light reflects < VOLUME_THRESHOLD off white Lambert."""
+def _far_intensity(light: Light):
+    """(I_max in W/sr, the light's extent in m) of a local light; a sun's E (W/m2)
+    reflects E / pi at any distance, as a light of I = E does at 1 m."""
     c = float(np.max(light.color)) * max(light.diffuse, light.specular, 0.0)
     if light.kind in (RECT, DISK):
         area = light.width * light.height if light.kind == RECT else math.pi * light.radius ** 2
@@ -48,9 +55,23 @@ def volume_radius(light: Light) -> float:
         extent = math.hypot(light.width, light.height) / 2 if light.kind == RECT else light.radius
     else:
         extent = light.radius
+    return c, extent
+
+
+def volume_threshold(lights) -> float:
+    """The scene's threshold (W/(sr m2)) for volume_radius, from all its lights."""
+    peak = max((_far_intensity(light)[0] for light in lights), default=0.0)
+    at_one_metre = peak / math.pi
+    return min(VOLUME_THRESHOLD, VOLUME_RELATIVE * at_one_metre) if peak > 0 else \
+        VOLUME_THRESHOLD
+
+
+def volume_radius(light: Light, threshold: float = VOLUME_THRESHOLD) -> float:
+    """Distance beyond which the light reflects < threshold off white Lambert."""
+    c, extent = _far_intensity(light)
     if c <= 0:
         return 0.0
-    return math.sqrt(c / (math.pi * VOLUME_THRESHOLD)) + extent
+    return math.sqrt(c / (math.pi * threshold)) + extent
 
 
 def disk_polygon(light: Light, sides: int) -> np.ndarray:
@@ -157,10 +178,24 @@ def _hammersley(n: int) -> tuple[np.ndarray, np.ndarray]:
     return (i + 0.5) / n, bits.astype(np.float64) / 2.0 ** 32
 
 
-def dfg_terms(nov, roughness, samples: int = DFG_SAMPLES) -> np.ndarray:
+COAT_IOR = 1.5   # UsdPreviewSurface's clearcoat (and Blender's default dielectric)
+
+
+def fresnel_dielectric(cos_i, eta):
+    """Unpolarised Fresnel reflectance of a dielectric of relative IOR eta (> 1) at
+    incidence cosine cos_i, as lib.glsl's fresnel_dielectric (and Cycles)."""
+    c = np.abs(np.asarray(cos_i, float))
+    g2 = eta * eta - 1 + c * c
+    g = np.sqrt(np.maximum(g2, 0.0))
+    a, b = (g - c) / (g + c), (c * (g + c) - 1) / (c * (g - c) + 1)
+    return np.where(g2 > 0, 0.5 * a * a * (1 + b * b), 1.0)
+
+
+def dfg_terms(nov, roughness, samples: int = DFG_SAMPLES, fresnel_ior=None) -> np.ndarray:
     """(..., 2): the GGX integrals (sum of Fc G_vis, sum of G_vis) for n.v and
     perceptual roughness (broadcast), by importance sampling D (height-correlated
-    Smith visibility, lib.glsl's v_smith)."""
+    Smith visibility, lib.glsl's v_smith). With fresnel_ior, (...,): the integral of
+    F G_vis with a dielectric's exact Fresnel, its single-scattering albedo."""
     nov, roughness = np.broadcast_arrays(np.asarray(nov, float), np.asarray(roughness, float))
     shape = nov.shape
     nov = np.clip(nov.reshape(-1, 1), 1e-4, 1.0)
@@ -177,6 +212,8 @@ def dfg_terms(nov, roughness, samples: int = DFG_SAMPLES) -> np.ndarray:
     gl = nov * np.sqrt(np.maximum(nol, 0) ** 2 * (1 - a2) + a2)
     vis = 0.5 / np.maximum(gv + gl, 1e-12)
     weight = np.where(nol > 0, 4 * vis * nol * voh / cos_h, 0.0)
+    if fresnel_ior is not None:
+        return (weight * fresnel_dielectric(voh, fresnel_ior)).mean(axis=1).reshape(shape)
     fc = (1 - voh) ** 5
     out = np.stack([(weight * fc).mean(axis=1), weight.mean(axis=1)], axis=-1)
     return out.reshape(shape + (2,))
@@ -184,16 +221,21 @@ def dfg_terms(nov, roughness, samples: int = DFG_SAMPLES) -> np.ndarray:
 
 @functools.lru_cache(maxsize=1)
 def dfg_lut(size: int = DFG_SIZE) -> np.ndarray:
-    """(size, size, 2) float32, row j = roughness (j + 0.5) / size, column i = n.v
-    (i + 0.5) / size: the table the shaders read (texel centres at those values).
-    Computed once per process."""
+    """(size, size, 3) float32, row j = roughness (j + 0.5) / size, column i = n.v
+    (i + 0.5) / size: the table the shaders read (texel centres at those values);
+    channels: dfg_terms, then the exact-Fresnel albedo at COAT_IOR. Computed once per
+    process."""
     c = (np.arange(size) + 0.5) / size
-    return np.stack([dfg_terms(c, r) for r in c]).astype(np.float32)   # row by row: cache-sized
+    rows = [np.concatenate([dfg_terms(c, r), dfg_terms(c, r, fresnel_ior=COAT_IOR)[:, None]],
+                           axis=1) for r in c]                       # row by row: cache-sized
+    return np.stack(rows).astype(np.float32)
 
 
 def specular_albedo(f0, f90, nov, roughness) -> np.ndarray:
     """Directional albedo of a Schlick-GGX lobe with multiple scattering, as the
-    shaders compute it from the table: what it reflects of a uniform world."""
+    shaders compute it from the table for a metal: what it reflects of a uniform
+    world (a dielectric's they scale by the exact-Fresnel ratio, lib.glsl
+    make_surface)."""
     x, y = np.moveaxis(dfg_terms(nov, roughness), -1, 0)
     f0 = np.asarray(f0, float)
     return (f0 * (y - x) + f90 * x) * (1 + f0 * (1 / y - 1))

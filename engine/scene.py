@@ -97,6 +97,9 @@ class MeshData:
     backface_culling: bool = False  # lantern:backfaceCulling: culling was asked for
     point_of_vertex: np.ndarray | None = None  # (V,) int32: vertex -> mesh point
     skin: "SkinData | None" = None            # UsdSkel binding
+    # No normals authored: they are the surface's own (area-weighted per point), and a
+    # skinned or blend-shaped mesh has them computed again from its deformed surface.
+    surface_normals: bool = False
     bounds: tuple | None = None    # (lo, hi) float64 of the vertex positions
 
     def __post_init__(self):

@@ -95,7 +95,10 @@ class RenderResult:
     # The passes asked for: name -> float32 (H, W, C), row 0 = top, scene-linear.
     passes: dict = field(default_factory=dict)
     warnings: list = field(default_factory=list)
-    timings: dict = field(default_factory=dict)  # load, per pass (CPU), readback, total (s)
+    # Seconds: load (the scene read), upload, per pass (CPU), programs (of the passes'
+    # time, making programs), readback, total; a session's first render adds context
+    # and setup (the GL context and the GPU state, before the render's total).
+    timings: dict = field(default_factory=dict)
     gpu_timings: dict = field(default_factory=dict)  # per pass that ran: GPU seconds
     stats: dict = field(default_factory=dict)    # prims_read, bytes_uploaded, draw_calls, ...
 
@@ -109,8 +112,14 @@ class Session:
         self.size = usd_camera.resolution(stage, settings.width, settings.height)
         self._reader = StageReader(stage)
         self._camera = None          # (key, Camera) of the stage camera last read
+        t0 = time.perf_counter()
+        run_gl(lambda gl: None)      # the process's GL context, made by its first job
+        t1 = time.perf_counter()
         renderer = run_gl(lambda gl: Renderer(gl, self._preset, settings.srgb_filtering))
         self._renderer = renderer
+        # What this session's first render reports besides its own work: the GL
+        # context (zero when the process had one) and the GPU state's set-up.
+        self._opening = {"context": t1 - t0, "setup": time.perf_counter() - t1}
         # A session dropped without close() still frees its GPU state; at exit the
         # process's context goes with the process.
         self._finalizer = weakref.finalize(self, _release, renderer, self._reader)
@@ -215,6 +224,9 @@ class Session:
         timings["total"] = time.perf_counter() - t0
         # CPU work of the frame, outside the wait for the GPU's pixels.
         stats["cpu_seconds"] = max(timings["total"] - timings.get("readback", 0.0), 0.0)
+        if self._opening:
+            timings.update(self._opening)
+            self._opening = None
         return RenderResult(rgba=rgba, passes=aovs,
                             warnings=self._reader.scene.warning_list() +
                             self._renderer.warnings(),
@@ -222,7 +234,7 @@ class Session:
 
     def skinned_points(self, frame: float) -> dict:
         """GPU-deformed geometry read back: {mesh path: (points, normals)}, world space,
-        one row per mesh point (normals unnormalised, as skinned), for every mesh with
+        one row per mesh point (normals as drawn), for every mesh with
         a UsdSkel binding. For tests against UsdSkel."""
         self._check_open()
         changes = self._reader.sync(float(frame))

@@ -91,6 +91,22 @@ def flat_texels(texels) -> np.ndarray:
     return data.reshape(rows, FLAT_TEX_W, 4)
 
 
+def incidence_texels(indices, point_of_vertex, n_points) -> np.ndarray:
+    """A mesh's triangles listed per point, for normals of its deformed surface
+    (shaders/skin.vert SKIN_SURFACE_NORMALS): texel p < n_points holds (first,
+    count) of point p's entries; entry i, at texel n_points + i, the vertex indices of
+    one of its triangles, in their winding (floats, exact below 2^24)."""
+    tri = np.asarray(indices, np.int64).reshape(-1, 3)
+    corner_points = np.asarray(point_of_vertex, np.int64)[tri.reshape(-1)]
+    order = np.argsort(corner_points, kind="stable")
+    counts = np.bincount(corner_points, minlength=n_points)
+    texels = np.zeros((n_points + len(order), 4))
+    texels[:n_points, 0] = np.cumsum(counts) - counts
+    texels[:n_points, 1] = counts
+    texels[n_points:, :3] = tri[order // 3]
+    return texels
+
+
 def shape_texels(skin) -> np.ndarray:
     off = skin.shape_offsets
     return flat_texels(np.concatenate([off, np.zeros((len(off), 1))], axis=1))

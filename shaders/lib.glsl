@@ -48,10 +48,26 @@ float ggx_alpha(float roughness) {
 }
 
 // The split-sum table (engine/lighting.py dfg_lut): x = integral of Fc G_vis, y =
-// integral of G_vis (the GGX albedo with F = 1), by n.v (s) and perceptual roughness
-// (t), texel centres at (i + 0.5) / size. Every program that shades a Surface binds it.
+// integral of G_vis (the GGX albedo with F = 1), z = integral of F G_vis with the exact
+// Fresnel of IOR 1.5, by n.v (s) and perceptual roughness (t), texel centres at
+// (i + 0.5) / size. Every program that shades a Surface binds it.
 uniform sampler2D dfg_lut;
 vec2 dfg(float NoV, float roughness) { return texture(dfg_lut, vec2(NoV, roughness)).xy; }
+float dfg_ior15(float NoV, float roughness) { return texture(dfg_lut, vec2(NoV, roughness)).z; }
+
+// A dielectric's exact (unpolarised) Fresnel reflectance, relative IOR eta >= 1, as
+// Cycles' fresnel_dielectric_cos: its Principled BSDF's dielectric lobes and coat use
+// it, and Schlick's form falls short of it between 40 and 70 degrees (IOR 1.5: 0.070
+// against 0.089 at 60), 10-15% of a dielectric's reflection in a white furnace.
+float fresnel_dielectric(float cos_i, float eta) {
+    float c = abs(cos_i);
+    float g2 = eta * eta - 1.0 + c * c;
+    if (g2 <= 0.0) return 1.0;
+    float g = sqrt(g2);
+    float a = (g - c) / (g + c);
+    float b = (c * (g + c) - 1.0) / (c * (g - c) + 1.0);
+    return 0.5 * a * a * (1.0 + b * b);
+}
 
 // A Schlick-GGX lobe's albedo of a uniform world, single scattering, and the factor
 // that restores the energy single scattering loses (Kulla-Conty, Filament).
@@ -59,6 +75,7 @@ vec3 lobe_albedo(vec2 t, vec3 f0, vec3 f90) { return f0 * (t.y - t.x) + f90 * t.
 vec3 lobe_energy(vec2 t, vec3 f0) { return 1.0 + f0 * (1.0 / max(t.y, 1e-4) - 1.0); }
 
 const float COAT_F0 = 0.04;   // UsdPreviewSurface's clearcoat: IOR 1.5, white
+const float COAT_IOR = 1.5;
 
 // A shaded point and its layers, top down (Cycles' Principled BSDF): an optional
 // clearcoat (white GGX, F0 0.04, on the base normal) takes its directional albedo
@@ -66,6 +83,9 @@ const float COAT_F0 = 0.04;   // UsdPreviewSurface's clearcoat: IOR 1.5, white
 // the IOR, metals their base colour) takes E_spec(n.v) of what reaches it, and the
 // Lambert layer gets the rest, (1 - metallic)(1 - E_dielectric). Albedos include
 // multiple scattering, so a white dielectric in a white furnace reflects exactly 1.
+// Dielectric lobes take the exact Fresnel: towards a light directly, and in albedos
+// the table's IOR 1.5 integral (the coat's own IOR); a base of another IOR scales
+// Schlick's albedo by that integral's ratio to Schlick's at IOR 1.5.
 struct Surface {
     vec3 p;       // camera-relative position
     vec3 n;       // world normal
@@ -74,6 +94,7 @@ struct Surface {
     float metallic;
     float roughness;
     vec3 f0;      // specular colour at normal incidence
+    float eta;    // the dielectric's relative IOR (1: no specular), from its F0
     vec3 f90;     // clamp(50 f0): f0 = 0 means no specular at all
     float NoV;
     vec3 spec_energy;   // multiple-scattering factor of the base lobe
@@ -97,11 +118,15 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, vec4 base, vec4 mat, float coat_rou
     float f90_d = clamp(50.0 * f0_d, 0.0, 1.0);
     s.f0 = mix(vec3(f0_d), s.base, s.metallic);
     s.f90 = clamp(50.0 * s.f0, 0.0, 1.0);
+    float root_f0 = min(sqrt(max(f0_d, 0.0)), 0.999);
+    s.eta = (1.0 + root_f0) / (1.0 - root_f0);
     s.NoV = clamp(dot(n, v), 1e-4, 1.0);
     vec2 t = dfg(s.NoV, s.roughness);
+    float exact_ratio = dfg_ior15(s.NoV, s.roughness) / max(COAT_F0 * (t.y - t.x) + t.x, 1e-6);
     s.spec_energy = lobe_energy(t, s.f0);
-    s.spec_albedo = lobe_albedo(t, s.f0, s.f90) * s.spec_energy;
-    float e_d = (f0_d * (t.y - t.x) + f90_d * t.x) * (1.0 + f0_d * (1.0 / max(t.y, 1e-4) - 1.0));
+    s.spec_albedo = lobe_albedo(t, s.f0, s.f90) * s.spec_energy * mix(exact_ratio, 1.0, s.metallic);
+    float e_d = (f0_d * (t.y - t.x) + f90_d * t.x) * exact_ratio *
+        (1.0 + f0_d * (1.0 / max(t.y, 1e-4) - 1.0));
     s.coat = clamp(mat.w, 0.0, 1.0);
     s.coat_roughness = clamp(coat_roughness, 0.0, 1.0);
     s.coat_energy = 1.0;
@@ -109,7 +134,7 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, vec4 base, vec4 mat, float coat_rou
     if (s.coat > 0.0) {
         vec2 tc = dfg(s.NoV, s.coat_roughness);
         s.coat_energy = lobe_energy(tc, vec3(COAT_F0)).x;
-        s.coat_albedo = s.coat * lobe_albedo(tc, vec3(COAT_F0), vec3(1.0)).x * s.coat_energy;
+        s.coat_albedo = s.coat * dfg_ior15(s.NoV, s.coat_roughness) * s.coat_energy;
     }
     s.under_coat = 1.0 - s.coat_albedo;
     s.diffuse = s.base * (1.0 - s.metallic) * (1.0 - e_d) * s.under_coat;
@@ -138,7 +163,9 @@ vec3 brdf_specular(Surface s, vec3 l, float a) {
     float NoL = max(dot(s.n, l), 0.0);
     float NoH = max(dot(s.n, h), 0.0);
     float VoH = max(dot(s.v, h), 0.0);
-    vec3 F = s.f0 + (s.f90 - s.f0) * schlick_weight(VoH);
+    float w = schlick_weight(VoH);
+    vec3 f0_m = s.base, f90_m = clamp(50.0 * s.base, 0.0, 1.0);
+    vec3 F = mix(vec3(fresnel_dielectric(VoH, s.eta)), f0_m + (f90_m - f0_m) * w, s.metallic);
     return s.under_coat * s.spec_energy * F * d_ggx(NoH, a) * v_smith(s.NoV, NoL, a);
 }
 
@@ -149,7 +176,7 @@ vec3 brdf_coat(Surface s, vec3 l, float a) {
     float NoL = max(dot(s.n, l), 0.0);
     float NoH = max(dot(s.n, h), 0.0);
     float VoH = max(dot(s.v, h), 0.0);
-    float F = COAT_F0 + (1.0 - COAT_F0) * schlick_weight(VoH);
+    float F = fresnel_dielectric(VoH, COAT_IOR);
     return vec3(s.coat * s.coat_energy * F * d_ggx(NoH, a) * v_smith(s.NoV, NoL, a));
 }
 

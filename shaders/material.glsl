@@ -12,6 +12,9 @@ uniform float u_opacity;
 uniform float u_opacity_threshold;
 uniform float u_clearcoat;
 uniform float u_clearcoat_roughness;
+// The footprint a lookup filters over, as a fraction of the fragment's own
+// (engine/gpu/passes/antialias.py texture_footprint): 1 but in supersampled images.
+uniform float u_texture_footprint = 1.0;
 
 // A UsdUVTexture: wrap (0 repeat, 1 mirror, 2 clamp, 3 black), scale, bias, channel
 // (-1 rgb, 0..3 r g b a). srgb: an 8-bit sRGB image filtered as Cycles filters it
@@ -53,7 +56,7 @@ vec4 bilinear_encoded(sampler2D t, Map m, vec2 w) {
 
 vec4 sample_map(sampler2D t, Map m, vec2 uv) {
     // Gradients from the unwrapped st so mirror folds do not spike the mip level.
-    vec2 dx = dFdx(uv), dy = dFdy(uv);
+    vec2 dx = dFdx(uv) * u_texture_footprint, dy = dFdy(uv) * u_texture_footprint;
     vec2 w = vec2(wrap1(uv.x, m.wrap.x), wrap1(uv.y, m.wrap.y));
     vec4 c = textureGrad(t, w, dx, dy);
     if (m.srgb) {

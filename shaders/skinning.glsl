@@ -6,12 +6,12 @@
 //   SKIN_JOINTS   joint influences (4 per vertex; SKIN_JOINTS8: 8; SKIN_JOINTS_TEX:
 //                 any number, read per point from the influence texture)
 //   SKIN_DQS      dual-quaternion skinning instead of linear blend
+//   SKIN_SURFACE_NORMALS  (skin.vert, on the already deformed vertices) normals are the
+//                 surface's own, gathered per point from its triangles
 // Joint texture: one row per joint, see engine/skin.py joint_texels.
-#if defined(SKIN_SHAPES) || defined(SKIN_JOINTS_TEX)
-in int in_point;
+in int in_point;                // the mesh point this vertex is (per-point data)
 const int FLAT_TEX_W = 4096;   // engine/skin.py FLAT_TEX_W
 vec4 flat_texel(sampler2D tex, int i) { return texelFetch(tex, ivec2(i % FLAT_TEX_W, i / FLAT_TEX_W), 0); }
-#endif
 
 #ifdef SKIN_SHAPES
 uniform sampler2D u_shape_offsets;
@@ -126,4 +126,8 @@ void skin_vertex(inout vec3 p, inout vec3 n, inout vec3 t) {
     n = sn;
     t = st;
 #endif
+    // UsdSkel normalises each skinned normal (its baked twin stores unit normals):
+    // unnormalised ones, interpolated across a triangle, would tilt the shading.
+    float n_len = length(n);
+    if (n_len > 0.0) n /= n_len;
 }

@@ -5,8 +5,12 @@ USD (a bpy process may never load a second one). `lantern.exporters` arranges th
 on import, so it goes first, before any test module imports pxr. The CLI tests run
 `lantern render file.usd` in subprocesses without bpy, which use usd-core.
 """
+import atexit
+import os
 import pathlib
+import shutil
 import sys
+import tempfile
 
 import pytest
 
@@ -14,6 +18,13 @@ import lantern.exporters  # noqa: F401  (must precede any pxr import)
 
 REPO = pathlib.Path(__file__).resolve().parent.parent
 CORPUS = REPO.parent / "shared" / "corpus"
+
+# The persistent program cache (engine/gpu/program_binaries.py) of this test run: a
+# temporary folder, never the user's, set before any test module copies os.environ for
+# the subprocesses it starts.
+PROGRAM_CACHE = tempfile.mkdtemp(prefix="lantern-test-programs-")
+os.environ["LANTERN_PROGRAM_CACHE_DIR"] = PROGRAM_CACHE
+atexit.register(shutil.rmtree, PROGRAM_CACHE, True)
 
 # Shared test modules (calibration scenes and closed forms) live beside the tests.
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))

@@ -196,6 +196,33 @@ def test_grazing_checker_far_band_filters_as_cycles():
     assert abs(ours - cycles) < abs(eevee - cycles)
 
 
+TEXTURED = ["tex_grazing_checker", "01_principled_material", "02_suzanne", "demo",
+            "09_tex_wrapping_mirror"]
+
+
+@pytest.mark.parametrize("preset", ["high", "ultra"])
+@pytest.mark.parametrize("name", TEXTURED)
+def test_supersampled_presets_are_no_worse_than_medium(name, preset, request):
+    """A preset that costs more is not less accurate: high (2x2 supersampled) and
+    ultra (3x3) have an HDR-FLIP against Cycles no higher than medium's (one sample
+    and FXAA) on every textured reference scene. Texture lookups in a supersampled
+    image filter over half a sub-pixel (antialias.texture_footprint); over a whole
+    one, high and ultra blurred the grazing checker (0.084 and 0.062, against 0.077
+    and 0.047 now)."""
+    if (name, preset) == ("09_tex_wrapping_mirror", "high"):
+        # Not a texture's doing (its one image is black): the squares' edges lie
+        # along the pixel rows and columns, where a 2x2 ordered grid places an edge
+        # no closer than one sample does (0.2 px off either way). Strict: a change
+        # that fixes it must say so here.
+        request.applymarker(pytest.mark.xfail(strict=True, reason="2x2 grid on "
+                                              "axis-aligned geometric edges"))
+    ref = reference(name)
+    medium = mean_flip(render(name, preset="medium").rgba, ref)
+    flip = mean_flip(render(name, preset=preset).rgba, ref)
+    print(f"{name}: {preset} {flip:.4f}, medium {medium:.4f}")
+    assert flip <= medium
+
+
 def test_16_bit_ramp_keeps_more_than_256_levels(tmp_path):
     result = render("tex_gradient16", fxaa=False)
     row = result.rgba[4, :, 0]

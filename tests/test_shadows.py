@@ -179,7 +179,7 @@ def test_no_self_shadowing_at_grazing_angles(kind, spec):
 
 @pytest.mark.parametrize("kind", sorted(calibration.LIGHTS))
 def test_calibration_with_shadows_on(kind):
-    """The issue-2 calibration with Cast Shadow on: mean error ≤ 0.5% in the lit area."""
+    """The light calibration (tests/calibration.py) with Cast Shadow on: mean error ≤ 0.5% in the lit area."""
     import bpy
     from lantern.exporters import stage_from_depsgraph
     calibration.build_scene(kind)

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import moderngl
 
+from .program_binaries import BinaryLoader
 from .programs import ProgramCache
 
 GL_FLOOR = 330
@@ -61,8 +62,11 @@ def _version_cap():
 class GLContext:
     def __init__(self):
         self.backend, self.requested = _backend()
-        self.ctx = moderngl.create_context(standalone=True, context=self.backend, require=GL_FLOOR)
-        self.programs = ProgramCache(self.ctx)
+        # ModernGL loads its entry points through the program cache's loader, which
+        # stands in for compiling and linking (engine/gpu/program_binaries.py).
+        self.loader = BinaryLoader(self.backend)
+        self.ctx = moderngl.create_context(standalone=True, context=self.loader, require=GL_FLOOR)
+        self.programs = ProgramCache(self.ctx, self.loader)
         # A surfaceless context has no default framebuffer, and some draws (transform
         # feedback with rasterisation off) fail without one: keep a 1x1 one bound.
         self.scratch = self.ctx.simple_framebuffer((1, 1))

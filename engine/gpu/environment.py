@@ -78,7 +78,8 @@ class Environment:
         # Cube lookups filter across faces (core since GL 3.2; off by default).
         self._fn["glEnable"](GL_TEXTURE_CUBE_MAP_SEAMLESS)
         table = dfg_lut()
-        self.lut = uploads.texture(table.shape[1::-1], 2, table, kind="textures", dtype="f4")
+        self.lut = uploads.texture(table.shape[1::-1], table.shape[2], table, kind="textures",
+                                   dtype="f4")
         self.lut.filter = (ctx.LINEAR, ctx.LINEAR)
         self.lut.repeat_x = self.lut.repeat_y = False
         self.map: EnvironmentMap | None = None

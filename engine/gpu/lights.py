@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from ...core.lights import DISK, RECT, SPOT, SUN
-from ..lighting import disk_polygon, rect_polygon, volume_radius
+from ..lighting import disk_polygon, rect_polygon, volume_radius, volume_threshold
 from ..view import split_double
 
 MAX_POLY = 32
@@ -60,6 +60,7 @@ class LightTable:
         self.texture = None
         self.index = {}            # light path -> row
         self.ranges = {}           # light path -> volume radius R
+        self.threshold = None      # the scene's volume threshold the ranges use
 
     def update(self, scene, changed: set, disk_sides: int):
         """Rows for the lights in `changed`; the whole table when lights were added or
@@ -68,10 +69,13 @@ class LightTable:
         if not changed and self.texture is not None and disk_sides == self.disk_sides:
             return
         paths = list(scene.lights)
-        if paths != list(self.index) or self.texture is None or disk_sides != self.disk_sides:
+        threshold = volume_threshold(scene.lights.values())
+        if paths != list(self.index) or self.texture is None or \
+                disk_sides != self.disk_sides or threshold != self.threshold:
             self.disk_sides = disk_sides
             self.index = {p: i for i, p in enumerate(paths)}
-            self.ranges = {p: volume_radius(scene.lights[p]) for p in paths}
+            self.threshold = threshold
+            self.ranges = {p: volume_radius(scene.lights[p], threshold) for p in paths}
             lines = max(-(-len(paths) // LIGHTS_PER_LINE), 1)
             rows = np.zeros((lines * LIGHTS_PER_LINE, ROW_TEXELS, 4), np.float32)
             for p, i in self.index.items():
@@ -82,7 +86,7 @@ class LightTable:
         for p in changed:
             if p in self.index:
                 i = self.index[p]
-                self.ranges[p] = volume_radius(scene.lights[p])
+                self.ranges[p] = volume_radius(scene.lights[p], threshold)
                 self.uploads.write_texture(
                     self.texture, pack(scene.lights[p], self.ranges[p], self.disk_sides),
                     kind="lights", viewport=((i % LIGHTS_PER_LINE) * ROW_TEXELS,

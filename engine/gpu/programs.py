@@ -4,13 +4,22 @@ context and variant.
 
 Texture units are assigned here and only here (UNITS): a program's sampler uniforms
 are pointed at their units when it is compiled, and passes bind a texture to
-UNITS[name]. Uniforms are not buffers: set_uniform writes them directly."""
+UNITS[name]. Uniforms are not buffers: set_uniform writes them directly.
+
+Linked programs persist across processes as program binaries
+(engine/gpu/program_binaries.py): a program found there is loaded, not compiled."""
 from __future__ import annotations
 
+import logging
 import os
 import re
+import time
 
 import numpy as np
+
+from . import program_binaries
+
+log = logging.getLogger(__name__)
 
 SHADER_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(
     os.path.abspath(__file__)))), "shaders")
@@ -25,7 +34,8 @@ UNITS = {name: unit for unit, name in enumerate((
     "hdr",
     "t_diffuse", "t_metallic", "t_roughness", "t_emissive", "t_opacity", "t_normal",
     "u_objects", "u_lights",
-    "u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences",
+    "u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences", "u_deformed",
+    "u_incidence",
     "dfg_lut", "env_specular", "radiance", "ao_tex", "post_src", "post_aux"))}
 
 
@@ -56,36 +66,80 @@ def load_source(name: str, defines=(), _seen=None) -> str:
 
 
 class ProgramCache:
-    """Programs by (shaders, variant), compiled on first use."""
+    """Programs by (shaders, variant), made on first use: loaded from the persistent
+    cache when `binaries` (the context's BinaryLoader) has them, else compiled.
+    `compiled`, `loaded` and `seconds` count what making them cost, for the stats."""
 
-    def __init__(self, ctx):
+    def __init__(self, ctx, binaries=None):
         self.ctx = ctx
+        self.binaries = binaries
+        self._store = None
+        self._driver = None
         self._programs = {}
         self._screen = {}           # program key -> its VAO without buffers
+        self.compiled = 0
+        self.loaded = 0
+        self.seconds = 0.0
 
     def get(self, vert: str, frag: str | None = None, defines=(), varyings=(), compute=False):
         defines = tuple(sorted(set(defines)))
         key = (vert, frag, defines, tuple(varyings), compute)
         prog = self._programs.get(key)
         if prog is None:
+            t0 = time.perf_counter()
+            if compute:
+                sources = (load_source(vert, defines), None)
+            else:
+                sources = (load_source(vert, defines),
+                           None if frag is None else load_source(frag, defines))
+            binaries = self._binaries()
+            if binaries is not None:
+                entry = program_binaries.entry_key(sources + ("compute",) * compute,
+                                                   tuple(varyings), self._driver)
+                binaries.expect(entry, self._store.read(entry))
             try:
                 if compute:
-                    prog = self.ctx.compute_shader(load_source(vert, defines))
+                    prog = self.ctx.compute_shader(sources[0])
                 elif frag is None:
-                    prog = self.ctx.program(vertex_shader=load_source(vert, defines),
-                                            varyings=list(varyings))
+                    prog = self.ctx.program(vertex_shader=sources[0], varyings=list(varyings))
                 else:
-                    prog = self.ctx.program(vertex_shader=load_source(vert, defines),
-                                            fragment_shader=load_source(frag, defines))
+                    prog = self.ctx.program(vertex_shader=sources[0], fragment_shader=sources[1])
             except Exception as exc:
                 raise ShaderError(f"{vert} + {frag} [variant: {', '.join(defines) or 'base'}] "
                                   f"failed to compile: {exc}") from exc
+            finally:
+                if binaries is not None:
+                    binaries.done()
+            if binaries is not None and binaries.outcome == "loaded":
+                self.loaded += 1
+            else:
+                self.compiled += 1
+            if binaries is not None:
+                if binaries.failure:
+                    log.debug("program cache: %s + %s [%s]: %s; compiled", vert, frag,
+                              ", ".join(defines) or "base", binaries.failure)
+                if binaries.captured:
+                    self._store.write(entry, *binaries.captured)
+            self.seconds += time.perf_counter() - t0
             for name, unit in UNITS.items():
                 if name in prog:
                     prog[name].value = unit
             prog.extra = key
             self._programs[key] = prog
         return prog
+
+    def _binaries(self):
+        """The context's BinaryLoader when the persistent cache is on and the driver
+        stores binaries, else None."""
+        if self.binaries is None or program_binaries.disabled() or not self.binaries.active:
+            return None
+        folder = program_binaries.cache_folder()
+        if self._store is None or self._store.folder != folder:
+            self._store = program_binaries.ProgramStore(folder)
+        if self._driver is None:
+            info = self.ctx.info
+            self._driver = (info["GL_VENDOR"], info["GL_RENDERER"], info["GL_VERSION"])
+        return self.binaries
 
     def fullscreen(self, prog):
         """Draws one triangle covering the target with `prog` (fullscreen.vert needs

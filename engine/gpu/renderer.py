@@ -76,7 +76,8 @@ class Renderer:
         self.stencil = Stencil(gl.proc)
         self.depth = DepthConvention(gl.proc, self.features.clip_control)
         self.pool = TargetPool(ctx, self.stencil, self.depth)
-        programs = gl.programs
+        programs = self.programs = gl.programs
+        self._programs_seen = (programs.compiled, programs.loaded, programs.seconds)
         self.geometry = Geometry(ctx, self.uploads, programs, self.features)
         self.lights = LightTable(self.uploads)
         self.textures = MaterialTextures(ctx, self.uploads, preset.anisotropy, srgb_filtering)
@@ -158,6 +159,7 @@ class Renderer:
         uploaded = self.uploads.take()
         frame.stats["bytes_uploaded"] = int(sum(uploaded.values()))
         frame.stats["bytes_by_kind"] = dict(uploaded)
+        self._count_programs(frame)
         frame.stats.update(self.gl_info)
         frame.board = board
         self._restore_state()
@@ -185,6 +187,18 @@ class Renderer:
         self.preset = preset
         self.textures.set_anisotropy(preset.anisotropy)
 
+    def _count_programs(self, frame):
+        """The programs this session made since it last said (its first render counts
+        what it made at construction): compiled, or loaded from the persistent cache
+        (engine/gpu/program_binaries.py), and the seconds that took, which the passes'
+        timings include."""
+        p = self.programs
+        compiled, loaded, seconds = self._programs_seen
+        frame.stats["programs_compiled"] = p.compiled - compiled
+        frame.stats["programs_loaded"] = p.loaded - loaded
+        frame.timings["programs"] = p.seconds - seconds
+        self._programs_seen = (p.compiled, p.loaded, p.seconds)
+
     def warnings(self) -> list:
         """What the GL side could not use (images it could not read) and the last
         render's non-finite pixels, named by the prims they lie on."""
@@ -192,7 +206,7 @@ class Renderer:
 
     def skinned_points(self, scene, changes) -> dict:
         """{mesh path: (points, normals)} of every skinned mesh at this sync's time,
-        world space, one row per mesh point (normals unnormalised, as skinned)."""
+        world space, one row per mesh point (normals as drawn)."""
         self.update(scene, changes, bool(self._cull_backfaces))
         frame = Frame(scene=scene, changes=changes, size=(1, 1), preset=self.preset)
         board = {}

@@ -44,6 +44,11 @@ class Uploads:
         self._count(kind, len(data))
         buffer.write(data, offset=offset)
 
+    def copy_into_texture(self, texture, buffer, viewport):
+        """A buffer's contents into a texture, inside the GPU: nothing goes up, so
+        nothing is counted (the one GPU-side texture write, kept here with the rest)."""
+        texture.write(buffer, viewport=viewport)
+
     def texture(self, size, components, data=None, *, kind: str, dtype="f1", **kw):
         if data is not None:
             data = _bytes(data)

@@ -104,6 +104,9 @@ class Host:
         kind, f = message
         if kind == protocol.QUIT:
             return False
+        if kind == protocol.WARM:
+            self._warm(f["presets"])
+            return True
         name = f.get("scene")
         if kind == protocol.DROP:
             scene = self.scenes.pop(name, None)
@@ -203,6 +206,20 @@ class Host:
                    width=w, height=h, layout=frame_layout, final=final, preset=preset,
                    stats=result.stats, timings=result.timings, warnings=result.warnings)
         return True
+
+    def _warm(self, presets):
+        """Makes the programs of a first frame at these presets now, before Blender
+        asks for one (WARM, sent by addon/prestart.py; engine/host/warmup.py). After
+        the first preset it stops when a message waits, which then makes what it needs
+        itself. A warm-up that fails costs only its time: the first frame then makes
+        them."""
+        from .warmup import warm
+        try:
+            seconds = warm(presets, stop=lambda: not self.inbox.empty())
+        except Exception as error:
+            print(f"lantern host: the warm-up failed: {error}", file=sys.stderr, flush=True)
+            return
+        print(f"lantern host: warmed up in {seconds:.2f} s", file=sys.stderr, flush=True)
 
     def run(self) -> int:
         from .. import shutdown

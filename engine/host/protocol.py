@@ -16,8 +16,8 @@ import numpy as np
 from multiprocessing import shared_memory
 
 # Blender -> host
-EDIT, RENDER, SLOTS, RELEASE, FORGET, DROP, QUIT = (
-    "edit", "render", "slots", "release", "forget", "drop", "quit")
+EDIT, RENDER, SLOTS, RELEASE, FORGET, DROP, QUIT, WARM = (
+    "edit", "render", "slots", "release", "forget", "drop", "quit", "warm")
 # host -> Blender
 READY, FRAME, ERROR, FATAL = "ready", "frame", "error", "fatal"
 

@@ -175,7 +175,8 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None) -> MeshData:
     return MeshData(key=key, vertices=vertices, indices=indices, ranges=ranges,
                     materials=[m.name for m in materials], double_sided=double,
                     backface_culling=culling and not double,
-                    point_of_vertex=point_of_corner[first].astype(np.int32))
+                    point_of_vertex=point_of_corner[first].astype(np.int32),
+                    surface_normals=normals is None)
 
 
 def _topology_points(mesh, pts):

@@ -22,7 +22,7 @@ import tempfile
 import bpy
 import numpy as np
 
-from ...core.files import atomic_write
+from ...core.files import atomic_write, write_bytes
 
 _memory_dir = None
 # Blender's file formats -> extensions, for packed images with no file name of their own.
@@ -59,7 +59,7 @@ def image_file(image, owner, warn, texture_dir):
             data = image.packed_file.data
             ext = os.path.splitext(image.filepath)[1] or EXTENSIONS.get(image.file_format, ".png")
             return _write(folder, stem, ext, data, in_memory,
-                          lambda path: _write_bytes(path, data))
+                          lambda path: write_bytes(path, data))
         return _write_pixels(image, folder, stem, in_memory)
     except (OSError, RuntimeError, ValueError) as error:
         warn(f"{owner}: image '{image.name}' could not be written out ({error})")
@@ -76,11 +76,6 @@ def _write(folder, stem, ext, content, hashed, write):
         return path
     atomic_write(path, write, suffix=ext)
     return path
-
-
-def _write_bytes(path, data):
-    with open(path, "wb") as f:
-        f.write(data)
 
 
 def _write_pixels(image, folder, stem, hashed):

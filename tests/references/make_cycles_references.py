@@ -11,6 +11,9 @@ threshold 0.
 - penumbra (area-light shadows, docs/rendering.md): penumbra_scenes.SCENES (a box under a
   rect and under a disk light, the demo lit by its area light only), 2048 spp,
   near-point pixel filter, penumbra/<scene>.exr;
+- clearcoat: a sphere in a white furnace, coat weight x coat roughness x dark and
+  bright base (clearcoat_scenes.CASES), clearcoat_scenes.SAMPLES spp, Cycles' default
+  pixel filter, clearcoat/<case>.exr (RGB, float32);
 - looks (the shading work, docs/rendering.md): the scenes of reference_scenes.SCENES,
   each at its own size and samples, with Cycles' default pixel filter (Blackman-Harris, 1.5 px): the images a
   user compares against, anti-aliased edges included. 8 transparent bounces (blended
@@ -28,7 +31,7 @@ main as it was before the shading work (commit a55bdc4) first on the import path
 and EXPORTER.md with this branch (the exporter half of the shading work, the engine unchanged).
 
 Run from the repository root (no argument: all sets):
-    .venv/bin/python tests/references/make_cycles_references.py [calibration|box|penumbra|looks] [NAME ...]
+    .venv/bin/python tests/references/make_cycles_references.py [calibration|box|penumbra|clearcoat|looks] [NAME ...]
     .venv/bin/python tests/references/make_cycles_references.py before [--label TEXT] [--out FILE.md] [NAME ...]
 """
 import pathlib
@@ -43,6 +46,7 @@ import lantern.exporters  # noqa: F401,E402  (Blender's pxr first)
 import bpy  # noqa: E402
 
 import calibration  # noqa: E402
+import clearcoat_scenes  # noqa: E402
 import penumbra_scenes  # noqa: E402
 import reference_scenes  # noqa: E402
 
@@ -104,6 +108,15 @@ def render_look(name):
           f"{time.perf_counter() - start:.1f} s")
 
 
+def render_clearcoat(name):
+    scene = clearcoat_scenes.build(name)
+    configure_cycles(scene, clearcoat_scenes.SAMPLES, point_filter=False)
+    (HERE / "clearcoat").mkdir(exist_ok=True)
+    start = time.perf_counter()
+    write_exr(scene, HERE / "clearcoat" / f"{name}.exr", rgb=True)
+    print(f"{name}: {time.perf_counter() - start:.1f} s", flush=True)
+
+
 def lantern_against_reference(name):
     """(mean HDR-FLIP, PSNR dB, render seconds) of this process's Lantern on `name`."""
     from image_metrics import mean_flip, psnr
@@ -150,7 +163,7 @@ def before(names, label, out="BEFORE.md"):
 
 if __name__ == "__main__":
     args = sys.argv[1:]
-    chosen = [args.pop(0)] if args else list(SETS) + ["looks"]
+    chosen = [args.pop(0)] if args else list(SETS) + ["clearcoat", "looks"]
     if chosen == ["before"]:
         options = {"--label": "Lantern on this import path", "--out": "BEFORE.md"}
         while args[:1] and args[0] in options:
@@ -159,6 +172,10 @@ if __name__ == "__main__":
         before(args or list(reference_scenes.SCENES), options["--label"], options["--out"])
         raise SystemExit(0)
     for name in chosen:
+        if name == "clearcoat":
+            for case in args or clearcoat_scenes.CASES:
+                render_clearcoat(case)
+            continue
         if name == "looks":
             for look in args or reference_scenes.SCENES:
                 render_look(look)

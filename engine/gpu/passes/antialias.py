@@ -7,7 +7,8 @@ Deferred shading).
                       1.5 px either side of each pixel centre (Cycles doubles the
                       user's 1.5 px width for this filter, scene/film.cpp
                       filter_table), separably, in two draws. Textures pick their
-                      mips for the larger image, as Cycles' samples see them.
+                      mips for the larger image, one level sharper still
+                      (texture_footprint).
   k = 1               FXAA at geometric edges (passes/post.py), when the preset asks.
 
 Chosen by measurement (bench/bench_antialias.py, docs/rendering.md "Anti-aliasing"): against
@@ -27,6 +28,20 @@ from ..programs import UNITS, set_uniform
 
 FILTER_WIDTH = 1.5          # pixels, Cycles' default (Film > Pixel Filter > Width)
 MAX_TAPS = 64               # shaders/post.frag POST_DOWNSAMPLE
+
+
+# Cycles looks a texture up at points (bilinear, no mips) and leaves all averaging to
+# its pixel filter. A supersampled sub-pixel is averaged with its neighbours by the
+# same filter, so a lookup filtering over the whole sub-pixel blurs twice; over half
+# of it (one mip level sharper) the grazing checker's HDR-FLIP goes 0.084 -> 0.077
+# (high) and 0.062 -> 0.047 (ultra), and sharper still gains nothing (docs/compare.md).
+SUPERSAMPLED_FOOTPRINT = 0.5
+
+
+def texture_footprint(k: int) -> float:
+    """What a texture lookup filters over, as a fraction of its fragment, in an image
+    supersampled k times (1: the fragment is the pixel, the lookup its only filter)."""
+    return 1.0 if k <= 1 else SUPERSAMPLED_FOOTPRINT
 
 
 def blackman_harris(x, width=2.0 * FILTER_WIDTH):

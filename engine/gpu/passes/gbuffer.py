@@ -20,6 +20,7 @@ from __future__ import annotations
 from ..framegraph import Pass
 from ..points import set_camera_facing
 from ..programs import UNITS, set_uniform
+from .antialias import texture_footprint
 
 # Material input -> shader names and variant define.
 MAP_SLOTS = [("diffuseColor", "diffuse", "HAS_DIFFUSE_MAP"), ("metallic", "metallic", "HAS_METALLIC_MAP"),
@@ -69,7 +70,8 @@ class GBufferPass(Pass):
             set_uniform(prog, "view_proj", view.view_proj)
             set_uniform(prog, "u_far", view.far_clip)
             view.set_origin(prog)
-            set_material(prog, mat, self.textures, threshold)
+            set_material(prog, mat, self.textures, threshold,
+                         texture_footprint(frame.supersample))
             # A mirroring transform turns counter-clockwise triangles clockwise.
             ctx.front_face = "cw" if batch.mirrored else "ccw"
             if batch.cull:
@@ -92,7 +94,8 @@ class GBufferPass(Pass):
         def setup(prog, cloud):
             set_camera_facing(prog, view)
             mat = materials[cloud.material]
-            set_material(prog, mat, self.textures, mat.opacity_threshold)
+            set_material(prog, mat, self.textures, mat.opacity_threshold,
+                         texture_footprint(frame.supersample))
 
         draws, points = self.geometry.points.draw(
             self.programs, "gbuffer", setup, lambda lo, hi: not view.outside(lo[None], hi[None])[0])
@@ -100,9 +103,11 @@ class GBufferPass(Pass):
         frame.count("points_drawn", points)
 
 
-def set_material(prog, mat, textures, threshold):
+def set_material(prog, mat, textures, threshold, footprint=1.0):
     """A material's uniforms and maps (shaders/material.glsl); `threshold`: the alpha
-    test, discarding below it (0: none)."""
+    test, discarding below it (0: none); `footprint`: what a texture lookup filters
+    over, as a fraction of the fragment (antialias.texture_footprint)."""
+    set_uniform(prog, "u_texture_footprint", footprint)
     set_uniform(prog, "u_diffuse", mat.diffuse)
     set_uniform(prog, "u_metallic", mat.metallic)
     set_uniform(prog, "u_roughness", mat.roughness)

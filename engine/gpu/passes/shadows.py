@@ -66,7 +66,7 @@ BUDGET_WARNING = "shadow maps"     # the scene's warnings key for the budget's l
 # Cube faces: (forward, up) in GL's cube-map order +X -X +Y -Y +Z -Z.
 CUBE_FACES = [((1, 0, 0), (0, -1, 0)), ((-1, 0, 0), (0, -1, 0)), ((0, 1, 0), (0, 0, 1)),
               ((0, -1, 0), (0, 0, -1)), ((0, 0, 1), (0, -1, 0)), ((0, 0, -1), (0, -1, 0))]
-# GL projection (NDC [-1, 1]) -> texture space [0, 1] (seed 000's bias matrix).
+# GL projection (NDC [-1, 1]) -> texture space [0, 1] (the bias matrix of docs/design.md, "Shadow maps").
 BIAS = np.array([[0.5, 0, 0, 0.5], [0, 0.5, 0, 0.5], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]])
 # GL projection -> the same window depth under glClipControl's ZERO_TO_ONE.
 ZERO_TO_ONE = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]])

@@ -10,6 +10,13 @@ per-point texture past 8), blend-shape offsets. Per frame only joint matrices (o
 texture per skeleton, whatever number of meshes it drives) and the list of active
 blend shapes (a few texels per mesh) go up.
 
+A deformed mesh without authored normals gets its surface's own, as its baked twin
+(and Blender) would: a second transform feedback, over a copy of the deformed
+vertices, gathers per point the area normals of its triangles (SKIN_SURFACE_NORMALS;
+the triangles per point are static, engine/skin.py incidence_texels). GL 3.3, no
+compute. Gathering, not scattering: one point per triangle corner added by blending
+cost llvmpipe 4-40x the skinning (point set-up), a geometry shader as much.
+
 reads: nothing   writes: skinned (this frame's posed boxes, and a readback)"""
 from __future__ import annotations
 
@@ -18,13 +25,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ....core.transforms import transform_aabbs
-from ...skin import (active_texels, defines, flat_texels, joint_texels, local_bounds,
-                     shape_texels)
+from ...skin import (active_texels, defines, flat_texels, incidence_texels, joint_texels,
+                     local_bounds, shape_texels)
 from ..framegraph import Pass
-from ..stores import VERTEX_FORMAT
 from ..programs import UNITS, set_uniform
+from ..stores import VERTEX_BYTES, VERTEX_FORMAT
 
 VARYINGS = ("out_pos", "out_normal", "out_uv", "out_tangent")
+TEXELS_PER_VERTEX = VERTEX_BYTES // 16   # the static layout as RGBA32F texels
+DEFORMED_TEX_W = 4095             # shaders/skin.vert: a multiple of 3
 
 
 @dataclass
@@ -36,11 +45,13 @@ class _Input:
     shapes: object = None        # blend-shape offsets texture
     influences: object = None    # per-point influences texture (past 8)
     active: object = None        # this frame's active blend shapes
+    incidence: object = None     # surface normals: each point's triangles
     n_active: int = 0
     vaos: dict = None
 
     def release(self):
-        for obj in [self.rest, self.attributes, self.shapes, self.influences, self.active] + \
+        for obj in [self.rest, self.attributes, self.shapes, self.influences, self.active,
+                    self.incidence] + \
                 list((self.vaos or {}).values()):
             if obj is not None:
                 obj.release()
@@ -70,6 +81,7 @@ class SkinningPass(Pass):
         self.inputs = {}               # mesh key -> _Input
         self.joints = {}               # skel key -> texture
         self._fresh = set()            # mesh keys whose output is stale
+        self._scratch = None           # surface normals: (vertex copy, its texture)
 
     def needed(self, frame):
         return bool(self.inputs)
@@ -129,6 +141,10 @@ class SkinningPass(Pass):
         if skin.point_influences is not None:
             inp.influences = self.uploads.float_texture(flat_texels(skin.point_influences),
                                                         kind="mesh")
+        if mesh.surface_normals:
+            inp.incidence = self.uploads.float_texture(
+                flat_texels(incidence_texels(mesh.indices, mesh.point_of_vertex, skin.n_points)),
+                kind="mesh")
         return inp
 
     def execute(self, frame, board):
@@ -157,12 +173,62 @@ class SkinningPass(Pass):
 
     def _deform(self, mesh, inp):
         skin = mesh.skin
-        defs = tuple(sorted(defines(skin)))
-        prog = self.programs.get("skin.vert", None, defs, varyings=VARYINGS)
-        vao = inp.vaos.get(id(prog))
+        prog = self.programs.get("skin.vert", None, defines(skin), varyings=VARYINGS)
+        self._bind(prog, skin, inp)
+        store, slot = self.geometry.meshes[mesh.key]
+        self._vao(prog, inp, "rest").transform(
+            store.vbo, mode=self.ctx.POINTS, vertices=slot.n_vertices,
+            buffer_offset=slot.first_vertex * VERTEX_BYTES)
+        if mesh.surface_normals:
+            self._surface_normals(mesh, inp, store, slot)
+
+    def _surface_normals(self, mesh, inp, store, slot):
+        """Replaces the deformed vertices' normals by the surface's own: the vertices
+        are copied (inside the GPU) into a texture, and a transform feedback of the
+        copy writes them back, each normal the normalised sum of the area normals of
+        its point's triangles (listed per point in inp.incidence)."""
+        ctx = self.ctx
+        rows = max(1, -(-slot.n_vertices * TEXELS_PER_VERTEX // DEFORMED_TEX_W))
+        self._grow_scratch(rows)
+        copy, deformed = self._scratch
+        ctx.copy_buffer(copy, store.vbo, size=slot.n_vertices * VERTEX_BYTES,
+                        read_offset=slot.first_vertex * VERTEX_BYTES)
+        self.uploads.copy_into_texture(deformed, copy, (0, 0, DEFORMED_TEX_W, rows))
+        prog = self.programs.get("skin.vert", None, ["SKIN_SURFACE_NORMALS"], varyings=VARYINGS)
+        deformed.use(UNITS["u_deformed"])
+        inp.incidence.use(UNITS["u_incidence"])
+        set_uniform(prog, "u_points", int(mesh.skin.n_points))
+        self._vao(prog, inp, "copy").transform(store.vbo, mode=ctx.POINTS, vertices=slot.n_vertices,
+                                               buffer_offset=slot.first_vertex * VERTEX_BYTES)
+
+    def _grow_scratch(self, rows):
+        """The surface-normal scratch (a vertex copy and its texture), grown to hold
+        `rows` rows of the texture."""
+        old = self._scratch
+        if old is not None and old[1].height >= rows:
+            return
+        rows = max(rows, old[1].height if old else 1)
+        self._release_scratch()
+        copy = self.ctx.buffer(reserve=DEFORMED_TEX_W * rows * 16)
+        deformed = self.ctx.texture((DEFORMED_TEX_W, rows), 4, dtype="f4")
+        deformed.filter = self.ctx.NEAREST, self.ctx.NEAREST
+        self._scratch = copy, deformed
+        for inp in self.inputs.values():        # VAOs reading the old copy
+            for key in [k for k in inp.vaos if k[1] == "copy"]:
+                inp.vaos.pop(key).release()
+
+    def _vao(self, prog, inp, source):
+        """A mesh's "rest" vertices or their deformed "copy", with its influences."""
+        key = (id(prog), source)
+        vao = inp.vaos.get(key)
         if vao is None:
-            vao = inp.vaos[id(prog)] = self.ctx.vertex_array(
-                prog, [(inp.rest, *VERTEX_FORMAT), (inp.attributes, *inp.fmt)], skip_errors=True)
+            vertices = inp.rest if source == "rest" else self._scratch[0]
+            vao = inp.vaos[key] = self.ctx.vertex_array(
+                prog, [(vertices, *VERTEX_FORMAT), (inp.attributes, *inp.fmt)], skip_errors=True)
+        return vao
+
+    def _bind(self, prog, skin, inp):
+        """The rig's textures and uniforms, for skin.vert."""
         if skin.has_joints:
             self.joints[skin.skel_key].use(UNITS["u_joint_xforms"])
             if inp.influences is not None:
@@ -177,14 +243,11 @@ class SkinningPass(Pass):
             inp.active.use(UNITS["u_shape_active"])
             set_uniform(prog, "u_shape_count", int(inp.n_active))
             set_uniform(prog, "u_shape_points", int(skin.n_points))
-        store, slot = self.geometry.meshes[mesh.key]
-        vao.transform(store.vbo, mode=self.ctx.POINTS, vertices=slot.n_vertices,
-                      buffer_offset=slot.first_vertex * 48)
 
     def read(self, mesh_key) -> np.ndarray:
         """A skinned mesh's deformed vertices, (V, 12) float32, as drawn this frame."""
         store, slot = self.geometry.meshes[mesh_key]
-        data = store.vbo.read(size=slot.n_vertices * 48, offset=slot.first_vertex * 48)
+        data = store.vbo.read(size=slot.n_vertices * VERTEX_BYTES, offset=slot.first_vertex * VERTEX_BYTES)
         return np.frombuffer(data, np.float32).reshape(-1, 12)
 
     def release(self):
@@ -194,6 +257,13 @@ class SkinningPass(Pass):
             tex.release()
         self.inputs.clear()
         self.joints.clear()
+        self._release_scratch()
+
+    def _release_scratch(self):
+        if self._scratch is not None:
+            for obj in reversed(self._scratch):
+                obj.release()
+            self._scratch = None
 
 
 def _world_box(lo, hi, world):

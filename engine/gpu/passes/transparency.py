@@ -41,6 +41,7 @@ from ....core.lights import SUN
 from ...scene import OPAQUE_ALPHA
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
+from .antialias import texture_footprint
 from .gbuffer import map_defines, set_material
 
 MAX_FORWARD_LIGHTS = 32       # shaders/transparent.frag
@@ -160,7 +161,7 @@ class TransparencyPass(Pass):
         set_uniform(prog, "u_far", view.far_clip)
         view.set_camera(prog)
         set_uniform(prog, "u_size", tuple(float(s) for s in frame.size))
-        set_material(prog, mat, self.textures, 0.0)
+        set_material(prog, mat, self.textures, 0.0, texture_footprint(frame.supersample))
         set_uniform(prog, "u_opaque_alpha", OPAQUE_ALPHA if "opacity" in mat.maps else 2.0)
         self.environment.bind(prog, dome, env)    # and the split-sum table every draw needs
         set_uniform(prog, "has_dome", dome is not None)

@@ -1,0 +1,29 @@
+"""The engine host's warm-up: before Blender asks for a first frame, render a small
+stage like Blender's default scene (a cube with a material, a shadowed point light, a
+grey world, a camera) once per preset a first frame is likely drawn with, so that the programs
+are made (loaded from the program cache, engine/gpu/program_binaries.py, when it has
+them) and the driver has built its draw code for them (llvmpipe does that on a
+program's first draw). A scene that needs other variants makes only those later."""
+from __future__ import annotations
+
+import time
+
+SIZE = 16
+
+
+def warm(presets, stop=lambda: False) -> float:
+    """Renders the warm-up stage once per preset, in order: the first always, the
+    others until stop() says a request waits (it then makes what it needs itself);
+    returns the seconds it took."""
+    from ..session import RenderSettings, Session
+    from ..usd.default_scene import default_scene
+    start = time.perf_counter()
+    order = list(dict.fromkeys(presets))
+    with Session(default_scene(), RenderSettings(width=SIZE, height=SIZE,
+                                                 preset=order[0])) as session:
+        for i, preset in enumerate(order):
+            if i and stop():
+                break
+            session.configure(preset=preset)
+            session.render()
+    return time.perf_counter() - start

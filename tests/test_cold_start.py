@@ -1,0 +1,123 @@
+"""The cold path of `lantern render`: it imports only what the render uses, renders
+several files in one process past a bad one, and --timings names its phases."""
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+# A cube seen by a camera, with Blender's colour management as the exporter writes it
+# (docs/stage_contract.md): a display image goes through AgX, an .exr does not.
+CUBE = """#usda 1.0
+(
+    defaultPrim = "root"
+    upAxis = "Z"
+    metersPerUnit = 1
+    renderSettingsPrimPath = "/Render/Settings"
+)
+def Xform "root"
+{
+    def Mesh "Cube"
+    {
+        int[] faceVertexCounts = [4, 4, 4, 4, 4, 4]
+        int[] faceVertexIndices = [0, 2, 3, 1, 4, 5, 7, 6, 0, 1, 5, 4, 2, 6, 7, 3, 0, 4, 6, 2, 1, 3, 7, 5]
+        point3f[] points = [(-1, -1, -1), (1, -1, -1), (-1, 1, -1), (1, 1, -1), (-1, -1, 1), (1, -1, 1), (-1, 1, 1), (1, 1, 1)]
+    }
+    def Camera "Camera"
+    {
+        float focalLength = 35
+        float horizontalAperture = 36
+        float verticalAperture = 20.25
+        float2 clippingRange = (0.1, 100)
+        float3 xformOp:rotateXYZ = (70, 0, 30)
+        double3 xformOp:translate = (4, -7, 4)
+        uniform token[] xformOpOrder = ["xformOp:translate", "xformOp:rotateXYZ"]
+    }
+}
+def Scope "Render"
+{
+    def RenderSettings "Settings"
+    {
+        rel camera = </root/Camera>
+        string lantern:viewTransform = "AgX"
+    }
+}
+"""
+
+# Runs the CLI with some modules made unimportable: a finder ahead of every other that
+# refuses them, so that importing one fails the render.
+GUARDED = """
+import sys
+BLOCKED = ("lantern.compare", "dask", "distributed", "PyOpenColorIO", "bokeh")
+class Refuse:
+    def find_spec(self, name, path=None, target=None):
+        if any(name == b or name.startswith(b + ".") for b in BLOCKED):
+            raise ImportError(f"a plain render imported {name}")
+        return None
+sys.meta_path.insert(0, Refuse())
+from lantern.cli import main
+raise SystemExit(main(sys.argv[1:]))
+"""
+
+
+def _lantern(*args, code=None):
+    command = [sys.executable, "-c", code] if code else [sys.executable, "-m", "lantern"]
+    return subprocess.run(command + list(args), capture_output=True, text=True)
+
+
+def _cube(folder, name="cube.usda"):
+    path = folder / name
+    path.write_text(CUBE)
+    return path
+
+
+def test_a_plain_render_imports_neither_compare_dask_nor_opencolorio(tmp_path):
+    scene = _cube(tmp_path)
+    exr = tmp_path / "cube.exr"
+    proc = _lantern("render", str(scene), "-o", str(exr), "--size", "32x18", code=GUARDED)
+    assert proc.returncode == 0, proc.stderr
+    from lantern.engine.image_io import read_exr
+    assert read_exr(str(exr))[..., :3].max() > 0
+    # The guard bites: the same scene to a .png goes through AgX, with OpenColorIO.
+    proc = _lantern("render", str(scene), "-o", str(tmp_path / "cube.png"), "--size", "32x18",
+                    code=GUARDED)
+    assert proc.returncode == 1 and "PyOpenColorIO" in proc.stderr, proc.stderr
+
+
+def test_several_files_render_in_one_command_past_a_bad_one(tmp_path):
+    first = _cube(tmp_path, "first.usda")
+    (tmp_path / "more").mkdir()
+    second = _cube(tmp_path / "more", "second.usda")
+    broken = tmp_path / "broken.usda"
+    broken.write_text("#usda 1.0\ndef Xform \"root\" {\n  this is not USD\n")
+    missing = tmp_path / "missing.usd"
+    out = tmp_path / "images"
+    proc = _lantern("render", str(first), str(broken), str(missing), str(second),
+                    "-o", str(out) + os.sep, "--size", "32x18", "--timings")
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    assert sorted(os.listdir(out)) == ["first.png", "second.png"]
+    errors = proc.stderr.strip().splitlines()
+    assert len(errors) == 2, proc.stderr
+    assert "broken.usda" in errors[0] and "missing.usd" in errors[1]
+    assert "2 rendered, 2 failed" in proc.stdout
+    # One process, one context: the second file makes no program the first one made.
+    assert proc.stdout.count("timings of") == 2
+    compiled = [line for line in proc.stdout.splitlines() if "programs:" in line]
+    assert compiled[1].split()[1:4:2] == ["0", "0"], proc.stdout
+    import imageio.v3 as iio
+    a, b = (iio.imread(out / name) for name in ("first.png", "second.png"))
+    assert a.shape[:2] == (18, 32) and np.array_equal(a, b)
+    # Several scenes need a folder: an image name is a usage error, before any work.
+    proc = _lantern("render", str(first), str(second), "-o", str(tmp_path / "one.png"))
+    assert proc.returncode == 2 and "folder" in proc.stderr, proc.stderr
+
+
+def test_timings_name_the_phases_of_a_cold_render(tmp_path):
+    proc = _lantern("render", str(_cube(tmp_path)), "-o", str(tmp_path / "cube.exr"),
+                    "--size", "32x18", "--timings")
+    assert proc.returncode == 0, proc.stderr
+    phases = [line.strip().rsplit(None, 1)[0] for line in proc.stdout.splitlines()
+              if line.startswith("  ") and line.strip()[-1].isdigit()]
+    assert phases == ["process start to main", "imports", "stage open", "GL context",
+                      "session setup", "scene read", "programs", "uploads", "first frame",
+                      "encode and write", "wall"], proc.stdout
