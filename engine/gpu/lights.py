@@ -1,7 +1,8 @@
 """Lights on the GPU: one packed RGBA32F table, a row per light, written when a light
-changes. LIGHTS_PER_LINE rows lie side by side on each texture line
-(shaders/light_table.glsl), so any number of lights fits GL's texture size limit. Every light draw, one at a time or instanced, reads its light from the table
-by index (shaders/lights.glsl), so a light's numbers go up once, not per draw.
+changes. Every light draw, one at a time or instanced, reads its light from the table
+by index (shaders/light_table.glsl), so a light's numbers go up once, not per draw.
+LIGHTS_PER_LINE rows lie side by side on each texture line, so any number of lights
+fits GL's texture size limit (16384 lines on llvmpipe).
 
 Row layout (texels, must match shaders/lights.glsl):
   0 position (hi), volume radius R   1 colour (I, L or E), sphere radius
