@@ -295,6 +295,7 @@ class ShadowPass(Pass):
             for path, light in frame.scene.lights.items())
         if not wanted:
             self._drop(list(self.maps))
+            frame.scene.warnings.pop(BUDGET_WARNING, None)
         return wanted
 
     def execute(self, frame, board):
