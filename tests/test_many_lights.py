@@ -95,3 +95,32 @@ def test_20000_shadowed_lights_stay_in_memory_and_warn_once():
     assert budget == [f"{got['unshadowed']} of {LIGHTS} shadow-casting lights are lit without "
                       f"shadows: their shadow maps would pass the {SHADOW_BUDGET_BYTES >> 20} "
                       "MiB shadow memory budget"], got
+
+
+def test_lights_past_the_budget_lose_their_shadows_and_the_warning_names_them(monkeypatch):
+    """A budget of two low-preset cube maps and five shadow-casting lights: the two
+    nearest the camera keep their maps, three are counted in one warning, which goes
+    once no light casts."""
+    from pxr import Sdf, UsdLux
+
+    from lantern.engine import RenderSettings, Session
+    from lantern.engine.gpu.passes import shadows
+    monkeypatch.setattr(shadows, "SHADOW_BUDGET_BYTES", 2 * (3 * 512) * (2 * 512) * 4)
+    # Along the view, the nearest first: importance is intensity over squared distance.
+    positions = [(0.0, -40.0 + 10.0 * i, 1.0) for i in range(5)]
+    stage = many_lights_stage(positions, True)
+    settings = RenderSettings(width=SIZE, height=SIZE, preset="low", ambient_occlusion=False,
+                              fxaa=False, supersample=1)
+    with Session(stage, settings) as session:
+        result = session.render()
+        assert result.stats["shadow_maps"] == 2 and result.stats["unshadowed_lights"] == 3
+        assert [w for w in result.warnings if "without shadows" in w] == [
+            "3 of 5 shadow-casting lights are lit without shadows: their shadow maps would "
+            "pass the 6 MiB shadow memory budget"], result.warnings
+        assert set(session._renderer.shadows.maps) == {"/root/light_0", "/root/light_1"}
+        with Sdf.ChangeBlock():
+            for prim in stage.Traverse():
+                if prim.IsA(UsdLux.SphereLight):
+                    prim.GetAttribute("inputs:shadow:enable").Set(False)
+        result = session.render()
+        assert not [w for w in result.warnings if "without shadows" in w], result.warnings
