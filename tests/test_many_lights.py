@@ -116,7 +116,7 @@ def test_lights_past_the_budget_lose_their_shadows_and_the_warning_names_them(mo
         assert result.stats["shadow_maps"] == 2 and result.stats["unshadowed_lights"] == 3
         assert [w for w in result.warnings if "without shadows" in w] == [
             "3 of 5 shadow-casting lights are lit without shadows: their shadow maps would "
-            "pass the 6 MiB shadow memory budget"], result.warnings
+            "pass the 12 MiB shadow memory budget"], result.warnings
         assert set(session._renderer.shadows.maps) == {"/root/light_0", "/root/light_1"}
         with Sdf.ChangeBlock():
             for prim in stage.Traverse():
