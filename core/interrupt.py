@@ -13,6 +13,7 @@ refresh thread) does not interrupt the main thread's wait on its workers, so the
 also watches `wakeup_fd()`, which the signal writes to."""
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import sys
@@ -38,13 +39,14 @@ def exit_at_once():
 
 _requested = False
 _wakeup = None               # (read end, write end) of the signal's wake-up pipe
+_deferring = 0               # depth of deferred() blocks
 
 
 def _raise(signum, frame):
     global _requested
     _requested = True
-    if not _importing(frame):     # inside an import USD would swallow it, with a warning:
-        raise KeyboardInterrupt   # check() raises it when the import is done
+    if not _deferring and not _importing(frame):  # inside an import USD would swallow it
+        raise KeyboardInterrupt   # (a warning): check() raises it when the import is done
 
 
 def _importing(frame) -> bool:
@@ -67,6 +69,22 @@ def raise_keyboard_interrupt():
         _wakeup = (read, write)
     signal.set_wakeup_fd(_wakeup[1], warn_on_full_buffer=False)
     signal.signal(signal.SIGINT, _raise)
+
+
+@contextlib.contextmanager
+def deferred():
+    """Ctrl-C inside the block is recorded and raised when it ends, for a step that must
+    not stop half way: a worker process being started (blocking SIGINT on the main
+    thread does not stop the handler, which runs when the signal lands on another
+    thread), stopped there, is left reading its start-up data from a closed pipe and
+    prints a traceback."""
+    global _deferring
+    _deferring += 1
+    try:
+        yield
+    finally:
+        _deferring -= 1
+    check()
 
 
 def check():

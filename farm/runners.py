@@ -87,6 +87,20 @@ class _Process:
         # blocked (the mask is kept across exec) and ignores it before unblocking.
         # Blocking, not ignoring, in the client meanwhile: an ignored Ctrl-C that
         # arrived while a worker started was lost, a blocked one comes after.
+        # A Ctrl-C in the client while it starts one is answered once it has started
+        # (interrupt.deferred), and the process is stopped: nothing else knows it yet.
+        try:
+            with interrupt.deferred():
+                self._start(signal)
+        except BaseException:
+            if self.process.pid is not None:
+                self.process.kill()
+                self.process.join(1)
+            raise
+        child.close()
+        self.jobs: deque[_Job] = deque()  # sent, in order; the first is running
+
+    def _start(self, signal):
         if hasattr(signal, "pthread_sigmask"):
             signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
             try:
@@ -99,8 +113,6 @@ class _Process:
                 self.process.start()
             finally:
                 signal.signal(signal.SIGINT, previous)
-        child.close()
-        self.jobs: deque[_Job] = deque()  # sent, in order; the first is running
 
     @property
     def name(self):
