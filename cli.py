@@ -12,6 +12,7 @@ exported or rendered or an output cannot be written, 130 when interrupted (Ctrl-
 `--debug` shows the traceback of an unexpected error instead of one line.
 """
 import argparse
+import functools
 import logging
 import math
 import os
@@ -185,6 +186,8 @@ def _build_parser(argv=None):
     render.add_argument("-j", "--jobs", type=int, default=RENDER_PROCESSES,
                         help="worker processes for a sequence on this machine "
                              f"(default {RENDER_PROCESSES})")
+    from .cli_overlays import add_options as add_overlay_options
+    add_overlay_options(render)
 
     # `lantern compare` brings its package's imports: a render or export goes without.
     if _command(argv) not in ("render", "export"):
@@ -413,6 +416,8 @@ def _render(args):
         stage = _stage_from_blend(args.scene) if is_blend else _open_usd(args.scene)
         _check_camera(stage, args)
         args.colour = _colour(stage, args)
+        from .cli_overlays import from_args as overlays_from_args
+        args.overlays = overlays_from_args(args, stage, CommandError)
         # A .blend's stage was exported here: the workers get it as text.
         text = stage.GetRootLayer().ExportToString() if is_blend else None
     except BaseException:
@@ -433,6 +438,8 @@ def _check_render_options(args):
         raise _usage("--chunk must be at least 1")
     if args.camera is not None and not args.camera.startswith("/"):
         raise _usage(f"--camera {args.camera}: must be an absolute prim path, like /root/Camera")
+    from .cli_overlays import check as check_overlays
+    check_overlays(args, _usage, CommandError)
 
 
 def _is_folder(output):
@@ -604,11 +611,19 @@ def _render_frame(args, is_blend, phases):
     phases.mark("stage open")
     # An .exr is scene linear: the scene's view transform (OpenColorIO) is for displays.
     args.colour = {} if args.output.lower().endswith(".exr") else _colour(stage, args)
+    from .cli_overlays import from_args as overlays_from_args
+    args.overlays = overlays_from_args(args, stage, CommandError)
     phases.mark("encode and write")
     result = _rendered(args.scene, lambda: render_stage(stage, _settings(args, args.frame)))
     phases.mark("render")
     _print_warnings(result.warnings, set())
-    _write(args.output, lambda: write_image(args.output, result.rgba, **args.colour))
+    overlay = None
+    if args.overlays is not None:
+        from .engine.usd.camera import default_time
+        frame = args.frame if args.frame is not None else default_time(stage)
+        overlay = functools.partial(args.overlays.apply, frame=frame)
+    _write(args.output, lambda: write_image(args.output, result.rgba, **args.colour,
+                                            overlay=overlay))
     phases.mark("encode and write")
     height_px, width_px = result.rgba.shape[:2]
     print(f"{args.scene} -> {args.output} ({width_px}x{height_px}, "
@@ -691,7 +706,8 @@ def _render_sequence(stage, args, runner, stage_text):
             scheduler=args.scheduler, jobs=args.jobs, collect=args.collect, resume=args.resume,
             status=_status_writer(args),
             scene=args.scene, output=args.output, frames=tuple(args.frames), size=args.size,
-            preset=args.preset, camera=args.camera, chunk=args.chunk, **args.colour)
+            preset=args.preset, camera=args.camera, chunk=args.chunk, **args.colour,
+            overlays=args.overlays)
         status = render_frames(options, runner, stage_text, stage.GetFramesPerSecond() or 24.0,
                                lambda warnings: _print_warnings(warnings, seen))
     except FarmError as error:

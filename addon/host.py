@@ -59,6 +59,7 @@ class Frame:
     timings: dict
     warnings: list
     number: int = 0           # this scene's frame count when it arrived
+    gpu_timings: dict = field(default_factory=dict)   # per pass: GPU seconds
 
 
 @dataclass

@@ -19,6 +19,10 @@ class LanternSceneSettings(bpy.types.PropertyGroup):
         name="Viewport Resolution", default=1.0, min=0.1, max=1.0, subtype='FACTOR',
         description="Fraction of the viewport's pixels rendered in Rendered shading "
                     "(drawn stretched): lower is faster")
+    viewport_stats: bpy.props.BoolProperty(
+        name="Statistics", default=False,
+        description="Show the frame time, GPU time and draw calls of the latest viewport "
+                    "frame in its top-left corner")
 
 
 class LanternLightSettings(bpy.types.PropertyGroup):

@@ -61,6 +61,9 @@ class LanternRenderEngine(bpy.types.RenderEngine):
                             scene.lantern.viewport_resolution, region_border(context, depsgraph))
         self._viewport.draw(depsgraph, view, lambda *frame: _paint(self, scene, *frame),
                             scene.lantern.preset, scene.render.film_transparent)
+        if scene.lantern.viewport_stats and self._viewport.shown is not None:
+            from .viewport_stats import draw_stats
+            draw_stats(self._viewport.shown, region.height, context.preferences.system.ui_scale)
         self.update_stats("", self._viewport.status)
         while self._viewport.notices:
             self.report({'ERROR'}, self._viewport.notices.pop(0))

@@ -177,8 +177,11 @@ class ViewportRender:
             if shown is not None:
                 frame, views = shown
                 paint(frame.number, views["Combined"], frame.tag)
+                self.shown = frame
                 if channel.error is None:
                     self.status = "" if frame.final else "Lantern: refining"
+
+    shown = None        # the latest frame drawn (addon/viewport_stats.py reads it)
 
     def waiting(self) -> bool:
         """Whether a frame is still to come (the redraw timer keeps polling)."""

@@ -197,22 +197,27 @@ def orbit(runs):
                                  "medium")
             latest = host.channel(viewport.render.name).latest
             if latest is not None and latest.number > since:
-                moving.append((time.perf_counter() - t0, latest.preset, latest.stats))
+                moving.append((time.perf_counter() - t0, latest.preset, latest.stats,
+                               (latest.width, latest.height)))
                 break
             time.sleep(0.001)
     t0 = time.perf_counter()
     _, settled = viewport.frames(view, "medium", t0, viewport.number())
+    final = host.channel(viewport.render.name).latest
     edits = viewport.edits_since(mark)
     old = old_path(scene, view)
-    presets = {p for _, p, _ in moving}
+    presets = {p for _, p, _, _ in moving}
     stats = moving[-1][2]
+    sizes = sorted({f"{w}x{h}" for _, _, _, (w, h) in moving})
     print(f"2. view orbit, 04_lights.blend, {ORBIT_SIZE[0]}x{ORBIT_SIZE[1]}, {runs} views:")
     print(f"   per view while moving ({'/'.join(sorted(presets))} preset): "
-          f"{ms(np.median([t for t, _, _ in moving]))} (median), "
+          f"{ms(np.median([t for t, _, _, _ in moving]))} (median), drawn at "
+          f"{', '.join(sizes)} (chosen from the measured frame time), "
           f"{stats['prims_read']} prims read, {stats['bytes_uploaded']} bytes up, "
           f"{stats['shadow_maps_rendered']} shadow maps redrawn")
     print(f"   once still (medium, after {protocol.SETTLE_SECONDS * 1000:.0f} ms settle): "
-          f"{ms(settled)} to the final frame")
+          f"{ms(settled)} to the final frame, {final.stats['prims_read']} prims read, "
+          f"{final.stats['bytes_by_kind'].get('mesh', 0)} mesh bytes up")
     print(f"   old path per view (re-read stage, all uploads and shadows, tolist): {ms(old)}")
     print(f"   edits sent while orbiting: {len(edits)}")
     viewport.close()

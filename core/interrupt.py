@@ -38,15 +38,31 @@ def exit_at_once():
 
 
 _requested = False
+_deferring = 0               # > 0 inside deferred(): a Ctrl-C is recorded, raised after
 _wakeup = None               # (read end, write end) of the signal's wake-up pipe
-_deferring = 0               # depth of deferred() blocks
 
 
 def _raise(signum, frame):
     global _requested
     _requested = True
-    if not _deferring and not _importing(frame):  # inside an import USD would swallow it
-        raise KeyboardInterrupt   # (a warning): check() raises it when the import is done
+    # Inside an import USD would swallow it (with a warning), and inside a worker's
+    # start it would leave a child reading half its start-up data: check() raises it
+    # when they are done.
+    if not _deferring and not _importing(frame):
+        raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def deferred():
+    """A block that a Ctrl-C does not cut in two: it is raised when the block ends."""
+    global _deferring
+    _deferring += 1
+    try:
+        yield
+    finally:
+        _deferring -= 1
+    if not _deferring:
+        check()
 
 
 def _importing(frame) -> bool:
@@ -69,22 +85,6 @@ def raise_keyboard_interrupt():
         _wakeup = (read, write)
     signal.set_wakeup_fd(_wakeup[1], warn_on_full_buffer=False)
     signal.signal(signal.SIGINT, _raise)
-
-
-@contextlib.contextmanager
-def deferred():
-    """Ctrl-C inside the block is recorded and raised when it ends, for a step that must
-    not stop half way: a worker process being started (blocking SIGINT on the main
-    thread does not stop the handler, which runs when the signal lands on another
-    thread), stopped there, is left reading its start-up data from a closed pipe and
-    prints a traceback."""
-    global _deferring
-    _deferring += 1
-    try:
-        yield
-    finally:
-        _deferring -= 1
-    check()
 
 
 def check():

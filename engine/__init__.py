@@ -14,7 +14,7 @@ import importlib
 _WHERE = {"render_file": ".api", "render_sequence": ".api", "render_stage": ".api",
           "skinned_points": ".api", "shutdown": ".gpu.context", "read_exr": ".image_io",
           "write_image": ".image_io", "RenderResult": ".session",
-          "RenderSettings": ".session", "Session": ".session"}
+          "RenderSettings": ".settings", "Session": ".session"}
 
 __all__ = sorted(_WHERE)
 

@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .session import RenderResult, RenderSettings, Session
+from .session import RenderResult, Session
+from .settings import RenderSettings
 from .usd.opening import open_stage
 
 

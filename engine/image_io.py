@@ -97,18 +97,22 @@ def _write_exr(path, rgba, **_):
     _oiio_write(path, rgba, "float", [("compression", "zip")])
 
 
-def _write_png(path, rgba, view="Standard", look=None, exposure=0.0):
+def _write_png(path, rgba, view="Standard", look=None, exposure=0.0, overlay=None):
     pixels = to_display8(rgba, view=view, look=look, exposure=exposure)
+    if overlay is not None:     # drawn on the display-referred values (engine/overlays.py)
+        pixels = overlay(pixels)
     # Straight alpha, as PNG stores it: OIIO would otherwise un-premultiply.
     _oiio_write(path, pixels, "uint8", [("oiio:UnassociatedAlpha", 1)])
 
 
 def write_image(path: str, rgba: np.ndarray, view: str = "Standard", look: str | None = None,
-                exposure: float = 0.0) -> None:
+                exposure: float = 0.0, overlay=None) -> None:
     """Write float (H, W, 4) scene-linear RGBA, row 0 = top, to .exr or .png.
 
     `view`, `look` and `exposure` (stops) are Blender's colour-management settings and
-    shape the .png only; an .exr is always the scene-linear values."""
+    shape the .png only; an .exr is always the scene-linear values. `overlay`, a
+    function of the (H, W, 4) uint8 display image (engine/overlays.py BurnIn.apply),
+    draws over the .png only."""
     ext = os.path.splitext(path)[1].lower()
     writers = {".exr": _write_exr, ".png": _write_png}
     if ext not in writers:
@@ -117,7 +121,7 @@ def write_image(path: str, rgba: np.ndarray, view: str = "Standard", look: str |
     if rgba.ndim != 3 or rgba.shape[2] != 4:
         raise ValueError(f"expected an (H, W, 4) image, got {rgba.shape}")
     atomic_write(path, lambda tmp: writers[ext](tmp, rgba, view=view, look=look,
-                                                exposure=exposure), suffix=ext)
+                                                exposure=exposure, overlay=overlay), suffix=ext)
 
 
 def write_animation(path: str, frames, fps: float, view: str = "Standard",

@@ -27,6 +27,36 @@ class TextureRef:
     channel: str = "rgb"           # rgb | r | g | b | a
 
 
+@dataclass(frozen=True)
+class PatternNode:
+    """One node of a material's pattern graph (ND_lantern_<kind>, docs/materials.md).
+    Types: "float", "vector", "color", "float[]", "color4[]", "asset" (an image's
+    resolved path: bound as a texture, not a parameter)."""
+    name: str
+    kind: str
+    settings: tuple                # ((name, str), ...) sorted: part of the graph's shape
+    values: tuple                  # ((input, type, value), ...) sorted: per-material parameters
+    links: tuple                   # ((input, type, source node, source output, source type), ...)
+
+
+@dataclass(frozen=True)
+class PatternGraph:
+    """The node network feeding surface inputs: nodes sources first, outputs
+    ((surface input, node, output, output type), ...)."""
+    nodes: tuple
+    outputs: tuple
+
+    @property
+    def shape(self) -> tuple:
+        """Everything but the parameter values: equal shapes share one program."""
+        return (tuple((n.kind, n.settings, tuple((i, t, len(v) if t.endswith("[]") else 0)
+                                               for i, t, v in n.values), n.links)
+                      for n in self.nodes), self.outputs)
+
+    def feeds(self, target: str) -> bool:
+        return any(o[0] == target for o in self.outputs)
+
+
 @dataclass
 class Material:
     name: str                      # the Material prim's path, or <default ...>
@@ -44,6 +74,7 @@ class Material:
     uv_name: str | None = None     # primvar the material's reader asks for
     pass_index: int = 0            # lantern:passIndex: render pass IndexMA
     alpha_mode: str = ""           # lantern:alphaMode: "hashed" (Blender's Dithered), or ""
+    pattern: PatternGraph | None = None  # the mtlx network feeding surface inputs
 
     @property
     def has_normal_map(self) -> bool:
@@ -62,7 +93,7 @@ class Material:
                   by the transparency pass, blended, and casts transparent shadows."""
         if self.opacity_threshold > 0.0:
             return "clip"
-        if "opacity" in self.maps or self.opacity < 1.0:
+        if "opacity" in self.maps or self.opacity < 1.0 or self.opacity_varies:
             return "blend"
         return "opaque"
 
@@ -74,8 +105,12 @@ class Material:
         if alpha == "clip":
             return self.opacity_threshold
         if alpha == "blend":
-            return OPAQUE_ALPHA if "opacity" in self.maps else None
+            return OPAQUE_ALPHA if "opacity" in self.maps or self.opacity_varies else None
         return 0.0
+
+    @property
+    def opacity_varies(self) -> bool:
+        return self.pattern is not None and self.pattern.feeds("opacity")
 
 
 # At or above this alpha a blended texel is opaque (an 8-bit 255 and its filtered

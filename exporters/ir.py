@@ -52,6 +52,25 @@ class MaterialRecord:
     backface_culling: bool = False
     pass_index: int = 0         # Blender's material pass index (render pass IndexMA)
     alpha_mode: str = ""        # "hashed" (Dithered and see-through), else "" (contract)
+    graph: PatternGraph | None = None  # the node network feeding surface inputs, if any
+
+
+@dataclass
+class PatternNode:
+    """One node of a material's pattern graph (docs/materials.md lists the kinds).
+    Types are "float", "vector" or "color" (3 floats; a colour's alpha is dropped)."""
+    name: str                 # prim name inside the graph
+    kind: str                 # Lantern node kind; written as info:id ND_lantern_<kind>
+    settings: dict = field(default_factory=dict)  # name -> str: the graph's shape
+    values: dict = field(default_factory=dict)    # input -> (type, float | tuple | list)
+    links: dict = field(default_factory=dict)     # input -> (type, node name, output)
+    outputs: dict = field(default_factory=dict)   # output -> type
+
+
+@dataclass
+class PatternGraph:
+    nodes: list = field(default_factory=list)     # PatternNode, sources before users
+    outputs: dict = field(default_factory=dict)   # surface input -> (node name, output)
 
 
 @dataclass

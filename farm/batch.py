@@ -326,6 +326,7 @@ def _render_frames(options, runner, stage_text, fps, print_warnings):
                 height=options.size[1] if options.size else None, preset=options.preset,
                 camera=options.camera, stage_digest=digest, collect=options.collect,
                 colour=(options.view, options.look, options.exposure),
+                overlays=options.overlays,
                 since_ns=None if (options.collect or gif) else _folder_clock(folder))
 
     _open(options, RENDER_NEEDS, runner)

@@ -38,6 +38,7 @@ class SequenceOptions(FarmOptions):
     view: str = "Standard"
     look: str | None = None
     exposure: float = 0.0
+    overlays: object = None         # engine/overlays.py BurnIn, drawn on each .png; or None
 
     @property
     def colour(self):

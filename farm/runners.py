@@ -87,32 +87,23 @@ class _Process:
         # blocked (the mask is kept across exec) and ignores it before unblocking.
         # Blocking, not ignoring, in the client meanwhile: an ignored Ctrl-C that
         # arrived while a worker started was lost, a blocked one comes after.
-        # A Ctrl-C in the client while it starts one is answered once it has started
-        # (interrupt.deferred), and the process is stopped: nothing else knows it yet.
-        try:
-            with interrupt.deferred():
-                self._start(signal)
-        except BaseException:
-            if self.process.pid is not None:
-                self.process.kill()
-                self.process.join(1)
-            raise
-        child.close()
-        self.jobs: deque[_Job] = deque()  # sent, in order; the first is running
-
-    def _start(self, signal):
+        # A Ctrl-C that lands on another thread meanwhile is raised once the start is
+        # whole (interrupt.deferred), not in the middle of handing the child its data.
         if hasattr(signal, "pthread_sigmask"):
-            signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-            try:
-                self.process.start()
-            finally:
-                signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+            with interrupt.deferred():
+                signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+                try:
+                    self.process.start()
+                finally:
+                    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
         else:                                 # Windows: no signal masks
             previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
             try:
                 self.process.start()
             finally:
                 signal.signal(signal.SIGINT, previous)
+        child.close()
+        self.jobs: deque[_Job] = deque()  # sent, in order; the first is running
 
     @property
     def name(self):

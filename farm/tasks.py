@@ -12,6 +12,7 @@ as bytes instead and the client writes them.
 """
 from __future__ import annotations
 
+import functools
 import os
 import subprocess
 import sys
@@ -65,6 +66,7 @@ class RenderChunk:
     since_ns: int | None = None
     # Blender's colour management for .png outputs (engine/color.py): view, look, exposure.
     colour: tuple = ("Standard", None, 0.0)
+    overlays: object = None     # engine/overlays.py BurnIn: drawn on each .png
     needs = RENDER_NEEDS
 
     @property
@@ -252,9 +254,9 @@ def _keep(task, frame, path, rgba, result):
         if path is None:
             result.pixels[frame] = rgba
         elif task.collect:
-            result.files[path] = _encoded(path, rgba, task.colour)
+            result.files[path] = _encoded(path, rgba, task.colour, _overlay(task, frame))
         else:
-            _write(path, rgba, task.colour)
+            _write(path, rgba, task.colour, _overlay(task, frame))
     except (OSError, ValueError) as error:
         result.failed[frame] = f"{path}: cannot be written: " \
                                f"{getattr(error, 'strerror', None) or error}"
@@ -276,17 +278,22 @@ def _colour_settings(colour):
     return dict(view=view, look=look, exposure=exposure)
 
 
-def _write(path, rgba, colour):
+def _overlay(task, frame):
+    return None if task.overlays is None else functools.partial(task.overlays.apply,
+                                                                 frame=frame)
+
+
+def _write(path, rgba, colour, overlay=None):
     from ..engine.image_io import write_image
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-    write_image(path, rgba, **_colour_settings(colour))
+    write_image(path, rgba, **_colour_settings(colour), overlay=overlay)
 
 
-def _encoded(path, rgba, colour):
+def _encoded(path, rgba, colour, overlay=None):
     """The image file's bytes, encoded here (the worker) so only the file travels."""
     from ..engine.image_io import write_image
     with tempfile.TemporaryDirectory(prefix="lantern-frame-") as folder:
         local = os.path.join(folder, "frame" + os.path.splitext(path)[1])
-        write_image(local, rgba, **_colour_settings(colour))
+        write_image(local, rgba, **_colour_settings(colour), overlay=overlay)
         with open(local, "rb") as f:
             return f.read()

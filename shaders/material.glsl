@@ -16,6 +16,7 @@ uniform float u_clearcoat_roughness;
 // (engine/gpu/passes/antialias.py texture_footprint): 1 but in supersampled images.
 uniform float u_texture_footprint = 1.0;
 
+
 // A UsdUVTexture: wrap (0 repeat, 1 mirror, 2 clamp, 3 black), scale, bias, channel
 // (-1 rgb, 0..3 r g b a). srgb: an 8-bit sRGB image filtered as Cycles filters it
 // (engine/gpu/textures.py): magnified, its stored values are interpolated and then
@@ -74,6 +75,17 @@ vec4 sample_map(sampler2D t, Map m, vec2 uv) {
     return c;
 }
 
+#include "pattern.glsl"
+
+// The surface inputs a pattern graph feeds replace the constants and maps
+// (engine/gpu/pattern.py); without one this is the constants.
+void pattern_inputs(vec2 uv, inout vec3 diffuse, inout float metallic, inout float roughness,
+                    inout float opacity, inout vec3 emissive) {
+#ifdef HAS_PATTERN
+    pattern_eval(uv, diffuse, metallic, roughness, opacity, emissive);
+#endif
+}
+
 #ifdef HAS_DIFFUSE_MAP
 uniform sampler2D t_diffuse; uniform Map m_diffuse;
 #endif
@@ -97,6 +109,11 @@ float material_alpha(vec2 uv) {
     float alpha = u_opacity;
 #ifdef HAS_OPACITY_MAP
     alpha = sample_map(t_opacity, m_opacity, uv).x;
+#endif
+#ifdef HAS_PATTERN
+    vec3 d = vec3(0.0), e = vec3(0.0);
+    float mt = 0.0, r = 0.0;
+    pattern_eval(uv, d, mt, r, alpha, e);
 #endif
     return alpha;
 }
@@ -129,6 +146,8 @@ MaterialSample material_sample(vec2 uv, vec3 normal, vec4 tangent, bool front) {
 #ifdef HAS_EMISSIVE_MAP
     emissive = sample_map(t_emissive, m_emissive, uv).rgb;
 #endif
+    float opacity = 1.0;
+    pattern_inputs(uv, base, metallic, roughness, opacity, emissive);
 
     // Back faces only reach here on double-sided meshes: face the viewer.
     vec3 n = normalize(normal);

@@ -17,3 +17,4 @@ def mean_flip(image, reference):
     test = np.ascontiguousarray(image[..., :3], dtype=np.float32)
     _, mean, _ = flip.evaluate(ref, test, "HDR")
     return float(mean)
+

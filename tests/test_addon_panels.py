@@ -78,8 +78,8 @@ def test_cast_shadow_and_lanterns_shadow_settings_are_in_the_light_panel(addon, 
 def test_the_render_panels_show_only_what_the_engine_honours(addon, empty_scene):
     import bpy
     context = SimpleNamespace(engine="LANTERN", scene=empty_scene)
-    assert _drawn(bpy.types.LANTERN_RENDER_PT_quality, context) == ["preset",
-                                                                    "viewport_resolution"]
+    assert _drawn(bpy.types.LANTERN_RENDER_PT_quality, context) == [
+        "preset", "viewport_resolution", "viewport_stats"]
     assert _drawn(bpy.types.LANTERN_RENDER_PT_film, context) == ["film_transparent"]
 
 

@@ -131,16 +131,17 @@ def test_normal_map_strength_one(empty_scene, tmp_path):
 
 
 def test_unknown_node_warns_with_material_and_node(empty_scene):
-    mat, tree, bsdf = principled_material("Noisy")
-    noise = tree.nodes.new("ShaderNodeTexNoise")
-    noise.name = "My Noise"
-    tree.links.new(noise.outputs["Color"], bsdf.inputs["Base Color"])
+    # Brick is outside the pattern nodes (docs/materials.md; Noise is inside now).
+    mat, tree, bsdf = principled_material("Bricky")
+    brick = tree.nodes.new("ShaderNodeTexBrick")
+    brick.name = "My Brick"
+    tree.links.new(brick.outputs["Color"], bsdf.inputs["Base Color"])
     bsdf.inputs["Base Color"].default_value = (0.1, 0.2, 0.3, 1.0)
     cube_object("C").data.materials.append(mat)
     stage, report = export_current()
-    assert any("Noisy" in w and "My Noise" in w for w in report.warnings), report.warnings
+    assert any("Bricky" in w and "My Brick" in w for w in report.warnings), report.warnings
     # The fallback is the socket's own constant.
-    assert tuple(surface(stage, "Noisy").GetInput("diffuseColor").Get()) == \
+    assert tuple(surface(stage, "Bricky").GetInput("diffuseColor").Get()) == \
         pytest.approx((0.1, 0.2, 0.3))
 
 

@@ -367,6 +367,22 @@ def test_view_draw_up_to_the_gpu_call(viewport, monkeypatch):
     engine._viewport.notices.append("Lantern: a failure")
     render_engine.LanternRenderEngine.view_draw(engine, context, depsgraph)
     assert reported == [({'ERROR'}, "Lantern: a failure")] and not engine._viewport.notices
+    # The statistics overlay: off by default; on, the latest frame's line (blf stands in).
+    from lantern.addon import viewport_stats
+    drawn = []
+    monkeypatch.setattr(viewport_stats, "draw_stats", lambda frame, height, scale: drawn.append(
+        (viewport_stats.stats_line(frame), height, scale)))
+    render_engine.LanternRenderEngine.view_draw(engine, context, depsgraph)
+    assert drawn == []
+    scene.lantern.viewport_stats = True
+    context.preferences = SimpleNamespace(system=SimpleNamespace(ui_scale=1.5))
+    render_engine.LanternRenderEngine.view_draw(engine, context, depsgraph)
+    (line, height, scale), = drawn
+    assert height == H and scale == 1.5 and f"{W}x{H}" in line and " ms" in line
+    draws = int(line.split(" draw calls")[0].rsplit(" ", 1)[1])
+    assert draws == engine._viewport.shown.stats["draw_calls"] > 0
+    assert "GPU" in line or not engine._viewport.shown.gpu_timings
+    scene.lantern.viewport_stats = False
     engine._viewport.close()
 
 

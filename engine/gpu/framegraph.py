@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...core.passes import PASSES
+from ..settings import RenderSettings
 from .readback import SLOTS, ReadbackRequest
 from .timers import PassTimer
 
@@ -57,26 +58,6 @@ TARGETS = {
 }
 
 
-@dataclass(frozen=True)
-class FrameOptions:
-    """What a render asks of the shading and post passes (from RenderSettings; see
-    engine/session.py for each)."""
-    ambient_occlusion: bool = True
-    supersample: int | None = None   # None: the preset's
-    fxaa: bool | None = None         # None: the preset's
-    exposure: float = 0.0
-    blur: float = 0.0
-    grayscale: bool = False
-    mirror: str = ""
-
-    @staticmethod
-    def of(settings) -> "FrameOptions":
-        if settings is None:
-            return FrameOptions()
-        return FrameOptions(**{name: getattr(settings, name) for name in
-                               FrameOptions.__dataclass_fields__ if hasattr(settings, name)})
-
-
 @dataclass
 class Frame:
     """One render: what the passes share that is not a target."""
@@ -87,7 +68,7 @@ class Frame:
     transparent: bool = False
     aovs: frozenset = frozenset()  # render passes asked for (core/passes.py names)
     camera: object = None          # None: the view pass frames the default view
-    options: FrameOptions = field(default_factory=FrameOptions)
+    options: RenderSettings = field(default_factory=RenderSettings)  # shading and post
     # Anti-aliasing (passes/antialias.py): drawn `supersample` times wider and taller
     # than `output_size`, the image's; `size` is what the passes draw at now.
     supersample: int = 1

@@ -27,8 +27,8 @@ _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.M)
 
 # Sampler name -> texture unit, for every sampler of every program. The G-buffer and
 # the light pass share units 0-8, materials 9-14, tables and rigs, then the
-# environment, ambient occlusion and post-processing inputs; GL 3.3 guarantees 16
-# units per stage and 48 in all.
+# environment, ambient occlusion and post-processing inputs, then a pattern graph's
+# images (engine/gpu/pattern.py); GL 3.3 guarantees 16 units per stage and 48 in all.
 UNITS = {name: unit for unit, name in enumerate((
     "g_base", "g_normal", "g_mat", "g_emit", "g_depth", "latlong", "shadow_cmp", "shadow_raw",
     "hdr",
@@ -36,24 +36,32 @@ UNITS = {name: unit for unit, name in enumerate((
     "u_objects", "u_lights",
     "u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences", "u_deformed",
     "u_incidence",
-    "dfg_lut", "env_specular", "radiance", "ao_tex", "post_src", "post_aux"))}
+    "dfg_lut", "env_specular", "radiance", "ao_tex", "post_src", "post_aux",
+    "overlay_image", "overlay_atlas",
+    "t_pattern0", "t_pattern1", "t_pattern2", "t_pattern3"))}
 
 
 class ShaderError(RuntimeError):
     pass
 
 
-def load_source(name: str, defines=(), _seen=None) -> str:
+def load_source(name: str, defines=(), _seen=None, generated=()) -> str:
+    """`generated`: ((include name, source), ...) standing in for those shader files
+    (a material's pattern graph: engine/gpu/pattern.py)."""
     seen = set() if _seen is None else _seen
-    with open(os.path.join(SHADER_DIR, name), encoding="utf-8") as f:
-        src = f.read()
+    made = dict(generated)
+    if name in made:
+        src = made[name]
+    else:
+        with open(os.path.join(SHADER_DIR, name), encoding="utf-8") as f:
+            src = f.read()
 
     def include(m):
         inc = m.group(1)
         if inc in seen:
             return ""
         seen.add(inc)
-        return load_source(inc, (), seen)
+        return load_source(inc, (), seen, generated)
 
     src = _INCLUDE.sub(include, src)
     if defines:
@@ -81,17 +89,20 @@ class ProgramCache:
         self.loaded = 0
         self.seconds = 0.0
 
-    def get(self, vert: str, frag: str | None = None, defines=(), varyings=(), compute=False):
+    def get(self, vert: str, frag: str | None = None, defines=(), varyings=(), compute=False,
+            generated=()):
+        """`generated`: ((include name, source), ...) for load_source; part of the key."""
         defines = tuple(sorted(set(defines)))
-        key = (vert, frag, defines, tuple(varyings), compute)
+        generated = tuple(generated)
+        key = (vert, frag, defines, tuple(varyings), compute, generated)
         prog = self._programs.get(key)
         if prog is None:
             t0 = time.perf_counter()
             if compute:
                 sources = (load_source(vert, defines), None)
             else:
-                sources = (load_source(vert, defines),
-                           None if frag is None else load_source(frag, defines))
+                sources = (load_source(vert, defines), None if frag is None else
+                           load_source(frag, defines, generated=generated))
             binaries = self._binaries()
             if binaries is not None:
                 entry = program_binaries.entry_key(sources + ("compute",) * compute,

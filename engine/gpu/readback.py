@@ -24,7 +24,8 @@ import numpy as np
 from .programs import UNITS, set_uniform
 from .stencil import entry_points
 
-# The read-back formats by name: (ModernGL dtype, numpy dtype).
+# The read-back formats by name (engine/settings.py READBACK_FORMATS): (ModernGL
+# dtype, numpy dtype).
 FORMATS = {"float32": ("f4", np.float32), "half": ("f2", np.float16)}
 SLOTS = 2                       # frames in flight: one drawn while one is copied
 

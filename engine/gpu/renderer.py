@@ -11,7 +11,8 @@ import numpy as np
 from .context import Features
 from .depth import DepthConvention
 from .environment import Environment
-from .framegraph import Frame, FrameGraph, FrameOptions
+from ..settings import RenderSettings
+from .framegraph import Frame, FrameGraph
 from .geometry import Geometry
 from .lights import LightTable
 from .passes.ambient import AmbientPass
@@ -55,7 +56,8 @@ def supersample_factor(frame, size, max_texture: int) -> int:
 COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow_maps",
             "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
             "light_volumes", "stencil_marks", "batched_lights", "instances_drawn",
-            "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws")
+            "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws",
+            "pattern_bytes")
 
 
 def _path_name(features) -> str:
@@ -138,7 +140,7 @@ class Renderer:
         frame = Frame(scene=scene, changes=changes, size=tuple(size), preset=self.preset,
                       transparent=transparent, aovs=frozenset(aovs), camera=camera,
                       stats={name: 0 for name in COUNTERS},
-                      options=FrameOptions.of(settings),
+                      options=settings or RenderSettings(),
                       readback=readback or ReadbackRequest())
         frame.stats["meshes_uploaded"] = self.update(scene, changes, cull_backfaces)
         frame.timings["upload"] = time.perf_counter() - t0

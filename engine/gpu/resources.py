@@ -14,7 +14,7 @@ from collections import Counter
 
 import numpy as np
 
-KINDS = ("mesh", "objects", "commands", "joints", "shapes", "lights", "textures")
+KINDS = ("mesh", "objects", "commands", "joints", "shapes", "lights", "textures", "overlays")
 
 
 class Uploads:

@@ -41,7 +41,8 @@ class Scene:
 
     def session(self, preset):
         """The scene's Session, set to `preset`."""
-        from ..session import RenderSettings, Session
+        from ..session import Session
+        from ..settings import RenderSettings
         if self._session is None:
             self._session = Session(self.stage, RenderSettings(width=1, height=1,
                                                                preset=preset))
@@ -204,7 +205,8 @@ class Host:
             scene.moving = (scale, result.timings["total"] - result.timings.get("load", 0.0))
         self._send(protocol.FRAME, scene=name, request=req["id"], tag=req.get("tag"), slot=slot,
                    width=w, height=h, layout=frame_layout, final=final, preset=preset,
-                   stats=result.stats, timings=result.timings, warnings=result.warnings)
+                   stats=result.stats, timings=result.timings, gpu_timings=result.gpu_timings,
+                   warnings=result.warnings)
         return True
 
     def _warm(self, presets):

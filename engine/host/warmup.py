@@ -15,7 +15,8 @@ def warm(presets, stop=lambda: False) -> float:
     """Renders the warm-up stage once per preset, in order: the first always, the
     others until stop() says a request waits (it then makes what it needs itself);
     returns the seconds it took."""
-    from ..session import RenderSettings, Session
+    from ..session import Session
+    from ..settings import RenderSettings
     from ..usd.default_scene import default_scene
     start = time.perf_counter()
     order = list(dict.fromkeys(presets))

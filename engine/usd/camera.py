@@ -111,6 +111,15 @@ def settings_camera_path(stage: Usd.Stage, warnings: list | None = None):
     return None
 
 
+def rendered_camera_path(stage: Usd.Stage, camera: str | None = None):
+    """The camera a render of `stage` goes through: `camera`, else /Render/Settings',
+    else the first camera prim; None when there is none (the engine frames the scene)."""
+    path = camera or settings_camera_path(stage)
+    if path is None:
+        path = next((str(p.GetPath()) for p in stage.Traverse() if is_camera(p)), None)
+    return path
+
+
 def view_settings(stage: Usd.Stage) -> dict:
     """Blender's colour management as the exporter wrote it on /Render/Settings (view,
     look, exposure; docs/stage_contract.md), for display images; {} when absent."""

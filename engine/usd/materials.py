@@ -14,6 +14,7 @@ import numpy as np
 from pxr import Usd, UsdShade
 
 from ..scene import Material, TextureRef
+from .patterns import read_pattern
 
 DEFAULTS = {
     "diffuseColor": (0.18, 0.18, 0.18), "metallic": 0.0, "roughness": 0.5, "ior": 1.5,
@@ -117,6 +118,7 @@ def read_material(mat: UsdShade.Material, time, warnings: list) -> Material:
                                 f"default {DEFAULTS[name]}")
                 continue
             setattr(out, FIELDS[name], value)
+    out.pattern = read_pattern(mat, time, warnings)
     return out
 
 

@@ -8,6 +8,7 @@ import math
 
 from ..ir import MaterialRecord, TexInput, TextureRecord
 from .image import image_file
+from .pattern import PatternBuilder, Unsupported, is_pattern
 
 WRAP = {"REPEAT": "repeat", "EXTEND": "clamp", "CLIP": "black", "MIRROR": "mirror"}
 SEPARATE = {"ShaderNodeSeparateColor", "ShaderNodeSeparateRGB"}
@@ -33,6 +34,16 @@ def _link(socket):
             continue
         return link
     return None
+
+
+def _computed_coordinates(tex_node) -> bool:
+    """Whether an Image Texture's Vector is more than a UV map (a UsdUVTexture's st)."""
+    link = _link(tex_node.inputs["Vector"])
+    if link is None:
+        return False
+    node = link.from_node
+    return not (node.bl_idname == "ShaderNodeUVMap" or
+                (node.bl_idname == "ShaderNodeTexCoord" and link.from_socket.name == "UV"))
 
 
 def _constant(socket, kind):
@@ -98,6 +109,7 @@ class _Walker:
         self.material = material
         self.warn = warn
         self.texture_dir = texture_dir
+        self.pattern = PatternBuilder(_link, self.image_path)
 
     def unsupported(self, node, why="not supported"):
         self.warn(f"material '{self.material.name}': node '{node.name}' ({node.bl_idname}) "
@@ -121,6 +133,10 @@ class _Walker:
             return None
         return None
 
+    def image_path(self, node):
+        return image_file(node.image, f"material '{self.material.name}', node '{node.name}'",
+                          self.warn, self.texture_dir)
+
     def texture(self, node, raw=False):
         path = image_file(node.image, f"material '{self.material.name}', node '{node.name}'",
                           self.warn, self.texture_dir)
@@ -131,12 +147,24 @@ class _Walker:
                              wrap=WRAP.get(node.extension, "repeat"),
                              color_space="sRGB" if space == "sRGB" and not raw else "raw")
 
-    def value(self, socket, kind):
-        """A constant, or a TexInput when `socket` reads an image (maybe one channel)."""
+    def value(self, socket, kind, target=None):
+        """A constant, or a TexInput when `socket` reads an image (maybe one channel).
+        A node network feeding surface input `target` goes into the pattern graph, and
+        the socket's constant is UsdPreviewSurface's fallback."""
         link = _link(socket)
         if link is None:
             return _constant(socket, kind)
         node = link.from_node
+        if node.bl_idname == "ShaderNodeTexImage" and target is not None and \
+                _computed_coordinates(node):
+            # Mapped (or otherwise computed) coordinates: the image as a network node;
+            # failing that, the image on plain UVs as before (uv_of warns).
+            try:
+                self.pattern.connect(target, link)
+                return _constant(socket, kind)
+            except Unsupported as exc:
+                self.warn(f"material '{self.material.name}': node '{exc.node.name}' "
+                          f"({exc.node.bl_idname}) {exc.why}; the image uses plain UVs")
         if node.bl_idname == "ShaderNodeTexImage":
             tex = self.texture(node, raw=(kind == "float"))
             if tex is None:
@@ -152,6 +180,12 @@ class _Walker:
                     channel = "rgb"[list(node.outputs).index(link.from_socket)]
                     return TexInput(tex, channel)
                 return _constant(socket, kind)
+        if target is not None and is_pattern(node):
+            try:
+                self.pattern.connect(target, link)
+            except Unsupported as exc:
+                self.unsupported(exc.node, exc.why)
+            return _constant(socket, kind)
         self.unsupported(node)
         return _constant(socket, kind)
 
@@ -179,9 +213,9 @@ class _Walker:
 
     def principled(self, node, inputs, weight=1.0):
         get = node.inputs.get
-        inputs["diffuseColor"] = self.value(get("Base Color"), "color")
-        inputs["metallic"] = self.value(get("Metallic"), "float")
-        inputs["roughness"] = self.value(get("Roughness"), "float")
+        inputs["diffuseColor"] = self.value(get("Base Color"), "color", "diffuseColor")
+        inputs["metallic"] = self.value(get("Metallic"), "float", "metallic")
+        inputs["roughness"] = self.value(get("Roughness"), "float", "roughness")
         for name in ("IOR", "Specular IOR Level"):
             if _link(get(name)) is not None:
                 self.unsupported(_link(get(name)).from_node, f"on '{name}' is not supported")
@@ -223,8 +257,22 @@ class _Walker:
         factor = _constant(strength_socket, "float") * weight
         if factor == 0.0:
             return
-        color = self.value(color_socket, "color")
         have = inputs.get("emissiveColor", (0.0, 0.0, 0.0))
+        link = _link(color_socket)
+        if link is not None and is_pattern(link.from_node) and \
+                link.from_node.bl_idname != "ShaderNodeTexImage":
+            if isinstance(have, TexInput) or any(have) or \
+                    "emissiveColor" in self.pattern.graph.outputs:
+                self.warn(f"material '{self.material.name}': an emission from nodes cannot be "
+                          f"added to another emission; keeping the first")
+                return
+            try:
+                self.pattern.connect_scaled("emissiveColor", link, factor)
+            except Unsupported as exc:
+                self.unsupported(exc.node, exc.why)
+            inputs["emissiveColor"] = tuple(c * factor for c in _constant(color_socket, "color"))
+            return
+        color = self.value(color_socket, "color")
         if isinstance(color, TexInput):
             if isinstance(have, TexInput) or any(have):
                 self.warn(f"material '{self.material.name}': a textured emission cannot be "
@@ -249,7 +297,7 @@ class _Walker:
                                           else _constant(math_node.inputs[1], "float"))
             inputs["opacity"] = self.value(math_node.inputs[0], "float")
             return
-        inputs["opacity"] = self.value(socket, "float")
+        inputs["opacity"] = self.value(socket, "float", "opacity")
         if getattr(self.material, "blend_method", None) == "CLIP":
             inputs["opacityThreshold"] = float(self.material.alpha_threshold)
 
@@ -262,7 +310,7 @@ class _Walker:
         if kind == "ShaderNodeBsdfPrincipled":
             self.principled(node, inputs, weight)
         elif kind == "ShaderNodeBsdfDiffuse":
-            inputs["diffuseColor"] = self.value(node.inputs["Color"], "color")
+            inputs["diffuseColor"] = self.value(node.inputs["Color"], "color", "diffuseColor")
             inputs["roughness"] = 1.0
             inputs["ior"] = 1.0  # no specular layer
         elif kind == "ShaderNodeEmission":
@@ -305,7 +353,7 @@ def gather_material(material, warn, texture_dir=None):
         "emissiveColor": (0.0, 0.0, 0.0),
         "opacity": 1.0,
     }
-    tree = material.node_tree
+    tree, graph = material.node_tree, None
     if tree is not None:
         walker = _Walker(material, warn, texture_dir)
         output = output_node(tree, "ShaderNodeOutputMaterial", f"material '{material.name}'", warn)
@@ -314,19 +362,21 @@ def gather_material(material, warn, texture_dir=None):
             found = {"emissiveColor": (0.0, 0.0, 0.0)}
             walker.shader(link, found)
             inputs.update(found)
+            graph = walker.pattern.graph if walker.pattern.graph.outputs else None
     return MaterialRecord(key=material.name_full, name=material.name, inputs=inputs,
                           backface_culling=bool(material.use_backface_culling),
                           pass_index=int(material.pass_index),
-                          alpha_mode=alpha_mode(material, inputs))
+                          alpha_mode=alpha_mode(material, inputs, graph), graph=graph)
 
 
-def alpha_mode(material, inputs) -> str:
+def alpha_mode(material, inputs, graph=None) -> str:
     """"hashed" for a material that is see-through and set to Blender's Dithered render
     method (EEVEE's hashed alpha, Blender 4.2+'s default), else "". UsdPreviewSurface
     itself says the rest: `opacityThreshold` > 0 is a cut-out (clip), an opacity below 1
     or from a texture without a threshold is blended (Blender's Blended render method)."""
     opacity = inputs.get("opacity", 1.0)
-    see_through = isinstance(opacity, TexInput) or opacity < 1.0
+    see_through = isinstance(opacity, TexInput) or opacity < 1.0 or \
+        (graph is not None and "opacity" in graph.outputs)
     if not see_through or inputs.get("opacityThreshold", 0.0) > 0.0:
         return ""
     return "hashed" if getattr(material, "surface_render_method", "DITHERED") == "DITHERED" else ""

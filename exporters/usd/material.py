@@ -1,4 +1,5 @@
-"""MaterialRecord -> UsdShade.Material with a UsdPreviewSurface network."""
+"""MaterialRecord -> UsdShade.Material with a UsdPreviewSurface network, and its
+pattern graph (if any) as a MaterialX-style network on the `mtlx` render context."""
 from pxr import Gf, Sdf, UsdShade
 
 from ..ir import TexInput
@@ -64,7 +65,64 @@ def write_material(stage, path, rec, default_uv, asset_path):
             inp.Set(Gf.Vec3f(*value))
         else:
             inp.Set(float(value))
+    if rec.graph is not None:
+        write_pattern(stage, path, material, surface, rec.graph, asset_path)
     if rec.alpha_mode:
         material.GetPrim().CreateAttribute(ALPHA_MODE, Sdf.ValueTypeNames.Token,
                                            custom=True).Set(rec.alpha_mode)
     return material
+
+
+# PatternNode value types -> USD value types (docs/stage_contract.md, "Pattern graph").
+PATTERN_TYPES = {"float": Sdf.ValueTypeNames.Float, "vector": Sdf.ValueTypeNames.Vector3f,
+                 "color": Sdf.ValueTypeNames.Color3f, "float[]": Sdf.ValueTypeNames.FloatArray,
+                 "color4[]": Sdf.ValueTypeNames.Color4fArray, "asset": Sdf.ValueTypeNames.Asset}
+MTLX_SURFACE = "ND_UsdPreviewSurface_surfaceshader"
+# A pattern node's MaterialX node-definition name. Not `info:id`: no Sdr registry has
+# Lantern's definitions, and UsdValidation reports an unregistered id as an error.
+NODE_DEF = "lantern:nodeDef"
+
+
+def _pattern_value(typ, value):
+    if typ == "color4[]":
+        return [Gf.Vec4f(*c) for c in value]
+    if typ in ("vector", "color"):
+        return Gf.Vec3f(*value)
+    return value
+
+
+def write_pattern(stage, path, material, preview, graph, asset_path):
+    """The graph as a NodeGraph `Pattern` of shaders named by `lantern:nodeDef`
+    ND_lantern_<kind> (settings are string inputs, values typed inputs, links
+    connections), read by an
+    ND_UsdPreviewSurface_surfaceshader on `outputs:mtlx:surface` whose unconnected
+    inputs are the UsdPreviewSurface's."""
+    ng = UsdShade.NodeGraph.Define(stage, path.AppendChild("Pattern"))
+    shaders = {}
+    for node in graph.nodes:
+        shader = UsdShade.Shader.Define(stage, ng.GetPath().AppendChild(node.name))
+        shader.GetPrim().CreateAttribute(NODE_DEF, Sdf.ValueTypeNames.Token,
+                                         custom=True).Set(f"ND_lantern_{node.kind}")
+        for name, value in sorted(node.settings.items()):
+            shader.CreateInput(name, Sdf.ValueTypeNames.String).Set(str(value))
+        for name, (typ, value) in sorted(node.values.items()):
+            value = asset_path(value) if typ == "asset" else _pattern_value(typ, value)
+            shader.CreateInput(name, PATTERN_TYPES[typ]).Set(value)
+        for name, typ in sorted(node.outputs.items()):
+            shader.CreateOutput(name, PATTERN_TYPES[typ])
+        for name, (typ, src, out) in sorted(node.links.items()):
+            shader.CreateInput(name, PATTERN_TYPES[typ]).ConnectToSource(
+                shaders[src].GetOutput(out))
+        shaders[node.name] = shader
+    mtlx = UsdShade.Shader.Define(stage, path.AppendChild("MtlxSurface"))
+    mtlx.CreateIdAttr(MTLX_SURFACE)
+    for inp in preview.GetInputs():
+        if not inp.HasConnectedSource() and inp.GetBaseName() not in graph.outputs:
+            mtlx.CreateInput(inp.GetBaseName(), inp.GetTypeName()).Set(inp.Get())
+    for target, (src, out) in sorted(graph.outputs.items()):
+        src_out = shaders[src].GetOutput(out)
+        typ = INPUT_TYPES.get(target, Sdf.ValueTypeNames.Float)
+        ng_out = ng.CreateOutput(target, src_out.GetTypeName())
+        ng_out.ConnectToSource(src_out)
+        mtlx.CreateInput(target, typ).ConnectToSource(ng_out)
+    material.CreateSurfaceOutput("mtlx").ConnectToSource(mtlx.ConnectableAPI(), "surface")

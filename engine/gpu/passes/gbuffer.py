@@ -13,12 +13,15 @@ writes: g_base (base colour + alpha), g_normal (world normal, clearcoat roughnes
         g_mat (metallic, roughness, dielectric F0, clearcoat), g_emit (emission), all
         RGBA16F; g_depth (32-bit
         float, reversed: cleared to 0, tested GREATER; engine/view.py)
+A material with a pattern graph (engine/gpu/pattern.py) draws with its shape's
+generated variant and its parameters (stats: pattern_bytes).
 render passes: IndexOB, IndexMA into g_index (RG32F), only when asked for (a
         shader variant with a fifth output)"""
 from __future__ import annotations
 
 from ..framegraph import Pass
 from ..points import set_camera_facing
+from ..pattern import material_variant, pattern_images, set_parameters
 from ..programs import UNITS, set_uniform
 from .antialias import texture_footprint
 
@@ -66,12 +69,13 @@ class GBufferPass(Pass):
                 continue                   # wholly see-through: the transparency pass's
             defines = map_defines(mat) + self.geometry.object_defines() + \
                 (["WRITE_INDEX"] if index else [])
-            prog = self.programs.get("gbuffer.vert", "gbuffer.frag", defines)
+            prog = self.programs.get("gbuffer.vert", "gbuffer.frag", defines,
+                                     generated=material_variant(mat))
             set_uniform(prog, "view_proj", view.view_proj)
             set_uniform(prog, "u_far", view.far_clip)
             view.set_origin(prog)
-            set_material(prog, mat, self.textures, threshold,
-                         texture_footprint(frame.supersample))
+            frame.count("pattern_bytes", set_material(prog, mat, self.textures, threshold,
+                                                      texture_footprint(frame.supersample)))
             # A mirroring transform turns counter-clockwise triangles clockwise.
             ctx.front_face = "cw" if batch.mirrored else "ccw"
             if batch.cull:
@@ -106,7 +110,8 @@ class GBufferPass(Pass):
 def set_material(prog, mat, textures, threshold, footprint=1.0):
     """A material's uniforms and maps (shaders/material.glsl); `threshold`: the alpha
     test, discarding below it (0: none); `footprint`: what a texture lookup filters
-    over, as a fraction of the fragment (antialias.texture_footprint)."""
+    over, as a fraction of the fragment (antialias.texture_footprint). Returns the
+    pattern parameters' bytes."""
     set_uniform(prog, "u_texture_footprint", footprint)
     set_uniform(prog, "u_diffuse", mat.diffuse)
     set_uniform(prog, "u_metallic", mat.metallic)
@@ -118,19 +123,27 @@ def set_material(prog, mat, textures, threshold, footprint=1.0):
     set_uniform(prog, "u_clearcoat", mat.clearcoat)
     set_uniform(prog, "u_clearcoat_roughness", mat.clearcoat_roughness)
     set_uniform(prog, "u_material_index", float(mat.pass_index))
+    pattern_bytes = set_parameters(prog, mat)
     for name, short, _ in MAP_SLOTS:
         ref = mat.maps.get(name)
-        if ref is None:
-            continue
-        unit = UNITS[f"t_{short}"]
-        tex, decode = textures.get(ref.path, ref.colorspace)
-        tex.use(unit)
-        set_uniform(prog, f"m_{short}.srgb", bool(decode))
-        textures.sampler(ref.wrap_s, ref.wrap_t).use(unit)
-        set_uniform(prog, f"m_{short}.wrap", (WRAP.get(ref.wrap_s, 0), WRAP.get(ref.wrap_t, 0)))
-        set_uniform(prog, f"m_{short}.scale", tuple(ref.scale))
-        set_uniform(prog, f"m_{short}.bias", tuple(ref.bias))
-        set_uniform(prog, f"m_{short}.channel", CHANNEL.get(ref.channel, -1))
+        if ref is not None:
+            _bind_map(prog, short, ref, textures)
+    for k, ref in enumerate(pattern_images(mat)):
+        _bind_map(prog, f"pattern{k}", ref, textures)
+    return pattern_bytes
+
+
+def _bind_map(prog, short, ref, textures):
+    """Texture t_<short> and its Map m_<short> (shaders/material.glsl sample_map)."""
+    unit = UNITS[f"t_{short}"]
+    tex, decode = textures.get(ref.path, ref.colorspace)
+    tex.use(unit)
+    set_uniform(prog, f"m_{short}.srgb", bool(decode))
+    textures.sampler(ref.wrap_s, ref.wrap_t).use(unit)
+    set_uniform(prog, f"m_{short}.wrap", (WRAP.get(ref.wrap_s, 0), WRAP.get(ref.wrap_t, 0)))
+    set_uniform(prog, f"m_{short}.scale", tuple(ref.scale))
+    set_uniform(prog, f"m_{short}.bias", tuple(ref.bias))
+    set_uniform(prog, f"m_{short}.channel", CHANNEL.get(ref.channel, -1))
 
 
 def map_defines(mat) -> list:

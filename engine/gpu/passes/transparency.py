@@ -40,6 +40,7 @@ import numpy as np
 from ....core.lights import SUN
 from ...scene import OPAQUE_ALPHA
 from ..framegraph import Pass
+from ..pattern import material_variant
 from ..programs import UNITS, set_uniform
 from .antialias import texture_footprint
 from .gbuffer import map_defines, set_material
@@ -156,13 +157,15 @@ class TransparencyPass(Pass):
         dome, env = environment
         defines = map_defines(mat) + (["HAS_DOME_MAP"] if env is not None else []) + \
             (["AMBIENT"] if ambient else []) + (["HAS_SHADOW"] if sm is not None else [])
-        prog = self.programs.get("gbuffer.vert", "transparent.frag", defines)
+        prog = self.programs.get("gbuffer.vert", "transparent.frag", defines,
+                                 generated=material_variant(mat))
         set_uniform(prog, "view_proj", view.view_proj)
         set_uniform(prog, "u_far", view.far_clip)
         view.set_camera(prog)
         set_uniform(prog, "u_size", tuple(float(s) for s in frame.size))
         set_material(prog, mat, self.textures, 0.0, texture_footprint(frame.supersample))
-        set_uniform(prog, "u_opaque_alpha", OPAQUE_ALPHA if "opacity" in mat.maps else 2.0)
+        set_uniform(prog, "u_opaque_alpha", OPAQUE_ALPHA if "opacity" in mat.maps or mat.opacity_varies
+                    else 2.0)
         self.environment.bind(prog, dome, env)    # and the split-sum table every draw needs
         set_uniform(prog, "has_dome", dome is not None)
         if "light_rows" in prog:

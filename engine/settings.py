@@ -1,0 +1,73 @@
+"""RenderSettings: what a render is asked for (size, frame, preset, view, passes,
+shading and post options), a plain record. The Session takes it, and every frame
+carries it to the passes (engine/gpu/framegraph.py Frame.options)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.presets import DEFAULT as DEFAULT_PRESET
+
+# The image's formats in host memory (engine/gpu/readback.py maps them to GL's).
+READBACK_FORMATS = ("float32", "half")
+
+
+@dataclass
+class RenderSettings:
+    width: int | None = None     # None: /Render/Settings resolution if authored, else 640x360
+    height: int | None = None
+    frame: float | None = None   # None: the stage's startTimeCode if authored, else Default
+    preset: str = DEFAULT_PRESET  # low | medium | high | ultra (core/presets.py)
+    transparent: bool = False    # alpha = coverage instead of 1
+    # An explicit view instead of the stage's camera (Blender's viewport): OpenGL
+    # world-to-view and projection matrices, column-vector convention.
+    view_matrix: np.ndarray | None = None
+    projection_matrix: np.ndarray | None = None
+    camera: str | None = None    # a camera prim; None: /Render/Settings', else the first
+    cull_backfaces: bool = False  # cull back faces of every single-sided mesh
+    # Render passes (AOVs) to compute besides Combined, by Blender's names
+    # (core/passes.py): only these are computed and read back.
+    passes: frozenset = frozenset()
+    # Shading (docs/rendering.md). Ambient occlusion of the dome's light (the preset sets its
+    # rays and steps); off: the dome lights every surface unoccluded.
+    ambient_occlusion: bool = True
+    # 8-bit sRGB textures: "encoded" filters the stored values and decodes after (as
+    # Cycles does); "linear" decodes, then filters (as EEVEE and GL's sRGB formats do).
+    srgb_filtering: str = "encoded"
+    # Anti-aliasing: supersampling, the image drawn k times wider and taller and
+    # filtered down with Cycles' pixel filter (None: the preset's; high and ultra
+    # supersample, for F12 and the command line; an interactive viewport may ask for
+    # 1), and FXAA on images not supersampled (None: the preset's).
+    supersample: int | None = None
+    fxaa: bool | None = None
+    # The post chain, on the scene-linear image (engine/gpu/passes/post.py): exposure
+    # in stops, a Gaussian blur of `blur` pixels (sigma), grayscale (Rec. 709
+    # luminance), mirror "x", "y" or "xy". All off by default: inside Blender the image
+    # stays as rendered and Blender's colour management applies.
+    exposure: float = 0.0
+    blur: float = 0.0
+    grayscale: bool = False
+    mirror: str = ""
+    # The image's format in host memory: "float32" (F12, files, compare) or "half"
+    # (a viewport: half the bytes to copy; within float16 rounding of float32).
+    readback: str = "float32"
+
+    def __post_init__(self):
+        if self.supersample is not None and (int(self.supersample) != self.supersample
+                                             or not 1 <= self.supersample <= 8):
+            raise ValueError(f"supersample must be a whole number from 1 to 8, not "
+                             f"{self.supersample!r}")
+        if not (self.blur >= 0.0 and math.isfinite(self.blur)):
+            raise ValueError(f"blur must be a finite sigma >= 0 (pixels), not {self.blur!r}")
+        if not math.isfinite(self.exposure):
+            raise ValueError(f"exposure must be finite, not {self.exposure!r}")
+        if self.mirror not in ("", "x", "y", "xy"):
+            raise ValueError(f"mirror must be '', 'x', 'y' or 'xy', not {self.mirror!r}")
+        if self.readback not in READBACK_FORMATS:
+            raise ValueError(f"readback must be one of {', '.join(READBACK_FORMATS)}, not "
+                             f"{self.readback!r}")
+        if self.srgb_filtering not in ("encoded", "linear"):
+            raise ValueError(f"srgb_filtering must be 'encoded' or 'linear', not "
+                             f"{self.srgb_filtering!r}")

@@ -1,0 +1,583 @@
+"""The node-network scenes (docs/materials.md), one per node family, shared by the
+Cycles reference script (references/make_pattern_references.py) and by
+tests/test_patterns.py. Nothing here is copied elsewhere.
+
+Every scene is a grid of unit quads seen straight down by an orthographic camera, one
+material per quad, lit by a sun of strength pi straight down with a black world, so
+that (Principled BSDF, Specular IOR Level 0) each pixel is the base colour the
+network computes. Cycles renders direct light only (as references/looks/)."""
+import math
+
+from reference_scenes import _camera, _mesh_object, _sun, _world
+
+SIZE = (128, 128)
+SAMPLES = 64
+COLUMNS = 5
+
+
+def _principled(name):
+    import bpy
+    mat = bpy.data.materials.new(name)
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Roughness"].default_value = 1.0
+    bsdf.inputs["Specular IOR Level"].default_value = 0.0
+    return mat, mat.node_tree, bsdf
+
+
+def _uv_xyz(tree):
+    """(Separate XYZ of the UV coordinates) -> its node."""
+    coord = tree.nodes.new("ShaderNodeTexCoord")
+    sep = tree.nodes.new("ShaderNodeSeparateXYZ")
+    tree.links.new(coord.outputs["UV"], sep.inputs[0])
+    return coord, sep
+
+
+def _grid(name, builders, columns=COLUMNS, size=SIZE):
+    """One quad per (label, build(tree, bsdf)) in a grid of `columns`, rows downwards."""
+    import bpy
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.resolution_x, scene.render.resolution_y = size
+    scene.render.resolution_percentage = 100
+    scene.render.pixel_aspect_x = scene.render.pixel_aspect_y = 1.0
+    _world(scene, color=(0.0, 0.0, 0.0), strength=0.0)
+    _sun(scene, math.pi)
+    rows = (len(builders) + columns - 1) // columns
+    for i, (label, build) in enumerate(builders):
+        mat, tree, bsdf = _principled(f"{name}_{label}")
+        build(tree, bsdf)
+        x, y = i % columns, -(i // columns)
+        corners = [(x, y - 1, 0), (x + 1, y - 1, 0), (x + 1, y, 0), (x, y, 0)]
+        _mesh_object(scene, f"{name}_{label}", corners, [(0, 1, 2, 3)], mat,
+                     [(0, 0), (1, 0), (1, 1), (0, 1)])
+    extent = max(columns, rows)
+    centre = (columns / 2.0, -rows / 2.0)
+    _camera(scene, (centre[0], centre[1], 10.0), (centre[0], centre[1], 0.0),
+            ortho_scale=extent)
+    bpy.context.view_layer.update()
+    return scene
+
+
+def _to_base(tree, bsdf, socket):
+    tree.links.new(socket, bsdf.inputs["Base Color"])
+
+
+def _mix_blend(blend):
+    def build(tree, bsdf):
+        _, sep = _uv_xyz(tree)
+        comb = tree.nodes.new("ShaderNodeCombineColor")
+        tree.links.new(sep.outputs["X"], comb.inputs[0])
+        tree.links.new(sep.outputs["Y"], comb.inputs[1])
+        comb.inputs[2].default_value = 0.5
+        mix = tree.nodes.new("ShaderNodeMix")
+        mix.data_type, mix.blend_type = "RGBA", blend
+        mix.inputs["Factor"].default_value = 0.7
+        tree.links.new(comb.outputs[0], mix.inputs[6])          # A_Color
+        mix.inputs[7].default_value = (0.8, 0.3, 0.1, 1.0)     # B_Color
+        _to_base(tree, bsdf, mix.outputs[2])                    # Result_Color
+    return build
+
+
+def _mix_float(tree, bsdf):
+    _, sep = _uv_xyz(tree)
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type = "FLOAT"
+    tree.links.new(sep.outputs["X"], mix.inputs[0])             # Factor_Float
+    mix.inputs[2].default_value = 0.1                           # A_Float
+    mix.inputs[3].default_value = 0.9                           # B_Float
+    _to_base(tree, bsdf, mix.outputs[0])
+
+
+def _mix_vector(tree, bsdf):
+    coord, sep = _uv_xyz(tree)
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type, mix.factor_mode = "VECTOR", "NON_UNIFORM"
+    mix.inputs[1].default_value = (0.2, 0.8, 0.5)               # Factor_Vector
+    tree.links.new(coord.outputs["UV"], mix.inputs[4])          # A_Vector
+    mix.inputs[5].default_value = (0.9, 0.1, 0.4)               # B_Vector
+    _to_base(tree, bsdf, mix.outputs[1])
+
+
+def build_mix(workdir=None):
+    from lantern.core.pattern_nodes import BLEND_TYPES
+    return _grid("mix", [(b.lower(), _mix_blend(b)) for b in BLEND_TYPES] +
+                 [("float", _mix_float), ("vector", _mix_vector)])
+
+
+def _math(op, b=0.5, c=0.3):
+    def build(tree, bsdf):
+        _, sep = _uv_xyz(tree)
+        pre = tree.nodes.new("ShaderNodeMath")          # u * 4 - 2 spans [-2, 2]
+        pre.operation = "MULTIPLY_ADD"
+        tree.links.new(sep.outputs["X"], pre.inputs[0])
+        pre.inputs[1].default_value, pre.inputs[2].default_value = 4.0, -2.0
+        node = tree.nodes.new("ShaderNodeMath")
+        node.operation = op
+        tree.links.new(pre.outputs[0], node.inputs[0])
+        if b is None:
+            tree.links.new(sep.outputs["Y"], node.inputs[1])
+        else:
+            node.inputs[1].default_value = b
+        node.inputs[2].default_value = c
+        post = tree.nodes.new("ShaderNodeMath")         # [-2, 2] -> [0, 1]
+        post.operation, post.use_clamp = "MULTIPLY_ADD", False
+        tree.links.new(node.outputs[0], post.inputs[0])
+        post.inputs[1].default_value, post.inputs[2].default_value = 0.25, 0.5
+        _to_base(tree, bsdf, post.outputs[0])
+    return build
+
+
+MATH_SHOWN = ["ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "POWER", "LOGARITHM", "SQRT",
+              "ABSOLUTE", "MINIMUM", "GREATER_THAN", "SMOOTH_MIN", "ROUND", "FRACT",
+              "MODULO", "FLOORED_MODULO", "WRAP", "SNAP", "PINGPONG", "SINE", "ARCTAN2",
+              "TANH", "COMPARE", "SIGN", "EXPONENT", "INVERSE_SQRT"]
+
+
+def build_math(workdir=None):
+    return _grid("math", [(op.lower(), _math(op, None if op in ("ARCTAN2", "POWER") else 0.7))
+                          for op in MATH_SHOWN])
+
+
+def _vector_math(op):
+    def build(tree, bsdf):
+        coord, _ = _uv_xyz(tree)
+        pre = tree.nodes.new("ShaderNodeVectorMath")    # uv * 2 - 1
+        pre.operation = "MULTIPLY_ADD"
+        tree.links.new(coord.outputs["UV"], pre.inputs[0])
+        pre.inputs[1].default_value, pre.inputs[2].default_value = (2, 2, 2), (-1, -1, 0.5)
+        node = tree.nodes.new("ShaderNodeVectorMath")
+        node.operation = op
+        tree.links.new(pre.outputs[0], node.inputs[0])
+        node.inputs[1].default_value = (0.3, -0.6, 0.9)
+        node.inputs[2].default_value = (0.5, 0.5, 0.5)
+        node.inputs[3].default_value = 0.7
+        out = node.outputs[1] if op in ("DOT_PRODUCT", "DISTANCE", "LENGTH") else node.outputs[0]
+        post = tree.nodes.new("ShaderNodeVectorMath")
+        post.operation = "MULTIPLY_ADD"
+        tree.links.new(out, post.inputs[0])
+        post.inputs[1].default_value, post.inputs[2].default_value = (0.4,) * 3, (0.5,) * 3
+        _to_base(tree, bsdf, post.outputs[0])
+    return build
+
+
+VECTOR_MATH_SHOWN = ["ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "CROSS_PRODUCT", "PROJECT",
+                     "REFLECT", "DOT_PRODUCT", "DISTANCE", "LENGTH", "SCALE", "NORMALIZE",
+                     "SNAP", "FLOOR", "MODULO", "WRAP", "FRACTION", "ABSOLUTE", "MINIMUM",
+                     "MAXIMUM", "SINE", "COSINE", "CEIL", "SIGN", "MULTIPLY_ADD", "REFRACT",
+                     "FACEFORWARD", "POWER", "TANGENT"]
+
+
+def build_vector_math(workdir=None):
+    return _grid("vector_math", [(op.lower(), _vector_math(op)) for op in VECTOR_MATH_SHOWN])
+
+
+def _uv_mapping(tree, vector_type, location, rotation, scale):
+    """Texture Coordinate UV through a Mapping node (Location only where the type has it)."""
+    coord = tree.nodes.new("ShaderNodeTexCoord")
+    mapping = tree.nodes.new("ShaderNodeMapping")
+    mapping.vector_type = vector_type
+    tree.links.new(coord.outputs["UV"], mapping.inputs["Vector"])
+    if vector_type in ("POINT", "TEXTURE"):
+        mapping.inputs["Location"].default_value = location
+    mapping.inputs["Rotation"].default_value = rotation
+    mapping.inputs["Scale"].default_value = scale
+    return mapping
+
+
+def _mapped_checker(vector_type, scale=4.0):
+    def build(tree, bsdf):
+        mapping = _uv_mapping(tree, vector_type, (0.13, 0.27, 0.0), (0.0, 0.0, 0.5),
+                              (1.3, 0.8, 1.0))
+        checker = tree.nodes.new("ShaderNodeTexChecker")
+        checker.inputs["Scale"].default_value = scale
+        checker.inputs["Color1"].default_value = (0.9, 0.8, 0.2, 1.0)
+        checker.inputs["Color2"].default_value = (0.1, 0.2, 0.6, 1.0)
+        tree.links.new(mapping.outputs[0], checker.inputs["Vector"])
+        _to_base(tree, bsdf, checker.outputs["Color"])
+    return build
+
+
+def _plain_checker(scale):
+    def build(tree, bsdf):
+        coord = tree.nodes.new("ShaderNodeTexCoord")
+        checker = tree.nodes.new("ShaderNodeTexChecker")
+        checker.inputs["Scale"].default_value = scale
+        tree.links.new(coord.outputs["UV"], checker.inputs["Vector"])
+        _to_base(tree, bsdf, checker.outputs["Color"])
+    return build
+
+
+def _mapped_gradient(vector_type):
+    """The mapped coordinates themselves as colour (fract), where a checker would hide
+    a small offset."""
+    def build(tree, bsdf):
+        mapping = _uv_mapping(tree, vector_type, (0.13, 0.27, 0.1), (0.2, 0.3, 0.5),
+                              (1.3, 0.8, 1.2))
+        frac = tree.nodes.new("ShaderNodeVectorMath")
+        frac.operation = "FRACTION"
+        tree.links.new(mapping.outputs[0], frac.inputs[0])
+        _to_base(tree, bsdf, frac.outputs[0])
+    return build
+
+
+def build_mapping(workdir=None):
+    types = ("POINT", "TEXTURE", "VECTOR", "NORMAL")
+    return _grid("mapping", [(f"checker_{t.lower()}", _mapped_checker(t)) for t in types] +
+                 [(f"coords_{t.lower()}", _mapped_gradient(t)) for t in types] +
+                 [("checker_3", _plain_checker(3.0)), ("checker_7", _plain_checker(7.0))])
+
+
+def _ramp(interpolation):
+    def build(tree, bsdf):
+        _, sep = _uv_xyz(tree)
+        ramp = tree.nodes.new("ShaderNodeValToRGB")
+        ramp.color_ramp.interpolation = interpolation
+        els = ramp.color_ramp.elements
+        els[0].position, els[0].color = 0.1, (0.9, 0.1, 0.1, 1.0)
+        els[1].position, els[1].color = 0.9, (0.1, 0.2, 0.9, 1.0)
+        mid = els.new(0.45)
+        mid.color = (0.2, 0.9, 0.3, 1.0)
+        tree.links.new(sep.outputs["X"], ramp.inputs["Fac"])
+        _to_base(tree, bsdf, ramp.outputs["Color"])
+    return build
+
+
+def _ramp_alpha_to_roughness(tree, bsdf):
+    _, sep = _uv_xyz(tree)
+    ramp = tree.nodes.new("ShaderNodeValToRGB")
+    els = ramp.color_ramp.elements
+    els[0].color, els[1].color = (0.2, 0.2, 0.2, 0.2), (0.8, 0.8, 0.8, 0.9)
+    tree.links.new(sep.outputs["Y"], ramp.inputs["Fac"])
+    tree.links.new(ramp.outputs["Alpha"], bsdf.inputs["Base Color"])
+
+
+def build_color_ramp(workdir=None):
+    return _grid("color_ramp", [(i.lower(), _ramp(i)) for i in ("LINEAR", "CONSTANT", "EASE")] +
+                 [("alpha", _ramp_alpha_to_roughness)])
+
+
+def _uv_color(tree):
+    _, sep = _uv_xyz(tree)
+    comb = tree.nodes.new("ShaderNodeCombineColor")
+    tree.links.new(sep.outputs["X"], comb.inputs[0])
+    tree.links.new(sep.outputs["Y"], comb.inputs[1])
+    comb.inputs[2].default_value = 0.4
+    return comb.outputs[0]
+
+
+def _rgb_value(tree, bsdf):
+    rgb = tree.nodes.new("ShaderNodeRGB")
+    rgb.outputs[0].default_value = (0.7, 0.35, 0.1, 1.0)
+    value = tree.nodes.new("ShaderNodeValue")
+    value.outputs[0].default_value = 0.6
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type, mix.blend_type = "RGBA", "MULTIPLY"
+    tree.links.new(_uv_color(tree), mix.inputs[0])   # colour -> float factor (luminance)
+    tree.links.new(rgb.outputs[0], mix.inputs[6])
+    tree.links.new(value.outputs[0], mix.inputs[7])
+    _to_base(tree, bsdf, mix.outputs[2])
+
+
+def _invert(tree, bsdf):
+    inv = tree.nodes.new("ShaderNodeInvert")
+    inv.inputs["Fac"].default_value = 0.8
+    tree.links.new(_uv_color(tree), inv.inputs["Color"])
+    _to_base(tree, bsdf, inv.outputs[0])
+
+
+def _hsv(hue, sat, val):
+    def build(tree, bsdf):
+        node = tree.nodes.new("ShaderNodeHueSaturation")
+        node.inputs["Hue"].default_value = hue
+        node.inputs["Saturation"].default_value = sat
+        node.inputs["Value"].default_value = val
+        tree.links.new(_uv_color(tree), node.inputs["Color"])
+        _to_base(tree, bsdf, node.outputs[0])
+    return build
+
+
+def _separate_combine(mode):
+    def build(tree, bsdf):
+        sep = tree.nodes.new("ShaderNodeSeparateColor")
+        sep.mode = mode
+        tree.links.new(_uv_color(tree), sep.inputs[0])
+        comb = tree.nodes.new("ShaderNodeCombineColor")
+        comb.mode = mode
+        tree.links.new(sep.outputs[2], comb.inputs[0])     # rotate the channels
+        tree.links.new(sep.outputs[0], comb.inputs[1])
+        tree.links.new(sep.outputs[1], comb.inputs[2])
+        _to_base(tree, bsdf, comb.outputs[0])
+    return build
+
+
+def _xyz_to_float(tree, bsdf):
+    """Combine XYZ into a float socket (Blender's vector -> float average)."""
+    _, sep = _uv_xyz(tree)
+    comb = tree.nodes.new("ShaderNodeCombineXYZ")
+    tree.links.new(sep.outputs["Y"], comb.inputs[0])
+    tree.links.new(sep.outputs["X"], comb.inputs[1])
+    comb.inputs[2].default_value = 0.9
+    math_node = tree.nodes.new("ShaderNodeMath")
+    math_node.operation = "MULTIPLY"
+    tree.links.new(comb.outputs[0], math_node.inputs[0])
+    math_node.inputs[1].default_value = 1.0
+    _to_base(tree, bsdf, math_node.outputs[0])
+
+
+def build_color(workdir=None):
+    return _grid("color", [
+        ("rgb_value", _rgb_value), ("invert", _invert),
+        ("hsv_hue", _hsv(0.3, 1.0, 1.0)), ("hsv_sat", _hsv(0.5, 1.8, 0.9)),
+        ("hsv_val", _hsv(0.5, 0.4, 1.3)), ("sep_comb_rgb", _separate_combine("RGB")),
+        ("sep_comb_hsv", _separate_combine("HSV")), ("xyz_float", _xyz_to_float)])
+
+
+def family_builders():
+    """Every quad builder of the six family scenes: (label, build)."""
+    from lantern.core.pattern_nodes import BLEND_TYPES
+    return ([(b.lower(), _mix_blend(b)) for b in BLEND_TYPES] +
+            [("float", _mix_float), ("vector", _mix_vector)] +
+            [(op.lower(), _math(op, None if op in ("ARCTAN2", "POWER") else 0.7))
+             for op in MATH_SHOWN] +
+            [(op.lower(), _vector_math(op)) for op in VECTOR_MATH_SHOWN] +
+            [(t.lower(), _mapped_checker(t)) for t in ("POINT", "TEXTURE", "VECTOR", "NORMAL")] +
+            [(i.lower(), _ramp(i)) for i in ("LINEAR", "CONSTANT", "EASE")] +
+            [("invert", _invert), ("rgb_value", _rgb_value), ("hsv", _hsv(0.3, 1.2, 0.9)),
+             ("sep_comb_hsv", _separate_combine("HSV"))])
+
+
+def _gradient(gradient_type, centred=True):
+    def build(tree, bsdf):
+        node = tree.nodes.new("ShaderNodeTexGradient")
+        node.gradient_type = gradient_type
+        if centred:                                   # UV to [-1, 1]
+            mapping = _uv_mapping(tree, "POINT", (-1.0, -1.0, 0.0), (0.0, 0.0, 0.0),
+                                  (2.0, 2.0, 1.0))
+            tree.links.new(mapping.outputs[0], node.inputs["Vector"])
+        _to_base(tree, bsdf, node.outputs["Color"])
+    return build
+
+
+def build_gradient(workdir=None):
+    """Every gradient type on centred UVs, and Linear with its Vector unlinked (Blender's
+    Generated coordinates, which on these quads equal the UVs)."""
+    from lantern.core.pattern_nodes import GRADIENT_TYPES
+    return _grid("gradient", [(t.lower(), _gradient(t)) for t in GRADIENT_TYPES] +
+                 [("linear_generated", _gradient("LINEAR", centred=False))])
+
+
+def _emission_shader(tree, bsdf):
+    """An Emission shader (strength 2) whose colour is a network."""
+    out = tree.nodes["Material Output"]
+    emission = tree.nodes.new("ShaderNodeEmission")
+    emission.inputs["Strength"].default_value = 2.0
+    tree.links.new(_uv_color(tree), emission.inputs["Color"])
+    tree.links.new(emission.outputs[0], out.inputs["Surface"])
+
+
+def _principled_emission(tree, bsdf):
+    """A Principled BSDF's Emission Color from a network, strength 1.5, over a dark base."""
+    bsdf.inputs["Base Color"].default_value = (0.1, 0.1, 0.1, 1.0)
+    bsdf.inputs["Emission Strength"].default_value = 1.5
+    inv = tree.nodes.new("ShaderNodeInvert")
+    tree.links.new(_uv_color(tree), inv.inputs["Color"])
+    tree.links.new(inv.outputs[0], bsdf.inputs["Emission Color"])
+
+
+def _emission_from_float(tree, bsdf):
+    """A float output (Math) into Emission Color: Blender's float -> colour splat."""
+    _, sep = _uv_xyz(tree)
+    node = tree.nodes.new("ShaderNodeMath")
+    node.operation = "MULTIPLY"
+    tree.links.new(sep.outputs["X"], node.inputs[0])
+    node.inputs[1].default_value = 0.5
+    bsdf.inputs["Base Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+    bsdf.inputs["Emission Strength"].default_value = 1.0
+    tree.links.new(node.outputs[0], bsdf.inputs["Emission Color"])
+
+
+def build_emission(workdir=None):
+    return _grid("emission", [("shader", _emission_shader), ("principled", _principled_emission),
+                              ("float", _emission_from_float)])
+
+
+def _noise(output="Fac", scale=5.0, detail=2.0, roughness=0.5, distortion=0.0,
+           normalize=True):
+    def build(tree, bsdf):
+        coord = tree.nodes.new("ShaderNodeTexCoord")
+        node = tree.nodes.new("ShaderNodeTexNoise")
+        node.normalize = normalize
+        node.inputs["Scale"].default_value = scale
+        node.inputs["Detail"].default_value = detail
+        node.inputs["Roughness"].default_value = roughness
+        node.inputs["Distortion"].default_value = distortion
+        tree.links.new(coord.outputs["UV"], node.inputs["Vector"])
+        _to_base(tree, bsdf, node.outputs[output])
+    return build
+
+
+def build_noise(workdir=None):
+    """Blender's Perlin fBm: the defaults, its colour, fractional and zero detail,
+    distortion, and unnormalised (scaled into range by the base colour's clamp)."""
+    return _grid("noise", [("default", _noise()), ("color", _noise("Color")),
+                           ("detail_0", _noise(detail=0.0, scale=3.0)),
+                           ("detail_3_7", _noise(detail=3.7, roughness=0.6)),
+                           ("distortion", _noise("Color", distortion=1.5, scale=2.0)),
+                           ("coarse", _noise(scale=1.5, detail=0.0))])
+
+
+def _wave(wave_type="BANDS", direction="X", profile="SIN", distortion=0.0, scale=2.0):
+    def build(tree, bsdf):
+        coord = tree.nodes.new("ShaderNodeTexCoord")
+        node = tree.nodes.new("ShaderNodeTexWave")
+        node.wave_type, node.wave_profile = wave_type, profile
+        if wave_type == "BANDS":
+            node.bands_direction = direction
+        else:
+            node.rings_direction = direction
+        node.inputs["Scale"].default_value = scale
+        node.inputs["Distortion"].default_value = distortion
+        node.inputs["Phase Offset"].default_value = 0.7
+        tree.links.new(coord.outputs["UV"], node.inputs["Vector"])
+        _to_base(tree, bsdf, node.outputs["Color"])
+    return build
+
+
+def build_wave(workdir=None):
+    return _grid("wave", [("bands_x", _wave()), ("bands_y_saw", _wave(direction="Y", profile="SAW")),
+                          ("bands_diagonal_tri", _wave(direction="DIAGONAL", profile="TRI")),
+                          ("rings_spherical", _wave("RINGS", "SPHERICAL")),
+                          ("rings_z_saw", _wave("RINGS", "Z", "SAW", scale=1.0)),
+                          ("bands_distorted", _wave(distortion=3.0, scale=1.0))])
+
+
+def _voronoi(output="Distance", metric="EUCLIDEAN", detail=0.0, scale=4.0, randomness=1.0):
+    def build(tree, bsdf):
+        coord = tree.nodes.new("ShaderNodeTexCoord")
+        node = tree.nodes.new("ShaderNodeTexVoronoi")
+        node.distance = metric
+        node.inputs["Scale"].default_value = scale
+        node.inputs["Detail"].default_value = detail
+        node.inputs["Randomness"].default_value = randomness
+        tree.links.new(coord.outputs["UV"], node.inputs["Vector"])
+        out = node.outputs[output]
+        if output == "Position":                    # into [0, 1)
+            frac = tree.nodes.new("ShaderNodeVectorMath")
+            frac.operation = "FRACTION"
+            tree.links.new(out, frac.inputs[0])
+            out = frac.outputs[0]
+        _to_base(tree, bsdf, out)
+    return build
+
+
+def build_voronoi(workdir=None):
+    return _grid("voronoi", [("distance", _voronoi()), ("color", _voronoi("Color")),
+                             ("position", _voronoi("Position", scale=2.0)),
+                             ("manhattan", _voronoi(metric="MANHATTAN")),
+                             ("chebychev", _voronoi(metric="CHEBYCHEV", randomness=0.6)),
+                             ("minkowski", _voronoi(metric="MINKOWSKI")),
+                             ("detail_1_5", _voronoi("Color", detail=1.5, scale=2.0))])
+
+
+def _alpha(method, source):
+    """Alpha from a network, over the black world: Blended or Dithered render method."""
+    def build(tree, bsdf):
+        bsdf.inputs["Base Color"].default_value = (0.8, 0.5, 0.2, 1.0)
+        tree.links.new(source(tree), bsdf.inputs["Alpha"])
+        import bpy
+        next(m for m in bpy.data.materials if m.node_tree == tree).surface_render_method = method
+    return build
+
+
+def _alpha_gradient(tree):
+    node = tree.nodes.new("ShaderNodeTexGradient")
+    return node.outputs["Fac"]
+
+
+def _alpha_checker(tree):
+    coord = tree.nodes.new("ShaderNodeTexCoord")
+    node = tree.nodes.new("ShaderNodeTexChecker")
+    node.inputs["Scale"].default_value = 3.0
+    node.inputs["Color1"].default_value = (1.0, 1.0, 1.0, 1.0)
+    node.inputs["Color2"].default_value = (0.3, 0.3, 0.3, 1.0)
+    tree.links.new(coord.outputs["UV"], node.inputs["Vector"])
+    return node.outputs["Fac"]
+
+
+def build_alpha(workdir=None):
+    return _grid("alpha", [("gradient_blended", _alpha("BLENDED", _alpha_gradient)),
+                           ("gradient_dithered", _alpha("DITHERED", _alpha_gradient)),
+                           ("checker_blended", _alpha("BLENDED", _alpha_checker))])
+
+
+def _image_file():
+    """A 16 x 16 8-bit sRGB PNG: a colour gradient with a dark checker (one file a
+    process, in the temporary folder)."""
+    import os
+    import tempfile
+    import numpy as np
+    from reference_scenes import _write_image
+    path = os.path.join(tempfile.gettempdir(), f"lantern-pattern-image-{os.getpid()}.png")
+    if not os.path.exists(path):
+        y, x = np.mgrid[0:16, 0:16]
+        rgba = np.stack([x * 16, y * 16, 255 - x * 8, np.full_like(x, 255)], -1)
+        rgba[((x // 4 + y // 4) % 2) == 1, :3] //= 3
+        _write_image(path, rgba.astype(np.uint8))
+    return path
+
+
+def _image(tree, extension="REPEAT"):
+    import bpy
+    node = tree.nodes.new("ShaderNodeTexImage")
+    node.image = bpy.data.images.load(_image_file(), check_existing=True)
+    node.extension = extension
+    return node
+
+
+def _image_multiplied(tree, bsdf):
+    """Image x colour (Mix Multiply): the glTF importer's vertex-colour-free tint."""
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type, mix.blend_type = "RGBA", "MULTIPLY"
+    mix.inputs[0].default_value = 1.0
+    tree.links.new(_image(tree).outputs["Color"], mix.inputs[6])
+    mix.inputs[7].default_value = (1.0, 0.6, 0.3, 1.0)
+    _to_base(tree, bsdf, mix.outputs[2])
+
+
+def _image_mapped(tree, bsdf):
+    """A mapped, rotated image, mirrored, through Hue/Saturation/Value."""
+    mapping = _uv_mapping(tree, "POINT", (0.1, 0.2, 0.0), (0.0, 0.0, 0.4), (2.0, 1.5, 1.0))
+    image = _image(tree, "MIRROR")
+    tree.links.new(mapping.outputs[0], image.inputs["Vector"])
+    hsv = tree.nodes.new("ShaderNodeHueSaturation")
+    hsv.inputs["Hue"].default_value = 0.7
+    tree.links.new(image.outputs["Color"], hsv.inputs["Color"])
+    _to_base(tree, bsdf, hsv.outputs[0])
+
+
+def _image_mapping_only(tree, bsdf):
+    """Image <- Mapping straight on Base Color (the corpus's "Mapping is ignored" case)."""
+    mapping = _uv_mapping(tree, "TEXTURE", (0.25, 0.0, 0.0), (0.0, 0.0, 0.3), (0.5, 0.7, 1.0))
+    image = _image(tree)
+    tree.links.new(mapping.outputs[0], image.inputs["Vector"])
+    _to_base(tree, bsdf, image.outputs["Color"])
+
+
+def build_image(workdir=None):
+    return _grid("image", [("multiplied", _image_multiplied), ("mapped", _image_mapped),
+                           ("mapping_only", _image_mapping_only)])
+
+
+SCENES = {"image": build_image,
+          "alpha": build_alpha,
+          "voronoi": build_voronoi,
+          "wave": build_wave,
+          "noise": build_noise,
+          "emission": build_emission,
+          "gradient": build_gradient,
+          "mix": build_mix,
+          "math": build_math,
+          "vector_math": build_vector_math,
+          "mapping": build_mapping,
+          "color_ramp": build_color_ramp,
+          "color": build_color}

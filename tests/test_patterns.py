@@ -1,0 +1,204 @@
+"""Materials as node networks (docs/materials.md): the export of Blender's nodes as a
+MaterialX-style network, its reading, the generated GLSL and its program sharing, and
+each node family against its Cycles reference (references/patterns/, made by
+references/make_pattern_references.py from tests/pattern_scenes.py).
+
+The FLIP is measured on the quads' interiors (2 pixels in from every tile edge), each
+on its own: the network is under test, not the quads' edge anti-aliasing
+(docs/rendering.md measures that)."""
+import functools
+import pathlib
+
+import numpy as np
+import pytest
+
+import pattern_scenes
+from image_metrics import mean_flip
+
+PATTERNS = pathlib.Path(__file__).resolve().parent / "references" / "patterns"
+FLIP_BOUND = 0.05
+
+
+@functools.lru_cache(maxsize=None)
+def exported(name):
+    """(stage, export warnings) of a pattern scene, once per test session; the stage
+    passes pxr's validators."""
+    import bpy
+    from lantern.exporters import stage_from_depsgraph, validation_errors
+    pattern_scenes.SCENES[name]()
+    stage, report = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+    assert validation_errors(stage) == []
+    return stage, tuple(report.warnings)
+
+
+def tiles(name):
+    """{material name: (rows, columns) slices} of the quads' interiors, 2 pixels in
+    from every tile edge."""
+    import bpy
+    w, h = pattern_scenes.SIZE
+    pattern_scenes.SCENES[name]()
+    quads = sorted((ob for ob in bpy.data.objects if ob.type == "MESH"),
+                   key=lambda ob: (-ob.data.vertices[3].co.y, ob.data.vertices[0].co.x))
+    cols = pattern_scenes.COLUMNS
+    rows = (len(quads) + cols - 1) // cols
+    extent = max(cols, rows)
+    px = w / extent
+    y0 = (extent - rows) / 2.0 * px
+    out = {}
+    for i, ob in enumerate(quads):
+        x, y = i % cols, i // cols
+        top, left = int(np.ceil(y0 + y * px)) + 2, int(np.ceil(x * px)) + 2
+        bottom, right = int(y0 + (y + 1) * px) - 2, int((x + 1) * px) - 2
+        out[ob.data.materials[0].name] = (slice(top, bottom), slice(left, right))
+    return out
+
+
+def lantern_flip(name, preset="ultra"):
+    """(mean over tiles of each tile interior's HDR-FLIP, {material: FLIP}, result):
+    each interior is compared on its own, so that FLIP's spatial filter does not carry
+    the tile edges' anti-aliasing into it. The ultra preset's 3x3 supersampling stands
+    in for Cycles' 1.5 px pixel filter on the patterns' own edges (checker cells, ramp
+    steps); docs/materials.md gives the medium preset's figures too."""
+    from lantern.engine import RenderSettings, read_exr, render_stage
+    stage, _ = exported(name)
+    w, h = pattern_scenes.SIZE
+    result = render_stage(stage, RenderSettings(width=w, height=h, preset=preset))
+    reference = read_exr(str(PATTERNS / f"{name}.exr"))
+    per_tile = {mat: mean_flip(result.rgba[t], reference[t]) for mat, t in tiles(name).items()}
+    return float(np.mean(list(per_tile.values()))), per_tile, result
+
+
+@pytest.mark.parametrize("name", sorted(pattern_scenes.SCENES))
+def test_node_family_within_flip_of_cycles(name):
+    _, warnings = exported(name)
+    assert warnings == (), warnings
+    flip, per_tile, result = lantern_flip(name)
+    worst = max(per_tile, key=per_tile.get)
+    print(f"{name}: interior HDR-FLIP {flip:.4f}, worst {worst} {per_tile[worst]:.4f}")
+    assert not result.warnings, result.warnings
+    assert flip < FLIP_BOUND
+
+
+def test_network_is_written_on_the_mtlx_context_with_preview_fallback():
+    from pxr import UsdShade
+    stage, _ = exported("color")
+    mat = UsdShade.Material(stage.GetPrimAtPath("/root/_materials/color_invert"))
+    preview = mat.ComputeSurfaceSource()[0]
+    assert preview.GetIdAttr().Get() == "UsdPreviewSurface"
+    out = mat.GetSurfaceOutput("mtlx")
+    mtlx = UsdShade.Shader(out.GetValueProducingAttributes()[0].GetPrim())
+    assert mtlx.GetIdAttr().Get() == "ND_UsdPreviewSurface_surfaceshader"
+    ids = {p.GetAttribute("lantern:nodeDef").Get() for p in
+           stage.GetPrimAtPath("/root/_materials/color_invert/Pattern").GetChildren()}
+    assert {"ND_lantern_invert", "ND_lantern_combine_color", "ND_lantern_uv"} <= ids
+
+
+def test_equal_shapes_share_one_program_and_differ_in_parameters():
+    """mix_<blend> materials differ only in the blend type (shape); two materials with
+    the same shape but other values generate one source."""
+    from lantern.engine.gpu.pattern import code_of, parameters
+    from lantern.engine.scene import PatternGraph, PatternNode
+    node = lambda v: PatternNode("n0_rgb", "rgb", (), (("color", "color", v),), ())  # noqa: E731
+    a = PatternGraph((node((0.1, 0.2, 0.3)),), (("diffuseColor", "n0_rgb", "color", "color"),))
+    b = PatternGraph((node((0.9, 0.8, 0.7)),), (("diffuseColor", "n0_rgb", "color", "color"),))
+    assert code_of(a) is code_of(b)
+    assert parameters(a)[0, :3].tolist() == pytest.approx([0.1, 0.2, 0.3])
+    assert parameters(b)[0, :3].tolist() == pytest.approx([0.9, 0.8, 0.7])
+
+
+def test_unsupported_node_upstream_is_one_warning_and_the_fallback(empty_scene):
+    import bpy
+    from lantern.exporters import stage_from_depsgraph
+    mat, tree, bsdf = pattern_scenes._principled("Brick")
+    brick = tree.nodes.new("ShaderNodeTexBrick")
+    brick.name = "My Brick"
+    inv = tree.nodes.new("ShaderNodeInvert")
+    tree.links.new(brick.outputs["Color"], inv.inputs["Color"])
+    tree.links.new(inv.outputs[0], bsdf.inputs["Base Color"])
+    bsdf.inputs["Base Color"].default_value = (0.1, 0.2, 0.3, 1.0)
+    me = bpy.data.meshes.new("q")
+    me.from_pydata([(0, 0, 0), (1, 0, 0), (1, 1, 0)], [], [(0, 1, 2)])
+    me.materials.append(mat)
+    ob = bpy.data.objects.new("q", me)
+    bpy.context.scene.collection.objects.link(ob)
+    stage, report = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+    named = [w for w in report.warnings if "My Brick" in w]
+    assert len(named) == 1 and "Brick" in named[0], report.warnings
+    assert not stage.GetPrimAtPath("/root/_materials/Brick/Pattern")
+
+
+def test_materials_without_networks_load_no_generator_and_keep_the_fast_path():
+    from lantern.engine.gpu.pattern import material_variant
+    from lantern.engine.scene import Material
+    assert material_variant(Material(name="plain")) == ()
+
+
+def _one_quad_stage(build):
+    """A stage of one pattern quad (pattern_scenes' lighting), exported afresh."""
+    import bpy
+    from lantern.exporters import stage_from_depsgraph
+    pattern_scenes._grid("live", [("quad", build)])
+    stage, report = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+    assert not report.warnings, report.warnings
+    return stage
+
+
+def made(result):
+    """Programs a render compiled or loaded from the persistent program cache."""
+    return result.stats["programs_compiled"] + result.stats["programs_loaded"]
+
+
+def _pattern_node(stage, kind):
+    from pxr import UsdShade
+    graph = stage.GetPrimAtPath("/root/_materials/live_quad/Pattern")
+    return next(UsdShade.Shader(p) for p in graph.GetChildren()
+                if p.GetAttribute("lantern:nodeDef").Get() == f"ND_lantern_{kind}")
+
+
+def test_a_value_edit_uploads_parameters_and_compiles_nothing():
+    from lantern.engine import RenderSettings, Session
+    stage = _one_quad_stage(pattern_scenes._invert)
+    with Session(stage, RenderSettings(width=32, height=32)) as session:
+        session.render()
+        before = session.render()
+        assert made(before) == 0
+        _pattern_node(stage, "invert").GetInput("fac").Set(0.1)
+        after = session.render()
+    assert made(after) == 0
+    assert 0 < after.stats["pattern_bytes"] <= 1024
+    assert np.abs(after.rgba[16, 3, :3] - before.rgba[16, 3, :3]).max() > 0.1
+
+
+def test_a_graph_shape_edit_compiles_one_variant():
+    from lantern.engine import RenderSettings, Session
+    stage = _one_quad_stage(pattern_scenes._mix_blend("MULTIPLY"))
+    with Session(stage, RenderSettings(width=32, height=32)) as session:
+        session.render()
+        before = session.render()
+        # A shape no other test draws (the process's program cache is shared).
+        mix = _pattern_node(stage, "mix")
+        mix.GetInput("blend_type").Set("LINEAR_LIGHT")
+        mix.GetInput("clamp_result").Set("1")
+        after = session.render()
+    assert made(after) == 1
+    assert np.abs(after.rgba[16, 3, :3] - before.rgba[16, 3, :3]).max() > 0.05
+
+
+@pytest.mark.parametrize("edit, says", [
+    (lambda node: node.GetPrim().GetAttribute("lantern:nodeDef").Set("ND_image_color3"),
+     "is not supported"),
+    (lambda node: node.GetInput("fac").Set(float("nan")), "is not finite"),
+])
+def test_a_bad_node_is_one_warning_and_the_preview_value(edit, says):
+    """A network the engine cannot draw: the warning names the material and the node,
+    and the input draws the UsdPreviewSurface constant (here the socket's colour)."""
+    from lantern.engine import RenderSettings, render_stage
+    stage = _one_quad_stage(pattern_scenes._invert)
+    good = render_stage(stage, RenderSettings(width=32, height=32))
+    edit(_pattern_node(stage, "invert"))
+    bad = render_stage(stage, RenderSettings(width=32, height=32))
+    named = [w for w in bad.warnings if "live_quad" in w and "invert" in w]
+    assert len(named) == 1 and says in named[0], bad.warnings
+    assert np.isfinite(bad.rgba).all()
+    # Invert's fallback: its Color socket's default, lit as the base colour.
+    assert np.abs(bad.rgba[16, 3, :3] - good.rgba[16, 3, :3]).max() > 0.01
