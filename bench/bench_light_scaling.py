@@ -1,26 +1,40 @@
-"""Light volumes at work: 1 light against 256 small point lights at 640x360.
+"""Many lights: 1 to 16,384 small point lights over a plane at 640x360, each count in
+its own process, reporting render time and peak resident memory against one light.
 
-Fragments outside a light's volume are not shaded, so many small lights should cost
-about what one light covering the view costs (target: 256 lights <= 2x). "Small":
-0.002 W each, whose volume (engine/lighting.py: where a white Lambert surface would
-reflect less than 1e-4 W/(sr m2)) reaches about 0.7 m. Shadows off: shadowless point
-lights share one instanced draw. Reported twice: the render (G-buffer, lights,
-resolve) and the total with reading the stage, which costs Python time per light prim.
+Small lights (0.002 W each, radius 0.02 m) on a grid over a 24 m white plane, whose
+volumes (engine/lighting.py: where a white Lambert surface would reflect less than
+1e-4 W/(sr m2)) reach about 0.7 m: fragments outside a light's volume are not shaded,
+and shadowless point lights share one instanced draw, so time should grow far slower
+than the count. With shadows on, every light casts onto the plane: maps past the
+shadow memory budget (engine/gpu/passes/shadows.py) are not made, those lights are lit
+without shadows, and memory stays bounded. The stage is authored as Sdf specs (fast)
+and read by the engine like any other; "load" is the engine's stage read, "render"
+the rest (G-buffer, shadows, lights, resolve, read-back), both medians of 3 warm runs.
 Prints figures, asserts nothing. Runs without Blender (usd-core).
 """
+import json
 import math
+import pathlib
+import resource
+import subprocess
+import sys
 import time
 
 import numpy as np
-from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade
 
-from lantern.engine import RenderSettings, render_stage
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "tests"))
 
 WIDTH, HEIGHT = 640, 360
+COUNTS = (1, 16, 256, 1024, 4096, 16384)
+SHADOWED = (1, 256, 16384)
 
 
-def stage_with_lights(lights):
-    """A 24 m white plane seen from above at an angle, and (position, power) lights."""
+def stage_with_lights(positions, power, shadows):
+    """A 24 m white plane seen from above at an angle, and a sphere light of `power`
+    watts at each position."""
+    from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade
+
+    from light_grids import add_sphere_lights
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     UsdGeom.Xform.Define(stage, "/root")
@@ -41,43 +55,74 @@ def stage_with_lights(lights):
     camera.CreateVerticalApertureAttr(36.0 * HEIGHT / WIDTH)
     look = Gf.Matrix4d().SetLookAt(Gf.Vec3d(0, -14, 10), Gf.Vec3d(0, 0, 0), Gf.Vec3d(0, 0, 1))
     camera.AddTransformOp().Set(look.GetInverse())
-    for i, (position, power) in enumerate(lights):
-        light = UsdLux.SphereLight.Define(stage, f"/root/light_{i:03d}")
-        light.CreateIntensityAttr(power / math.pi)
-        light.CreateRadiusAttr(0.02)
-        light.CreateNormalizeAttr(True)
-        UsdLux.ShadowAPI.Apply(light.GetPrim()).CreateShadowEnableAttr(False)
-        light.AddTranslateOp().Set(Gf.Vec3d(*position))
+    add_sphere_lights(stage, "/root", positions,
+                      {"intensity": power / math.pi, "radius": 0.02, "normalize": True}, shadows)
     return stage
 
 
-def frame_time(stage, runs=5):
-    """Median (total, render without the stage read) seconds, and the last result."""
+def lights(count):
+    """One bright light high up, or `count` small ones on a grid 0.3 m over the plane."""
+    if count == 1:
+        return [(0.0, 0.0, 3.0)], 2000.0
+    side = int(math.ceil(math.sqrt(count)))
+    g = np.linspace(-10.0, 10.0, side)
+    return [(float(g[i % side]), float(g[i // side]), 0.3) for i in range(count)], 0.002
+
+
+def measure(count, shadows, runs=3):
+    """This process: one count's figures, as JSON on stdout."""
+    from lantern.engine import RenderSettings, render_stage
+    positions, power = lights(count)
+    stage = stage_with_lights(positions, power, shadows)
     settings = RenderSettings(width=WIDTH, height=HEIGHT)
-    render_stage(stage, settings)  # warm: context, shaders
-    totals, renders, result = [], [], None
+    result = render_stage(stage, settings)  # warm: context, shaders
+    loads, renders = [], []
     for _ in range(runs):
         start = time.perf_counter()
         result = render_stage(stage, settings)
-        totals.append(time.perf_counter() - start)
-        renders.append(totals[-1] - result.timings["load"])
-    return float(np.median(totals)), float(np.median(renders)), result
+        total = time.perf_counter() - start
+        loads.append(result.timings["load"])
+        renders.append(total - result.timings["load"])
+    print(json.dumps({
+        "load_ms": 1000 * float(np.median(loads)), "render_ms": 1000 * float(np.median(renders)),
+        "light_pass_ms": 1000 * result.gpu_timings.get("lights", 0.0),
+        "rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+        "shadow_maps": result.stats.get("shadow_maps", 0),
+        "unshadowed": result.stats.get("unshadowed_lights", 0),
+        "finite": bool(np.all(np.isfinite(result.rgba))),
+        "mean": float(result.rgba[..., :3].mean())}))
+
+
+def run(count, shadows):
+    proc = subprocess.run([sys.executable, __file__, "--one", str(count), str(int(shadows))],
+                          capture_output=True, text=True)
+    if proc.returncode != 0:
+        return {"error": (proc.stderr.strip().splitlines() or [f"exit {proc.returncode}"])[-1]}
+    return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
 def main():
-    one = stage_with_lights([((0.0, 0.0, 3.0), 2000.0)])
-    grid = np.linspace(-10.0, 10.0, 16)
-    many = stage_with_lights([((x, y, 0.3), 0.002) for x in grid for y in grid])
-    t1, render1, r1 = frame_time(one)
-    t256, render256, r256 = frame_time(many)
-    print(f"light scaling at {WIDTH}x{HEIGHT} ({time.strftime('%Y-%m-%d')}, llvmpipe):")
-    for name, total, render, result in (("1 light", t1, render1, r1), ("256 lights", t256, render256, r256)):
-        print(f"  {name:<11} render {render * 1000:7.1f} ms (light pass "
-              f"{result.gpu_timings['lights'] * 1000:.1f} ms on the GPU, {result.stats['light_volumes']} volumes), "
-              f"total with stage read {total * 1000:.1f} ms")
-    print(f"  ratio 256/1: render {render256 / render1:.2f}x (target <= 2x), "
-          f"total {t256 / t1:.2f}x")
+    print(f"light scaling at {WIDTH}x{HEIGHT} ({time.strftime('%Y-%m-%d')}, llvmpipe), "
+          "each count in its own process; ratios against 1 light of the same kind:")
+    print(f"  {'lights':>6} {'shadows':>7} {'load ms':>9} {'render ms':>10} {'x1':>6} "
+          f"{'light pass ms':>13} {'peak RSS MiB':>12} {'x1':>5} {'maps':>5} {'unshadowed':>10}")
+    for shadows in (False, True):
+        one = None
+        for count in COUNTS if not shadows else SHADOWED:
+            got = run(count, shadows)
+            if "error" in got:
+                print(f"  {count:>6} {'on' if shadows else 'off':>7} failed: {got['error']}")
+                continue
+            one = one or got
+            print(f"  {count:>6} {'on' if shadows else 'off':>7} {got['load_ms']:9.1f} "
+                  f"{got['render_ms']:10.1f} {got['render_ms'] / one['render_ms']:6.2f} "
+                  f"{got['light_pass_ms']:13.1f} {got['rss_mib']:12.0f} "
+                  f"{got['rss_mib'] / one['rss_mib']:5.2f} {got['shadow_maps']:>5} "
+                  f"{got['unshadowed']:>10}" + ("" if got["finite"] else "  NON-FINITE"))
 
 
 if __name__ == "__main__":
-    main()
+    if sys.argv[1:2] == ["--one"]:
+        measure(int(sys.argv[2]), sys.argv[3] == "1")
+    else:
+        main()

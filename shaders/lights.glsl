@@ -3,7 +3,7 @@
 // load_light(row) first. Positions come out camera-relative (origin.glsl), as the
 // surfaces they light. Include after lib.glsl (Surface, the BRDF).
 #include "origin.glsl"
-uniform sampler2D u_lights;
+#include "light_table.glsl"
 
 vec3 light_pos;             // camera-relative
 float light_range;          // volume radius: nothing is added beyond it
@@ -25,7 +25,7 @@ int n_poly;
 float light_area;
 int light_row;
 
-vec4 light_texel(int k) { return texelFetch(u_lights, ivec2(k, light_row), 0); }
+vec4 light_texel(int k) { return light_table(light_row, k); }
 
 // Camera-relative vertex i of an area light's polygon (stored about its centre).
 vec3 light_poly(int i) { return light_pos + light_texel(8 + i).xyz; }

@@ -7,15 +7,15 @@ in vec3 in_pos;
 uniform mat4 mvp;
 #ifdef LIGHTS_INSTANCED
 #include "origin.glsl"
-uniform sampler2D u_lights;
+#include "light_table.glsl"
 in int i_light;
 flat out int v_light;
 #endif
 void main() {
 #ifdef LIGHTS_INSTANCED
     v_light = i_light;
-    vec4 pos_range = texelFetch(u_lights, ivec2(0, i_light), 0);
-    vec3 pos = rebase(pos_range.xyz, texelFetch(u_lights, ivec2(7, i_light), 0).xyz);
+    vec4 pos_range = light_table(i_light, 0);
+    vec3 pos = rebase(pos_range.xyz, light_table(i_light, 7).xyz);
     gl_Position = mvp * vec4(pos + in_pos * pos_range.w, 1.0);
 #else
     gl_Position = mvp * vec4(in_pos, 1.0);

@@ -119,3 +119,26 @@ def test_frame_paths_and_one_line_errors():
         def __str__(self):
             raise UnicodeDecodeError("utf-8", b"\xff", 0, 1, "invalid start byte")
     assert "not UTF-8" in error_text(Undecodable())
+
+
+def test_ctrl_c_inside_deferred_is_raised_when_the_block_ends():
+    """core.interrupt.deferred: a step that must not stop half way (starting a worker)
+    finishes, then the Ctrl-C that came meanwhile is raised."""
+    import signal
+
+    from lantern.core import interrupt
+    previous = signal.getsignal(signal.SIGINT)
+    interrupt.raise_keyboard_interrupt()
+    steps = []
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with interrupt.deferred():
+                os.kill(os.getpid(), signal.SIGINT)
+                steps += ["signalled"]
+                for _ in range(1000):       # bytecodes, where the handler runs
+                    pass
+                steps += ["finished"]
+            steps += ["after"]
+        assert steps == ["signalled", "finished"]
+    finally:
+        interrupt.restore(previous)

@@ -1,6 +1,7 @@
 """Outputs get the permissions the umask gives a new file (0666 less the umask), not
 mkstemp's private 0600: images, sequence frames, GIFs, exported USD and the texture
-copies beside it, under umask 022 and 077. Every writer goes through
+copies beside it, and the compare report's files (its PNGs, heat maps, results.json and
+index.html), under umask 022 and 077. Every writer goes through
 core.files.atomic_write (a temporary name, then a rename)."""
 import os
 import stat
@@ -64,3 +65,33 @@ def test_exports_renders_and_sequences_take_the_umask(corpus, tmp_path, umask):
                     umask)
     assert proc.returncode == 0, proc.stderr
     assert _mode(tmp_path / "one.exr") == 0o666 & ~umask
+
+
+def test_the_compare_reports_files_take_the_umask(tmp_path, umask):
+    from lantern.compare import report
+    from lantern.compare.files import write_json, write_text
+    rgba = np.full((4, 6, 4), 0.5, np.float32)
+    paths = [report.display_png(str(tmp_path / "png" / "a.png"), rgba,
+                                {"transform": "Standard", "look": None, "exposure": 0.0}),
+             report.heatmap_png(str(tmp_path / "png" / "flip_a.png"),
+                                np.linspace(0, 1, 24, dtype=np.float32).reshape(4, 6))]
+    write_json(str(tmp_path / "results.json"), {"a": 1})
+    write_text(str(tmp_path / "index.html"), "<html></html>\n")
+    paths += [tmp_path / "results.json", tmp_path / "index.html"]
+    for path in paths:
+        assert _mode(path) == 0o666 & ~umask, path
+
+
+def test_the_compare_reports_files_take_the_umask(tmp_path, umask):
+    from lantern.compare import report
+    from lantern.compare.files import write_json, write_text
+    rgba = np.full((4, 6, 4), 0.5, np.float32)
+    paths = [report.display_png(str(tmp_path / "png" / "a.png"), rgba,
+                                {"transform": "Standard", "look": None, "exposure": 0.0}),
+             report.heatmap_png(str(tmp_path / "png" / "flip_a.png"),
+                                np.linspace(0, 1, 24, dtype=np.float32).reshape(4, 6))]
+    write_json(str(tmp_path / "results.json"), {"a": 1})
+    write_text(str(tmp_path / "index.html"), "<html></html>\n")
+    paths += [tmp_path / "results.json", tmp_path / "index.html"]
+    for path in paths:
+        assert _mode(path) == 0o666 & ~umask, path

@@ -1,6 +1,8 @@
 """Lights on the GPU: one packed RGBA32F table, a row per light, written when a light
 changes. Every light draw, one at a time or instanced, reads its light from the table
-by index (shaders/lights.glsl), so a light's numbers go up once, not per draw.
+by index (shaders/light_table.glsl), so a light's numbers go up once, not per draw.
+LIGHTS_PER_LINE rows lie side by side on each texture line, so any number of lights
+fits GL's texture size limit (16384 lines on llvmpipe).
 
 Row layout (texels, must match shaders/lights.glsl):
   0 position (hi), volume radius R   1 colour (I, L or E), sphere radius
@@ -24,6 +26,7 @@ from ..view import split_double
 
 MAX_POLY = 32
 ROW_TEXELS = 8 + MAX_POLY
+LIGHTS_PER_LINE = 64        # rows per texture line: shaders/light_table.glsl
 
 
 def pack(light, R: float, disk_sides: int) -> np.ndarray:
@@ -74,10 +77,12 @@ class LightTable:
             self.index = {p: i for i, p in enumerate(paths)}
             self.threshold = threshold
             self.ranges = {p: volume_radius(scene.lights[p], threshold) for p in paths}
-            rows = np.zeros((max(len(paths), 1), ROW_TEXELS, 4), np.float32)
+            lines = max(-(-len(paths) // LIGHTS_PER_LINE), 1)
+            rows = np.zeros((lines * LIGHTS_PER_LINE, ROW_TEXELS, 4), np.float32)
             for p, i in self.index.items():
                 rows[i] = pack(scene.lights[p], self.ranges[p], self.disk_sides)
-            self.texture = self.uploads.rewrite_float_texture(self.texture, rows, kind="lights")
+            self.texture = self.uploads.rewrite_float_texture(
+                self.texture, rows.reshape(lines, LIGHTS_PER_LINE * ROW_TEXELS, 4), kind="lights")
             return
         for p in changed:
             if p in self.index:
@@ -85,7 +90,8 @@ class LightTable:
                 self.ranges[p] = volume_radius(scene.lights[p], threshold)
                 self.uploads.write_texture(
                     self.texture, pack(scene.lights[p], self.ranges[p], self.disk_sides),
-                    kind="lights", viewport=(0, i, ROW_TEXELS, 1))
+                    kind="lights", viewport=((i % LIGHTS_PER_LINE) * ROW_TEXELS,
+                                             i // LIGHTS_PER_LINE, ROW_TEXELS, 1))
 
     def release(self):
         if self.texture is not None:

@@ -10,7 +10,8 @@ ONE), reading its numbers from the light table (engine/gpu/lights.py).
                            far plane (engine/view.py), so no volume crosses it; an
                            orthographic camera's volume that crosses its finite far
                            plane shades its scissored screen instead.
-  shadowless point/spot    all in one instanced draw of their spheres: per-light
+  point/spot without a map all in one instanced draw of their spheres (shadowless, or
+                           past the shadow maps' memory budget): per-light
                            Python and draw calls would cost more than their few pixels.
 Shadow-casting lights read their map from the shadow pass. Volumes are placed
 relative to the camera (positions are camera-relative, as the surfaces they light).
@@ -141,13 +142,12 @@ class LightPass(Pass):
         self.table.texture.use(UNITS["u_lights"])
         self.environment.lut.use(UNITS["dfg_lut"])
 
-        has_casters = self.geometry.has_casters()
         batched = []
         for path, light in frame.scene.lights.items():
             R = self.table.ranges[path]
             if light.kind != SUN and R <= 0:
                 continue
-            if self._batchable(light, R, has_casters, view):
+            if self._batchable(light, R, path in shadow_maps, view):
                 batched.append(path)
                 continue
             fbo.use()
@@ -166,8 +166,8 @@ class LightPass(Pass):
             self._draw_batched(frame, board, view, batched)
         ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
 
-    def _batchable(self, light, R, has_casters, view):
-        return (light.kind in (POINT, SPOT) and not (light.shadow and has_casters)
+    def _batchable(self, light, R, shadowed, view):
+        return (light.kind in (POINT, SPOT) and not shadowed
                 and not _crosses_far_plane(view, light.position - view.origin, R * 1.3))
 
     def _sphere_vbo(self):

@@ -8,6 +8,11 @@ by the session and drawn again only when it would change:
     otherwise only the cascades in which a caster changed.
 Maps are textures from the session's pool; a light that stops casting gives its back.
 
+Shadow maps share a memory budget (SHADOW_BUDGET_BYTES): lights are given maps in order
+of importance (suns first, then by intensity over squared distance to the camera) until
+the next map would pass it; the rest are lit without shadows, and the render warns once
+with their number. 20,000 shadow-casting lights would otherwise need 500 GB of maps.
+
 Layouts (every map is a set of tiles in one 2D depth texture):
   spot (half angle <= 60 deg)   1 perspective tile looking down the cone.
   point, wide spot, rect, disk  6 cube-face tiles (3 x 2), 90 deg each plus a border
@@ -52,6 +57,12 @@ BORDER = 2                 # cube tiles: texels beyond 90 deg on each side
 MAX_CUBE_TILE = 2048       # a cube is 3 x 2 tiles: cap its memory
 SPOT_MAX_HALF_ANGLE = 60.0  # wider spots use the cube layout
 MIN_RES, MAX_RES = 64, 8192
+# Every shadow map of a frame together (32-bit depth texels): under llvmpipe they are
+# host memory, and a render must leave a user's machine room. 1 GiB measured 1.86 GiB
+# peak resident at 640x360 (bench/bench_light_scaling.py): half that leaves room for
+# larger images and supersampling. Medium's point-light cube is 24 MiB: 21 fit.
+SHADOW_BUDGET_BYTES = 512 << 20
+BUDGET_WARNING = "shadow maps"     # the scene's warnings key for the budget's line
 # Cube faces: (forward, up) in GL's cube-map order +X -X +Y -Y +Z -Z.
 CUBE_FACES = [((1, 0, 0), (0, -1, 0)), ((-1, 0, 0), (0, -1, 0)), ((0, 1, 0), (0, 0, 1)),
               ((0, -1, 0), (0, 0, -1)), ((0, 0, 1), (0, -1, 0)), ((0, 0, -1), (0, -1, 0))]
@@ -244,6 +255,21 @@ def _plan_sun(light, res, preset, bounds, view):
                      size=size, atlas=(n * res, res), anchor=anchor)
 
 
+def _importance(light, eye) -> float:
+    """Which lights get a shadow map first: suns, then the brightest at the camera
+    (intensity over squared distance, at least the light's own size)."""
+    if light.kind == SUN:
+        return math.inf
+    d2 = float(np.sum((np.asarray(light.position, np.float64) - eye) ** 2))
+    return float(np.max(light.color)) / max(d2, light.radius ** 2, 1e-12)
+
+
+def _budget_warning(scene, unshadowed, casting):
+    scene.warnings[BUDGET_WARNING] = [
+        f"{unshadowed} of {casting} shadow-casting lights are lit without shadows: their "
+        f"shadow maps would pass the {SHADOW_BUDGET_BYTES >> 20} MiB shadow memory budget"]
+
+
 def casts(light, R) -> bool:
     """Whether a light gets a map: it casts and has something to light."""
     return light.shadow and (light.kind == SUN or R > 0)
@@ -271,6 +297,7 @@ class ShadowPass(Pass):
         if not wanted:
             self._drop(list(self.maps))
             self._drop_kept()
+            frame.scene.warnings.pop(BUDGET_WARNING, None)
         return wanted
 
     def execute(self, frame, board):
@@ -291,12 +318,15 @@ class ShadowPass(Pass):
             self._see_through = see_through
         for path in [p for p in self.maps if p not in scene.lights or p in frame.changes.lights]:
             self._drop([path])           # stale: drawn again below if it still casts
-        out = {}
+        out, used, casting = {}, 0, []
         for path, light in scene.lights.items():
-            R = self.lights.ranges[path]
-            if not casts(light, R):
+            if casts(light, self.lights.ranges[path]):
+                casting.append(path)
+            else:
                 self._drop([path])
-                continue
+        casting.sort(key=lambda p: -_importance(scene.lights[p], view.origin))
+        for n, path in enumerate(casting):
+            light, R = scene.lights[path], self.lights.ranges[path]
             old = self.maps.get(path)
             bounds = _key(view.bounds)
             if old is not None and old.inputs == (light, bounds) and light.kind != SUN:
@@ -309,6 +339,11 @@ class ShadowPass(Pass):
                 sm.inputs = (light, bounds)
                 if sm.same_layout(old):
                     old.inputs, sm = sm.inputs, old
+            used += sm.atlas[0] * sm.atlas[1] * 4
+            if used > SHADOW_BUDGET_BYTES:
+                self._drop(casting[n:])      # these, and every less important one
+                _budget_warning(scene, len(casting) - n, len(casting))
+                break
             tiles = _stale_tiles(sm, light, R, moved) if sm is old else range(sm.tiles)
             if not tiles:
                 out[path] = old
@@ -317,7 +352,10 @@ class ShadowPass(Pass):
             self.maps[path] = out[path] = sm
             frame.count("shadow_maps_rendered")
             frame.count("shadow_passes", len(tiles))
+        else:
+            scene.warnings.pop(BUDGET_WARNING, None)
         frame.count("shadow_maps", len(out))
+        frame.count("unshadowed_lights", len(casting) - len(out))
         # A screen pixel's width per unit of view depth (perspective) or in all (ortho).
         pixel = 2.0 / (abs(float(view.camera.proj[1][1])) * frame.size[1])
         for sm in out.values():
