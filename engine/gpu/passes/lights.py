@@ -30,6 +30,7 @@ from ...view import translate
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
 from .ambient import GBUFFER, LIGHTING_AOVS, LIGHTING_TARGETS, bind_gbuffer, lighting_aovs
+from .shadows import set_shadow_uniforms
 
 CONE_SIDES = 24
 CONE_MAX_HALF_ANGLE = 75.0   # wider spots use the sphere
@@ -223,7 +224,7 @@ class LightPass(Pass):
         bind_gbuffer(board, prog, view)
         set_uniform(prog, "light_index", row)
         if sm is not None:
-            sm.set_uniforms(prog, self.preset, view.origin)
+            set_shadow_uniforms(prog, sm, self.preset, view.origin)
         return prog
 
     def _cone_vbo(self, path, light, R):

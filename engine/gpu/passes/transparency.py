@@ -44,6 +44,7 @@ from ..pattern import material_variant
 from ..programs import UNITS, set_uniform
 from .antialias import texture_footprint
 from .gbuffer import map_defines, set_material
+from .shadows import set_shadow_uniforms
 
 MAX_FORWARD_LIGHTS = 32       # shaders/transparent.frag
 
@@ -173,7 +174,7 @@ class TransparencyPass(Pass):
                 [0] * (MAX_FORWARD_LIGHTS - len(rows))
         set_uniform(prog, "n_lights", len(rows))
         if sm is not None:
-            sm.set_uniforms(prog, self.preset, view.origin)
+            set_shadow_uniforms(prog, sm, self.preset, view.origin)
         if ambient:
             ctx.blend_func = ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
         else:
