@@ -80,18 +80,3 @@ def test_the_compare_reports_files_take_the_umask(tmp_path, umask):
     paths += [tmp_path / "results.json", tmp_path / "index.html"]
     for path in paths:
         assert _mode(path) == 0o666 & ~umask, path
-
-
-def test_the_compare_reports_files_take_the_umask(tmp_path, umask):
-    from lantern.compare import report
-    from lantern.compare.files import write_json, write_text
-    rgba = np.full((4, 6, 4), 0.5, np.float32)
-    paths = [report.display_png(str(tmp_path / "png" / "a.png"), rgba,
-                                {"transform": "Standard", "look": None, "exposure": 0.0}),
-             report.heatmap_png(str(tmp_path / "png" / "flip_a.png"),
-                                np.linspace(0, 1, 24, dtype=np.float32).reshape(4, 6))]
-    write_json(str(tmp_path / "results.json"), {"a": 1})
-    write_text(str(tmp_path / "index.html"), "<html></html>\n")
-    paths += [tmp_path / "results.json", tmp_path / "index.html"]
-    for path in paths:
-        assert _mode(path) == 0o666 & ~umask, path
