@@ -121,3 +121,12 @@ def test_gl_runs_on_its_own_thread_and_errors_propagate():
     with pytest.raises(RuntimeError, match="boom"):
         run_gl(boom)
     assert run_gl(lambda gl: gl.version) >= 330
+
+
+def test_authored_subdivision_scheme_warns_that_the_cage_is_drawn():
+    stage = new_stage()
+    cube(stage, "/root/cage/mesh").CreateSubdivisionSchemeAttr("catmullClark")
+    cube(stage, "/root/plain/mesh").CreateSubdivisionSchemeAttr("none")
+    res = render_stage(stage, RenderSettings(width=16, height=16))
+    assert [w for w in res.warnings if "subdivisionScheme" in w] == \
+        ["/root/cage/mesh: subdivisionScheme catmullClark is not refined; drawn as its cage"]

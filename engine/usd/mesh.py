@@ -98,6 +98,11 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None) -> MeshData:
         raise MeshError(f"face vertex index out of range (max {idx.max()}, {len(pts)} points)")
     if np.any(counts < 3):
         raise MeshError("face with fewer than 3 vertices")
+    scheme = mesh.GetSubdivisionSchemeAttr()
+    if warnings is not None and scheme.HasAuthoredValue() and scheme.Get() != "none":
+        # Refinement is not built yet: say so rather than pass the cage off as the surface.
+        warnings.append(f"{prim.GetPath()}: subdivisionScheme {scheme.Get()} is not "
+                        "refined; drawn as its cage")
 
     _finite(pts[np.unique(idx)], "points used by faces")
     n_faces = len(counts)
