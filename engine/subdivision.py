@@ -170,3 +170,33 @@ def refine_once(c: Cage) -> Cage:
 
 def _lower(s):
     return np.where(s >= MAX_SHARPNESS, MAX_SHARPNESS, np.maximum(s - 1.0, 0.0))
+
+
+def refine_face_varying(counts, values, levels):
+    """Per-corner values (UVs) over `levels` refinements, linearly within each face
+    (faceVaryingLinearInterpolation `all`); corners in the refined faces' order."""
+    counts = np.asarray(counts, np.int64)
+    values = np.asarray(values, np.float64)
+    for _ in range(levels):
+        starts = np.repeat(np.cumsum(counts) - counts, counts)
+        local = np.arange(len(values)) - starts
+        per_face = np.repeat(counts, counts)
+        nxt = values[starts + (local + 1) % per_face]
+        prv = values[starts + (local - 1) % per_face]
+        centre = np.zeros((len(counts), values.shape[1]))
+        np.add.at(centre, np.repeat(np.arange(len(counts)), counts), values)
+        centre = (centre / counts[:, None])[np.repeat(np.arange(len(counts)), counts)]
+        values = np.stack([values, 0.5 * (values + nxt), centre, 0.5 * (values + prv)],
+                          axis=1).reshape(-1, values.shape[1])
+        counts = np.full(len(starts), 4, np.int64)
+    return values
+
+
+def parent_faces(counts, levels):
+    """The cage face of each refined face."""
+    counts = np.asarray(counts, np.int64)
+    parent = np.arange(len(counts))
+    for level in range(levels):
+        parent = np.repeat(parent, counts if level == 0 else 4)
+        counts = np.full(len(parent), 4, np.int64)
+    return parent
