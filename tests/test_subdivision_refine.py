@@ -80,3 +80,30 @@ def test_creases_and_corner_match_blender(empty_scene):
     # The creases matter: without them the surface is far from Blender's.
     plain = refine(cage(creased.points, creased.counts, creased.indices), 3)
     assert _max_nearest(plain.points, theirs) > 1e-2
+
+
+def test_exported_cage_refined_by_the_engine_matches_blender(empty_scene):
+    """Export (cage, creases, level) -> stage -> engine refinement = Blender's mesh."""
+    from pxr import Usd, UsdGeom
+
+    from _export_helpers import export_current
+    from lantern.engine.usd.subdivision import RefinedCage, subdivision_level
+    from lantern.exporters.api import ExportOptions
+
+    bpy.ops.mesh.primitive_monkey_add()
+    ob = bpy.context.active_object
+    me = ob.data
+    creases = np.zeros(len(me.edges), dtype=np.float32)
+    creases[:40:3] = 0.6
+    me.attributes.new("crease_edge", "FLOAT", "EDGE").data.foreach_set("value", creases)
+    theirs, _ = _blender_refined(ob, 2)
+    stage, _ = export_current(ExportOptions(subdivision="cage"))
+    prim = next(p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))
+    assert subdivision_level(prim, []) == 2
+    mesh = UsdGeom.Mesh(prim)
+    t = Usd.TimeCode.Default()
+    refined = RefinedCage(mesh, np.asarray(mesh.GetPointsAttr().Get(), np.float64),
+                          np.asarray(mesh.GetFaceVertexCountsAttr().Get(), np.int64),
+                          np.asarray(mesh.GetFaceVertexIndicesAttr().Get(), np.int64), 2, t)
+    assert len(refined.points) == len(theirs)
+    assert _max_nearest(refined.points, theirs) < 1e-5
