@@ -42,8 +42,11 @@ def _blender_refined(ob, levels):
 
 
 def _max_nearest(a, b):
-    d = np.linalg.norm(a[:, None, :] - b[None, :, :], axis=2)
-    return max(d.min(axis=1).max(), d.min(axis=0).max())
+    """Symmetric largest distance from a row of one set to the nearest row of the other."""
+    def one_way(x, y):
+        return max(np.sqrt(((x[i:i + 512, None, :] - y[None]) ** 2).sum(axis=2)).min(axis=1).max()
+                   for i in range(0, len(x), 512))
+    return max(one_way(a, b), one_way(b, a))
 
 
 @pytest.mark.parametrize("levels", [1, 2])
@@ -107,3 +110,31 @@ def test_exported_cage_refined_by_the_engine_matches_blender(empty_scene):
                           np.asarray(mesh.GetFaceVertexIndicesAttr().Get(), np.int64), 2, t)
     assert len(refined.points) == len(theirs)
     assert _max_nearest(refined.points, theirs) < 1e-5
+
+
+def test_uvs_across_a_seam_match_blender_with_linear_uv_smoothing(empty_scene):
+    """UV Smooth None (faceVaryingLinearInterpolation all): each refined corner's (point,
+    UV) pair is one of Blender's; Suzanne's UV map has seams and open boundaries."""
+    from lantern.engine.subdivision import refine_face_varying
+
+    bpy.ops.mesh.primitive_monkey_add()
+    ob = bpy.context.active_object
+    me = ob.data
+    c = _blender_cage(ob)
+    uv = vectors(me.uv_layers.active.uv, "vector", 2).astype(np.float64)
+    ours = refine(c, 1)
+    ours_uv = refine_face_varying(c.counts, uv, 1)
+    mod = ob.modifiers.new("subsurf", "SUBSURF")
+    mod.levels, mod.use_limit_surface, mod.uv_smooth = 1, False, "NONE"
+    bpy.context.view_layer.update()
+    ev = ob.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    out = ev.to_mesh()
+    try:
+        pts = vectors(out.vertices, "co")
+        theirs = np.concatenate([pts[[l.vertex_index for l in out.loops]],
+                                 vectors(out.uv_layers.active.uv, "vector", 2)], axis=1)
+    finally:
+        ev.to_mesh_clear()
+    mine = np.concatenate([ours.points[ours.indices], ours_uv], axis=1)
+    assert len(mine) == len(theirs)
+    assert _max_nearest(mine, theirs) < 1e-5
