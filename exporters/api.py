@@ -23,6 +23,9 @@ class ExportOptions:
     texture_dir: str | None = None  # where packed/generated images go for in-memory stages
     animation: bool = True          # sample the frame range (rigs, shape keys, moving objects)
     max_influences: int | None = None  # trim skin influences per vertex (None: keep all)
+    # "apply": Subdivision Surface applied on the CPU; "cage": a trailing Catmull-Clark
+    # modifier is written as its cage with subdivisionScheme = catmullClark.
+    subdivision: str = "apply"
 
 
 @dataclass
@@ -51,7 +54,8 @@ def _export(depsgraph, stage, options, layer_path):
             warnings.append(message)
             log.warning(message)
 
-    scene = gather_scene(depsgraph, warn, _texture_dir(layer_path, options), options.animation)
+    scene = gather_scene(depsgraph, warn, _texture_dir(layer_path, options), options.animation,
+                         subdivision=options.subdivision)
     write_scene(stage, scene, asset_resolver(layer_path, options.textures),
                 options.max_influences)
     kinds = [o.kind for o in scene.objects]

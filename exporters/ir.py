@@ -89,6 +89,21 @@ class MeshRecord:
     tangents: np.ndarray | None = None
     skin: SkinRecord | None = None            # points are the rest mesh, skinned by a rig
     point_samples: PointSamples | None = None  # baked deformation, one sample per frame
+    subdivision: SubdivisionRecord | None = None  # points are a Catmull-Clark cage
+
+
+@dataclass
+class SubdivisionRecord:
+    """A cage's Catmull-Clark rules, as UsdGeom.Mesh has them."""
+    render_level: int
+    viewport_level: int
+    crease_indices: np.ndarray      # (2E,) int32, vertex pairs
+    crease_lengths: np.ndarray      # (E,) int32, all 2
+    crease_sharpnesses: np.ndarray  # (E,) float32, OpenSubdiv sharpness (10: infinite)
+    corner_indices: np.ndarray      # (K,) int32
+    corner_sharpnesses: np.ndarray  # (K,) float32
+    interpolate_boundary: str       # "edgeOnly" / "edgeAndCorner"
+    face_varying_linear_interpolation: str
 
 
 @dataclass

@@ -4,7 +4,7 @@ import threading
 
 import numpy as np
 import pytest
-from pxr import Gf, Usd, UsdGeom
+from pxr import Gf, Sdf, Usd, UsdGeom
 
 from lantern.engine import RenderSettings, render_stage
 from lantern.engine.gpu.context import run_gl
@@ -121,3 +121,29 @@ def test_gl_runs_on_its_own_thread_and_errors_propagate():
     with pytest.raises(RuntimeError, match="boom"):
         run_gl(boom)
     assert run_gl(lambda gl: gl.version) >= 330
+
+
+
+def test_subdivision_cage_without_a_level_warns_and_is_drawn_as_is():
+    stage = new_stage()
+    cube(stage, "/root/cage/mesh").CreateSubdivisionSchemeAttr("catmullClark")
+    cube(stage, "/root/plain/mesh").CreateSubdivisionSchemeAttr("none")
+    res = render_stage(stage, RenderSettings(width=16, height=16))
+    assert [w for w in res.warnings if "subdivisionScheme" in w] == \
+        ["/root/cage/mesh: subdivisionScheme catmullClark without "
+         "lantern:subdivisionRenderLevel; drawn as its cage"]
+
+
+def test_subdivision_cage_is_refined_to_its_render_level():
+    """A refined cube shrinks towards a sphere: it covers fewer pixels than its cage."""
+    coverage = []
+    for level in (0, 3):
+        stage = new_stage()
+        mesh = cube(stage, "/root/c/mesh", size=1.5)
+        mesh.CreateSubdivisionSchemeAttr("catmullClark")
+        mesh.GetPrim().CreateAttribute("lantern:subdivisionRenderLevel",
+                                       Sdf.ValueTypeNames.Int, custom=True).Set(level)
+        res = render_stage(stage, RenderSettings(width=W, height=H, transparent=True))
+        assert not [w for w in res.warnings if "subdivision" in w], res.warnings
+        coverage.append(res.rgba[..., 3].sum())
+    assert 0 < coverage[1] < 0.9 * coverage[0]

@@ -14,6 +14,7 @@ from pxr import Sdf, Usd, UsdGeom
 from ...core.transforms import cross
 from ...core.triangulate import triangulate
 from ..scene import MeshData
+from .subdivision import RefinedCage, subdivision_level
 
 
 class MeshError(ValueError):
@@ -98,8 +99,14 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None) -> MeshData:
         raise MeshError(f"face vertex index out of range (max {idx.max()}, {len(pts)} points)")
     if np.any(counts < 3):
         raise MeshError("face with fewer than 3 vertices")
-
     _finite(pts[np.unique(idx)], "points used by faces")
+    levels, refined = subdivision_level(prim, warnings), None
+    if levels:
+        # Normals and tangents are the refined surface's own (USD ignores authored ones
+        # on a subdivision surface); UVs and subsets follow the refined faces.
+        refined = RefinedCage(mesh, pts, counts, idx, levels, time)
+        cage_counts, cage_idx, cage_points = counts, idx, len(pts)
+        pts, counts, idx = refined.points, refined.counts, refined.indices
     n_faces = len(counts)
     face_of_corner = np.repeat(np.arange(n_faces), counts)
     tri, face_of_tri = triangulate(_topology_points(mesh, pts), counts, idx)
@@ -109,8 +116,8 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None) -> MeshData:
 
     P = pts[idx[corners]]
     per_point = True
-    normals, interp = _primvar(mesh, "normals", time)
-    if normals is None:
+    normals, interp = _primvar(mesh, "normals", time) if refined is None else (None, None)
+    if normals is None and refined is None:
         attr = mesh.GetNormalsAttr()
         v = attr.Get(time) if attr.HasValue() else None
         if v is not None and len(v):
@@ -130,7 +137,14 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None) -> MeshData:
 
     uv_name = next((m.uv_name for m in materials if m.uv_name), None)
     uvs, uv_interp = _pick_uv(mesh, uv_name, time)
-    if uvs is not None:
+    if uvs is not None and refined is not None:
+        cage_uv = _per_corner(uvs, uv_interp, cage_points,
+                              np.repeat(np.arange(len(cage_counts)), cage_counts), cage_idx,
+                              len(cage_counts), "uv")
+        UV = refined.face_varying(cage_uv)[corners]
+        _finite(UV, "texture coordinates (per corner)")
+        per_point = False
+    elif uvs is not None:
         UV = _per_corner(uvs, uv_interp, len(pts), face_of_corner, idx, n_faces, "uv")[corners]
         _finite(UV, "texture coordinates (per corner)")
         per_point &= _per_point(uv_interp)
@@ -140,6 +154,8 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None) -> MeshData:
     tri_mat = np.zeros(len(face_of_tri), np.int64)
     face_mat = np.zeros(n_faces, np.int64)
     for mi, faces in subsets:
+        if refined is not None:
+            faces = refined.faces(faces)
         faces = faces[(faces >= 0) & (faces < n_faces)]
         face_mat[faces] = mi
     tri_mat = face_mat[face_of_tri]
@@ -147,7 +163,7 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None) -> MeshData:
 
     T = np.zeros((len(corners), 4))
     if any(m.has_normal_map for m in materials):
-        tan, t_interp = _primvar(mesh, "tangents", time)
+        tan, t_interp = _primvar(mesh, "tangents", time) if refined is None else (None, None)
         if tan is not None and tan.shape[1] in (3, 4):
             tc = _per_corner(tan, t_interp, len(pts), face_of_corner, idx, n_faces, "tangents")[corners]
             _finite(tc, "tangents (per corner)")

@@ -25,17 +25,19 @@ DQS_SCALE_TOLERANCE = 1e-5
 
 @contextmanager
 def modifiers_disabled(modifiers, depsgraph):
-    """Switches the given modifiers off (viewport) for the block, then restores them."""
-    modifiers = [m for m in modifiers if m.show_viewport]
+    """Switches the given modifiers off for the block (for the depsgraph's mode: viewport
+    or render), then restores them."""
+    flag = "show_render" if depsgraph.mode == "RENDER" else "show_viewport"
+    modifiers = [m for m in modifiers if getattr(m, flag)]
     for m in modifiers:
-        m.show_viewport = False
+        setattr(m, flag, False)
     if modifiers:
         depsgraph.update()
     try:
         yield
     finally:
         for m in modifiers:
-            m.show_viewport = True
+            setattr(m, flag, True)
         if modifiers:
             depsgraph.update()
 

@@ -11,6 +11,7 @@ from .light import gather_light
 from .material import gather_material
 from .mesh import gather_mesh
 from .skeleton import relative_matrix, trs
+from .subdivision import subdivision_record, trailing_subdivision
 from .tangents import mikktspace_tangents, tangent_uv_map
 from .skin import animated, classify, group_entries
 from .world import gather_world
@@ -78,13 +79,17 @@ def _ancestors(ob):
         yield ob
 
 
-def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False):
+def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False,
+                 subdivision="apply"):
     """`animation`: sample the frame range (rigs, blend shapes, moving objects). Only a
     viewport depsgraph can step through frames; a render one is exported as a still.
     `live` (the viewport, exporters/live.py): rigs at the current frame only, and no
     modifier is switched off (that would be an edit inside a depsgraph update): a
     skinned mesh's rest shape is its mesh data, so one with other modifiers than its
-    Armature modifier is baked instead."""
+    Armature modifier is baked instead.
+    `subdivision`: "apply" writes a Subdivision Surface modifier's result; "cage" writes
+    the cage of a mesh whose last modifier is Catmull-Clark subdivision, with its rules
+    (not for rigged meshes, nor live, where no modifier may be switched off)."""
     scene = depsgraph.scene
     rec = SceneRecord(settings=_settings(scene, warn))
     visible = render_visible(depsgraph.view_layer)
@@ -121,12 +126,21 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False):
                 if rig is not None:
                     rigs[key] = rig
 
+    cages = {}
+    if subdivision == "cage" and not live:
+        for key in sorted(originals):
+            mod = trailing_subdivision(originals[key], depsgraph)
+            if mod is not None and key not in rigs:
+                cages[key] = mod
+
     # Skinned meshes are written at rest: their Armature modifiers are off while the
     # meshes are read (and while sampling, which then skips Blender's skinning).
-    with modifiers_disabled([m for r in rigs.values() for m in r.disabled], depsgraph):
+    # Subdivided meshes are read as their cages likewise.
+    off = [m for r in rigs.values() for m in r.disabled] + list(cages.values())
+    with modifiers_disabled(off, depsgraph):
         evaluated = {k: ob.evaluated_get(depsgraph) for k, ob in originals.items()}
         groups = _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir,
-                                 instances, shown, materials)
+                                 instances, shown, materials, cages)
         if animate:
             sampler = Sampler(depsgraph, rec, originals, rigs, warn)
             sampler.build_skeletons()
@@ -145,7 +159,7 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False):
 
 
 def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir, instances, shown,
-                    material_keys):
+                    material_keys, cages):
     scene = depsgraph.scene
 
     def exported_parent(orig):
@@ -195,7 +209,7 @@ def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir, instance
             obj.kind = "camera"
             obj.camera = gather_camera(ob.data.original, scene.render, warn)
         elif ob.type in MESH_LIKE and shown[key]:
-            gather_geometry(ob, obj, rec, shared, rigs.get(key), groups, warn)
+            gather_geometry(ob, obj, rec, shared, rigs.get(key), groups, warn, cages.get(key))
             for mat in obj.materials:
                 if mat is not None:
                     material_keys.setdefault(mat[0], mat[1])
@@ -230,7 +244,7 @@ def _gather_points(ob, obj, instances, world, warn):
         require_finite(obj.points.points, f"object '{obj.name}'", "particle positions")
 
 
-def gather_geometry(ob, obj, rec, shared, rig, groups, warn):
+def gather_geometry(ob, obj, rec, shared, rig, groups, warn, subdivision=None):
     orig = ob.original
     is_shared = is_shareable(orig) and orig.data.name_full in shared
     mesh_key = ("proto:" + orig.data.name_full) if is_shared else ("object:" + orig.name_full)
@@ -264,6 +278,8 @@ def gather_geometry(ob, obj, rec, shared, rig, groups, warn):
                 rec.meshes[mesh_key].points = co.reshape(-1, 3)
             if skinned and rig.armature is not None:
                 groups[orig.name_full] = group_entries(mesh)
+            if subdivision is not None:
+                rec.meshes[mesh_key].subdivision = subdivision_record(subdivision, mesh)
         finally:
             if not from_data:
                 ob.to_mesh_clear()

@@ -13,7 +13,10 @@ def write_mesh(stage, path, rec, double_sided, slot_names):
     lo, hi = rec.points.min(axis=0), rec.points.max(axis=0)
     mesh.CreateExtentAttr(Vt.Vec3fArray([tuple(map(float, lo)), tuple(map(float, hi))]))
     mesh.CreateOrientationAttr(UsdGeom.Tokens.rightHanded)
-    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+    if rec.subdivision is None:
+        mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+    else:
+        write_subdivision(mesh, rec.subdivision)
     mesh.CreateDoubleSidedAttr(bool(double_sided))
     if not double_sided:
         # doubleSided = false alone is USD's default, which usdview draws two-sided;
@@ -44,6 +47,24 @@ def write_mesh(stage, path, rec, double_sided, slot_names):
         UsdGeom.Subset.SetFamilyType(mesh, UsdShade.Tokens.materialBind,
                                      UsdGeom.Tokens.nonOverlapping)
     return mesh
+
+
+def write_subdivision(mesh, sub):
+    """The cage's Catmull-Clark rules; the levels are Blender's, as lantern: metadata."""
+    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.catmullClark)
+    mesh.CreateInterpolateBoundaryAttr(sub.interpolate_boundary)
+    mesh.CreateFaceVaryingLinearInterpolationAttr(sub.face_varying_linear_interpolation)
+    if len(sub.crease_lengths):
+        mesh.CreateCreaseIndicesAttr(Vt.IntArray.FromNumpy(sub.crease_indices))
+        mesh.CreateCreaseLengthsAttr(Vt.IntArray.FromNumpy(sub.crease_lengths))
+        mesh.CreateCreaseSharpnessesAttr(Vt.FloatArray.FromNumpy(sub.crease_sharpnesses))
+    if len(sub.corner_indices):
+        mesh.CreateCornerIndicesAttr(Vt.IntArray.FromNumpy(sub.corner_indices))
+        mesh.CreateCornerSharpnessesAttr(Vt.FloatArray.FromNumpy(sub.corner_sharpnesses))
+    prim = mesh.GetPrim()
+    for name, level in (("lantern:subdivisionRenderLevel", sub.render_level),
+                        ("lantern:subdivisionViewportLevel", sub.viewport_level)):
+        prim.CreateAttribute(name, Sdf.ValueTypeNames.Int, custom=True).Set(int(level))
 
 
 def face_slots(rec, slot_count):
