@@ -212,7 +212,8 @@ def test_supersampled_presets_are_no_worse_than_medium(name, preset, request):
     if (name, preset) == ("09_tex_wrapping_mirror", "high"):
         # Not a texture's doing (its one image is black): the squares' edges lie
         # along the pixel rows and columns, where a 2x2 ordered grid places an edge
-        # no closer than one sample does (0.2 px off either way). Strict: a change
+        # no closer than one sample does (0.2 px off either way). A rotated grid
+        # fixes it (0.015) at 2-3x high's time (docs/compare.md). Strict: a change
         # that fixes it must say so here.
         request.applymarker(pytest.mark.xfail(strict=True, reason="2x2 grid on "
                                               "axis-aligned geometric edges"))
