@@ -58,6 +58,11 @@ def parameters(graph) -> np.ndarray:
     return np.asarray(rows, np.float32).reshape(-1, 4)
 
 
+def _clamped(expr, clamp: str) -> str:
+    """A node's output clamped to [0, 1] when its clamp setting is on ("1")."""
+    return f"clamp({expr}, 0.0, 1.0)" if clamp == "1" else expr
+
+
 def _convert(expr, have, want):
     if have == want or (have != "float" and want != "float"):
         return expr
@@ -119,16 +124,14 @@ class _Writer:
                 out("result", "vector", f"mix({arg('a', 'vector')}, {arg('b', 'vector')}, {fac})")
             else:
                 blend = BLEND_TYPES.index(settings.get("blend_type", "MIX"))
-                expr = f"pt_blend({blend}, {fac}, {arg('a', 'color')}, {arg('b', 'color')})"
-                if settings.get("clamp_result", "0") == "1":
-                    expr = f"clamp({expr}, 0.0, 1.0)"
-                out("result", "color", expr)
+                out("result", "color", _clamped(
+                    f"pt_blend({blend}, {fac}, {arg('a', 'color')}, {arg('b', 'color')})",
+                    settings.get("clamp_result", "0")))
         elif kind == "math":
             op = MATH_OPS.index(settings["operation"])
-            expr = f"pt_math({op}, {arg('a', 'float')}, {arg('b', 'float')}, {arg('c', 'float')})"
-            if settings.get("clamp", "0") == "1":
-                expr = f"clamp({expr}, 0.0, 1.0)"
-            out("value", "float", expr)
+            out("value", "float", _clamped(
+                f"pt_math({op}, {arg('a', 'float')}, {arg('b', 'float')}, {arg('c', 'float')})",
+                settings.get("clamp", "0")))
         elif kind == "vector_math":
             op = VECTOR_MATH_OPS.index(settings["operation"])
             emit(f"    vec3 {p}_vector; float {p}_value;")
