@@ -115,9 +115,7 @@ class _Writer:
         elif kind == "mix":
             data = settings.get("data_type", "RGBA")
             fac_type = ins.get("factor", ("", "float"))[1]
-            fac = arg("factor", fac_type)
-            if settings.get("clamp_factor", "1") == "1":
-                fac = f"clamp({fac}, 0.0, 1.0)"
+            fac = _clamped(arg("factor", fac_type), settings.get("clamp_factor", "1"))
             if data == "FLOAT":
                 out("result", "float", f"mix({arg('a', 'float')}, {arg('b', 'float')}, {fac})")
             elif data == "VECTOR":
