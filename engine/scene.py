@@ -74,11 +74,20 @@ class Material:
     uv_name: str | None = None     # primvar the material's reader asks for
     pass_index: int = 0            # lantern:passIndex: render pass IndexMA
     alpha_mode: str = ""           # lantern:alphaMode: "hashed" (Blender's Dithered), or ""
+    # lantern:bumpMapCorrection: Cycles' correction of the shadow terminator of a normal
+    # map (its default; Material > Settings > Bump Map Correction).
+    bump_correction: bool = True
     pattern: PatternGraph | None = None  # the mtlx network feeding surface inputs
 
     @property
     def has_normal_map(self) -> bool:
         return "normal" in self.maps
+
+    @property
+    def needs_smooth_normal(self) -> bool:
+        """Whether shading needs the normal before the normal map as well as after it
+        (the bump map correction, shaders/lib.glsl bump_shadowing)."""
+        return self.bump_correction and self.has_normal_map
 
     @property
     def alpha(self) -> str:

@@ -52,6 +52,7 @@ class MaterialRecord:
     backface_culling: bool = False
     pass_index: int = 0         # Blender's material pass index (render pass IndexMA)
     alpha_mode: str = ""        # "hashed" (Dithered and see-through), else "" (contract)
+    bump_correction: bool = True  # Cycles' Bump Map Correction (contract: Material)
     graph: PatternGraph | None = None  # the node network feeding surface inputs, if any
 
 

@@ -12,6 +12,9 @@ uniform sampler2D g_normal;
 uniform sampler2D g_mat;
 uniform sampler2D g_emit;
 uniform sampler2D g_depth;
+#ifdef BUMP_CORRECTION
+uniform sampler2D g_smooth;     // the normals before the normal maps (lib.glsl bump_dome)
+#endif
 uniform mat4 inv_view_proj;
 uniform vec3 cam_forward;
 uniform bool cam_ortho;
@@ -44,6 +47,9 @@ void main() {
         vec3 n = normalize(nrm.xyz);
         vec3 v = cam_ortho ? -cam_forward : normalize(-p);
         Surface s = make_surface(p, n, v, texelFetch(g_base, px, 0), texelFetch(g_mat, px, 0), nrm.w);
+#ifdef BUMP_CORRECTION
+        s.smooth_n = normalize(texelFetch(g_smooth, px, 0).xyz);
+#endif
         emitted = texelFetch(g_emit, px, 0).rgb;
         float ao = 1.0;
 #ifdef HAS_AO

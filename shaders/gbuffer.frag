@@ -10,9 +10,17 @@ layout(location = 0) out vec4 rt_base;
 layout(location = 1) out vec4 rt_normal;
 layout(location = 2) out vec4 rt_mat;
 layout(location = 3) out vec4 rt_emit;
+#ifdef WRITE_SMOOTH_NORMAL
+// The normal before the normal map, in frames with a normal-mapped material (the bump
+// map correction, lib.glsl bump_shadowing).
+layout(location = 4) out vec4 rt_smooth;
+#define INDEX_LOCATION 5
+#else
+#define INDEX_LOCATION 4
+#endif
 #ifdef WRITE_INDEX
 // Render passes IndexOB and IndexMA (asked for only).
-layout(location = 4) out vec2 rt_index;
+layout(location = INDEX_LOCATION) out vec2 rt_index;
 flat in float v_object_index;
 uniform float u_material_index;
 #endif
@@ -28,6 +36,9 @@ void main() {
     rt_normal = vec4(m.n, m.coat_roughness);
     rt_mat = m.mat;
     rt_emit = vec4(m.emissive, 1.0);
+#ifdef WRITE_SMOOTH_NORMAL
+    rt_smooth = vec4(m.smooth_n, 0.0);
+#endif
 #ifdef WRITE_INDEX
     rt_index = vec2(v_object_index, u_material_index);
 #endif

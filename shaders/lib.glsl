@@ -89,6 +89,7 @@ const float COAT_IOR = 1.5;
 struct Surface {
     vec3 p;       // camera-relative position
     vec3 n;       // world normal
+    vec3 smooth_n;  // the normal before a normal map (bump_shadowing); n without one
     vec3 v;       // towards the viewer
     vec3 base;
     float metallic;
@@ -110,7 +111,7 @@ struct Surface {
 // mat = (metallic, roughness, dielectric F0, clearcoat), as the G-buffer stores it.
 Surface make_surface(vec3 p, vec3 n, vec3 v, vec4 base, vec4 mat, float coat_roughness) {
     Surface s;
-    s.p = p; s.n = n; s.v = v;
+    s.p = p; s.n = n; s.smooth_n = n; s.v = v;
     s.base = max(base.rgb, vec3(0.0));
     s.metallic = clamp(mat.x, 0.0, 1.0);
     s.roughness = clamp(mat.y, 0.0, 1.0);
@@ -178,6 +179,41 @@ vec3 brdf_coat(Surface s, vec3 l, float a) {
     float VoH = max(dot(s.v, h), 0.0);
     float F = fresnel_dielectric(VoH, COAT_IOR);
     return vec3(s.coat * s.coat_energy * F * d_ggx(NoH, a) * v_smith(s.NoV, NoL, a));
+}
+
+// Cycles' bump map correction (kernel/closure/bsdf.h bump_shadowing_term; on by
+// default, Material > Settings) where a normal map bends n away from the smooth normal:
+// light from behind the smooth surface adds nothing to any lobe (bump_visible), and the
+// diffuse lobe is shadowed by GGX's Smith G1 at a roughness that grows with the bend
+// (bump_shadowing; Conty Estevez et al. 2019, "A Microfacet-Based Shadowing Function to
+// Solve the Bump Terminator Problem"). Without a map smooth_n == n, and both are 1.
+float bump_visible(Surface s, vec3 l) {
+    if (s.smooth_n == s.n) return 1.0;
+    return dot(s.smooth_n, l) * dot(s.smooth_n, s.n) * dot(s.n, l) < 0.0 ? 0.0 : 1.0;
+}
+
+float bump_shadowing(Surface s, vec3 l) {
+    if (s.smooth_n == s.n) return 1.0;
+    float cos_i = abs(dot(s.smooth_n, l)), cos_d = abs(dot(s.smooth_n, s.n));
+    if (cos_d >= 1.0 || cos_i >= 1.0) return 1.0;
+    if (cos_i < 1e-6) return 0.0;
+    float alpha2 = clamp(0.125 * (1.0 / (cos_d * cos_d) - 1.0), 0.0, 1.0);
+    float tan2 = (1.0 - cos_i * cos_i) / (cos_i * cos_i);
+    return 2.0 / (1.0 + sqrt(1.0 + alpha2 * tan2));
+}
+
+// The share of a uniform dome's diffuse light that the correction keeps, by the cosine
+// of the bend at 0, 0.1, ..., 1: bump_visible x bump_shadowing integrated over the bent
+// normal's hemisphere (tests/test_bump_correction.py integrates it again). Other domes
+// take the same share of their irradiance.
+const float BUMP_DOME[11] = float[](0.2732, 0.3128, 0.3541, 0.3973, 0.4752, 0.5655, 0.6525,
+                                    0.7377, 0.8224, 0.9080, 1.0);
+
+float bump_dome(Surface s) {
+    if (s.smooth_n == s.n) return 1.0;
+    float x = clamp(abs(dot(s.smooth_n, s.n)), 0.0, 1.0) * 10.0;
+    int i = min(int(x), 9);
+    return mix(BUMP_DOME[i], BUMP_DOME[i + 1], x - float(i));
 }
 
 // Irradiance from order-2 SH whose coefficients already include the cosine-lobe

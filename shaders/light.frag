@@ -8,6 +8,9 @@ uniform sampler2D g_base;
 uniform sampler2D g_normal;
 uniform sampler2D g_mat;
 uniform sampler2D g_depth;
+#ifdef BUMP_CORRECTION
+uniform sampler2D g_smooth;
+#endif
 uniform mat4 inv_view_proj;
 uniform vec3 cam_forward;
 uniform bool cam_ortho;
@@ -46,6 +49,9 @@ void main() {
     vec3 n = normalize(nrm.xyz);
     vec3 v = cam_ortho ? -cam_forward : normalize(-p);
     Surface s = make_surface(p, n, v, texelFetch(g_base, px, 0), texelFetch(g_mat, px, 0), nrm.w);
+#ifdef BUMP_CORRECTION
+    s.smooth_n = normalize(texelFetch(g_smooth, px, 0).xyz);
+#endif
     vec3 diffuse, glossy;        // what the light reflects diffusely, and specularly
 #ifdef LIGHT_DISTANT
     distant_light(s, diffuse, glossy);

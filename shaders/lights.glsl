@@ -120,7 +120,8 @@ void distant_light(Surface s, out vec3 diffuse, out vec3 glossy) {
     if (NoL <= 0.0) return;
     vec3 E = light_color * NoL;
     float a = ggx_alpha(s.roughness), ac = ggx_alpha(s.coat_roughness);
-    diffuse = E * light_diffuse * brdf_diffuse(s);
+    E *= bump_visible(s, l);
+    diffuse = E * light_diffuse * brdf_diffuse(s) * bump_shadowing(s, l);
     glossy = E * light_specular * (brdf_specular(s, l, a) + brdf_coat(s, l, ac));
 }
 
@@ -140,7 +141,8 @@ void sphere_light(Surface s, out vec3 diffuse, out vec3 glossy) {
     // A sphere source widens the highlight (Karis 2013); a point keeps alpha.
     float a = ggx_alpha(s.roughness), ac = ggx_alpha(s.coat_roughness);
     float widen = light_radius / max(2.0 * d, 1e-6);
-    diffuse = E * light_diffuse * brdf_diffuse(s);
+    E *= bump_visible(s, l);
+    diffuse = E * light_diffuse * brdf_diffuse(s) * bump_shadowing(s, l);
     glossy = E * light_specular * (brdf_specular(s, l, min(1.0, a + widen))
                                    + brdf_coat(s, l, min(1.0, ac + widen)));
 }
@@ -173,9 +175,12 @@ void area_light(Surface s, out vec3 diffuse, out vec3 glossy) {
     vec3 l = dq > 1e-6 ? lq / dq : s.n;
     float a = ggx_alpha(s.roughness), ac = ggx_alpha(s.coat_roughness);
     float widen = sqrt(light_area / PI) / max(2.0 * dq, 1e-6);
-    diffuse = E * light_diffuse * brdf_diffuse(s);
-    glossy = E * light_specular * step(0.0, dot(s.n, l)) * (brdf_specular(s, l, min(1.0, a + widen))
-                                                            + brdf_coat(s, l, min(1.0, ac + widen)));
+    // The bump map correction towards the light's centre for the diffuse integral.
+    vec3 to_centre = normalize(light_pos - s.p);
+    diffuse = E * light_diffuse * brdf_diffuse(s) * bump_visible(s, to_centre)
+        * bump_shadowing(s, to_centre);
+    glossy = E * light_specular * step(0.0, dot(s.n, l)) * bump_visible(s, l)
+        * (brdf_specular(s, l, min(1.0, a + widen)) + brdf_coat(s, l, min(1.0, ac + widen)));
 }
 
 // Any kind, by the loaded row's flags.

@@ -12,6 +12,8 @@ uniform float u_opacity;
 uniform float u_opacity_threshold;
 uniform float u_clearcoat;
 uniform float u_clearcoat_roughness;
+// Cycles' bump map correction (Material > Settings), for a normal-mapped material.
+uniform bool u_bump_correction = true;
 // The footprint a lookup filters over, as a fraction of the fragment's own
 // (engine/gpu/passes/antialias.py texture_footprint): 1 but in supersampled images.
 uniform float u_texture_footprint = 1.0;
@@ -123,6 +125,7 @@ float material_alpha(vec2 uv) {
 struct MaterialSample {
     vec3 base;        // [0, 65000]
     vec3 n;           // world shading normal, facing the viewer
+    vec3 smooth_n;    // the same before the normal map; n where no correction applies
     vec4 mat;         // metallic, roughness, dielectric F0, clearcoat
     float coat_roughness;
     vec3 emissive;    // [0, 60000]
@@ -152,6 +155,7 @@ MaterialSample material_sample(vec2 uv, vec3 normal, vec4 tangent, bool front) {
     // Back faces only reach here on double-sided meshes: face the viewer.
     vec3 n = normalize(normal);
     if (!front) n = -n;
+    vec3 smooth_n = n;
 #ifdef HAS_NORMAL_MAP
     vec3 t = tangent.xyz - n * dot(n, tangent.xyz);
     if (dot(t, t) > 1e-12) {
@@ -161,11 +165,13 @@ MaterialSample material_sample(vec2 uv, vec3 normal, vec4 tangent, bool front) {
         vec3 mapped = t * ts.x + b * ts.y + n * ts.z;
         if (dot(mapped, mapped) > 1e-12) n = normalize(mapped);
     }
+    if (!u_bump_correction) smooth_n = n;
 #endif
     float f = (u_ior - 1.0) / (u_ior + 1.0);
     MaterialSample m;
     m.base = clamp(base, 0.0, 65000.0);
     m.n = n;
+    m.smooth_n = smooth_n;
     m.mat = vec4(clamp(metallic, 0.0, 1.0), clamp(roughness, 0.0, 1.0), f * f,
                  clamp(u_clearcoat, 0.0, 1.0));
     m.coat_roughness = clamp(u_clearcoat_roughness, 0.0, 1.0);

@@ -24,6 +24,9 @@ layout(location = 0) out vec4 rt_base;
 layout(location = 1) out vec4 rt_normal;
 layout(location = 2) out vec4 rt_mat;
 layout(location = 3) out vec4 rt_emit;
+#ifdef WRITE_SMOOTH_NORMAL
+layout(location = 4) out vec4 rt_smooth;     // as gbuffer.frag's: a sphere has no map
+#endif
 uniform vec3 u_diffuse;
 uniform float u_metallic;
 uniform float u_roughness;
@@ -59,5 +62,8 @@ void main() {
     rt_normal = vec4((p - v_center) / v_radius, 1.0);
     rt_mat = vec4(clamp(u_metallic, 0.0, 1.0), clamp(u_roughness, 0.0, 1.0), f * f, 1.0);
     rt_emit = vec4(clamp(u_emissive, 0.0, 60000.0), 1.0);
+#ifdef WRITE_SMOOTH_NORMAL
+    rt_smooth = vec4(rt_normal.xyz, 0.0);
+#endif
 #endif
 }

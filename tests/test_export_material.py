@@ -130,6 +130,20 @@ def test_normal_map_strength_one(empty_scene, tmp_path):
     assert shader.GetInput("sourceColorSpace").Get() == "raw"
 
 
+def test_bump_map_correction_is_written_only_when_off(empty_scene):
+    """Cycles' Bump Map Correction is on by default, as the engine's: the stage says
+    only where a material turns it off (lantern:bumpMapCorrection = false)."""
+    on, _, _ = principled_material("On")
+    off, _, _ = principled_material("Off")
+    off.cycles.use_bump_map_correction = False
+    cube_object("A").data.materials.append(on)
+    cube_object("B").data.materials.append(off)
+    stage, _ = export_current()
+    attr = "lantern:bumpMapCorrection"
+    assert not stage.GetPrimAtPath("/root/_materials/On").HasAttribute(attr)
+    assert stage.GetPrimAtPath("/root/_materials/Off").GetAttribute(attr).Get() is False
+
+
 def test_unknown_node_warns_with_material_and_node(empty_scene):
     # Brick is outside the pattern nodes (docs/materials.md; Noise is inside now).
     mat, tree, bsdf = principled_material("Bricky")

@@ -6,7 +6,9 @@ targets: the graph takes them from the session's pool (by size and format) befor
 first pass that writes them and gives them back after the last pass that uses them, so
 a warm frame allocates nothing. Other entries are whatever a pass hands on (this
 frame's view, the shadow maps, the read-back image). A pass the frame does not need
-(`needed` is false) does not run and allocates nothing. The order is checked once:
+(`needed` is false) does not run and allocates nothing; an entry a pass writes only
+for some frames (`writes_optional`, `wanted`) is allocated only for them, and the passes
+after it read it as `optional`. The order is checked once:
 every entry a pass reads is written by a pass before it.
 
 Render passes (AOVs, core/passes.py) are targets too: a pass lists in `aovs` the
@@ -40,6 +42,7 @@ TARGETS = {
     "g_mat": "rgba16f",        # metallic, roughness, dielectric F0, clearcoat
     "g_emit": "rgba16f",       # emission
     "g_depth": "depth",         # 32-bit float, reversed (engine/view.py)
+    "g_smooth": "rgba16f",     # world normal before the normal map (bump map correction)
     "ao": "r32f",              # ambient occlusion of the dome's light
     "hdr": "rgba32f",          # light accumulation: float32, 1e-38..3e38 (a 1e-6 W and a
                                # 1e6 W light alike; float16 underflowed and overflowed)
@@ -94,10 +97,15 @@ class Pass:
     reads: tuple = ()
     optional: tuple = ()   # entries read when a pass before wrote them this frame
     writes: tuple = ()
+    writes_optional: tuple = ()  # entries written only in the frames that need them
     aovs: dict = {}     # render pass name -> (target, first channel) this pass can write
 
     def needed(self, frame: Frame) -> bool:
         return True
+
+    def wanted(self, frame: Frame) -> tuple:
+        """The entries of `writes_optional` this frame needs."""
+        return ()
 
     def aov_targets(self, frame: Frame) -> tuple:
         """The AOV targets this frame asks this pass to write."""
@@ -122,7 +130,7 @@ class FrameGraph:
             missing = [r for r in p.reads + p.optional if r not in written]
             if missing:
                 raise ValueError(f"pass {p.name} reads {missing} before any pass writes them")
-            written |= set(p.writes)
+            written |= set(p.writes) | set(p.writes_optional)
             for aov, (target, _) in p.aovs.items():
                 if target not in TARGETS:
                     raise ValueError(f"pass {p.name} writes {aov} into {target}, not a target")
@@ -138,7 +146,7 @@ class FrameGraph:
             if self.producers[aov] not in live:
                 raise RuntimeError(f"the pass writing {aov} ({self.producers[aov].name}) "
                                    "did not run")
-        writes = {p: p.writes + p.aov_targets(frame) for p in live}
+        writes = {p: p.writes + p.wanted(frame) + p.aov_targets(frame) for p in live}
         kept = {t for p in live for t in p.aov_targets(frame)}   # read back at the end
         last_use = {}
         for i, p in enumerate(live):

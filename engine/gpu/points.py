@@ -92,17 +92,17 @@ class PointClouds:
 
     VARIANTS = {"gbuffer": [], "shadow": ["POINTS_SHADOW"], "id": ["POINTS_ID"]}
 
-    def draw(self, programs, variant: str, setup, visible=None) -> tuple:
+    def draw(self, programs, variant: str, setup, visible=None, defines=()) -> tuple:
         """Draws every cloud (those `visible(lo, hi)` allows) with the points program
-        (variant: gbuffer, shadow or id); setup(prog, cloud) sets the pass's uniforms.
-        Returns (draws, points)."""
+        (variant: gbuffer, shadow or id, with the pass's own `defines`); setup(prog,
+        cloud) sets the pass's uniforms. Returns (draws, points)."""
         draws = points = 0
         for path, cloud in self.clouds.items():
             if visible is not None and not visible(*self._box(cloud)):
                 continue
-            defines = self.VARIANTS[variant] + \
+            variant_defines = self.VARIANTS[variant] + list(defines) + \
                 (["POINTS_COLOUR"] if cloud.colours is not None and variant == "gbuffer" else [])
-            prog = programs.get("points.vert", "points.frag", defines)
+            prog = programs.get("points.vert", "points.frag", variant_defines)
             set_uniform(prog, "u_object", cloud.oid)
             setup(prog, cloud)
             self._vao(cloud, prog).render(self.ctx.TRIANGLE_STRIP, vertices=4, instances=cloud.n)

@@ -38,7 +38,7 @@ UNITS = {name: unit for unit, name in enumerate((
     "u_incidence",
     "dfg_lut", "env_specular", "radiance", "ao_tex", "post_src", "post_aux",
     "overlay_image", "overlay_atlas",
-    "t_pattern0", "t_pattern1", "t_pattern2", "t_pattern3"))}
+    "t_pattern0", "t_pattern1", "t_pattern2", "t_pattern3", "g_smooth"))}
 
 
 class ShaderError(RuntimeError):

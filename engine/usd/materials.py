@@ -83,6 +83,9 @@ def read_material(mat: UsdShade.Material, time, warnings: list) -> Material:
     mode = mat.GetPrim().GetAttribute("lantern:alphaMode")
     if mode and mode.HasAuthoredValue():
         out.alpha_mode = str(mode.Get())         # see Material.alpha
+    correction = mat.GetPrim().GetAttribute("lantern:bumpMapCorrection")
+    if correction and correction.HasAuthoredValue():
+        out.bump_correction = bool(correction.Get())
     surface = mat.ComputeSurfaceSource()[0]
     if not surface or _shader_id(surface) != "UsdPreviewSurface":
         warnings.append(f"{path}: no UsdPreviewSurface surface; using the default material")

@@ -366,7 +366,15 @@ def gather_material(material, warn, texture_dir=None):
     return MaterialRecord(key=material.name_full, name=material.name, inputs=inputs,
                           backface_culling=bool(material.use_backface_culling),
                           pass_index=int(material.pass_index),
-                          alpha_mode=alpha_mode(material, inputs, graph), graph=graph)
+                          alpha_mode=alpha_mode(material, inputs, graph), graph=graph,
+                          bump_correction=bump_correction(material))
+
+
+def bump_correction(material) -> bool:
+    """Cycles' Bump Map Correction (Material > Settings, on by default). Without the
+    Cycles add-on's settings, its default."""
+    settings = getattr(material, "cycles", None)
+    return bool(getattr(settings, "use_bump_map_correction", True))
 
 
 def alpha_mode(material, inputs, graph=None) -> str:

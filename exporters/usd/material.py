@@ -14,6 +14,7 @@ OUTPUT_TYPES = {"rgb": Sdf.ValueTypeNames.Float3}
 # How a see-through material is drawn when UsdPreviewSurface alone cannot say (the
 # stage contract, "Material"): "hashed" for Blender's Dithered render method.
 ALPHA_MODE = "lantern:alphaMode"
+BUMP_CORRECTION = "lantern:bumpMapCorrection"
 
 
 def write_material(stage, path, rec, default_uv, asset_path):
@@ -70,6 +71,9 @@ def write_material(stage, path, rec, default_uv, asset_path):
     if rec.alpha_mode:
         material.GetPrim().CreateAttribute(ALPHA_MODE, Sdf.ValueTypeNames.Token,
                                            custom=True).Set(rec.alpha_mode)
+    if not rec.bump_correction:            # authored only where it differs from Cycles' default
+        material.GetPrim().CreateAttribute(BUMP_CORRECTION, Sdf.ValueTypeNames.Bool,
+                                           custom=True).Set(False)
     return material
 
 

@@ -5,7 +5,8 @@ them per map), emission (added here and only here), and the dome as the backgrou
 Ambient occlusion, when the AO pass ran, dims the dome's light only. It starts the
 HDR target.
 
-reads: g_base, g_normal, g_mat, g_emit, g_depth, view, ao (optional)   writes: hdr
+reads: g_base, g_normal, g_mat, g_emit, g_depth, view, ao (optional), g_smooth (optional:
+       the normals before the normal maps, for the bump map correction)   writes: hdr
 render passes (with the light pass): DiffDir, GlossDir, Env, Shadow: see LIGHTING_AOVS"""
 from __future__ import annotations
 
@@ -37,15 +38,21 @@ def lighting_aovs(frame) -> bool:
 def bind_gbuffer(board, prog, view):
     """The G-buffer and the camera, as every screen-space lighting pass reads them
     (positions from depth are camera-relative: lib.glsl)."""
-    for name in GBUFFER:
+    for name in GBUFFER + (("g_smooth",) if "g_smooth" in board else ()):
         board[name].use(UNITS[name])
     view.set_camera(prog)
+
+
+def bump_defines(board) -> list:
+    """The lighting shaders' variant for a frame whose G-buffer holds the normals before
+    the normal maps (the bump map correction: passes/gbuffer.py)."""
+    return ["BUMP_CORRECTION"] if "g_smooth" in board else []
 
 
 class AmbientPass(Pass):
     name = "ambient"
     reads = GBUFFER + ("view",)
-    optional = ("ao",)
+    optional = ("ao", "g_smooth")
     writes = ("hdr",)
     aovs = LIGHTING_AOVS
 
@@ -82,7 +89,7 @@ class AmbientPass(Pass):
         # preset has occlusion.
         ao = board.get("ao") if occludes(frame) else None
         defines = (["HAS_DOME_MAP"] if env is not None else []) + (["HAS_AO"] if ao else []) + \
-            (["WRITE_AOVS"] if aovs else [])
+            (["WRITE_AOVS"] if aovs else []) + bump_defines(board)
         prog = self.programs.get("fullscreen.vert", "ambient.frag", defines)
         bind_gbuffer(board, prog, board["view"])
         self.environment.bind(prog, dome, env)

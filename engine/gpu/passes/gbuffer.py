@@ -12,7 +12,9 @@ reads: skinned (posed geometry), view
 writes: g_base (base colour + alpha), g_normal (world normal, clearcoat roughness),
         g_mat (metallic, roughness, dielectric F0, clearcoat), g_emit (emission), all
         RGBA16F; g_depth (32-bit
-        float, reversed: cleared to 0, tested GREATER; engine/view.py)
+        float, reversed: cleared to 0, tested GREATER; engine/view.py); g_smooth (the
+        normal before the normal map, RGBA16F) only in frames with a normal-mapped
+        material, for Cycles' bump map correction (shaders/lib.glsl bump_shadowing)
 A material with a pattern graph (engine/gpu/pattern.py) draws with its shape's
 generated variant and its parameters (stats: pattern_bytes).
 render passes: IndexOB, IndexMA into g_index (RG32F), only when asked for (a
@@ -38,16 +40,25 @@ class GBufferPass(Pass):
     name = "gbuffer"
     reads = ("skinned", "view")
     writes = TARGETS
+    writes_optional = ("g_smooth",)
     aovs = {"IndexOB": ("g_index", 0), "IndexMA": ("g_index", 1)}
 
     def __init__(self, ctx, pool, programs, geometry, textures, depth):
         self.ctx, self.pool, self.programs = ctx, pool, programs
         self.geometry, self.textures, self.depth = geometry, textures, depth
 
+    def wanted(self, frame):
+        # The normal before the normal map, for Cycles' bump map correction (lib.glsl
+        # bump_shadowing), only in frames that draw a normal-mapped material.
+        needed = any(m.needs_smooth_normal for m in frame.scene.materials.values())
+        return ("g_smooth",) if needed else ()
+
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]
         index = "g_index" in self.aov_targets(frame)
-        colors = [board[n] for n in TARGETS[:4]] + ([board["g_index"]] if index else [])
+        smooth = "g_smooth" in board
+        colors = [board[n] for n in TARGETS[:4]] + ([board["g_smooth"]] if smooth else []) + \
+            ([board["g_index"]] if index else [])
         fbo = self.pool.framebuffer(colors, depth=board["g_depth"])
         fbo.use()
         fbo.clear(0.0, 0.0, 0.0, 0.0, depth=0.0)
@@ -68,7 +79,7 @@ class GBufferPass(Pass):
             if threshold is None:
                 continue                   # wholly see-through: the transparency pass's
             defines = map_defines(mat) + self.geometry.object_defines() + \
-                (["WRITE_INDEX"] if index else [])
+                (["WRITE_SMOOTH_NORMAL"] if smooth else []) + (["WRITE_INDEX"] if index else [])
             prog = self.programs.get("gbuffer.vert", "gbuffer.frag", defines,
                                      generated=material_variant(mat))
             set_uniform(prog, "view_proj", view.view_proj)
@@ -88,11 +99,11 @@ class GBufferPass(Pass):
         ctx.front_face = "ccw"
         ctx.disable(ctx.CULL_FACE)
         if self.geometry.points.clouds:
-            self._points(frame, view, materials)
+            self._points(frame, view, materials, ["WRITE_SMOOTH_NORMAL"] if smooth else [])
         ctx.disable(ctx.DEPTH_TEST)
         self.depth.far_clip(False)
 
-    def _points(self, frame, view, materials):
+    def _points(self, frame, view, materials, defines):
         """Points prims: spheres facing the camera (points.vert), depth-tested with
         the meshes."""
         def setup(prog, cloud):
@@ -102,7 +113,8 @@ class GBufferPass(Pass):
                          texture_footprint(frame.supersample))
 
         draws, points = self.geometry.points.draw(
-            self.programs, "gbuffer", setup, lambda lo, hi: not view.outside(lo[None], hi[None])[0])
+            self.programs, "gbuffer", setup, lambda lo, hi: not view.outside(lo[None], hi[None])[0],
+            defines)
         frame.count("draw_calls", draws)
         frame.count("points_drawn", points)
 
@@ -123,6 +135,7 @@ def set_material(prog, mat, textures, threshold, footprint=1.0):
     set_uniform(prog, "u_clearcoat", mat.clearcoat)
     set_uniform(prog, "u_clearcoat_roughness", mat.clearcoat_roughness)
     set_uniform(prog, "u_material_index", float(mat.pass_index))
+    set_uniform(prog, "u_bump_correction", bool(mat.bump_correction))
     pattern_bytes = set_parameters(prog, mat)
     for name, short, _ in MAP_SLOTS:
         ref = mat.maps.get(name)

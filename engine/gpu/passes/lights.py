@@ -16,7 +16,8 @@ ONE), reading its numbers from the light table (engine/gpu/lights.py).
 Shadow-casting lights read their map from the shadow pass. Volumes are placed
 relative to the camera (positions are camera-relative, as the surfaces they light).
 
-reads: g_base, g_normal, g_mat, g_emit, g_depth, hdr, view, shadow_maps (optional)
+reads: g_base, g_normal, g_mat, g_emit, g_depth, hdr, view, shadow_maps (optional),
+       g_smooth (optional: normals before the normal maps, for the bump map correction)
 writes: hdr, depth_stencil
 render passes: adds to DiffDir, GlossDir, Shadow (passes/ambient.py LIGHTING_AOVS)"""
 from __future__ import annotations
@@ -29,7 +30,8 @@ from ....core.lights import KINDS, POINT, SPOT, SUN
 from ...view import translate
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
-from .ambient import GBUFFER, LIGHTING_AOVS, LIGHTING_TARGETS, bind_gbuffer, lighting_aovs
+from .ambient import (GBUFFER, LIGHTING_AOVS, LIGHTING_TARGETS, bind_gbuffer, bump_defines,
+                      lighting_aovs)
 from .shadows import set_shadow_uniforms
 
 CONE_SIDES = 24
@@ -93,6 +95,7 @@ def cone(light, length: float) -> np.ndarray:
 class LightPass(Pass):
     name = "lights"
     reads = GBUFFER + ("hdr", "view", "shadow_maps")
+    optional = ("g_smooth",)
     writes = ("hdr", "depth_stencil")
 
     def __init__(self, ctx, pool, programs, uploads, stencil, table, geometry, environment):
@@ -201,7 +204,7 @@ class LightPass(Pass):
                 self._instances[1].release()
             self._instances = (rows, self.uploads.buffer(rows, kind="lights"))
         prog = self.programs.get("volume.vert", "light.frag", ["LIGHT_SPHERE", "LIGHTS_INSTANCED"]
-                                 + (["WRITE_AOVS"] if self._aovs else []))
+                                 + (["WRITE_AOVS"] if self._aovs else []) + bump_defines(board))
         bind_gbuffer(board, prog, view)
         set_uniform(prog, "mvp", view.view_proj)
         ctx.enable(ctx.BLEND)
@@ -220,7 +223,7 @@ class LightPass(Pass):
 
     def _program(self, board, view, vert, variant, row, sm):
         prog = self.programs.get(vert, "light.frag", [variant] + (["HAS_SHADOW"] if sm else [])
-                                 + (["WRITE_AOVS"] if self._aovs else []))
+                                 + (["WRITE_AOVS"] if self._aovs else []) + bump_defines(board))
         bind_gbuffer(board, prog, view)
         set_uniform(prog, "light_index", row)
         if sm is not None:
