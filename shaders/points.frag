@@ -33,6 +33,8 @@ uniform float u_roughness;
 uniform float u_ior;
 uniform vec3 u_emissive;
 uniform float u_opacity;
+uniform float u_clearcoat;
+uniform float u_clearcoat_roughness;
 #endif
 
 void main() {
@@ -59,8 +61,9 @@ void main() {
 #endif
     float f = (u_ior - 1.0) / (u_ior + 1.0);
     rt_base = vec4(clamp(base, 0.0, 1.0), u_opacity);
-    rt_normal = vec4((p - v_center) / v_radius, 1.0);
-    rt_mat = vec4(clamp(u_metallic, 0.0, 1.0), clamp(u_roughness, 0.0, 1.0), f * f, 1.0);
+    rt_normal = vec4((p - v_center) / v_radius, clamp(u_clearcoat_roughness, 0.0, 1.0));
+    rt_mat = vec4(clamp(u_metallic, 0.0, 1.0), clamp(u_roughness, 0.0, 1.0), f * f,
+                  clamp(u_clearcoat, 0.0, 1.0));
     rt_emit = vec4(clamp(u_emissive, 0.0, 60000.0), 1.0);
 #ifdef WRITE_SMOOTH_NORMAL
     rt_smooth = vec4(rt_normal.xyz, 0.0);

@@ -226,8 +226,10 @@ def test_points_are_spheres(gl, hard_case, monkeypatch):
     # and tilt its normals: edge pixels differ, the rest agree closely.
     hard_case(f"Points spheres vs 96-segment meshed spheres (GL {gl[0]}.{gl[1]}): pixels "
               f"differing by > 0.05", int((diff > 0.05).sum()), 10, "px")
+    # 3e-5: the spheres' G-buffer once carried a full clearcoat of roughness 1 that
+    # the meshes' material does not have (6.7e-5).
     hard_case(f"Points spheres vs meshed spheres (GL {gl[0]}.{gl[1]}): mean abs difference",
-              float(diff.mean()), 1e-4)
+              float(diff.mean()), 3e-5)
 
 
 def test_a_particle_scene_shows_its_particles_lit_and_shadowed(hard_case):
