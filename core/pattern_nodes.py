@@ -52,6 +52,11 @@ KINDS = {
     "voronoi": {"dimensions": ("3D",), "feature": ("F1",), "distance": VORONOI_METRICS,
                 "normalize": ("0",)},
     "wave": {"wave_type": WAVE_TYPES, "direction": WAVE_DIRECTIONS, "wave_profile": WAVE_PROFILES},
+    # Shading normals (the surface input `normal`): Cycles' Bump node (svm_node_set_bump)
+    # from the height's screen-space derivatives, and a tangent-space Normal Map whose
+    # colour a network computes.
+    "bump": {"invert": ("0", "1")},
+    "normal_map": {"space": ("TANGENT",)},
 }
 
 

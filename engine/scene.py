@@ -84,10 +84,21 @@ class Material:
         return "normal" in self.maps
 
     @property
+    def needs_tangents(self) -> bool:
+        """A tangent-space normal map, as a texture or in a network."""
+        return self.has_normal_map or (self.pattern is not None and
+                                       any(n.kind == "normal_map" for n in self.pattern.nodes))
+
+    @property
+    def bends_normal(self) -> bool:
+        """A normal map, or a network (Bump, Normal Map) feeding the normal."""
+        return self.has_normal_map or (self.pattern is not None and self.pattern.feeds("normal"))
+
+    @property
     def needs_smooth_normal(self) -> bool:
         """Whether shading needs the normal before the normal map as well as after it
         (the bump map correction, shaders/lib.glsl bump_shadowing)."""
-        return self.bump_correction and self.has_normal_map
+        return self.bump_correction and self.bends_normal
 
     @property
     def alpha(self) -> str:

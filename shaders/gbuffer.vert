@@ -13,12 +13,19 @@ uniform float u_far;
 out vec3 v_normal;
 out vec2 v_uv;
 out vec4 v_tangent;
+#ifdef PATTERN_NORMAL
+out vec3 v_position;        // camera-relative: a bump node's screen-space derivatives
+#endif
 #ifdef WRITE_INDEX
 flat out float v_object_index;
 #endif
 void main() {
     mat4 model = object_model();
-    gl_Position = view_proj * (model * vec4(in_pos, 1.0));
+    vec4 position = model * vec4(in_pos, 1.0);
+    gl_Position = view_proj * position;
+#ifdef PATTERN_NORMAL
+    v_position = position.xyz;
+#endif
     gl_ClipDistance[0] = u_far - gl_Position.w;
     v_normal = object_normal_matrix() * in_normal;
     v_uv = in_uv;

@@ -77,14 +77,23 @@ vec4 sample_map(sampler2D t, Map m, vec2 uv) {
     return c;
 }
 
+// The surface a pattern graph is evaluated on, for its nodes that bend the shading
+// normal (pattern_lib.glsl pt_bump, pt_normal_map); material_sample sets it.
+vec3 pt_N = vec3(0.0, 0.0, 1.0);   // the interpolated normal, facing the viewer
+vec3 pt_P = vec3(0.0);             // camera-relative position
+vec4 pt_T = vec4(0.0);             // tangent (world) and bitangent sign; 0: none
+#ifdef PATTERN_NORMAL
+in vec3 v_position;                // gbuffer.vert
+#endif
+
 #include "pattern.glsl"
 
 // The surface inputs a pattern graph feeds replace the constants and maps
 // (engine/gpu/pattern.py); without one this is the constants.
 void pattern_inputs(vec2 uv, inout vec3 diffuse, inout float metallic, inout float roughness,
-                    inout float opacity, inout vec3 emissive) {
+                    inout float opacity, inout vec3 emissive, inout vec3 normal) {
 #ifdef HAS_PATTERN
-    pattern_eval(uv, diffuse, metallic, roughness, opacity, emissive);
+    pattern_eval(uv, diffuse, metallic, roughness, opacity, emissive, normal);
 #endif
 }
 
@@ -113,9 +122,9 @@ float material_alpha(vec2 uv) {
     alpha = sample_map(t_opacity, m_opacity, uv).x;
 #endif
 #ifdef HAS_PATTERN
-    vec3 d = vec3(0.0), e = vec3(0.0);
+    vec3 d = vec3(0.0), e = vec3(0.0), n = vec3(0.0);
     float mt = 0.0, r = 0.0;
-    pattern_eval(uv, d, mt, r, alpha, e);
+    pattern_eval(uv, d, mt, r, alpha, e, n);
 #endif
     return alpha;
 }
@@ -149,13 +158,17 @@ MaterialSample material_sample(vec2 uv, vec3 normal, vec4 tangent, bool front) {
 #ifdef HAS_EMISSIVE_MAP
     emissive = sample_map(t_emissive, m_emissive, uv).rgb;
 #endif
-    float opacity = 1.0;
-    pattern_inputs(uv, base, metallic, roughness, opacity, emissive);
-
     // Back faces only reach here on double-sided meshes: face the viewer.
     vec3 n = normalize(normal);
     if (!front) n = -n;
     vec3 smooth_n = n;
+    pt_N = n;
+    pt_T = vec4(tangent.xyz - n * dot(n, tangent.xyz), tangent.w);
+#ifdef PATTERN_NORMAL
+    pt_P = v_position;
+#endif
+    float opacity = 1.0;
+    pattern_inputs(uv, base, metallic, roughness, opacity, emissive, n);
 #ifdef HAS_NORMAL_MAP
     vec3 t = tangent.xyz - n * dot(n, tangent.xyz);
     if (dot(t, t) > 1e-12) {
@@ -165,8 +178,8 @@ MaterialSample material_sample(vec2 uv, vec3 normal, vec4 tangent, bool front) {
         vec3 mapped = t * ts.x + b * ts.y + n * ts.z;
         if (dot(mapped, mapped) > 1e-12) n = normalize(mapped);
     }
-    if (!u_bump_correction) smooth_n = n;
 #endif
+    if (!u_bump_correction) smooth_n = n;
     float f = (u_ior - 1.0) / (u_ior + 1.0);
     MaterialSample m;
     m.base = clamp(base, 0.0, 65000.0);

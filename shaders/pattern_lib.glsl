@@ -408,3 +408,32 @@ float pt_wave(int type, int dir, int profile, vec3 p, float distortion, float de
 // scene-linear role of Blender's default OCIO config), vector -> float the average.
 float pt_color_to_float(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
 float pt_vector_to_float(vec3 v) { return (v.x + v.y + v.z) * (1.0 / 3.0); }
+
+// Cycles' Bump node (svm_node_set_bump): the shading normal of a surface displaced by
+// `distance` x height along pt_N (material.glsl), from the height's and the position's
+// derivatives across the pixel (Cycles takes finite differences of its ray
+// differentials: the same surface gradient). Strength blends towards pt_N.
+vec3 pt_bump(float strength, float distance, float height, bool invert) {
+    vec3 dpdx = dFdx(pt_P), dpdy = dFdy(pt_P);
+    vec3 rx = cross(dpdy, pt_N), ry = cross(pt_N, dpdx);
+    float det = dot(dpdx, rx);
+    vec3 surfgrad = dFdx(height) * rx + dFdy(height) * ry;
+    float scale = invert ? -distance : distance;
+    vec3 n = abs(det) * pt_N - scale * sign(det) * surfgrad;
+    if (!(dot(n, n) > 0.0)) return pt_N;
+    float s = max(strength, 0.0);
+    return normalize(s * normalize(n) + (1.0 - s) * pt_N);
+}
+
+// Cycles' tangent-space Normal Map node (svm_node_normal_map) on a colour a network
+// computed: n = 2c - 1 in the MikkTSpace frame (pt_T), strength s weighting it as
+// Cycles does (docs/stage_contract.md, "Normal maps"). Without tangents, pt_N.
+vec3 pt_normal_map(float strength, vec3 color) {
+    if (!(dot(pt_T.xyz, pt_T.xyz) > 1e-12)) return pt_N;
+    vec3 t = normalize(pt_T.xyz);
+    vec3 b = cross(pt_N, t) * (pt_T.w < 0.0 ? -1.0 : 1.0);
+    vec3 c = 2.0 * color - 1.0;
+    float s = max(strength, 0.0);
+    vec3 n = s * c.x * t + s * c.y * b + (1.0 + min(s, 1.0) * (c.z - 1.0)) * pt_N;
+    return dot(n, n) > 1e-12 ? normalize(n) : pt_N;
+}

@@ -568,7 +568,62 @@ def build_image(workdir=None):
                            ("mapping_only", _image_mapping_only)])
 
 
-SCENES = {"image": build_image,
+def _height(kind, scale):
+    """A height for the Bump node: Noise's Fac, Wave bands' Fac or a linear Gradient, on
+    the UV coordinates."""
+    def height(tree):
+        coord = tree.nodes.new("ShaderNodeTexCoord")
+        node = tree.nodes.new({"noise": "ShaderNodeTexNoise", "wave": "ShaderNodeTexWave",
+                               "gradient": "ShaderNodeTexGradient"}[kind])
+        if kind != "gradient":
+            node.inputs["Scale"].default_value = scale
+        tree.links.new(coord.outputs["UV"], node.inputs["Vector"])
+        return node.outputs["Fac"]
+    return height
+
+
+def _bump(height, distance, strength=1.0, invert=False):
+    """Height -> Bump -> the Principled BSDF's Normal, base colour 0.8: under the sun
+    overhead a pixel is 0.8 x the cosine of the bumped normal's tilt."""
+    def build(tree, bsdf):
+        bsdf.inputs["Base Color"].default_value = (0.8, 0.8, 0.8, 1.0)
+        bump = tree.nodes.new("ShaderNodeBump")
+        bump.invert = invert
+        bump.inputs["Distance"].default_value = distance
+        bump.inputs["Strength"].default_value = strength
+        tree.links.new(height(tree), bump.inputs["Height"])
+        tree.links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
+    return build
+
+
+def _network_normal_map(strength):
+    """The image through a Mapping node, as a tangent-space normal map (Non-Color)."""
+    def build(tree, bsdf):
+        bsdf.inputs["Base Color"].default_value = (0.8, 0.8, 0.8, 1.0)
+        mapping = _uv_mapping(tree, "POINT", (0.1, 0.2, 0.0), (0.0, 0.0, 0.3), (0.5, 0.5, 1.0))
+        image = _image(tree)
+        image.image.colorspace_settings.name = "Non-Color"
+        tree.links.new(mapping.outputs[0], image.inputs["Vector"])
+        normal_map = tree.nodes.new("ShaderNodeNormalMap")
+        normal_map.inputs["Strength"].default_value = strength
+        tree.links.new(image.outputs["Color"], normal_map.inputs["Color"])
+        tree.links.new(normal_map.outputs["Normal"], bsdf.inputs["Normal"])
+    return build
+
+
+def build_bump(workdir=None):
+    """Networks that bend the shading normal: Bump on procedural heights (Cycles'
+    surface gradient), and a Normal Map whose image goes through a Mapping node."""
+    return _grid("bump", [("noise", _bump(_height("noise", 5.0), 0.05)),
+                          ("noise_half", _bump(_height("noise", 5.0), 0.05, strength=0.5)),
+                          ("wave_invert", _bump(_height("wave", 2.0), 0.03, invert=True)),
+                          ("gradient", _bump(_height("gradient", 1.0), 0.5)),
+                          ("normal_map", _network_normal_map(1.0)),
+                          ("normal_map_half", _network_normal_map(0.5))])
+
+
+SCENES = {"bump": build_bump,
+          "image": build_image,
           "alpha": build_alpha,
           "voronoi": build_voronoi,
           "wave": build_wave,

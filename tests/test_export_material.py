@@ -144,6 +144,35 @@ def test_bump_map_correction_is_written_only_when_off(empty_scene):
     assert stage.GetPrimAtPath("/root/_materials/Off").GetAttribute(attr).Get() is False
 
 
+def test_bump_network_feeds_the_normal_and_a_chained_bump_warns(empty_scene):
+    """A Bump node on a network's height becomes the graph's `normal`; a Bump whose own
+    Normal input is linked (chained bumps) is one warning naming it, and no normal."""
+    def bumped(name, chained):
+        mat, tree, bsdf = principled_material(name)
+        noise = tree.nodes.new("ShaderNodeTexNoise")
+        bump = tree.nodes.new("ShaderNodeBump")
+        bump.name = "Outer"
+        tree.links.new(noise.outputs["Fac"], bump.inputs["Height"])
+        if chained:
+            inner = tree.nodes.new("ShaderNodeBump")
+            tree.links.new(noise.outputs["Fac"], inner.inputs["Height"])
+            tree.links.new(inner.outputs["Normal"], bump.inputs["Normal"])
+        tree.links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
+        return mat
+    cube_object("A").data.materials.append(bumped("Bumped", False))
+    cube_object("B").data.materials.append(bumped("Chained", True))
+    stage, report = export_current()
+    mtlx = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/Bumped/MtlxSurface"))
+    (src,), _ = mtlx.GetInput("normal").GetConnectedSources()
+    assert src.sourceName == "normal"
+    assert not stage.GetPrimAtPath("/root/_materials/Chained/MtlxSurface").IsValid() or \
+        not UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/Chained/MtlxSurface")) \
+        .GetInput("normal")
+    chained = [w for w in report.warnings if "'Chained'" in w]
+    assert len(chained) == 1 and "'Outer'" in chained[0] and "linked Normal" in chained[0], \
+        report.warnings
+
+
 def test_unknown_node_warns_with_material_and_node(empty_scene):
     # Brick is outside the pattern nodes (docs/materials.md; Noise is inside now).
     mat, tree, bsdf = principled_material("Bricky")

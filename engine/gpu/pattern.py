@@ -21,7 +21,7 @@ from .programs import set_uniform_array
 
 SURFACE = {"diffuseColor": ("pt_diffuse", "color"), "metallic": ("pt_metallic", "float"),
            "roughness": ("pt_roughness", "float"), "opacity": ("pt_opacity", "float"),
-           "emissiveColor": ("pt_emissive", "color")}
+           "emissiveColor": ("pt_emissive", "color"), "normal": ("pt_normal", "vector")}
 
 
 @dataclass(frozen=True)
@@ -205,6 +205,13 @@ class _Writer:
             out("color", "color", f"vec3({p}_fac)")
         elif kind == "noise":
             self._noise(p, settings, arg)
+        elif kind == "bump":
+            invert = "true" if settings.get("invert", "0") == "1" else "false"
+            out("normal", "vector", f"pt_bump({arg('strength', 'float', '1.0')}, "
+                f"{arg('distance', 'float', '1.0')}, {arg('height', 'float', '1.0')}, {invert})")
+        elif kind == "normal_map":
+            out("normal", "vector", f"pt_normal_map({arg('strength', 'float', '1.0')}, "
+                f"{arg('color', 'color', '0.5')})")
         else:
             raise ValueError(f"pattern node kind {kind!r} has no GLSL")
 

@@ -162,7 +162,7 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None) -> MeshData:
     order = np.argsort(tri_mat, kind="stable")
 
     T = np.zeros((len(corners), 4))
-    if any(m.has_normal_map for m in materials):
+    if any(m.needs_tangents for m in materials):
         tan, t_interp = _primvar(mesh, "tangents", time) if refined is None else (None, None)
         if tan is not None and tan.shape[1] in (3, 4):
             tc = _per_corner(tan, t_interp, len(pts), face_of_corner, idx, n_faces, "tangents")[corners]

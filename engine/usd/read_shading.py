@@ -86,8 +86,8 @@ class ShadingReading:
         else:
             new = self._material(UsdShade.Material(prim), force=True)
             changes.materials.add(name)
-            relayout = users if old is None or (old.uv_name, old.has_normal_map) != \
-                (new.uv_name, new.has_normal_map) else set()
+            relayout = users if old is None or (old.uv_name, old.needs_tangents) != \
+                (new.uv_name, new.needs_tangents) else set()
         for path in relayout:
             p = self.stage.GetPrimAtPath(path)
             if p:

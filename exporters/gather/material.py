@@ -196,7 +196,8 @@ class _Walker:
         node = link.from_node
         if node.bl_idname == "ShaderNodeNormalMap" and node.space == "TANGENT":
             src = _link(node.inputs["Color"])
-            if src is not None and src.from_node.bl_idname == "ShaderNodeTexImage":
+            if src is not None and src.from_node.bl_idname == "ShaderNodeTexImage" and \
+                    not _computed_coordinates(src.from_node):
                 tex = self.texture(src.from_node, raw=True)
                 if tex is None:
                     return None
@@ -208,6 +209,14 @@ class _Walker:
                     strength, bool(getattr(node, "invert_green", False)))
                 tex = dataclasses.replace(tex, scale=scale, bias=bias)
                 return TexInput(tex, "rgb")
+        if is_pattern(node):
+            # A Bump node, or a Normal Map whose colour a network computes: the
+            # pattern graph's `normal` (UsdPreviewSurface's fallback has none).
+            try:
+                self.pattern.connect("normal", link)
+            except Unsupported as exc:
+                self.unsupported(exc.node, exc.why)
+            return None
         self.unsupported(node, "as a normal is not supported")
         return None
 

@@ -84,6 +84,23 @@ def _combine_color(node, mode=None):
         {"x": node.inputs[0], "y": node.inputs[1], "z": node.inputs[2]}, {"color": node.outputs[0]}
 
 
+def _bump(node):
+    """Cycles' Bump node on the shading normal (its Filter Width only sets where Cycles
+    takes its finite differences; the engine takes the height's screen-space
+    derivatives)."""
+    if node.inputs["Normal"].is_linked:
+        raise Unsupported(node, "with a linked Normal input is not supported")
+    return "bump", {"invert": str(int(node.invert))}, \
+        {"strength": node.inputs["Strength"], "distance": node.inputs["Distance"],
+         "height": node.inputs["Height"]}, {"normal": node.outputs["Normal"]}
+
+
+def _normal_map(node):
+    return "normal_map", {"space": node.space}, \
+        {"strength": node.inputs["Strength"], "color": node.inputs["Color"]}, \
+        {"normal": node.outputs["Normal"]}
+
+
 def _ramp(node):
     ramp = node.color_ramp
     if ramp.color_mode != "RGB" or ramp.interpolation not in {"LINEAR", "CONSTANT", "EASE"}:
@@ -159,6 +176,8 @@ NODES = {
         "distortion": n.inputs["Distortion"], "detail": n.inputs["Detail"],
         "detail_scale": n.inputs["Detail Scale"], "detail_roughness": n.inputs["Detail Roughness"],
         "phase": n.inputs["Phase Offset"]}, {"fac": n.outputs["Fac"], "color": n.outputs["Color"]}),
+    "ShaderNodeBump": _bump,
+    "ShaderNodeNormalMap": _normal_map,
     "ShaderNodeTexGradient": lambda n: ("gradient", {"gradient_type": n.gradient_type},
                                         {"vector": n.inputs["Vector"]},
                                         {"color": n.outputs["Color"], "fac": n.outputs["Fac"]}),

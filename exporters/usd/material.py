@@ -11,6 +11,8 @@ INPUT_TYPES = {
     "normal": Sdf.ValueTypeNames.Normal3f,
 }
 OUTPUT_TYPES = {"rgb": Sdf.ValueTypeNames.Float3}
+# MaterialX's ND_UsdPreviewSurface_surfaceshader types its normal float3.
+MTLX_INPUT_TYPES = {**INPUT_TYPES, "normal": Sdf.ValueTypeNames.Float3}
 # How a see-through material is drawn when UsdPreviewSurface alone cannot say (the
 # stage contract, "Material"): "hashed" for Blender's Dithered render method.
 ALPHA_MODE = "lantern:alphaMode"
@@ -125,7 +127,7 @@ def write_pattern(stage, path, material, preview, graph, asset_path):
             mtlx.CreateInput(inp.GetBaseName(), inp.GetTypeName()).Set(inp.Get())
     for target, (src, out) in sorted(graph.outputs.items()):
         src_out = shaders[src].GetOutput(out)
-        typ = INPUT_TYPES.get(target, Sdf.ValueTypeNames.Float)
+        typ = MTLX_INPUT_TYPES.get(target, Sdf.ValueTypeNames.Float)
         ng_out = ng.CreateOutput(target, src_out.GetTypeName())
         ng_out.ConnectToSource(src_out)
         mtlx.CreateInput(target, typ).ConnectToSource(ng_out)

@@ -160,5 +160,8 @@ def _bind_map(prog, short, ref, textures):
 
 
 def map_defines(mat) -> list:
-    """The variant of a program including shaders/material.glsl for this material."""
-    return [flag for name, _, flag in MAP_SLOTS if name in mat.maps]
+    """The variant of a program including shaders/material.glsl for this material (and
+    PATTERN_NORMAL: a network bends the normal, which needs the position)."""
+    pattern_normal = mat.pattern is not None and mat.pattern.feeds("normal")
+    return [flag for name, _, flag in MAP_SLOTS if name in mat.maps] + \
+        (["PATTERN_NORMAL"] if pattern_normal else [])
