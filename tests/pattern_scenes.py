@@ -504,6 +504,41 @@ def _alpha_checker(tree):
     return node.outputs["Fac"]
 
 
+def _transparent_mix(slot, factor, alpha=1.0):
+    """A Mix Shader of a Transparent BSDF (in shader slot `slot`) and the Principled BSDF
+    (base 0.8, 0.5, 0.2; its own Alpha `alpha`), Blended; `factor` a constant or a
+    function(tree) giving the socket feeding the Mix's factor."""
+    def build(tree, bsdf):
+        import bpy
+        bsdf.inputs["Base Color"].default_value = (0.8, 0.5, 0.2, 1.0)
+        bsdf.inputs["Alpha"].default_value = alpha
+        output = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+        mix = tree.nodes.new("ShaderNodeMixShader")
+        transparent = tree.nodes.new("ShaderNodeBsdfTransparent")
+        shaders = [transparent.outputs[0], bsdf.outputs["BSDF"]]
+        if slot == 1:
+            shaders.reverse()
+        tree.links.new(shaders[0], mix.inputs[1])
+        tree.links.new(shaders[1], mix.inputs[2])
+        tree.links.new(mix.outputs[0], output.inputs["Surface"])
+        if callable(factor):
+            tree.links.new(factor(tree), mix.inputs[0])
+        else:
+            mix.inputs[0].default_value = factor
+        next(m for m in bpy.data.materials if m.node_tree == tree).surface_render_method = "BLENDED"
+    return build
+
+
+def build_transparent(workdir=None):
+    """The Transparent BSDF mixed with another shader: the surface's opacity (as the
+    Principled BSDF's Alpha), constant or from a network, in either shader slot."""
+    return _grid("transparent", [("constant_first", _transparent_mix(0, 0.35)),
+                                 ("constant_second", _transparent_mix(1, 0.35)),
+                                 ("network_first", _transparent_mix(0, _alpha_gradient)),
+                                 ("network_second", _transparent_mix(1, _alpha_gradient)),
+                                 ("over_alpha", _transparent_mix(0, 0.5, alpha=0.6))])
+
+
 def build_alpha(workdir=None):
     return _grid("alpha", [("gradient_blended", _alpha("BLENDED", _alpha_gradient)),
                            ("gradient_dithered", _alpha("DITHERED", _alpha_gradient)),
@@ -623,6 +658,7 @@ def build_bump(workdir=None):
 
 
 SCENES = {"bump": build_bump,
+          "transparent": build_transparent,
           "image": build_image,
           "alpha": build_alpha,
           "voronoi": build_voronoi,

@@ -173,6 +173,36 @@ def test_bump_network_feeds_the_normal_and_a_chained_bump_warns(empty_scene):
         report.warnings
 
 
+def test_transparent_bsdf_in_a_mix_shader_is_the_opacity(empty_scene):
+    """Mix Shader (factor f) of a Transparent BSDF and a Principled BSDF: the Principled
+    BSDF's share is the opacity (f in the second slot, 1 - f in the first), times its own
+    Alpha; a tinted Transparent BSDF is one warning (exported white)."""
+    def mixed(name, slot, alpha=1.0, tint=(1.0, 1.0, 1.0, 1.0)):
+        mat, tree, bsdf = principled_material(name)
+        bsdf.inputs["Alpha"].default_value = alpha
+        output = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+        mix = tree.nodes.new("ShaderNodeMixShader")
+        mix.inputs[0].default_value = 0.3
+        transparent = tree.nodes.new("ShaderNodeBsdfTransparent")
+        transparent.inputs["Color"].default_value = tint
+        shaders = [transparent.outputs[0], bsdf.outputs["BSDF"]][::1 if slot == 0 else -1]
+        tree.links.new(shaders[0], mix.inputs[1])
+        tree.links.new(shaders[1], mix.inputs[2])
+        tree.links.new(mix.outputs[0], output.inputs["Surface"])
+        return mat
+    for obj, mat in (("A", mixed("First", 0)), ("B", mixed("Second", 1)),
+                     ("C", mixed("Alpha", 0, alpha=0.5)),
+                     ("D", mixed("Tinted", 0, tint=(1.0, 0.2, 0.2, 1.0)))):
+        cube_object(obj).data.materials.append(mat)
+    stage, report = export_current()
+    opacity = {name: surface(stage, name).GetInput("opacity").Get()
+               for name in ("First", "Second", "Alpha", "Tinted")}
+    assert opacity == pytest.approx({"First": 0.3, "Second": 0.7, "Alpha": 0.15, "Tinted": 0.3})
+    assert [w for w in report.warnings if "Transparent BSDF" in w] == [
+        w for w in report.warnings if "'Tinted'" in w] and len(report.warnings) == 1, \
+        report.warnings
+
+
 def test_unknown_node_warns_with_material_and_node(empty_scene):
     # Brick is outside the pattern nodes (docs/materials.md; Noise is inside now).
     mat, tree, bsdf = principled_material("Bricky")

@@ -326,6 +326,8 @@ class _Walker:
             inputs.setdefault("diffuseColor", (0.0, 0.0, 0.0))
             inputs.setdefault("ior", 1.0)
             self.emission(node.inputs["Color"], node.inputs["Strength"], inputs, weight)
+        elif kind == "ShaderNodeMixShader" and _transparent_slot(node) is not None:
+            return self.transparent_mix(node, inputs, weight)
         elif kind in {"ShaderNodeAddShader", "ShaderNodeMixShader"}:
             shaders = [s for s in node.inputs if s.type == "SHADER"]
             weights = [weight, weight]
@@ -351,6 +353,68 @@ class _Walker:
             self.unsupported(node)
             return False
         return True
+
+
+    def transparent_mix(self, node, inputs, weight):
+        """A Mix Shader of a Transparent BSDF and another shader: Cycles lets the
+        transparent share of the light through, which is the surface's opacity (as the
+        Principled BSDF's Alpha is): opacity = the other's share x its own opacity."""
+        slot = _transparent_slot(node)
+        shaders = [s for s in node.inputs if s.type == "SHADER"]
+        transparent = _link(shaders[slot]).from_node
+        color = transparent.inputs["Color"]
+        if _link(color) is not None or tuple(_constant(color, "color")) != (1.0, 1.0, 1.0):
+            self.warn(f"material '{self.material.name}': node '{transparent.name}' "
+                      f"(Transparent BSDF) colour is not exported (white: uncoloured "
+                      f"transparency)")
+        other = _link(shaders[1 - slot])
+        filled = other is not None and self.shader(other, inputs, weight)
+        if not filled:
+            inputs.setdefault("diffuseColor", (0.0, 0.0, 0.0))
+        fac = node.inputs[0]
+        if _link(fac) is None:
+            f = min(max(_constant(fac, "float"), 0.0), 1.0)
+            share = f if slot == 0 else 1.0 - f          # the other shader's weight
+            inputs["opacity"] = self.scaled_opacity(node, inputs.get("opacity", 1.0), share)
+            return True
+        if inputs.get("opacity", 1.0) != 1.0:
+            self.warn(f"material '{self.material.name}': node '{node.name}' (Mix Shader) "
+                      f"has a textured factor over a see-through shader; the factor alone "
+                      f"is the opacity")
+        opacity = self.value(fac, "float", "opacity")
+        if slot == 1:                                     # opacity = 1 - factor
+            if isinstance(opacity, TexInput):
+                opacity = TexInput(dataclasses.replace(
+                    opacity.texture, scale=tuple(-s for s in opacity.texture.scale),
+                    bias=tuple(1.0 - b for b in opacity.texture.bias)), opacity.channel)
+            else:
+                if self.pattern.graph.outputs.get("opacity") is not None:
+                    self.pattern.complement("opacity")
+                opacity = 1.0 - float(opacity)           # and UsdPreviewSurface's fallback
+        inputs["opacity"] = opacity
+        return True
+
+    def scaled_opacity(self, node, opacity, share):
+        """`opacity` (a constant or a texture) times a constant share."""
+        if isinstance(opacity, TexInput):
+            tex = opacity.texture
+            return TexInput(dataclasses.replace(
+                tex, scale=tuple(s * share for s in tex.scale),
+                bias=tuple(b * share for b in tex.bias)), opacity.channel)
+        if self.pattern.graph.outputs.get("opacity") is not None and share != 1.0:
+            self.warn(f"material '{self.material.name}': node '{node.name}' (Mix Shader) "
+                      f"weight over a network's alpha is not exported; the network's alpha "
+                      f"alone is the opacity")
+            return opacity
+        return float(opacity) * share
+
+
+def _transparent_slot(node):
+    """Which of a Mix Shader's two shaders is a Transparent BSDF (0, 1), or None."""
+    shaders = [_link(s) for s in node.inputs if s.type == "SHADER"]
+    slots = [i for i, link in enumerate(shaders)
+             if link is not None and link.from_node.bl_idname == "ShaderNodeBsdfTransparent"]
+    return slots[0] if len(slots) == 1 else None
 
 
 def gather_material(material, warn, texture_dir=None):

@@ -247,6 +247,16 @@ class PatternBuilder:
         self.graph.nodes.append(rec)
         self.graph.outputs[target] = (rec.name, "vector")
 
+    def complement(self, target) -> None:
+        """Surface input `target` reads 1 - what it read (a Math Subtract node after it)."""
+        src, out = self.graph.outputs[target]
+        rec = PatternNode(name=f"n{len(self.graph.nodes)}_math", kind="math",
+                          settings={"operation": "SUBTRACT", "clamp": "0"},
+                          values={"a": ("float", 1.0)},
+                          links={"b": ("float", src, out)}, outputs={"value": "float"})
+        self.graph.nodes.append(rec)
+        self.graph.outputs[target] = (rec.name, "value")
+
     def _output_name(self, node, socket):
         for out, s in NODES[node.bl_idname](node)[3].items():
             if s == socket:
