@@ -295,9 +295,24 @@ def check_material_preview():
     host_class.render, engine.render_frame = spy_request, spy_frame
     previews = {}
     try:
-        for name, colour in (("red", (0.8, 0.05, 0.05, 1.0)), ("blue", (0.05, 0.05, 0.8, 1.0))):
+        for name, colour in (("red", (0.8, 0.05, 0.05, 1.0)), ("blue", (0.05, 0.05, 0.8, 1.0)),
+                             ("network", None)):
             material = bpy.data.materials.new(name)
-            material.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = colour
+            base = material.node_tree.nodes["Principled BSDF"].inputs["Base Color"]
+            if colour is not None:
+                base.default_value = colour
+            else:
+                # A node network (its fallback is the socket's grey): Value 0.25 mixing
+                # red into blue, so the sphere is mostly red with some blue.
+                tree = material.node_tree
+                mix = tree.nodes.new("ShaderNodeMix")
+                mix.data_type = "RGBA"
+                value = tree.nodes.new("ShaderNodeValue")
+                value.outputs[0].default_value = 0.25
+                tree.links.new(value.outputs[0], mix.inputs["Factor"])
+                mix.inputs[6].default_value = (0.8, 0.05, 0.05, 1.0)
+                mix.inputs[7].default_value = (0.05, 0.05, 0.8, 1.0)
+                tree.links.new(mix.outputs[2], base)
             returned.clear()
             t0 = time.perf_counter()
             with bpy.context.temp_override(id=material):

@@ -271,16 +271,21 @@ def test_a_killed_engine_is_reported_and_the_next_render_recovers(installed):
 def test_material_previews_render_with_lantern(installed):
     info = _step(installed, "material_preview")
     assert info["scene_engine"] == "LANTERN"
-    assert [c["preset"] for c in info["calls"]] == ["low", "low"]
+    assert [c["preset"] for c in info["calls"]] == ["low", "low", "low"]
     assert {c["scene"] for c in info["calls"]} == {"preview"}
     assert all(c["size"] == [128, 128] for c in info["calls"])
-    red, blue = (np.load(installed[1] / f"preview_{n}.npy") for n in ("red", "blue"))
-    for image in (red, blue):
+    red, blue, network = (np.load(installed[1] / f"preview_{n}.npy")
+                          for n in ("red", "blue", "network"))
+    for image in (red, blue, network):
         _sane(image)
     # The sphere fills the middle of the preview; its colour is the material's.
     mid = slice(48, 80)
     r, b = red[mid, mid, :3].mean(axis=(0, 1)), blue[mid, mid, :3].mean(axis=(0, 1))
     assert r[0] > 1.5 * r[2] and b[2] > 1.5 * b[0], (r, b)
+    # A node network's preview shows the network (0.75 red + 0.25 blue, under the
+    # preview's white highlights), not the Base Color socket's grey (equal channels).
+    n = network[mid, mid, :3].mean(axis=(0, 1))
+    assert n[0] > 1.2 * n[2] and n[2] > 1.2 * n[1], n
     print("preview seconds:", info["seconds"])
 
 
