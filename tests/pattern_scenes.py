@@ -545,26 +545,32 @@ def build_alpha(workdir=None):
                            ("checker_blended", _alpha("BLENDED", _alpha_checker))])
 
 
-def _image_file():
-    """A 16 x 16 8-bit sRGB PNG: a colour gradient with a dark checker (one file a
-    process, in the temporary folder)."""
+def _image_file(second=False):
+    """A 16 x 16 8-bit sRGB PNG: a colour gradient with a dark checker, or (`second`)
+    green and magenta stripes (one file each a process, in the temporary folder)."""
     import os
     import tempfile
     import numpy as np
     from reference_scenes import _write_image
-    path = os.path.join(tempfile.gettempdir(), f"lantern-pattern-image-{os.getpid()}.png")
+    name = "stripes" if second else "image"
+    path = os.path.join(tempfile.gettempdir(), f"lantern-pattern-{name}-{os.getpid()}.png")
     if not os.path.exists(path):
         y, x = np.mgrid[0:16, 0:16]
-        rgba = np.stack([x * 16, y * 16, 255 - x * 8, np.full_like(x, 255)], -1)
-        rgba[((x // 4 + y // 4) % 2) == 1, :3] //= 3
+        if second:
+            stripe = (y // 2) % 2 == 1
+            rgba = np.stack([np.where(stripe, 220, 30), np.where(stripe, 40, 200),
+                             np.where(stripe, 200, 60), np.full_like(x, 255)], -1)
+        else:
+            rgba = np.stack([x * 16, y * 16, 255 - x * 8, np.full_like(x, 255)], -1)
+            rgba[((x // 4 + y // 4) % 2) == 1, :3] //= 3
         _write_image(path, rgba.astype(np.uint8))
     return path
 
 
-def _image(tree, extension="REPEAT"):
+def _image(tree, extension="REPEAT", second=False):
     import bpy
     node = tree.nodes.new("ShaderNodeTexImage")
-    node.image = bpy.data.images.load(_image_file(), check_existing=True)
+    node.image = bpy.data.images.load(_image_file(second), check_existing=True)
     node.extension = extension
     return node
 
@@ -598,9 +604,19 @@ def _image_mapping_only(tree, bsdf):
     _to_base(tree, bsdf, image.outputs["Color"])
 
 
+def _two_images(tree, bsdf):
+    """Two images in one network (Mix, factor 0.4): each reads its own file."""
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type = "RGBA"
+    mix.inputs[0].default_value = 0.4
+    tree.links.new(_image(tree).outputs["Color"], mix.inputs[6])
+    tree.links.new(_image(tree, second=True).outputs["Color"], mix.inputs[7])
+    _to_base(tree, bsdf, mix.outputs[2])
+
+
 def build_image(workdir=None):
     return _grid("image", [("multiplied", _image_multiplied), ("mapped", _image_mapped),
-                           ("mapping_only", _image_mapping_only)])
+                           ("mapping_only", _image_mapping_only), ("two_images", _two_images)])
 
 
 def _height(kind, scale):

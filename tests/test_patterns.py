@@ -169,6 +169,20 @@ def test_a_value_edit_uploads_parameters_and_compiles_nothing():
     assert np.abs(after.rgba[16, 3, :3] - before.rgba[16, 3, :3]).max() > 0.1
 
 
+def test_a_material_edit_keeps_a_networks_images_on_the_gpu():
+    """A network's image stays uploaded across a material edit: the edit's render
+    uploads no texture (the images of networks once went with every material edit and
+    came back as new uploads)."""
+    from lantern.engine import RenderSettings, Session
+    stage = _one_quad_stage(pattern_scenes._image_multiplied)
+    with Session(stage, RenderSettings(width=32, height=32)) as session:
+        first = session.render()
+        assert first.stats["bytes_by_kind"].get("textures", 0) > 0
+        _pattern_node(stage, "mix").GetInput("factor").Set(0.5)
+        after = session.render()
+    assert after.stats["bytes_by_kind"].get("textures", 0) == 0, after.stats["bytes_by_kind"]
+
+
 def test_a_graph_shape_edit_compiles_one_variant():
     from lantern.engine import RenderSettings, Session
     stage = _one_quad_stage(pattern_scenes._mix_blend("MULTIPLY"))

@@ -26,19 +26,23 @@ SHADER_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(
 _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.M)
 
 # Sampler name -> texture unit, for every sampler of every program. The G-buffer and
-# the light pass share units 0-8, materials 9-14, tables and rigs, then the
-# environment, ambient occlusion and post-processing inputs, then a pattern graph's
-# images (engine/gpu/pattern.py); GL 3.3 guarantees 16 units per stage and 48 in all.
+# the light pass share units 0-8 (and the smooth normals), materials 9-14 and a pattern
+# graph's images (engine/gpu/pattern.py), then the object and light tables, the
+# environment, ambient occlusion, post-processing and overlay inputs. Every unit stays
+# below 32: llvmpipe reports 32 fragment units, and a fragment sampler on unit 32 or
+# above read another unit's texture there (a second network image read the first).
+# The skinning programs (transform feedback: no material, no lighting) take the
+# material maps' units.
 UNITS = {name: unit for unit, name in enumerate((
     "g_base", "g_normal", "g_mat", "g_emit", "g_depth", "latlong", "shadow_cmp", "shadow_raw",
     "hdr",
     "t_diffuse", "t_metallic", "t_roughness", "t_emissive", "t_opacity", "t_normal",
     "u_objects", "u_lights",
-    "u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences", "u_deformed",
-    "u_incidence",
     "dfg_lut", "env_specular", "radiance", "ao_tex", "post_src", "post_aux",
     "overlay_image", "overlay_atlas",
     "t_pattern0", "t_pattern1", "t_pattern2", "t_pattern3", "g_smooth"))}
+UNITS.update(zip(("u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences",
+                  "u_deformed", "u_incidence"), range(UNITS["t_diffuse"], UNITS["t_diffuse"] + 6)))
 
 
 class ShaderError(RuntimeError):

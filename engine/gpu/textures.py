@@ -31,6 +31,7 @@ import numpy as np
 
 from ..color import to_srgb8
 from ..textures import is_srgb, read_rgba, srgb_to_linear
+from .pattern import pattern_images
 
 GL_SRGB8_ALPHA8 = 0x8C43
 SRGB_FILTERING = ("encoded", "linear")   # Cycles' way (the default), EEVEE's way
@@ -168,8 +169,9 @@ class MaterialTextures:
         return self._samplers[key]
 
     def prune(self, materials):
-        """Releases the images no material uses any more."""
-        used = {(ref.path, ref.colorspace) for m in materials for ref in m.maps.values()}
+        """Releases the images no material uses any more (as a map or in its network)."""
+        used = {(ref.path, ref.colorspace) for m in materials
+                for ref in [*m.maps.values(), *pattern_images(m)]}
         for key in [k for k in self._tex if k not in used]:
             self._tex.pop(key)[0].release()
             if not any(k[0] == key[0] for k in self._tex):
