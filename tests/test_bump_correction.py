@@ -8,13 +8,12 @@ import math
 import pathlib
 import re
 
-import imageio.v3 as iio
 import numpy as np
 import pytest
-from pxr import Gf, Sdf, UsdLux, UsdShade
+from pxr import Sdf, UsdLux
 
 from lantern.engine import RenderSettings, render_stage
-from test_engine_textures import H, W, pixel_of, textured_stage
+from test_engine_textures import H, W, normal_mapped_stage, pixel_of, textured_stage
 
 LIB = pathlib.Path(__file__).resolve().parent.parent / "shaders" / "lib.glsl"
 BEND = math.radians(45.0)
@@ -23,22 +22,7 @@ BEND = math.radians(45.0)
 def tilted_plane(tmp_path, correction: bool):
     """The plane of test_engine_textures, its diffuse colour constant, no specular
     (IOR 1), and a normal map of one texel tilting the normal 45 degrees to +x."""
-    path = tmp_path / "tilt.png"
-    iio.imwrite(path, np.full((8, 8, 3), (255, 128, 255), np.uint8))
-    stage = textured_stage(tmp_path / "missing.png")
-    surf = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/checker/surface"))
-    surf.GetInput("diffuseColor").ClearSources()
-    normal = UsdShade.Shader.Define(stage, "/root/_materials/checker/normal")
-    normal.CreateIdAttr("UsdUVTexture")
-    normal.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(str(path))
-    normal.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("raw")
-    normal.CreateInput("scale", Sdf.ValueTypeNames.Float4).Set((2, 2, 2, 1))
-    normal.CreateInput("bias", Sdf.ValueTypeNames.Float4).Set((-1, -1, -1, 0))
-    reader = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/checker/uv"))
-    normal.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(),
-                                                                        "result")
-    surf.CreateInput("normal", Sdf.ValueTypeNames.Normal3f).ConnectToSource(
-        normal.ConnectableAPI(), "rgb")
+    stage = normal_mapped_stage(tmp_path, (255, 128, 255))
     if not correction:
         stage.GetPrimAtPath("/root/_materials/checker").CreateAttribute(
             "lantern:bumpMapCorrection", Sdf.ValueTypeNames.Bool, custom=True).Set(False)

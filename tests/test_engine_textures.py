@@ -123,22 +123,29 @@ def test_missing_texture_warns_and_falls_back(tmp_path):
     assert np.allclose(px[:3], (0.25, 0.5, 0.75), atol=0.01)
 
 
+def normal_mapped_stage(tmp_path, rgb):
+    """The plane with its constant colour and a normal map of one texel `rgb` (8-bit,
+    n = 2c - 1 in the tangent frame)."""
+    path = tmp_path / f"n{rgb[0]}.png"
+    iio.imwrite(path, np.full((8, 8, 3), rgb, np.uint8))
+    stage = textured_stage(tmp_path / "missing.png")
+    surf = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/checker/surface"))
+    surf.GetInput("diffuseColor").ClearSources()
+    nt = UsdShade.Shader.Define(stage, "/root/_materials/checker/normal")
+    nt.CreateIdAttr("UsdUVTexture")
+    nt.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(str(path))
+    nt.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("raw")
+    nt.CreateInput("scale", Sdf.ValueTypeNames.Float4).Set((2, 2, 2, 1))
+    nt.CreateInput("bias", Sdf.ValueTypeNames.Float4).Set((-1, -1, -1, 0))
+    reader = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/checker/uv"))
+    nt.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(), "result")
+    surf.CreateInput("normal", Sdf.ValueTypeNames.Normal3f).ConnectToSource(nt.ConnectableAPI(), "rgb")
+    return stage
+
+
 def test_flat_normal_map_changes_nothing_tilted_one_does(tmp_path):
     def with_normal_map(rgb):
-        path = tmp_path / f"n{rgb[0]}.png"
-        iio.imwrite(path, np.full((8, 8, 3), rgb, np.uint8))
-        stage = textured_stage(tmp_path / "missing.png")
-        surf = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/checker/surface"))
-        surf.GetInput("diffuseColor").ClearSources()
-        nt = UsdShade.Shader.Define(stage, "/root/_materials/checker/normal")
-        nt.CreateIdAttr("UsdUVTexture")
-        nt.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(str(path))
-        nt.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("raw")
-        nt.CreateInput("scale", Sdf.ValueTypeNames.Float4).Set((2, 2, 2, 1))
-        nt.CreateInput("bias", Sdf.ValueTypeNames.Float4).Set((-1, -1, -1, 0))
-        reader = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/checker/uv"))
-        nt.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(), "result")
-        surf.CreateInput("normal", Sdf.ValueTypeNames.Normal3f).ConnectToSource(nt.ConnectableAPI(), "rgb")
+        stage = normal_mapped_stage(tmp_path, rgb)
         return render_stage(stage, RenderSettings(width=W, height=H)).rgba[pixel_of(0, 0)]
 
     flat = with_normal_map((128, 128, 255))
