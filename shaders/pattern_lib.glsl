@@ -410,19 +410,21 @@ float pt_color_to_float(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
 float pt_vector_to_float(vec3 v) { return (v.x + v.y + v.z) * (1.0 / 3.0); }
 
 // Cycles' Bump node (svm_node_set_bump): the shading normal of a surface displaced by
-// `distance` x height along pt_N (material.glsl), from the height's and the position's
-// derivatives across the pixel (Cycles takes finite differences of its ray
-// differentials: the same surface gradient). Strength blends towards pt_N.
-vec3 pt_bump(float strength, float distance, float height, bool invert) {
+// `distance` x height along normal_in (pt_N, material.glsl, unless a normal is linked
+// in), from the height's and the position's derivatives across the pixel (Cycles
+// takes finite differences of its ray differentials: the same surface gradient).
+// Strength blends towards normal_in.
+vec3 pt_bump(float strength, float distance, float height, bool invert, vec3 normal_in) {
+    normal_in = dot(normal_in, normal_in) > 0.0 ? normalize(normal_in) : pt_N;
     vec3 dpdx = dFdx(pt_P), dpdy = dFdy(pt_P);
-    vec3 rx = cross(dpdy, pt_N), ry = cross(pt_N, dpdx);
+    vec3 rx = cross(dpdy, normal_in), ry = cross(normal_in, dpdx);
     float det = dot(dpdx, rx);
     vec3 surfgrad = dFdx(height) * rx + dFdy(height) * ry;
     float scale = invert ? -distance : distance;
-    vec3 n = abs(det) * pt_N - scale * sign(det) * surfgrad;
-    if (!(dot(n, n) > 0.0)) return pt_N;
+    vec3 n = abs(det) * normal_in - scale * sign(det) * surfgrad;
+    if (!(dot(n, n) > 0.0)) return normal_in;
     float s = max(strength, 0.0);
-    return normalize(s * normalize(n) + (1.0 - s) * pt_N);
+    return normalize(s * normalize(n) + (1.0 - s) * normal_in);
 }
 
 // Cycles' tangent-space Normal Map node (svm_node_normal_map) on a colour a network

@@ -647,6 +647,18 @@ def _bump(height, distance, strength=1.0, invert=False):
     return build
 
 
+def _chained_bump(tree, bsdf):
+    """Wave bands bumped, on a noise bump (the outer Bump's Normal is the inner's)."""
+    bsdf.inputs["Base Color"].default_value = (0.8, 0.8, 0.8, 1.0)
+    inner, outer = tree.nodes.new("ShaderNodeBump"), tree.nodes.new("ShaderNodeBump")
+    inner.inputs["Distance"].default_value = 0.05
+    outer.inputs["Distance"].default_value = 0.02
+    tree.links.new(_height("noise", 5.0)(tree), inner.inputs["Height"])
+    tree.links.new(_height("wave", 2.0)(tree), outer.inputs["Height"])
+    tree.links.new(inner.outputs["Normal"], outer.inputs["Normal"])
+    tree.links.new(outer.outputs["Normal"], bsdf.inputs["Normal"])
+
+
 def _network_normal_map(strength):
     """The image through a Mapping node, as a tangent-space normal map (Non-Color)."""
     def build(tree, bsdf):
@@ -669,6 +681,7 @@ def build_bump(workdir=None):
                           ("noise_half", _bump(_height("noise", 5.0), 0.05, strength=0.5)),
                           ("wave_invert", _bump(_height("wave", 2.0), 0.03, invert=True)),
                           ("gradient", _bump(_height("gradient", 1.0), 0.5)),
+                          ("chained", _chained_bump),
                           ("normal_map", _network_normal_map(1.0)),
                           ("normal_map_half", _network_normal_map(0.5))])
 

@@ -207,8 +207,10 @@ class _Writer:
             self._noise(p, settings, arg)
         elif kind == "bump":
             invert = "true" if settings.get("invert", "0") == "1" else "false"
+            normal_in = arg("normal", "vector") if "normal" in ins else "pt_N"
             out("normal", "vector", f"pt_bump({arg('strength', 'float', '1.0')}, "
-                f"{arg('distance', 'float', '1.0')}, {arg('height', 'float', '1.0')}, {invert})")
+                f"{arg('distance', 'float', '1.0')}, {arg('height', 'float', '1.0')}, {invert}, "
+                f"{normal_in})")
         elif kind == "normal_map":
             out("normal", "vector", f"pt_normal_map({arg('strength', 'float', '1.0')}, "
                 f"{arg('color', 'color', '0.5')})")

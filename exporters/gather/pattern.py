@@ -85,14 +85,14 @@ def _combine_color(node, mode=None):
 
 
 def _bump(node):
-    """Cycles' Bump node on the shading normal (its Filter Width only sets where Cycles
-    takes its finite differences; the engine takes the height's screen-space
-    derivatives)."""
+    """Cycles' Bump node on the shading normal, or on its linked Normal (chained bumps,
+    a normal map under a bump). Its Filter Width only sets where Cycles takes its finite
+    differences; the engine takes the height's screen-space derivatives."""
+    inputs = {"strength": node.inputs["Strength"], "distance": node.inputs["Distance"],
+              "height": node.inputs["Height"]}
     if node.inputs["Normal"].is_linked:
-        raise Unsupported(node, "with a linked Normal input is not supported")
-    return "bump", {"invert": str(int(node.invert))}, \
-        {"strength": node.inputs["Strength"], "distance": node.inputs["Distance"],
-         "height": node.inputs["Height"]}, {"normal": node.outputs["Normal"]}
+        inputs["normal"] = node.inputs["Normal"]
+    return "bump", {"invert": str(int(node.invert))}, inputs, {"normal": node.outputs["Normal"]}
 
 
 def _normal_map(node):
