@@ -197,6 +197,27 @@ def test_transparent_bsdf_in_a_mix_shader_is_the_opacity(empty_scene):
         report.warnings
 
 
+def test_a_udim_image_exports_its_first_tile_with_one_warning(empty_scene, tmp_path):
+    """UDIM tiles are not supported: the first tile's file is used (not "not found"),
+    and the warning names the image and the tiles left out."""
+    from reference_scenes import _write_image
+    for tile in (1001, 1002):
+        _write_image(str(tmp_path / f"tiles.{tile}.png"), np.full((4, 4, 4), 200, np.uint8))
+    img = bpy.data.images.load(str(tmp_path / "tiles.1001.png"))
+    img.name = "Tiles"
+    img.source = "TILED"                     # Blender finds tiles.1002.png beside it
+    mat, tree, bsdf = principled_material("Tiled")
+    tex = tree.nodes.new("ShaderNodeTexImage")
+    tex.image = img
+    tree.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+    cube_object("C").data.materials.append(mat)
+    stage, report = export_current()
+    shader, _ = source(surface(stage, "Tiled"), "diffuseColor")
+    assert os.path.basename(shader.GetInput("file").Get().path) == "tiles.1001.png"
+    assert len(report.warnings) == 1 and "'Tiles'" in report.warnings[0] and \
+        "2 tiles" in report.warnings[0] and "not found" not in report.warnings[0], report.warnings
+
+
 def test_unknown_node_warns_with_material_and_node(empty_scene):
     # Brick is outside the pattern nodes (docs/materials.md; Noise is inside now).
     mat, tree, bsdf = principled_material("Bricky")

@@ -46,6 +46,8 @@ def image_file(image, owner, warn, texture_dir):
         return None
     if image.packed_file is None and image.source in {"FILE", "SEQUENCE", "MOVIE", "TILED"}:
         path = os.path.normpath(bpy.path.abspath(image.filepath, library=image.library))
+        if image.source == "TILED":
+            path = _first_tile(image, path, owner, warn)
         if os.path.isfile(path):
             return path
         warn(f"{owner}: image file not found: {path}")
@@ -64,6 +66,19 @@ def image_file(image, owner, warn, texture_dir):
     except (OSError, RuntimeError, ValueError) as error:
         warn(f"{owner}: image '{image.name}' could not be written out ({error})")
         return None
+
+
+def _first_tile(image, path, owner, warn):
+    """A UDIM image's first tile's file (its <UDIM> or <UVTILE> token filled in): the
+    engine draws one image a texture, so the other tiles are left out, with a warning."""
+    tiles = sorted(t.number for t in image.tiles) or [1001]
+    first = tiles[0]
+    u, v = (first - 1001) % 10 + 1, (first - 1001) // 10 + 1
+    path = path.replace("<UDIM>", str(first)).replace("<UVTILE>", f"u{u}_v{v}")
+    if len(tiles) > 1:
+        warn(f"{owner}: UDIM image '{image.name}' has {len(tiles)} tiles; only tile "
+             f"{first} is exported (UDIM tiles are not supported)")
+    return path
 
 
 def _write(folder, stem, ext, content, hashed, write):
