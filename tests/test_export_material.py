@@ -18,6 +18,16 @@ def principled_material(name):
     return mat, tree, bsdf
 
 
+def image_on_base_cube(name, image, obj="C"):
+    """A cube whose material (`name`) has `image` on the Principled BSDF's Base Color."""
+    mat, tree, bsdf = principled_material(name)
+    tex = tree.nodes.new("ShaderNodeTexImage")
+    tex.image = image
+    tree.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+    cube_object(obj).data.materials.append(mat)
+    return mat
+
+
 def surface(stage, name):
     shader = UsdShade.Shader(stage.GetPrimAtPath(f"/root/_materials/{name}/PreviewSurface"))
     assert shader.GetIdAttr().Get() == "UsdPreviewSurface"
@@ -206,11 +216,7 @@ def test_a_udim_image_exports_its_first_tile_with_one_warning(empty_scene, tmp_p
     img = bpy.data.images.load(str(tmp_path / "tiles.1001.png"))
     img.name = "Tiles"
     img.source = "TILED"                     # Blender finds tiles.1002.png beside it
-    mat, tree, bsdf = principled_material("Tiled")
-    tex = tree.nodes.new("ShaderNodeTexImage")
-    tex.image = img
-    tree.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
-    cube_object("C").data.materials.append(mat)
+    image_on_base_cube("Tiled", img)
     stage, report = export_current()
     shader, _ = source(surface(stage, "Tiled"), "diffuseColor")
     assert os.path.basename(shader.GetInput("file").Get().path) == "tiles.1001.png"
@@ -234,13 +240,10 @@ def test_unknown_node_warns_with_material_and_node(empty_scene):
 
 
 def test_missing_image_warns_and_falls_back(empty_scene, tmp_path):
-    mat, tree, bsdf = principled_material("Lost")
-    tex = tree.nodes.new("ShaderNodeTexImage")
-    tex.image = bpy.data.images.new("gone", 2, 2)
-    tex.image.source = "FILE"
-    tex.image.filepath = str(tmp_path / "gone.png")
-    tree.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
-    cube_object("C").data.materials.append(mat)
+    gone = bpy.data.images.new("gone", 2, 2)
+    gone.source = "FILE"
+    gone.filepath = str(tmp_path / "gone.png")
+    image_on_base_cube("Lost", gone)
     stage, report = export_current()
     assert any("Lost" in w and "gone.png" in w for w in report.warnings), report.warnings
     assert not surface(stage, "Lost").GetInput("diffuseColor").HasConnectedSource()
@@ -463,11 +466,7 @@ def _packed_and_generated(tmp_path):
     values = np.arange(24, dtype=np.float32).reshape(2, 3, 4) / 4.0   # above 1 too
     gen.pixels.foreach_set(values.ravel())
     for name, image in (("Packed", src), ("Generated", gen)):
-        mat, tree, bsdf = principled_material(name)
-        tex = tree.nodes.new("ShaderNodeTexImage")
-        tex.image = image
-        tree.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
-        cube_object(name).data.materials.append(mat)
+        image_on_base_cube(name, image, obj=name)
     return expected_png, values[::-1]          # Blender's rows run bottom-up
 
 
@@ -515,11 +514,7 @@ def test_generated_byte_image_keeps_its_bytes(empty_scene, tmp_path):
     bpy.context.scene.view_settings.view_transform = "AgX"
     img = bpy.data.images.new("grid", 8, 8, alpha=True)
     img.generated_type = "COLOR_GRID"
-    mat, tree, bsdf = principled_material("Grid")
-    tex = tree.nodes.new("ShaderNodeTexImage")
-    tex.image = img
-    tree.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
-    cube_object("C").data.materials.append(mat)
+    image_on_base_cube("Grid", img)
     stage, _ = export_current()
     pixels = np.empty(8 * 8 * 4, np.float32)
     img.pixels.foreach_get(pixels)
