@@ -56,6 +56,8 @@ KINDS = {
     # from the height's screen-space derivatives, and a tangent-space Normal Map whose
     # colour a network computes.
     "bump": {"invert": ("0", "1")},
+    # A mesh's colour attribute, by the primvar it is written as (its setting `name`).
+    "attribute": {},
     "normal_map": {"space": ("TANGENT",)},
 }
 

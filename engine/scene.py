@@ -84,6 +84,14 @@ class Material:
         return "normal" in self.maps
 
     @property
+    def color_attribute(self) -> str | None:
+        """The colour primvar this material's network reads (its first attribute node)."""
+        if self.pattern is None:
+            return None
+        return next((dict(n.settings).get("name") for n in self.pattern.nodes
+                     if n.kind == "attribute"), None)
+
+    @property
     def needs_tangents(self) -> bool:
         """A tangent-space normal map, as a texture or in a network."""
         return self.has_normal_map or (self.pattern is not None and
@@ -156,6 +164,8 @@ class MeshData:
     # skinned or blend-shaped mesh has them computed again from its deformed surface.
     surface_normals: bool = False
     bounds: tuple | None = None    # (lo, hi) float64 of the vertex positions
+    # (V, 3) float32: the colour attribute a bound material's network reads, or None.
+    colors: np.ndarray | None = None
 
     def __post_init__(self):
         if self.bounds is None and len(self.vertices):

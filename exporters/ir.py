@@ -88,6 +88,9 @@ class MeshRecord:
     material_indices: np.ndarray | None = None  # (F,) int32 slot index per face
     # MikkTSpace (C, 4): tangent xyz, bitangent sign; only with a normal-mapped material.
     tangents: np.ndarray | None = None
+    # Colour attributes a bound material's network reads: primvar name -> (C, 3) float32,
+    # scene linear, per corner ("displayColor": the render colour attribute).
+    colors: dict = field(default_factory=dict)
     skin: SkinRecord | None = None            # points are the rest mesh, skinned by a rig
     point_samples: PointSamples | None = None  # baked deformation, one sample per frame
     subdivision: SubdivisionRecord | None = None  # points are a Catmull-Clark cage

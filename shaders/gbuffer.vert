@@ -16,6 +16,10 @@ out vec4 v_tangent;
 #ifdef PATTERN_NORMAL
 out vec3 v_position;        // camera-relative: a bump node's screen-space derivatives
 #endif
+#ifdef COLOR_ATTRIBUTE
+in vec3 in_color;           // the colour attribute a network reads (engine/gpu/stores.py)
+out vec3 v_color;
+#endif
 #ifdef WRITE_INDEX
 flat out float v_object_index;
 #endif
@@ -25,6 +29,9 @@ void main() {
     gl_Position = view_proj * position;
 #ifdef PATTERN_NORMAL
     v_position = position.xyz;
+#endif
+#ifdef COLOR_ATTRIBUTE
+    v_color = in_color;
 #endif
     gl_ClipDistance[0] = u_far - gl_Position.w;
     v_normal = object_normal_matrix() * in_normal;

@@ -85,6 +85,12 @@ vec4 pt_T = vec4(0.0);             // tangent (world) and bitangent sign; 0: non
 #ifdef PATTERN_NORMAL
 in vec3 v_position;                // gbuffer.vert
 #endif
+#ifdef COLOR_ATTRIBUTE
+in vec3 v_color;                   // gbuffer.vert: the mesh's colour attribute
+vec3 pt_color_attribute() { return v_color; }
+#else
+vec3 pt_color_attribute() { return vec3(0.0); }
+#endif
 
 #include "pattern.glsl"
 

@@ -48,8 +48,10 @@ def _grid(name, builders, columns=COLUMNS, size=SIZE):
         build(tree, bsdf)
         x, y = i % columns, -(i // columns)
         corners = [(x, y - 1, 0), (x + 1, y - 1, 0), (x + 1, y, 0), (x, y, 0)]
-        _mesh_object(scene, f"{name}_{label}", corners, [(0, 1, 2, 3)], mat,
-                     [(0, 0), (1, 0), (1, 1), (0, 1)])
+        ob = _mesh_object(scene, f"{name}_{label}", corners, [(0, 1, 2, 3)], mat,
+                          [(0, 0), (1, 0), (1, 1), (0, 1)])
+        if hasattr(build, "mesh"):             # what the network reads off the mesh
+            build.mesh(ob.data)
     extent = max(columns, rows)
     centre = (columns / 2.0, -rows / 2.0)
     _camera(scene, (centre[0], centre[1], 10.0), (centre[0], centre[1], 0.0),
@@ -674,6 +676,43 @@ def _network_normal_map(strength):
     return build
 
 
+def _colors(mesh):
+    """Two colour attributes on a quad: "Col" per corner (8-bit, the render one) and
+    "Paint" per point (float); each corner or point its own colour."""
+    col = mesh.color_attributes.new("Col", "BYTE_COLOR", "CORNER")
+    for i, c in enumerate([(0.9, 0.1, 0.1, 1), (0.1, 0.8, 0.2, 1), (0.2, 0.3, 0.9, 1),
+                           (0.9, 0.8, 0.1, 1)]):
+        col.data[i].color = c
+    paint = mesh.color_attributes.new("Paint", "FLOAT_COLOR", "POINT")
+    for i, c in enumerate([(0.05, 0.6, 0.9, 1), (0.8, 0.05, 0.7, 1), (0.3, 0.9, 0.1, 1),
+                           (1.5, 1.2, 0.2, 1)]):
+        paint.data[i].color = c
+    mesh.color_attributes.render_color_index = mesh.color_attributes.find("Col")
+
+
+def _attribute(node_type, name, output="Color"):
+    """A Color Attribute (or Attribute) node's output on Base Color."""
+    def build(tree, bsdf):
+        node = tree.nodes.new(node_type)
+        if node_type == "ShaderNodeVertexColor":
+            node.layer_name = name
+        else:
+            node.attribute_name = name
+        _to_base(tree, bsdf, node.outputs[output])
+    build.mesh = _colors
+    return build
+
+
+def build_attribute(workdir=None):
+    """Colour attributes read by networks: the render one and a named one, per corner
+    and per point, 8-bit and float, through the Color Attribute and Attribute nodes."""
+    return _grid("attribute", [
+        ("render", _attribute("ShaderNodeVertexColor", "")),
+        ("named_point", _attribute("ShaderNodeVertexColor", "Paint")),
+        ("attribute_color", _attribute("ShaderNodeAttribute", "Col")),
+        ("attribute_fac", _attribute("ShaderNodeAttribute", "Paint", "Fac"))])
+
+
 def build_bump(workdir=None):
     """Networks that bend the shading normal: Bump on procedural heights (Cycles'
     surface gradient), and a Normal Map whose image goes through a Mapping node."""
@@ -686,7 +725,8 @@ def build_bump(workdir=None):
                           ("normal_map_half", _network_normal_map(0.5))])
 
 
-SCENES = {"bump": build_bump,
+SCENES = {"attribute": build_attribute,
+          "bump": build_bump,
           "transparent": build_transparent,
           "image": build_image,
           "alpha": build_alpha,

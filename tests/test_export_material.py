@@ -224,6 +224,43 @@ def test_a_udim_image_exports_its_first_tile_with_one_warning(empty_scene, tmp_p
         "2 tiles" in report.warnings[0] and "not found" not in report.warnings[0], report.warnings
 
 
+def test_colour_attributes_are_written_as_the_primvars_networks_read(empty_scene):
+    """The render colour attribute becomes primvars:displayColor, a named one its own
+    (a valid identifier), both faceVarying colour, scene linear; a name the mesh lacks
+    is one warning naming the object."""
+    ob = cube_object("Painted")
+    col = ob.data.color_attributes.new("Col", "BYTE_COLOR", "CORNER")
+    col.data[0].color = (0.5, 0.25, 1.0, 1.0)
+    paint = ob.data.color_attributes.new("Wet Paint", "FLOAT_COLOR", "POINT")
+    paint.data[0].color = (2.0, 0.5, 0.0, 1.0)
+    ob.data.color_attributes.render_color_index = ob.data.color_attributes.find("Col")
+    mat, tree, bsdf = principled_material("Reads")
+    render, named, missing = (tree.nodes.new("ShaderNodeVertexColor") for _ in range(3))
+    named.layer_name, missing.layer_name = "Wet Paint", "Nowhere"
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type = "RGBA"
+    tree.links.new(render.outputs["Color"], mix.inputs[6])
+    tree.links.new(named.outputs["Color"], mix.inputs[7])
+    tree.links.new(missing.outputs["Color"], bsdf.inputs["Emission Color"])
+    tree.links.new(mix.outputs[2], bsdf.inputs["Base Color"])
+    ob.data.materials.append(mat)
+    stage, report = export_current()
+    mesh = next(p for p in stage.Traverse() if p.GetTypeName() == "Mesh")
+    primvars = UsdGeom.PrimvarsAPI(mesh)
+    for name, first in (("displayColor", (0.5, 0.25, 1.0)), ("Wet_Paint", (2.0, 0.5, 0.0))):
+        pv = primvars.GetPrimvar(name)
+        assert pv.GetInterpolation() == "faceVarying"
+        assert str(pv.GetTypeName()) == "color3f[]"
+        values = np.asarray(pv.Get())
+        assert len(values) == 24                  # the cube's corners
+        if name == "Wet_Paint":                   # per point: the corners of point 0
+            corners = np.asarray(UsdGeom.Mesh(mesh).GetFaceVertexIndicesAttr().Get()) == 0
+            assert np.allclose(values[corners], first)
+        else:
+            assert np.allclose(values[0], first, atol=5e-3)    # 8-bit sRGB, read as linear
+    assert [w for w in report.warnings if "Nowhere" in w and "Painted" in w], report.warnings
+
+
 def test_unknown_node_warns_with_material_and_node(empty_scene):
     # Brick is outside the pattern nodes (docs/materials.md; Noise is inside now).
     mat, tree, bsdf = principled_material("Bricky")

@@ -169,6 +169,32 @@ def test_a_value_edit_uploads_parameters_and_compiles_nothing():
     assert np.abs(after.rgba[16, 3, :3] - before.rgba[16, 3, :3]).max() > 0.1
 
 
+def test_a_skinned_mesh_draws_its_colour_attribute():
+    """A skinned quad (one bone, at rest) reads its colour attribute as the static one
+    does: the colours ride beside the deformed vertices (engine/gpu/stores.py)."""
+    import bpy
+    from _export_helpers import add_armature_modifier, make_armature
+    from lantern.engine import RenderSettings, read_exr, render_stage
+    from lantern.exporters import stage_from_depsgraph
+    pattern_scenes.SCENES["attribute"]()
+    quad = bpy.data.objects["attribute_render"]
+    arm = make_armature(bone_names=("Root",))
+    group = quad.vertex_groups.new(name="Root")
+    group.add([v.index for v in quad.data.vertices], 1.0, "REPLACE")
+    add_armature_modifier(quad, arm)
+    bpy.context.view_layer.update()
+    stage, report = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+    assert report.warnings == [], report.warnings
+    w, h = pattern_scenes.SIZE
+    result = render_stage(stage, RenderSettings(width=w, height=h, preset="ultra"))
+    assert result.stats["meshes_skinned"] == 1
+    t = tiles("attribute")["attribute_render"]
+    reference = read_exr(str(PATTERNS / "attribute.exr"))
+    flip = mean_flip(result.rgba[t], reference[t])
+    print(f"skinned quad's colour attribute: HDR-FLIP {flip:.4f}")
+    assert flip < 0.01
+
+
 def test_a_material_edit_keeps_a_networks_images_on_the_gpu():
     """A network's image stays uploaded across a material edit: the edit's render
     uploads no texture (the images of networks once went with every material edit and

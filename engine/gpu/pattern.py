@@ -205,6 +205,10 @@ class _Writer:
             out("color", "color", f"vec3({p}_fac)")
         elif kind == "noise":
             self._noise(p, settings, arg)
+        elif kind == "attribute":
+            out("color", "color", "pt_color_attribute()")
+            out("vector", "vector", f"{p}_color")
+            out("fac", "float", f"pt_vector_to_float({p}_color)")   # Cycles: the average
         elif kind == "bump":
             invert = "true" if settings.get("invert", "0") == "1" else "false"
             normal_in = arg("normal", "vector") if "normal" in ins else "pt_N"

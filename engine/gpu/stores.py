@@ -17,6 +17,10 @@ import numpy as np
 
 VERTEX_FORMAT = ("3f 3f 2f 4f", "in_pos", "in_normal", "in_uv", "in_tangent")
 VERTEX_BYTES = 48
+# A colour attribute a network reads (engine/scene.py MeshData.colors): a buffer beside
+# the vertices, same vertex numbers, made when a first mesh has one.
+COLOR_FORMAT = ("3f", "in_color")
+COLOR_BYTES = 12
 
 
 class Arena:
@@ -74,6 +78,7 @@ class VertexStore:
         self.indices = Arena(indices)
         self.vbo = uploads.buffer(reserve=vertices * VERTEX_BYTES, kind="mesh")
         self.ibo = uploads.buffer(reserve=indices * 4, kind="mesh")
+        self.cbo = None               # colours beside the vertices (COLOR_FORMAT), if any
         self.generation = 0           # bumps when the buffers are replaced (VAOs go stale)
         self._vaos = {}
 
@@ -85,13 +90,15 @@ class VertexStore:
     def _alloc(self, arena, n, attr, unit):
         start = arena.alloc(n)
         if start is None:
-            old = getattr(self, attr)
             capacity = max(arena.capacity * 2, arena.capacity + n)
-            new = self.uploads.buffer(reserve=capacity * unit, kind="mesh")
-            # A copy inside the GPU, not an upload.
-            self.ctx.copy_buffer(new, old, size=arena.capacity * unit)
-            old.release()
-            setattr(self, attr, new)
+            grown = [(attr, unit)] + ([("cbo", COLOR_BYTES)] if attr == "vbo" and self.cbo else [])
+            for name, size in grown:
+                old = getattr(self, name)
+                new = self.uploads.buffer(reserve=capacity * size, kind="mesh")
+                # A copy inside the GPU, not an upload.
+                self.ctx.copy_buffer(new, old, size=arena.capacity * size)
+                old.release()
+                setattr(self, name, new)
             arena.grow(capacity)
             self._drop_vaos()
             start = arena.alloc(n)
@@ -105,6 +112,14 @@ class VertexStore:
         self.uploads.write(self.vbo, np.ascontiguousarray(vertices, np.float32), kind="mesh",
                            offset=slot.first_vertex * VERTEX_BYTES)
 
+    def write_colors(self, slot: Slot, colors: np.ndarray):
+        if self.cbo is None:
+            self.cbo = self.uploads.buffer(reserve=self.vertices.capacity * COLOR_BYTES,
+                                           kind="mesh")
+            self._drop_vaos()          # the VAOs made before have no colour attribute
+        self.uploads.write(self.cbo, np.ascontiguousarray(colors, np.float32), kind="mesh",
+                           offset=slot.first_vertex * COLOR_BYTES)
+
     def write_indices(self, slot: Slot, indices: np.ndarray):
         absolute = np.asarray(indices, np.uint32) + np.uint32(slot.first_vertex)
         self.uploads.write(self.ibo, absolute, kind="mesh", offset=slot.first_index * 4)
@@ -115,6 +130,8 @@ class VertexStore:
         vao = self._vaos.get(key)
         if vao is None:
             content = [(self.vbo, *VERTEX_FORMAT)]
+            if self.cbo is not None:
+                content.append((self.cbo, *COLOR_FORMAT))
             if ids is not None:
                 content.append((ids, "1i/i", "in_object"))
             vao = self._vaos[key] = self.ctx.vertex_array(
@@ -129,5 +146,6 @@ class VertexStore:
 
     def release(self):
         self._drop_vaos()
-        self.vbo.release()
-        self.ibo.release()
+        for buffer in (self.vbo, self.ibo, self.cbo):
+            if buffer is not None:
+                buffer.release()

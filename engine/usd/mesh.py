@@ -174,7 +174,24 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None) -> MeshData:
         elif uvs is not None:
             T = compute_tangents(P, N, UV, idx[corners])   # a function of point and normal
 
-    soup = np.concatenate([P, N, UV, T], axis=1).reshape(-1, 3, 12)[order].reshape(-1, 12)
+    # A colour attribute a bound network reads: three more columns, split off below.
+    color_name = next((m.color_attribute for m in materials if m.color_attribute), None)
+    columns = [P, N, UV, T]
+    if color_name is not None:
+        colors, c_interp = _primvar(mesh, color_name, time) if refined is None else (None, None)
+        if colors is not None and colors.ndim == 2 and colors.shape[1] >= 3:
+            C = _per_corner(colors[:, :3], c_interp, len(pts), face_of_corner, idx, n_faces,
+                            color_name)[corners]
+            _finite(C, f"{color_name} (per corner)")
+            per_point &= _per_point(c_interp)
+        else:
+            C = np.zeros((len(corners), 3))
+            if warnings is not None:
+                warnings.append(f"{prim.GetPath()}: no colour primvar {color_name!r} for its "
+                                f"material's network; it reads black")
+        columns.append(C)
+    width = sum(c.shape[1] for c in columns)
+    soup = np.concatenate(columns, axis=1).reshape(-1, 3, width)[order].reshape(-1, width)
     ranges = []
     sorted_mat = tri_mat[order]
     for mi in range(len(materials)):
@@ -188,7 +205,11 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None) -> MeshData:
     double = bool(mesh.GetDoubleSidedAttr().Get(time))
     marker = prim.GetAttribute("lantern:backfaceCulling")
     culling = bool(marker.Get(time)) if marker and marker.HasValue() else False
-    return MeshData(key=key, vertices=vertices, indices=indices, ranges=ranges,
+    vertices, colors = (vertices[:, :12], vertices[:, 12:15]) if vertices.shape[1] > 12 \
+        else (vertices, None)
+    return MeshData(key=key, vertices=np.ascontiguousarray(vertices), indices=indices,
+                    ranges=ranges, colors=None if colors is None else
+                    np.ascontiguousarray(colors, np.float32),
                     materials=[m.name for m in materials], double_sided=double,
                     backface_culling=culling and not double,
                     point_of_vertex=point_of_corner[first].astype(np.int32),

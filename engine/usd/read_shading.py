@@ -86,8 +86,8 @@ class ShadingReading:
         else:
             new = self._material(UsdShade.Material(prim), force=True)
             changes.materials.add(name)
-            relayout = users if old is None or (old.uv_name, old.needs_tangents) != \
-                (new.uv_name, new.needs_tangents) else set()
+            layout = lambda m: (m.uv_name, m.needs_tangents, m.color_attribute)  # noqa: E731
+            relayout = users if old is None or layout(old) != layout(new) else set()
         for path in relayout:
             p = self.stage.GetPrimAtPath(path)
             if p:

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import require_finite
 from ..ir import InstancesRecord, PointsRecord, PrototypeRecord
-from .mesh import _get, gather_mesh
+from .mesh import _get, color_attribute_names, gather_mesh
 from .tangents import mikktspace_tangents, tangent_uv_map
 
 # persistent_id entries past the instance's own level are this.
@@ -173,8 +173,10 @@ class InstanceGatherer:
                         self.warn(faceless_warning(name, len(mesh.vertices), len(mesh.edges)))
                     return None
                 data_name = orig.data.name if orig != instancer and orig.type == "MESH" else name
-                record = gather_mesh(mesh, mesh_key, data_name, owner=f"object '{name}'")
-                uv_map = tangent_uv_map([s.material for s in ob.material_slots])
+                materials = [s.material for s in ob.material_slots]
+                record = gather_mesh(mesh, mesh_key, data_name, f"object '{name}'",
+                                     color_attribute_names(materials), self.warn)
+                uv_map = tangent_uv_map(materials)
                 if uv_map is not None:
                     record.tangents = mikktspace_tangents(mesh, uv_map)
                 self.rec.meshes[mesh_key] = record

@@ -1,8 +1,57 @@
 """An evaluated Blender mesh -> MeshRecord."""
+import re
+
 import numpy as np
 
 from ..errors import require_finite
 from ..ir import MeshRecord
+
+# The primvar of a mesh's render colour attribute (a Color Attribute node naming none).
+RENDER_COLOR = "displayColor"
+COLOR_TYPES = {"FLOAT_COLOR", "BYTE_COLOR"}
+
+
+def attribute_primvar(name: str) -> str:
+    """The primvar a colour attribute is written as, and a network's attribute node reads
+    (a valid USD identifier, as Tf.MakeValidIdentifier makes one)."""
+    if not name:
+        return RENDER_COLOR
+    ident = re.sub(r"[^A-Za-z0-9_]", "_", name)
+    return "_" + ident if ident[0].isdigit() else ident
+
+
+def color_attribute_names(materials) -> set:
+    """The colour attributes the materials' networks read ('' = the render one)."""
+    names = set()
+    for material in materials:
+        tree = material.node_tree if material is not None else None
+        for node in (tree.nodes if tree is not None else ()):
+            if node.bl_idname == "ShaderNodeVertexColor":
+                names.add(node.layer_name)
+            elif node.bl_idname == "ShaderNodeAttribute" and node.attribute_type == "GEOMETRY":
+                names.add(node.attribute_name)
+    return names
+
+
+def _color_attribute(mesh, name, owner, warn):
+    """(corners, 3) scene-linear colours of colour attribute `name` ('' = the render one),
+    or None with a warning."""
+    attrs = mesh.color_attributes
+    if not name:
+        index = attrs.render_color_index
+        attr = attrs[index] if 0 <= index < len(attrs) else None
+    else:
+        attr = mesh.attributes.get(name)
+    if attr is None or attr.data_type not in COLOR_TYPES or attr.domain not in {"POINT", "CORNER"}:
+        if warn is not None:
+            warn(f"{owner}: colour attribute '{name or '(render)'}' is not on the mesh as a "
+                 f"point or corner colour; its network reads black")
+        return None
+    values = _get(attr.data, "color", np.float32, 4)[:, :3]   # scene linear for both types
+    if attr.domain == "POINT":
+        values = values[_get(mesh.loops, "vertex_index", np.int32, 1)]
+    require_finite(values, owner, f"colour attribute '{attr.name}'")
+    return np.ascontiguousarray(values)
 
 
 def _get(collection, attr, dtype, width):
@@ -12,9 +61,10 @@ def _get(collection, attr, dtype, width):
     return out.reshape(-1, width) if width > 1 else out
 
 
-def gather_mesh(mesh, key, name, owner=None):
+def gather_mesh(mesh, key, name, owner=None, color_names=(), warn=None):
     """Loose edges and vertices need nothing: only polygons are written. NaN or Inf in
-    positions, normals or UVs is an ExportError naming `owner` (the object)."""
+    positions, normals or UVs is an ExportError naming `owner` (the object).
+    `color_names`: the colour attributes its materials' networks read."""
     owner = owner or f"mesh '{name}'"
     points = _get(mesh.vertices, "co", np.float32, 3)
     require_finite(points, owner, "vertex positions")
@@ -36,8 +86,14 @@ def gather_mesh(mesh, key, name, owner=None):
         require_finite(uvs[layer.name], owner, f"UV map '{layer.name}'")
     active = next((l.name for l in mesh.uv_layers if l.active_render), None)
 
+    colors = {}
+    for color_name in sorted(color_names):
+        values = _color_attribute(mesh, color_name, owner, warn)
+        if values is not None:
+            colors[attribute_primvar(color_name)] = values
+
     material_indices = _get(mesh.polygons, "material_index", np.int32, 1)
     return MeshRecord(key=key, name=name, points=points, face_counts=counts,
                       face_indices=indices, normals=normals,
                       normals_interpolation=interpolation, uvs=uvs,
-                      active_uv=active, material_indices=material_indices)
+                      active_uv=active, material_indices=material_indices, colors=colors)

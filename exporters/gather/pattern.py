@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from ...core.pattern_nodes import MAX_IMAGES, unsupported_setting
 from ..ir import PatternGraph, PatternNode
+from .mesh import attribute_primvar
 
 SOCKET_TYPES = {"VALUE": "float", "INT": "float", "BOOLEAN": "float",
                 "VECTOR": "vector", "RGBA": "color"}
@@ -101,6 +102,19 @@ def _normal_map(node):
         {"normal": node.outputs["Normal"]}
 
 
+def _attribute(node):
+    """A colour attribute of the mesh (the engine reads the primvar exporters/gather/
+    mesh.py writes for it)."""
+    if node.bl_idname == "ShaderNodeVertexColor":
+        return "attribute", {"name": attribute_primvar(node.layer_name)}, {}, \
+            {"color": node.outputs["Color"]}
+    if node.attribute_type != "GEOMETRY":
+        raise Unsupported(node, f"of type {node.attribute_type} is not supported")
+    return "attribute", {"name": attribute_primvar(node.attribute_name)}, {}, \
+        {"color": node.outputs["Color"], "vector": node.outputs["Vector"],
+         "fac": node.outputs["Fac"]}
+
+
 def _ramp(node):
     ramp = node.color_ramp
     if ramp.color_mode != "RGB" or ramp.interpolation not in {"LINEAR", "CONSTANT", "EASE"}:
@@ -177,6 +191,8 @@ NODES = {
         "detail_scale": n.inputs["Detail Scale"], "detail_roughness": n.inputs["Detail Roughness"],
         "phase": n.inputs["Phase Offset"]}, {"fac": n.outputs["Fac"], "color": n.outputs["Color"]}),
     "ShaderNodeBump": _bump,
+    "ShaderNodeVertexColor": _attribute,
+    "ShaderNodeAttribute": _attribute,
     "ShaderNodeNormalMap": _normal_map,
     "ShaderNodeTexGradient": lambda n: ("gradient", {"gradient_type": n.gradient_type},
                                         {"vector": n.inputs["Vector"]},

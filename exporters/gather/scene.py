@@ -9,7 +9,7 @@ from .instances import (MESH_LIKE, UNSUPPORTED, InstanceGatherer, faceless_warni
                         particle_points, pointcloud_points, unsupported_warning)
 from .light import gather_light
 from .material import gather_material
-from .mesh import gather_mesh
+from .mesh import color_attribute_names, gather_mesh
 from .skeleton import relative_matrix, trs
 from .subdivision import subdivision_record, trailing_subdivision
 from .tangents import mikktspace_tangents, tangent_uv_map
@@ -266,8 +266,10 @@ def gather_geometry(ob, obj, rec, shared, rig, groups, warn, subdivision=None):
                     warn(faceless_warning(orig.name, len(mesh.vertices), len(mesh.edges)))
                 return
             name = orig.data.name if orig.type == "MESH" else orig.name
-            rec.meshes[mesh_key] = gather_mesh(mesh, mesh_key, name, owner)
-            uv_map = tangent_uv_map([s.material for s in ob.material_slots])
+            materials = [s.material for s in ob.material_slots]
+            rec.meshes[mesh_key] = gather_mesh(mesh, mesh_key, name, owner,
+                                               color_attribute_names(materials), warn)
+            uv_map = tangent_uv_map(materials)
             if uv_map is not None:
                 rec.meshes[mesh_key].tangents = mikktspace_tangents(mesh, uv_map)
             if keyed:

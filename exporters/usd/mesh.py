@@ -30,6 +30,10 @@ def write_mesh(stage, path, rec, double_sided, slot_names):
         pv = primvars.CreatePrimvar(primvar_name(name), Sdf.ValueTypeNames.TexCoord2fArray,
                                     UsdGeom.Tokens.faceVarying)
         pv.Set(Vt.Vec2fArray.FromNumpy(np.ascontiguousarray(rec.uvs[name])))
+    for name in sorted(rec.colors):                # colour attributes networks read
+        pv = primvars.CreatePrimvar(name, Sdf.ValueTypeNames.Color3fArray,
+                                    UsdGeom.Tokens.faceVarying)
+        pv.Set(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(rec.colors[name])))
     if rec.tangents is not None:
         pv = primvars.CreatePrimvar("tangents", Sdf.ValueTypeNames.Float4Array,
                                     UsdGeom.Tokens.faceVarying)

@@ -161,7 +161,9 @@ def _bind_map(prog, short, ref, textures):
 
 def map_defines(mat) -> list:
     """The variant of a program including shaders/material.glsl for this material (and
-    PATTERN_NORMAL: a network bends the normal, which needs the position)."""
+    PATTERN_NORMAL: a network bends the normal, which needs the position;
+    COLOR_ATTRIBUTE: a network reads the mesh's colour attribute)."""
     pattern_normal = mat.pattern is not None and mat.pattern.feeds("normal")
     return [flag for name, _, flag in MAP_SLOTS if name in mat.maps] + \
-        (["PATTERN_NORMAL"] if pattern_normal else [])
+        (["PATTERN_NORMAL"] if pattern_normal else []) + \
+        (["COLOR_ATTRIBUTE"] if mat.color_attribute is not None else [])
