@@ -92,6 +92,14 @@ class Material:
                      if n.kind == "attribute"), None)
 
     @property
+    def reads_generated(self) -> bool:
+        """Whether the network reads Generated coordinates (a texture's unlinked Vector,
+        a Texture Coordinate node's Generated)."""
+        return self.pattern is not None and any(
+            link[3] == "generated" for n in self.pattern.nodes for link in n.links) or \
+            (self.pattern is not None and any(o[2] == "generated" for o in self.pattern.outputs))
+
+    @property
     def needs_tangents(self) -> bool:
         """A tangent-space normal map, as a texture or in a network."""
         return self.has_normal_map or (self.pattern is not None and
@@ -164,8 +172,10 @@ class MeshData:
     # skinned or blend-shaped mesh has them computed again from its deformed surface.
     surface_normals: bool = False
     bounds: tuple | None = None    # (lo, hi) float64 of the vertex positions
-    # (V, 3) float32: the colour attribute a bound material's network reads, or None.
-    colors: np.ndarray | None = None
+    # Per-vertex data bound networks read, (V, 3) float32 each (engine/gpu/stores.py
+    # STREAMS): "colors", a colour attribute; "generated", Blender's Generated
+    # coordinates (the rest points in their bounding box, as its auto texture space).
+    streams: dict = field(default_factory=dict)
 
     def __post_init__(self):
         if self.bounds is None and len(self.vertices):

@@ -20,6 +20,10 @@ out vec3 v_position;        // camera-relative: a bump node's screen-space deriv
 in vec3 in_color;           // the colour attribute a network reads (engine/gpu/stores.py)
 out vec3 v_color;
 #endif
+#ifdef PATTERN_GENERATED
+in vec3 in_generated;       // Blender's Generated coordinates (engine/usd/mesh.py)
+out vec3 v_generated;
+#endif
 #ifdef WRITE_INDEX
 flat out float v_object_index;
 #endif
@@ -32,6 +36,9 @@ void main() {
 #endif
 #ifdef COLOR_ATTRIBUTE
     v_color = in_color;
+#endif
+#ifdef PATTERN_GENERATED
+    v_generated = in_generated;
 #endif
     gl_ClipDistance[0] = u_far - gl_Position.w;
     v_normal = object_normal_matrix() * in_normal;

@@ -91,6 +91,12 @@ vec3 pt_color_attribute() { return v_color; }
 #else
 vec3 pt_color_attribute() { return vec3(0.0); }
 #endif
+#ifdef PATTERN_GENERATED
+in vec3 v_generated;               // gbuffer.vert: Blender's Generated coordinates
+vec3 pt_generated() { return v_generated; }
+#else
+vec3 pt_generated() { return vec3(0.0); }
+#endif
 
 #include "pattern.glsl"
 

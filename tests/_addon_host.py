@@ -302,17 +302,13 @@ def check_material_preview():
             if colour is not None:
                 base.default_value = colour
             else:
-                # A node network (its fallback is the socket's grey): Value 0.25 mixing
-                # red into blue, so the sphere is mostly red with some blue.
-                tree = material.node_tree
-                mix = tree.nodes.new("ShaderNodeMix")
-                mix.data_type = "RGBA"
-                value = tree.nodes.new("ShaderNodeValue")
-                value.outputs[0].default_value = 0.25
-                tree.links.new(value.outputs[0], mix.inputs["Factor"])
-                mix.inputs[6].default_value = (0.8, 0.05, 0.05, 1.0)
-                mix.inputs[7].default_value = (0.05, 0.05, 0.8, 1.0)
-                tree.links.new(mix.outputs[2], base)
+                # A node network (its fallback is the socket's grey): red and blue
+                # cells of a Checker Texture on Generated coordinates.
+                checker = material.node_tree.nodes.new("ShaderNodeTexChecker")
+                checker.inputs["Color1"].default_value = (0.8, 0.05, 0.05, 1.0)
+                checker.inputs["Color2"].default_value = (0.05, 0.05, 0.8, 1.0)
+                checker.inputs["Scale"].default_value = 3.0
+                material.node_tree.links.new(checker.outputs["Color"], base)
             returned.clear()
             t0 = time.perf_counter()
             with bpy.context.temp_override(id=material):

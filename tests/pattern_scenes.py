@@ -713,6 +713,35 @@ def build_attribute(workdir=None):
         ("attribute_fac", _attribute("ShaderNodeAttribute", "Paint", "Fac"))])
 
 
+def _unlinked(node_type, output="Color", **inputs):
+    """A texture whose Vector is unlinked: Blender's Generated coordinates."""
+    def build(tree, bsdf):
+        node = tree.nodes.new(node_type)
+        if node_type == "ShaderNodeTexGradient":
+            node.gradient_type = inputs.pop("gradient_type", "LINEAR")
+        for name, value in inputs.items():
+            node.inputs[name].default_value = value
+        _to_base(tree, bsdf, node.outputs[output])
+    return build
+
+
+def _generated_z(tree, bsdf):
+    """Texture Coordinate's Generated, its Z (0.5 on a flat quad) into the blue."""
+    coord = tree.nodes.new("ShaderNodeTexCoord")
+    _to_base(tree, bsdf, coord.outputs["Generated"])
+
+
+def build_generated(workdir=None):
+    """Generated coordinates (the textures' default, and Texture Coordinate's output):
+    on a flat quad they differ from UV in Z (0.5, where UV has 0)."""
+    return _grid("generated", [
+        ("spherical", _unlinked("ShaderNodeTexGradient", "Fac", gradient_type="SPHERICAL")),
+        ("noise", _unlinked("ShaderNodeTexNoise", "Color", Scale=3.0)),
+        ("checker", _unlinked("ShaderNodeTexChecker", "Color", Scale=3.0)),
+        ("wave_rings", _unlinked("ShaderNodeTexWave", "Color")),
+        ("coordinates", _generated_z)])
+
+
 def build_bump(workdir=None):
     """Networks that bend the shading normal: Bump on procedural heights (Cycles'
     surface gradient), and a Normal Map whose image goes through a Mapping node."""
@@ -726,6 +755,7 @@ def build_bump(workdir=None):
 
 
 SCENES = {"attribute": build_attribute,
+          "generated": build_generated,
           "bump": build_bump,
           "transparent": build_transparent,
           "image": build_image,

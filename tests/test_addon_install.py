@@ -282,10 +282,11 @@ def test_material_previews_render_with_lantern(installed):
     mid = slice(48, 80)
     r, b = red[mid, mid, :3].mean(axis=(0, 1)), blue[mid, mid, :3].mean(axis=(0, 1))
     assert r[0] > 1.5 * r[2] and b[2] > 1.5 * b[0], (r, b)
-    # A node network's preview shows the network (0.75 red + 0.25 blue, under the
-    # preview's white highlights), not the Base Color socket's grey (equal channels).
-    n = network[mid, mid, :3].mean(axis=(0, 1))
-    assert n[0] > 1.2 * n[2] and n[2] > 1.2 * n[1], n
+    # A node network's preview shows the network: both checker colours on the sphere
+    # (Generated coordinates), not the Base Color socket's grey.
+    px = network[mid, mid, :3].reshape(-1, 3)
+    reddish, bluish = (px[:, 0] > 1.5 * px[:, 2]).mean(), (px[:, 2] > 1.5 * px[:, 0]).mean()
+    assert reddish > 0.15 and bluish > 0.15, (reddish, bluish)
     print("preview seconds:", info["seconds"])
 
 

@@ -136,8 +136,8 @@ class Geometry:
             self._stale()
         if not skinned:
             store.write_vertices(slot, mesh.vertices)
-        if mesh.colors is not None:           # not deformed: written once, skinned or not
-            store.write_colors(slot, mesh.colors)
+        for name, values in mesh.streams.items():   # not deformed: once, skinned or not
+            store.write_stream(slot, name, values)
         store.write_indices(slot, mesh.indices)
         if old is not None:
             for path, d in self.draws.items():   # rebuilt data: same key, maybe new ranges

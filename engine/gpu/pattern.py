@@ -108,6 +108,7 @@ class _Writer:
         self.current = node.name
         if kind == "uv":
             out("uv", "vector", "vec3(uv, 0.0)")
+            out("generated", "vector", "pt_generated()")
         elif kind == "value":
             out("value", "float", arg("value", "float"))
         elif kind == "rgb":

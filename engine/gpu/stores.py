@@ -17,10 +17,10 @@ import numpy as np
 
 VERTEX_FORMAT = ("3f 3f 2f 4f", "in_pos", "in_normal", "in_uv", "in_tangent")
 VERTEX_BYTES = 48
-# A colour attribute a network reads (engine/scene.py MeshData.colors): a buffer beside
-# the vertices, same vertex numbers, made when a first mesh has one.
-COLOR_FORMAT = ("3f", "in_color")
-COLOR_BYTES = 12
+# Per-vertex data only some networks read (engine/scene.py MeshData.streams): a buffer
+# each beside the vertices, same vertex numbers, made when a first mesh has that stream.
+STREAMS = {"colors": ("3f", "in_color"), "generated": ("3f", "in_generated")}
+STREAM_BYTES = 12
 
 
 class Arena:
@@ -78,7 +78,7 @@ class VertexStore:
         self.indices = Arena(indices)
         self.vbo = uploads.buffer(reserve=vertices * VERTEX_BYTES, kind="mesh")
         self.ibo = uploads.buffer(reserve=indices * 4, kind="mesh")
-        self.cbo = None               # colours beside the vertices (COLOR_FORMAT), if any
+        self.streams = {}             # stream name -> buffer beside the vertices (STREAMS)
         self.generation = 0           # bumps when the buffers are replaced (VAOs go stale)
         self._vaos = {}
 
@@ -91,18 +91,20 @@ class VertexStore:
         start = arena.alloc(n)
         if start is None:
             capacity = max(arena.capacity * 2, arena.capacity + n)
-            grown = [(attr, unit)] + ([("cbo", COLOR_BYTES)] if attr == "vbo" and self.cbo else [])
-            for name, size in grown:
-                old = getattr(self, name)
-                new = self.uploads.buffer(reserve=capacity * size, kind="mesh")
-                # A copy inside the GPU, not an upload.
-                self.ctx.copy_buffer(new, old, size=arena.capacity * size)
-                old.release()
-                setattr(self, name, new)
+            setattr(self, attr, self._grown(getattr(self, attr), arena.capacity, capacity, unit))
+            if attr == "vbo":
+                for name, buffer in self.streams.items():
+                    self.streams[name] = self._grown(buffer, arena.capacity, capacity, STREAM_BYTES)
             arena.grow(capacity)
             self._drop_vaos()
             start = arena.alloc(n)
         return start
+
+    def _grown(self, old, capacity, new_capacity, unit):
+        new = self.uploads.buffer(reserve=new_capacity * unit, kind="mesh")
+        self.ctx.copy_buffer(new, old, size=capacity * unit)     # inside the GPU
+        old.release()
+        return new
 
     def free(self, slot: Slot):
         self.vertices.release(slot.first_vertex, slot.n_vertices)
@@ -112,13 +114,13 @@ class VertexStore:
         self.uploads.write(self.vbo, np.ascontiguousarray(vertices, np.float32), kind="mesh",
                            offset=slot.first_vertex * VERTEX_BYTES)
 
-    def write_colors(self, slot: Slot, colors: np.ndarray):
-        if self.cbo is None:
-            self.cbo = self.uploads.buffer(reserve=self.vertices.capacity * COLOR_BYTES,
-                                           kind="mesh")
-            self._drop_vaos()          # the VAOs made before have no colour attribute
-        self.uploads.write(self.cbo, np.ascontiguousarray(colors, np.float32), kind="mesh",
-                           offset=slot.first_vertex * COLOR_BYTES)
+    def write_stream(self, slot: Slot, name: str, values: np.ndarray):
+        if name not in self.streams:
+            self.streams[name] = self.uploads.buffer(
+                reserve=self.vertices.capacity * STREAM_BYTES, kind="mesh")
+            self._drop_vaos()          # the VAOs made before lack the stream
+        self.uploads.write(self.streams[name], np.ascontiguousarray(values, np.float32),
+                           kind="mesh", offset=slot.first_vertex * STREAM_BYTES)
 
     def write_indices(self, slot: Slot, indices: np.ndarray):
         absolute = np.asarray(indices, np.uint32) + np.uint32(slot.first_vertex)
@@ -130,8 +132,7 @@ class VertexStore:
         vao = self._vaos.get(key)
         if vao is None:
             content = [(self.vbo, *VERTEX_FORMAT)]
-            if self.cbo is not None:
-                content.append((self.cbo, *COLOR_FORMAT))
+            content += [(buffer, *STREAMS[name]) for name, buffer in self.streams.items()]
             if ids is not None:
                 content.append((ids, "1i/i", "in_object"))
             vao = self._vaos[key] = self.ctx.vertex_array(
@@ -146,6 +147,6 @@ class VertexStore:
 
     def release(self):
         self._drop_vaos()
-        for buffer in (self.vbo, self.ibo, self.cbo):
-            if buffer is not None:
-                buffer.release()
+        for buffer in (self.vbo, self.ibo, *self.streams.values()):
+            buffer.release()
+        self.streams.clear()

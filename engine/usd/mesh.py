@@ -174,10 +174,15 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None) -> MeshData:
         elif uvs is not None:
             T = compute_tangents(P, N, UV, idx[corners])   # a function of point and normal
 
-    # A colour attribute a bound network reads: three more columns, split off below.
+    # Streams bound networks read (MeshData.streams): three more columns each, split off
+    # below, so that they follow the vertices' order and sharing.
     color_name = next((m.color_attribute for m in materials if m.color_attribute), None)
-    columns = [P, N, UV, T]
+    columns, streams = [P, N, UV, T], []
+    if any(m.reads_generated for m in materials):
+        streams.append("generated")
+        columns.append(generated_coordinates(_topology_points(mesh, pts))[idx[corners]])
     if color_name is not None:
+        streams.append("colors")
         colors, c_interp = _primvar(mesh, color_name, time) if refined is None else (None, None)
         if colors is not None and colors.ndim == 2 and colors.shape[1] >= 3:
             C = _per_corner(colors[:, :3], c_interp, len(pts), face_of_corner, idx, n_faces,
@@ -205,15 +210,26 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None) -> MeshData:
     double = bool(mesh.GetDoubleSidedAttr().Get(time))
     marker = prim.GetAttribute("lantern:backfaceCulling")
     culling = bool(marker.Get(time)) if marker and marker.HasValue() else False
-    vertices, colors = (vertices[:, :12], vertices[:, 12:15]) if vertices.shape[1] > 12 \
-        else (vertices, None)
-    return MeshData(key=key, vertices=np.ascontiguousarray(vertices), indices=indices,
-                    ranges=ranges, colors=None if colors is None else
-                    np.ascontiguousarray(colors, np.float32),
+    extra = {name: np.ascontiguousarray(vertices[:, 12 + 3 * k:15 + 3 * k])
+             for k, name in enumerate(streams)}
+    return MeshData(key=key, vertices=np.ascontiguousarray(vertices[:, :12]), indices=indices,
+                    ranges=ranges, streams=extra,
                     materials=[m.name for m in materials], double_sided=double,
                     backface_culling=culling and not double,
                     point_of_vertex=point_of_corner[first].astype(np.int32),
                     surface_normals=normals is None)
+
+
+def generated_coordinates(rest):
+    """Blender's Generated texture coordinates of points: their place in the bounding
+    box of the rest points, [0, 1] on each axis (the mesh's auto texture space; an axis
+    of no extent has size 1, as Blender gives it)."""
+    if not len(rest):
+        return np.zeros((0, 3))
+    lo, hi = rest.min(axis=0), rest.max(axis=0)
+    half = (hi - lo) / 2.0
+    half[half == 0.0] = 1.0
+    return (rest - (lo + hi) / 2.0) / (2.0 * half) + 0.5
 
 
 def _topology_points(mesh, pts):

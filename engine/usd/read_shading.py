@@ -86,7 +86,8 @@ class ShadingReading:
         else:
             new = self._material(UsdShade.Material(prim), force=True)
             changes.materials.add(name)
-            layout = lambda m: (m.uv_name, m.needs_tangents, m.color_attribute)  # noqa: E731
+            layout = lambda m: (m.uv_name, m.needs_tangents, m.color_attribute,  # noqa: E731
+                                m.reads_generated)
             relayout = users if old is None or layout(old) != layout(new) else set()
         for path in relayout:
             p = self.stage.GetPrimAtPath(path)

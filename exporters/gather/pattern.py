@@ -66,7 +66,7 @@ def _mapping(node):
 
 
 def _texcoord(node):
-    return "uv", {}, {}, {"uv": node.outputs["UV"]}
+    return "uv", {}, {}, {"uv": node.outputs["UV"], "generated": node.outputs["Generated"]}
 
 
 def _separate_color(node, mode=None):
@@ -198,8 +198,8 @@ NODES = {
                                         {"vector": n.inputs["Vector"]},
                                         {"color": n.outputs["Color"], "fac": n.outputs["Fac"]}),
 }
-# Texture nodes whose unlinked Vector is Blender's Generated coordinates: UV stands in
-# (docs/materials.md, "approximated").
+# Texture nodes whose unlinked Vector is Blender's Generated coordinates (the engine
+# computes them from the mesh's rest points: engine/usd/mesh.py).
 GENERATED_DEFAULT = {"ShaderNodeTexChecker", "ShaderNodeTexGradient", "ShaderNodeTexNoise",
                      "ShaderNodeTexWave", "ShaderNodeTexVoronoi"}
 
@@ -306,7 +306,9 @@ class PatternBuilder:
             typ = socket_type(socket)
             link = self.link_of(socket)
             if link is None:
-                if name == "vector" and (node.bl_idname in GENERATED_DEFAULT or kind == "image"):
+                if name == "vector" and node.bl_idname in GENERATED_DEFAULT:
+                    rec.links[name] = (typ, self._uv_node(), "generated")
+                elif name == "vector" and kind == "image":
                     rec.links[name] = (typ, self._uv_node(), "uv")
                 else:
                     rec.values[name] = (typ, socket_value(socket, typ))
@@ -327,7 +329,7 @@ class PatternBuilder:
         key = "<uv>"
         if key not in self._names:
             rec = PatternNode(name=f"n{len(self.graph.nodes)}_uv", kind="uv",
-                              outputs={"uv": "vector"})
+                              outputs={"uv": "vector", "generated": "vector"})
             self.graph.nodes.append(rec)
             self._names[key] = rec.name
         return self._names[key]

@@ -162,8 +162,10 @@ def _bind_map(prog, short, ref, textures):
 def map_defines(mat) -> list:
     """The variant of a program including shaders/material.glsl for this material (and
     PATTERN_NORMAL: a network bends the normal, which needs the position;
-    COLOR_ATTRIBUTE: a network reads the mesh's colour attribute)."""
+    COLOR_ATTRIBUTE, PATTERN_GENERATED: a network reads the mesh's colour attribute,
+    its Generated coordinates)."""
     pattern_normal = mat.pattern is not None and mat.pattern.feeds("normal")
     return [flag for name, _, flag in MAP_SLOTS if name in mat.maps] + \
         (["PATTERN_NORMAL"] if pattern_normal else []) + \
-        (["COLOR_ATTRIBUTE"] if mat.color_attribute is not None else [])
+        (["COLOR_ATTRIBUTE"] if mat.color_attribute is not None else []) + \
+        (["PATTERN_GENERATED"] if mat.reads_generated else [])
