@@ -531,6 +531,54 @@ def _transparent_mix(slot, factor, alpha=1.0):
     return build
 
 
+def _bsdf_mix(factor, second, first_color=(0.8, 0.2, 0.1, 1.0)):
+    """A Mix Shader of the Principled BSDF (base `first_color`) and a second BSDF made by
+    `second(tree)`, by `factor` (a constant, or function(tree) -> socket)."""
+    def build(tree, bsdf):
+        bsdf.inputs["Base Color"].default_value = first_color
+        output = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+        mix = tree.nodes.new("ShaderNodeMixShader")
+        tree.links.new(bsdf.outputs["BSDF"], mix.inputs[1])
+        tree.links.new(second(tree), mix.inputs[2])
+        tree.links.new(mix.outputs[0], output.inputs["Surface"])
+        if callable(factor):
+            tree.links.new(factor(tree), mix.inputs[0])
+        else:
+            mix.inputs[0].default_value = factor
+    return build
+
+
+def _second_principled(color=(0.1, 0.3, 0.9, 1.0), metallic=0.0, textured=False):
+    def second(tree):
+        node = tree.nodes.new("ShaderNodeBsdfPrincipled")
+        node.inputs["Roughness"].default_value = 1.0
+        node.inputs["Specular IOR Level"].default_value = 0.0
+        node.inputs["Base Color"].default_value = color
+        node.inputs["Metallic"].default_value = metallic
+        if textured:
+            tree.links.new(_image(tree).outputs["Color"], node.inputs["Base Color"])
+        return node.outputs["BSDF"]
+    return second
+
+
+def _second_diffuse(tree):
+    node = tree.nodes.new("ShaderNodeBsdfDiffuse")
+    node.inputs["Color"].default_value = (0.2, 0.8, 0.3, 1.0)
+    return node.outputs["BSDF"]
+
+
+def build_mix_shader(workdir=None):
+    """Mix Shaders of two BSDFs, input by input: base colours by a constant and by a
+    network, metal against dielectric, an image against a colour, a Diffuse BSDF."""
+    return _grid("mix_shader", [
+        ("colors", _bsdf_mix(0.3, _second_principled())),
+        ("network", _bsdf_mix(_alpha_gradient, _second_principled())),
+        ("metal", _bsdf_mix(0.5, _second_principled((0.9, 0.7, 0.3, 1.0), metallic=1.0),
+                            (0.9, 0.7, 0.3, 1.0))),
+        ("image", _bsdf_mix(0.4, _second_principled(textured=True))),
+        ("diffuse", _bsdf_mix(0.6, _second_diffuse))])
+
+
 def build_transparent(workdir=None):
     """The Transparent BSDF mixed with another shader: the surface's opacity (as the
     Principled BSDF's Alpha), constant or from a network, in either shader slot."""
@@ -755,6 +803,7 @@ def build_bump(workdir=None):
 
 
 SCENES = {"attribute": build_attribute,
+          "mix_shader": build_mix_shader,
           "generated": build_generated,
           "bump": build_bump,
           "transparent": build_transparent,

@@ -261,6 +261,43 @@ def test_colour_attributes_are_written_as_the_primvars_networks_read(empty_scene
     assert [w for w in report.warnings if "Nowhere" in w and "Painted" in w], report.warnings
 
 
+def test_a_mix_of_two_bsdfs_mixes_their_inputs(empty_scene):
+    """Mix Shader of two Principled BSDFs: constants mix into constants by a constant
+    factor; a linked factor makes a network Mix per differing input; emissions add,
+    weighted; no warning when their specular is the same."""
+    def mixed(name, factor_linked):
+        mat, tree, first = principled_material(name)
+        first.inputs["Base Color"].default_value = (1.0, 0.0, 0.0, 1.0)
+        first.inputs["Emission Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+        first.inputs["Emission Strength"].default_value = 2.0
+        second = tree.nodes.new("ShaderNodeBsdfPrincipled")
+        second.inputs["Base Color"].default_value = (0.0, 0.0, 1.0, 1.0)
+        second.inputs["Metallic"].default_value = 1.0
+        output = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+        mix = tree.nodes.new("ShaderNodeMixShader")
+        mix.inputs[0].default_value = 0.25
+        if factor_linked:
+            tree.links.new(tree.nodes.new("ShaderNodeTexGradient").outputs["Fac"], mix.inputs[0])
+        tree.links.new(first.outputs["BSDF"], mix.inputs[1])
+        tree.links.new(second.outputs["BSDF"], mix.inputs[2])
+        tree.links.new(mix.outputs[0], output.inputs["Surface"])
+        return mat
+    cube_object("A").data.materials.append(mixed("Constant", False))
+    cube_object("B").data.materials.append(mixed("Network", True))
+    stage, report = export_current()
+    constant = surface(stage, "Constant")
+    assert constant.GetInput("diffuseColor").Get() == pytest.approx((0.75, 0.0, 0.25))
+    assert constant.GetInput("metallic").Get() == pytest.approx(0.25)
+    assert constant.GetInput("emissiveColor").Get() == pytest.approx((1.5, 1.5, 1.5))
+    mtlx = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/Network/MtlxSurface"))
+    for name in ("diffuseColor", "metallic"):
+        (src,), _ = mtlx.GetInput(name).GetConnectedSources()
+        (node,), _ = src.source.GetOutput(src.sourceName).GetConnectedSources()
+        assert node.source.GetPrim().GetAttribute("lantern:nodeDef").Get() == "ND_lantern_mix"
+    assert [w for w in report.warnings if "Network" in w] == [
+        w for w in report.warnings if "emission under a textured factor" in w], report.warnings
+
+
 def test_unknown_node_warns_with_material_and_node(empty_scene):
     # Brick is outside the pattern nodes (docs/materials.md; Noise is inside now).
     mat, tree, bsdf = principled_material("Bricky")

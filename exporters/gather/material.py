@@ -330,6 +330,10 @@ class _Walker:
             return self.transparent_mix(node, inputs, weight)
         elif kind in {"ShaderNodeAddShader", "ShaderNodeMixShader"}:
             shaders = [s for s in node.inputs if s.type == "SHADER"]
+            if kind == "ShaderNodeMixShader" and all(
+                    link is not None and link.from_node.bl_idname in MIXABLE_BSDFS
+                    for link in map(_link, shaders)):
+                return self.bsdf_mix(node, [_link(s) for s in shaders], inputs, weight)
             weights = [weight, weight]
             if kind == "ShaderNodeMixShader":
                 fac = node.inputs[0]
@@ -339,8 +343,8 @@ class _Walker:
                 else:
                     f = min(max(_constant(fac, "float"), 0.0), 1.0)
                     weights = [weight * (1.0 - f), weight * f]
-            pairs = [(l, w) for l, w in ((_link(s), w) for s, w in zip(shaders, weights))
-                     if l is not None and w > 0.0]
+            links = [_link(s) for s in shaders]
+            pairs = [(l, w) for l, w in zip(links, weights) if l is not None and w > 0.0]
             bsdfs = [w for l, w in pairs if l.from_node.bl_idname != "ShaderNodeEmission"]
             if kind == "ShaderNodeMixShader" and (len(bsdfs) > 1 or any(w != weight for w in bsdfs)):
                 self.warn(f"material '{self.material.name}': node '{node.name}' (Mix Shader) "
@@ -354,6 +358,53 @@ class _Walker:
             return False
         return True
 
+
+    def bsdf_mix(self, node, links, inputs, weight):
+        """A Mix Shader of two Principled (or Diffuse) BSDFs: one layer whose inputs mix
+        by the factor. Exact where Cycles' closure mix is linear in them (base colour,
+        metallic, alpha: the Principled BSDF blends its lobes by metallic too, and
+        emission, weighted exactly as before); roughness and the other inputs mix as
+        values (one warning where they differ)."""
+        fac = node.inputs[0]
+        f = None if _link(fac) is not None else min(max(_constant(fac, "float"), 0.0), 1.0)
+        sides = []
+        for link, share in zip(links, (None if f is None else 1.0 - f, f)):
+            side = {}
+            self.shader(link, side, weight if share is None else weight * share)
+            sides.append(side)
+        # Emission adds across the two (weighted); the rest starts from the first.
+        inputs.update({k: v for k, v in sides[0].items() if k != "emissiveColor"})
+        emitted = [e for e in (s.get("emissiveColor", (0.0, 0.0, 0.0)) for s in sides)
+                   if isinstance(e, TexInput) or any(e)]
+        if emitted and f is None:
+            self.warn(f"material '{self.material.name}': node '{node.name}' (Mix Shader) "
+                      f"emission under a textured factor is not exported")
+        elif len(emitted) == 1 or not any(isinstance(e, TexInput) for e in emitted):
+            inputs["emissiveColor"] = emitted[0] if len(emitted) == 1 else \
+                tuple(map(sum, zip(*emitted))) if emitted else (0.0, 0.0, 0.0)
+        else:
+            inputs["emissiveColor"] = emitted[0]
+            self.warn(f"material '{self.material.name}': a textured emission cannot be "
+                      f"added to another emission; keeping the first")
+        for target, (kind, names) in MIXED_INPUTS.items():
+            sockets = [_bsdf_socket(l.from_node, names) for l in links]
+            if all(s is None or _link(s) is None for s in sockets) and f is not None:
+                a, b = (_constant(s, kind) if s is not None else MIXED_DEFAULTS[target]
+                        for s in sockets)
+                inputs[target] = tuple(x + (y - x) * f for x, y in zip(a, b)) \
+                    if kind == "color" else a + (b - a) * f
+                continue
+            try:
+                self.pattern.connect_mix(target, kind, fac, sockets,
+                                         MIXED_DEFAULTS[target])
+            except Unsupported as exc:
+                self.unsupported(exc.node, exc.why)
+        iors = {_bsdf_ior(link.from_node) for link in links}
+        if len(iors) > 1:
+            self.warn(f"material '{self.material.name}': node '{node.name}' (Mix Shader) "
+                      f"mixes BSDFs of different specular (IOR and Specular IOR Level); the "
+                      f"first's is used")
+        return True
 
     def transparent_mix(self, node, inputs, weight):
         """A Mix Shader of a Transparent BSDF and another shader: Cycles lets the
@@ -407,6 +458,34 @@ class _Walker:
                       f"alone is the opacity")
             return opacity
         return float(opacity) * share
+
+
+# BSDFs a Mix Shader mixes input by input (bsdf_mix), and those inputs: surface input ->
+# (kind, {BSDF: socket}); a BSDF without the socket takes MIXED_DEFAULTS (a Diffuse
+# BSDF: no metal, fully rough, opaque).
+MIXABLE_BSDFS = {"ShaderNodeBsdfPrincipled", "ShaderNodeBsdfDiffuse"}
+MIXED_INPUTS = {
+    "diffuseColor": ("color", {"ShaderNodeBsdfPrincipled": "Base Color",
+                               "ShaderNodeBsdfDiffuse": "Color"}),
+    "metallic": ("float", {"ShaderNodeBsdfPrincipled": "Metallic"}),
+    "roughness": ("float", {"ShaderNodeBsdfPrincipled": "Roughness"}),
+    "opacity": ("float", {"ShaderNodeBsdfPrincipled": "Alpha"}),
+}
+MIXED_DEFAULTS = {"diffuseColor": (0.8, 0.8, 0.8), "metallic": 0.0, "roughness": 1.0,
+                  "opacity": 1.0}
+
+
+def _bsdf_ior(node) -> float:
+    """The IOR a BSDF is written with (a Diffuse BSDF: 1, no specular layer)."""
+    if node.bl_idname != "ShaderNodeBsdfPrincipled":
+        return 1.0
+    return round(principled_ior(_constant(node.inputs["IOR"], "float"),
+                                _constant(node.inputs["Specular IOR Level"], "float")), 6)
+
+
+def _bsdf_socket(node, names):
+    name = names.get(node.bl_idname)
+    return node.inputs[name] if name is not None else None
 
 
 def _transparent_slot(node):

@@ -263,6 +263,36 @@ class PatternBuilder:
         self.graph.nodes.append(rec)
         self.graph.outputs[target] = (rec.name, "vector")
 
+    def connect_mix(self, target, kind, fac, sockets, default) -> None:
+        """Surface input `target` reads a Mix node of the two `sockets` (a socket, or None
+        for `default`) by the factor socket `fac`: the Mix Shader of two BSDFs, input by
+        input. Raises Unsupported (naming the node) as connect does."""
+        nodes, names = list(self.graph.nodes), dict(self._names)
+        typ = "color" if kind == "color" else "float"
+        rec = PatternNode(name="", kind="mix",
+                          settings={"data_type": "RGBA" if typ == "color" else "FLOAT",
+                                    "clamp_factor": "1", "blend_type": "MIX",
+                                    "clamp_result": "0"} if typ == "color" else
+                          {"data_type": "FLOAT", "clamp_factor": "1"},
+                          outputs={"result": typ})
+        try:
+            for name, socket, want in (("factor", fac, "float"), ("a", sockets[0], typ),
+                                       ("b", sockets[1], typ)):
+                link = self.link_of(socket) if socket is not None else None
+                if link is None:
+                    value = socket_value(socket, want) if socket is not None else default
+                    rec.values[name] = (want, value)
+                else:
+                    src = self._node(link.from_node, set())
+                    rec.links[name] = (want, src, self._output_name(link.from_node,
+                                                                    link.from_socket))
+        except Unsupported:
+            self.graph.nodes, self._names = nodes, names
+            raise
+        rec.name = f"n{len(self.graph.nodes)}_mix"
+        self.graph.nodes.append(rec)
+        self.graph.outputs[target] = (rec.name, "result")
+
     def complement(self, target) -> None:
         """Surface input `target` reads 1 - what it read (a Math Subtract node after it)."""
         src, out = self.graph.outputs[target]
