@@ -94,11 +94,12 @@ struct Surface {
     vec3 base;
     float metallic;
     float roughness;
-    vec3 f0;      // specular colour at normal incidence
     float eta;    // the dielectric's relative IOR (1: no specular), from its F0
-    vec3 f90;     // clamp(50 f0): f0 = 0 means no specular at all
     float NoV;
-    vec3 spec_energy;   // multiple-scattering factor of the base lobe
+    // Multiple-scattering factors of the base lobe's dielectric and metal parts, each
+    // its own: Cycles blends the two lobes by metallic, so a half metal is half of each.
+    float energy_d;
+    vec3 energy_m;
     vec3 spec_albedo;   // the base lobe's albedo at n.v (multiple scattering included)
     vec3 diffuse;       // Lambert albedo left to the diffuse layer
     float coat;         // coat weight
@@ -117,15 +118,16 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, vec4 base, vec4 mat, float coat_rou
     s.roughness = clamp(mat.y, 0.0, 1.0);
     float f0_d = mat.z;
     float f90_d = clamp(50.0 * f0_d, 0.0, 1.0);
-    s.f0 = mix(vec3(f0_d), s.base, s.metallic);
-    s.f90 = clamp(50.0 * s.f0, 0.0, 1.0);
     float root_f0 = min(sqrt(max(f0_d, 0.0)), 0.999);
     s.eta = (1.0 + root_f0) / (1.0 - root_f0);
     s.NoV = clamp(dot(n, v), 1e-4, 1.0);
     vec2 t = dfg(s.NoV, s.roughness);
     float exact_ratio = dfg_ior15(s.NoV, s.roughness) / max(COAT_F0 * (t.y - t.x) + t.x, 1e-6);
-    s.spec_energy = lobe_energy(t, s.f0);
-    s.spec_albedo = lobe_albedo(t, s.f0, s.f90) * s.spec_energy * mix(exact_ratio, 1.0, s.metallic);
+    s.energy_d = lobe_energy(t, vec3(f0_d)).x;
+    s.energy_m = lobe_energy(t, s.base);
+    s.spec_albedo = mix(lobe_albedo(t, vec3(f0_d), vec3(f90_d)) * s.energy_d * exact_ratio,
+                        lobe_albedo(t, s.base, clamp(50.0 * s.base, 0.0, 1.0)) * s.energy_m,
+                        s.metallic);
     float e_d = (f0_d * (t.y - t.x) + f90_d * t.x) * exact_ratio *
         (1.0 + f0_d * (1.0 / max(t.y, 1e-4) - 1.0));
     s.coat = clamp(mat.w, 0.0, 1.0);
@@ -166,8 +168,9 @@ vec3 brdf_specular(Surface s, vec3 l, float a) {
     float VoH = max(dot(s.v, h), 0.0);
     float w = schlick_weight(VoH);
     vec3 f0_m = s.base, f90_m = clamp(50.0 * s.base, 0.0, 1.0);
-    vec3 F = mix(vec3(fresnel_dielectric(VoH, s.eta)), f0_m + (f90_m - f0_m) * w, s.metallic);
-    return s.under_coat * s.spec_energy * F * d_ggx(NoH, a) * v_smith(s.NoV, NoL, a);
+    vec3 F = mix(vec3(fresnel_dielectric(VoH, s.eta) * s.energy_d),
+                 (f0_m + (f90_m - f0_m) * w) * s.energy_m, s.metallic);
+    return s.under_coat * F * d_ggx(NoH, a) * v_smith(s.NoV, NoL, a);
 }
 
 // The clearcoat lobe towards l (alpha a).

@@ -172,3 +172,19 @@ def test_dome_lat_long_map(tmp_path):
     dome.CreateTextureFileAttr(str(tmp_path / "gone.exr"))
     res = render_stage(stage, RenderSettings(width=W, height=H))
     assert any("/root/_world" in w and "gone.exr" in w for w in res.warnings)
+
+
+def test_a_half_metal_is_half_of_each_lobe(tmp_path):
+    """Cycles' Principled BSDF blends its dielectric and metal lobes by Metallic, each
+    with its own multiple-scattering energy: metallic 0.5 lights as the mean of 0 and 1
+    (one energy factor for the blended F0 made it 13% darker at roughness 1)."""
+    def lit(metallic):
+        stage = textured_stage(tmp_path / "missing.png")
+        surf = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/checker/surface"))
+        surf.GetInput("diffuseColor").ClearSources()
+        surf.GetInput("diffuseColor").Set((0.9, 0.7, 0.3))
+        surf.CreateInput("metallic", Sdf.ValueTypeNames.Float).Set(metallic)
+        return render_stage(stage, RenderSettings(width=W, height=H)).rgba[pixel_of(0, 0)][:3]
+    half, ends = lit(0.5), (lit(0.0) + lit(1.0)) / 2
+    print(f"metallic 0.5: {half.round(4)}, mean of 0 and 1: {ends.round(4)}")
+    assert np.allclose(half, ends, rtol=1e-3)
