@@ -221,14 +221,19 @@ def dfg_terms(nov, roughness, samples: int = DFG_SAMPLES, fresnel_ior=None) -> n
 
 @functools.lru_cache(maxsize=1)
 def dfg_lut(size: int = DFG_SIZE) -> np.ndarray:
-    """(size, size, 3) float32, row j = roughness (j + 0.5) / size, column i = n.v
+    """(size, size, 4) float32, row j = roughness (j + 0.5) / size, column i = n.v
     (i + 0.5) / size: the table the shaders read (texel centres at those values);
-    channels: dfg_terms, then the exact-Fresnel albedo at COAT_IOR. Computed once per
-    process."""
+    channels: dfg_terms, the exact-Fresnel albedo at COAT_IOR, and the lobe's albedo
+    averaged over the hemisphere, E_avg = 2 * integral of E(mu) mu (the same in every
+    column; Cycles' multiple-scattering Fresnel needs it: lib.glsl lobe_energy).
+    Computed once per process."""
     c = (np.arange(size) + 0.5) / size
     rows = [np.concatenate([dfg_terms(c, r), dfg_terms(c, r, fresnel_ior=COAT_IOR)[:, None]],
                            axis=1) for r in c]                       # row by row: cache-sized
-    return np.stack(rows).astype(np.float32)
+    table = np.stack(rows)
+    e_avg = 2.0 * (table[:, :, 1] * c[None, :]).mean(axis=1)       # midpoint rule in mu
+    return np.concatenate([table, np.repeat(e_avg[:, None, None], size, axis=1)],
+                          axis=2).astype(np.float32)
 
 
 def specular_albedo(f0, f90, nov, roughness) -> np.ndarray:
@@ -237,5 +242,9 @@ def specular_albedo(f0, f90, nov, roughness) -> np.ndarray:
     world (a dielectric's they scale by the exact-Fresnel ratio, lib.glsl
     make_surface)."""
     x, y = np.moveaxis(dfg_terms(nov, roughness), -1, 0)
+    mu = (np.arange(DFG_SIZE) + 0.5) / DFG_SIZE
+    e_avg = 2.0 * (dfg_terms(mu, roughness)[:, 1] * mu).mean()
     f0 = np.asarray(f0, float)
-    return (f0 * (y - x) + f90 * x) * (1 + f0 * (1 / y - 1))
+    fss = f0 + (f90 - f0) / 21.0
+    fms = fss * e_avg / (1.0 - fss * (1.0 - e_avg))
+    return (f0 * (y - x) + f90 * x) * (1 + fms * (1 / y - 1))

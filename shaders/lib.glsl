@@ -72,7 +72,19 @@ float fresnel_dielectric(float cos_i, float eta) {
 // A Schlick-GGX lobe's albedo of a uniform world, single scattering, and the factor
 // that restores the energy single scattering loses (Kulla-Conty, Filament).
 vec3 lobe_albedo(vec2 t, vec3 f0, vec3 f90) { return f0 * (t.y - t.x) + f90 * t.x; }
-vec3 lobe_energy(vec2 t, vec3 f0) { return 1.0 + f0 * (1.0 / max(t.y, 1e-4) - 1.0); }
+float dfg_e_avg(float roughness) { return texture(dfg_lut, vec2(0.5, roughness)).w; }
+
+// The multiple-scattering factor of a GGX lobe whose single-scattering Fresnel averages
+// fss over the hemisphere, as Cycles' microfacet_ggx_preserve_energy has it (Kulla and
+// Conty's Fms): 1 + Fms (1 - E) / E, Fms = fss E_avg / (1 - fss (1 - E_avg)). A white
+// lobe gets 1 / E; a coloured one loses more to the bounces between its microfacets.
+vec3 lobe_energy(vec2 t, vec3 fss, float e_avg) {
+    vec3 fms = fss * e_avg / max(1.0 - fss * (1.0 - e_avg), 1e-4);
+    return 1.0 + fms * (1.0 / max(t.y, 1e-4) - 1.0);
+}
+
+// The hemispherical average of Schlick's Fresnel from f0 to f90.
+vec3 fresnel_avg(vec3 f0, vec3 f90) { return f0 + (f90 - f0) / 21.0; }
 
 const float COAT_F0 = 0.04;   // UsdPreviewSurface's clearcoat: IOR 1.5, white
 const float COAT_IOR = 1.5;
@@ -123,20 +135,22 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, vec4 base, vec4 mat, float coat_rou
     s.NoV = clamp(dot(n, v), 1e-4, 1.0);
     vec2 t = dfg(s.NoV, s.roughness);
     float exact_ratio = dfg_ior15(s.NoV, s.roughness) / max(COAT_F0 * (t.y - t.x) + t.x, 1e-6);
-    s.energy_d = lobe_energy(t, vec3(f0_d)).x;
-    s.energy_m = lobe_energy(t, s.base);
+    float e_avg = dfg_e_avg(s.roughness);
+    vec3 f90_m = clamp(50.0 * s.base, 0.0, 1.0);
+    s.energy_d = lobe_energy(t, fresnel_avg(vec3(f0_d), vec3(f90_d)), e_avg).x;
+    s.energy_m = lobe_energy(t, fresnel_avg(s.base, f90_m), e_avg);
     s.spec_albedo = mix(lobe_albedo(t, vec3(f0_d), vec3(f90_d)) * s.energy_d * exact_ratio,
-                        lobe_albedo(t, s.base, clamp(50.0 * s.base, 0.0, 1.0)) * s.energy_m,
+                        lobe_albedo(t, s.base, f90_m) * s.energy_m,
                         s.metallic);
-    float e_d = (f0_d * (t.y - t.x) + f90_d * t.x) * exact_ratio *
-        (1.0 + f0_d * (1.0 / max(t.y, 1e-4) - 1.0));
+    float e_d = (f0_d * (t.y - t.x) + f90_d * t.x) * exact_ratio * s.energy_d;
     s.coat = clamp(mat.w, 0.0, 1.0);
     s.coat_roughness = clamp(coat_roughness, 0.0, 1.0);
     s.coat_energy = 1.0;
     s.coat_albedo = 0.0;
     if (s.coat > 0.0) {
         vec2 tc = dfg(s.NoV, s.coat_roughness);
-        s.coat_energy = lobe_energy(tc, vec3(COAT_F0)).x;
+        s.coat_energy = lobe_energy(tc, fresnel_avg(vec3(COAT_F0), vec3(1.0)),
+                                    dfg_e_avg(s.coat_roughness)).x;
         s.coat_albedo = s.coat * dfg_ior15(s.NoV, s.coat_roughness) * s.coat_energy;
     }
     s.under_coat = 1.0 - s.coat_albedo;

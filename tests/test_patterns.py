@@ -169,6 +169,16 @@ def test_a_value_edit_uploads_parameters_and_compiles_nothing():
     assert np.abs(after.rgba[16, 3, :3] - before.rgba[16, 3, :3]).max() > 0.1
 
 
+def test_a_half_metal_of_roughness_1_matches_cycles():
+    """The mix_shader scene's metal quad (a Mix Shader of metallic 0 and 1, as Cycles'
+    Principled BSDF blends its lobes): each lobe has its own multiple-scattering
+    energy, tinted by Kulla and Conty's Fms as Cycles' (0.065 with one factor for the
+    blended F0 and F0 in Fms' place)."""
+    _, per_tile, _ = lantern_flip("mix_shader")
+    print(f"half metal, roughness 1: HDR-FLIP {per_tile['mix_shader_metal']:.4f}")
+    assert per_tile["mix_shader_metal"] < 0.03
+
+
 def test_a_skinned_mesh_draws_its_colour_attribute():
     """A skinned quad (one bone, at rest) reads its colour attribute as the static one
     does: the colours ride beside the deformed vertices (engine/gpu/stores.py)."""
