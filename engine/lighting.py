@@ -219,19 +219,26 @@ def dfg_terms(nov, roughness, samples: int = DFG_SAMPLES, fresnel_ior=None) -> n
     return out.reshape(shape + (2,))
 
 
+def _trapezoid(y, x):
+    """The trapezoid rule along the last axis."""
+    return ((y[..., 1:] + y[..., :-1]) * 0.5 * np.diff(x)).sum(axis=-1)
+
+
 @functools.lru_cache(maxsize=1)
 def dfg_lut(size: int = DFG_SIZE) -> np.ndarray:
-    """(size, size, 4) float32, row j = roughness (j + 0.5) / size, column i = n.v
-    (i + 0.5) / size: the table the shaders read (texel centres at those values);
+    """(size, size, 4) float32, row j = roughness j / (size - 1), column i = n.v
+    i / (size - 1): the table the shaders read, at texel centres for those values
+    (lib.glsl dfg_uv), so that n.v and roughness 0 and 1 are in it, not clamped half a
+    texel short (E at n.v 1 and roughness 1 read 0.326 that way; it is 0.307);
     channels: dfg_terms, the exact-Fresnel albedo at COAT_IOR, and the lobe's albedo
     averaged over the hemisphere, E_avg = 2 * integral of E(mu) mu (the same in every
     column; Cycles' multiple-scattering Fresnel needs it: lib.glsl lobe_energy).
     Computed once per process."""
-    c = (np.arange(size) + 0.5) / size
+    c = np.linspace(0.0, 1.0, size)
     rows = [np.concatenate([dfg_terms(c, r), dfg_terms(c, r, fresnel_ior=COAT_IOR)[:, None]],
                            axis=1) for r in c]                       # row by row: cache-sized
     table = np.stack(rows)
-    e_avg = 2.0 * (table[:, :, 1] * c[None, :]).mean(axis=1)       # midpoint rule in mu
+    e_avg = 2.0 * _trapezoid(table[:, :, 1] * c[None, :], c)
     return np.concatenate([table, np.repeat(e_avg[:, None, None], size, axis=1)],
                           axis=2).astype(np.float32)
 
@@ -242,8 +249,8 @@ def specular_albedo(f0, f90, nov, roughness) -> np.ndarray:
     world (a dielectric's they scale by the exact-Fresnel ratio, lib.glsl
     make_surface)."""
     x, y = np.moveaxis(dfg_terms(nov, roughness), -1, 0)
-    mu = (np.arange(DFG_SIZE) + 0.5) / DFG_SIZE
-    e_avg = 2.0 * (dfg_terms(mu, roughness)[:, 1] * mu).mean()
+    mu = np.linspace(0.0, 1.0, DFG_SIZE)
+    e_avg = 2.0 * _trapezoid(dfg_terms(mu, roughness)[:, 1] * mu, mu)
     f0 = np.asarray(f0, float)
     fss = f0 + (f90 - f0) / 21.0
     fms = fss * e_avg / (1.0 - fss * (1.0 - e_avg))

@@ -49,11 +49,15 @@ float ggx_alpha(float roughness) {
 
 // The split-sum table (engine/lighting.py dfg_lut): x = integral of Fc G_vis, y =
 // integral of G_vis (the GGX albedo with F = 1), z = integral of F G_vis with the exact
-// Fresnel of IOR 1.5, by n.v (s) and perceptual roughness (t), texel centres at
-// (i + 0.5) / size. Every program that shades a Surface binds it.
+// Fresnel of IOR 1.5, w = y averaged over the hemisphere, by n.v (s) and perceptual
+// roughness (t), texel i at i / (size - 1). Every program that shades a Surface binds it.
 uniform sampler2D dfg_lut;
-vec2 dfg(float NoV, float roughness) { return texture(dfg_lut, vec2(NoV, roughness)).xy; }
-float dfg_ior15(float NoV, float roughness) { return texture(dfg_lut, vec2(NoV, roughness)).z; }
+vec2 dfg_uv(float NoV, float roughness) {
+    vec2 n = vec2(textureSize(dfg_lut, 0));
+    return (clamp(vec2(NoV, roughness), 0.0, 1.0) * (n - 1.0) + 0.5) / n;
+}
+vec2 dfg(float NoV, float roughness) { return texture(dfg_lut, dfg_uv(NoV, roughness)).xy; }
+float dfg_ior15(float NoV, float roughness) { return texture(dfg_lut, dfg_uv(NoV, roughness)).z; }
 
 // A dielectric's exact (unpolarised) Fresnel reflectance, relative IOR eta >= 1, as
 // Cycles' fresnel_dielectric_cos: its Principled BSDF's dielectric lobes and coat use
@@ -72,7 +76,7 @@ float fresnel_dielectric(float cos_i, float eta) {
 // A Schlick-GGX lobe's albedo of a uniform world, single scattering, and the factor
 // that restores the energy single scattering loses (Kulla-Conty, Filament).
 vec3 lobe_albedo(vec2 t, vec3 f0, vec3 f90) { return f0 * (t.y - t.x) + f90 * t.x; }
-float dfg_e_avg(float roughness) { return texture(dfg_lut, vec2(0.5, roughness)).w; }
+float dfg_e_avg(float roughness) { return texture(dfg_lut, dfg_uv(0.5, roughness)).w; }
 
 // The multiple-scattering factor of a GGX lobe whose single-scattering Fresnel averages
 // fss over the hemisphere, as Cycles' microfacet_ggx_preserve_energy has it (Kulla and

@@ -188,3 +188,21 @@ def test_a_half_metal_is_half_of_each_lobe(tmp_path):
     half, ends = lit(0.5), (lit(0.0) + lit(1.0)) / 2
     print(f"metallic 0.5: {half.round(4)}, mean of 0 and 1: {ends.round(4)}")
     assert np.allclose(half, ends, rtol=1e-3)
+
+
+def test_a_rough_white_metal_reflects_the_sun_as_its_lobe_with_1_over_e(tmp_path):
+    """Roughness 1, light and view along the normal: the GGX lobe gives F D G/(4 cos
+    cos) = 1/(4 pi), times the sun's irradiance pi, times the energy factor 1/E(1, 1)
+    (Cycles' preserve_energy) = 0.25 / 0.307. The split-sum table is read at n.v and
+    roughness 1 themselves (it was clamped half a texel short: 0.766 for 0.815)."""
+    from lantern.engine.lighting import dfg_terms
+    stage = textured_stage(tmp_path / "missing.png")
+    surf = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/checker/surface"))
+    surf.GetInput("diffuseColor").ClearSources()
+    surf.GetInput("diffuseColor").Set((1.0, 1.0, 1.0))
+    surf.CreateInput("metallic", Sdf.ValueTypeNames.Float).Set(1.0)
+    e = float(dfg_terms(np.array([1.0]), np.array([1.0]), samples=1 << 16)[0, 1])
+    # The camera looks straight down at the plate's centre.
+    got = render_stage(stage, RenderSettings(width=W, height=H)).rgba[pixel_of(0, 0)][:3]
+    print(f"white metal, roughness 1: {got.round(4)}, closed form {0.25 / e:.4f}")
+    assert np.allclose(got, 0.25 / e, rtol=0.01)
