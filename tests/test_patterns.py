@@ -173,10 +173,11 @@ def test_a_half_metal_of_roughness_1_matches_cycles():
     """The mix_shader scene's metal quad (a Mix Shader of metallic 0 and 1, as Cycles'
     Principled BSDF blends its lobes): each lobe has its own multiple-scattering
     energy, tinted by Kulla and Conty's Fms as Cycles' (0.065 with one factor for the
-    blended F0 and F0 in Fms' place)."""
+    blended F0 and F0 in Fms' place, 0.0156 with the table read half a texel short;
+    0.0037 now)."""
     _, per_tile, _ = lantern_flip("mix_shader")
     print(f"half metal, roughness 1: HDR-FLIP {per_tile['mix_shader_metal']:.4f}")
-    assert per_tile["mix_shader_metal"] < 0.03
+    assert per_tile["mix_shader_metal"] < 0.01
 
 
 def test_a_skinned_mesh_draws_its_colour_attribute():
