@@ -58,6 +58,7 @@ vec2 dfg_uv(float NoV, float roughness) {
 }
 vec2 dfg(float NoV, float roughness) { return texture(dfg_lut, dfg_uv(NoV, roughness)).xy; }
 float dfg_ior15(float NoV, float roughness) { return texture(dfg_lut, dfg_uv(NoV, roughness)).z; }
+float dfg_e_avg(float roughness) { return texture(dfg_lut, dfg_uv(0.5, roughness)).w; }
 
 // A dielectric's exact (unpolarised) Fresnel reflectance, relative IOR eta >= 1, as
 // Cycles' fresnel_dielectric_cos: its Principled BSDF's dielectric lobes and coat use
@@ -73,10 +74,8 @@ float fresnel_dielectric(float cos_i, float eta) {
     return 0.5 * a * a * (1.0 + b * b);
 }
 
-// A Schlick-GGX lobe's albedo of a uniform world, single scattering, and the factor
-// that restores the energy single scattering loses (Kulla-Conty, Filament).
+// A Schlick-GGX lobe's albedo of a uniform world, single scattering.
 vec3 lobe_albedo(vec2 t, vec3 f0, vec3 f90) { return f0 * (t.y - t.x) + f90 * t.x; }
-float dfg_e_avg(float roughness) { return texture(dfg_lut, dfg_uv(0.5, roughness)).w; }
 
 // The multiple-scattering factor of a GGX lobe whose single-scattering Fresnel averages
 // fss over the hemisphere, as Cycles' microfacet_ggx_preserve_energy has it (Kulla and
@@ -143,10 +142,9 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, vec4 base, vec4 mat, float coat_rou
     vec3 f90_m = clamp(50.0 * s.base, 0.0, 1.0);
     s.energy_d = lobe_energy(t, fresnel_avg(vec3(f0_d), vec3(f90_d)), e_avg).x;
     s.energy_m = lobe_energy(t, fresnel_avg(s.base, f90_m), e_avg);
-    s.spec_albedo = mix(lobe_albedo(t, vec3(f0_d), vec3(f90_d)) * s.energy_d * exact_ratio,
-                        lobe_albedo(t, s.base, f90_m) * s.energy_m,
-                        s.metallic);
-    float e_d = (f0_d * (t.y - t.x) + f90_d * t.x) * exact_ratio * s.energy_d;
+    // The dielectric lobe's albedo (what its diffuse layer does not get), and the metal's.
+    float e_d = lobe_albedo(t, vec3(f0_d), vec3(f90_d)).x * s.energy_d * exact_ratio;
+    s.spec_albedo = mix(vec3(e_d), lobe_albedo(t, s.base, f90_m) * s.energy_m, s.metallic);
     s.coat = clamp(mat.w, 0.0, 1.0);
     s.coat_roughness = clamp(coat_roughness, 0.0, 1.0);
     s.coat_energy = 1.0;

@@ -82,6 +82,16 @@ vec4 sample_map(sampler2D t, Map m, vec2 uv) {
 vec3 pt_N = vec3(0.0, 0.0, 1.0);   // the interpolated normal, facing the viewer
 vec3 pt_P = vec3(0.0);             // camera-relative position
 vec4 pt_T = vec4(0.0);             // tangent (world) and bitangent sign; 0: none
+
+// A tangent-space vector in the MikkTSpace frame of pt_T and pt_N (bitangent N x T times
+// the sign), normalised: a normal map's normal. pt_N without tangents, or for 0.
+vec3 tangent_space_normal(vec3 ts) {
+    if (!(dot(pt_T.xyz, pt_T.xyz) > 1e-12)) return pt_N;
+    vec3 t = normalize(pt_T.xyz);
+    vec3 b = cross(pt_N, t) * (pt_T.w < 0.0 ? -1.0 : 1.0);
+    vec3 n = t * ts.x + b * ts.y + pt_N * ts.z;
+    return dot(n, n) > 1e-12 ? normalize(n) : pt_N;
+}
 #ifdef PATTERN_NORMAL
 in vec3 v_position;                // gbuffer.vert
 #endif
@@ -182,14 +192,7 @@ MaterialSample material_sample(vec2 uv, vec3 normal, vec4 tangent, bool front) {
     float opacity = 1.0;
     pattern_inputs(uv, base, metallic, roughness, opacity, emissive, n);
 #ifdef HAS_NORMAL_MAP
-    vec3 t = tangent.xyz - n * dot(n, tangent.xyz);
-    if (dot(t, t) > 1e-12) {
-        t = normalize(t);
-        vec3 b = cross(n, t) * (tangent.w < 0.0 ? -1.0 : 1.0);
-        vec3 ts = sample_map(t_normal, m_normal, uv).xyz;
-        vec3 mapped = t * ts.x + b * ts.y + n * ts.z;
-        if (dot(mapped, mapped) > 1e-12) n = normalize(mapped);
-    }
+    n = tangent_space_normal(sample_map(t_normal, m_normal, uv).xyz);
 #endif
     if (!u_bump_correction) smooth_n = n;
     float f = (u_ior - 1.0) / (u_ior + 1.0);

@@ -428,14 +428,10 @@ vec3 pt_bump(float strength, float distance, float height, bool invert, vec3 nor
 }
 
 // Cycles' tangent-space Normal Map node (svm_node_normal_map) on a colour a network
-// computed: n = 2c - 1 in the MikkTSpace frame (pt_T), strength s weighting it as
-// Cycles does (docs/stage_contract.md, "Normal maps"). Without tangents, pt_N.
+// computed: n = 2c - 1 in the MikkTSpace frame (material.glsl tangent_space_normal),
+// strength s weighting it as Cycles does (docs/stage_contract.md, "Normal maps").
 vec3 pt_normal_map(float strength, vec3 color) {
-    if (!(dot(pt_T.xyz, pt_T.xyz) > 1e-12)) return pt_N;
-    vec3 t = normalize(pt_T.xyz);
-    vec3 b = cross(pt_N, t) * (pt_T.w < 0.0 ? -1.0 : 1.0);
     vec3 c = 2.0 * color - 1.0;
     float s = max(strength, 0.0);
-    vec3 n = s * c.x * t + s * c.y * b + (1.0 + min(s, 1.0) * (c.z - 1.0)) * pt_N;
-    return dot(n, n) > 1e-12 ? normalize(n) : pt_N;
+    return tangent_space_normal(vec3(s * c.xy, 1.0 + min(s, 1.0) * (c.z - 1.0)));
 }
