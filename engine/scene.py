@@ -95,9 +95,10 @@ class Material:
     def reads_generated(self) -> bool:
         """Whether the network reads Generated coordinates (a texture's unlinked Vector,
         a Texture Coordinate node's Generated)."""
-        return self.pattern is not None and any(
-            link[3] == "generated" for n in self.pattern.nodes for link in n.links) or \
-            (self.pattern is not None and any(o[2] == "generated" for o in self.pattern.outputs))
+        if self.pattern is None:
+            return False
+        sources = [link[3] for n in self.pattern.nodes for link in n.links]
+        return "generated" in sources + [o[2] for o in self.pattern.outputs]
 
     @property
     def needs_tangents(self) -> bool:
@@ -109,6 +110,12 @@ class Material:
     def bends_normal(self) -> bool:
         """A normal map, or a network (Bump, Normal Map) feeding the normal."""
         return self.has_normal_map or (self.pattern is not None and self.pattern.feeds("normal"))
+
+    @property
+    def mesh_layout(self) -> tuple:
+        """What this material asks of the meshes it is bound to (engine/usd/mesh.py):
+        they are built again when it changes."""
+        return (self.uv_name, self.needs_tangents, self.color_attribute, self.reads_generated)
 
     @property
     def needs_smooth_normal(self) -> bool:

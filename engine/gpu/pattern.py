@@ -14,14 +14,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...core.pattern_nodes import (BLEND_TYPES, GRADIENT_TYPES, MAPPING_TYPES, MATH_OPS,
-                                   RAMP_INTERPOLATIONS, VECTOR_MATH_OPS, VORONOI_METRICS,
-                                   WAVE_DIRECTIONS, WAVE_PROFILES, WAVE_TYPES, random_offset)
+                                   RAMP_INTERPOLATIONS, SURFACE_INPUTS, VECTOR_MATH_OPS,
+                                   VORONOI_METRICS, WAVE_DIRECTIONS, WAVE_PROFILES, WAVE_TYPES,
+                                   random_offset)
 from ..scene import TextureRef
 from .programs import set_uniform_array
 
-SURFACE = {"diffuseColor": ("pt_diffuse", "color"), "metallic": ("pt_metallic", "float"),
-           "roughness": ("pt_roughness", "float"), "opacity": ("pt_opacity", "float"),
-           "emissiveColor": ("pt_emissive", "color"), "normal": ("pt_normal", "vector")}
+# pattern_eval's out parameters, one per surface input, in material.glsl's call order.
+SURFACE = {target: (f"pt_{target}", typ) for target, typ in SURFACE_INPUTS.items()}
 
 
 @dataclass(frozen=True)

@@ -13,14 +13,12 @@ import os
 import numpy as np
 from pxr import Sdf, UsdShade
 
-from ...core.pattern_nodes import unsupported_setting
+from ...core.pattern_nodes import SURFACE_INPUTS, unsupported_setting
 from ..scene import PatternGraph, PatternNode
 
 MTLX_SURFACE = "ND_UsdPreviewSurface_surfaceshader"
 PREFIX = "ND_lantern_"
 NODE_DEF = "lantern:nodeDef"   # a node's definition (docs/stage_contract.md), else info:id
-SURFACE_INPUTS = {"diffuseColor": "color", "metallic": "float", "roughness": "float",
-                  "opacity": "float", "emissiveColor": "color", "normal": "vector"}
 TYPES = {Sdf.ValueTypeNames.Float: "float", Sdf.ValueTypeNames.Vector3f: "vector",
          Sdf.ValueTypeNames.Color3f: "color", Sdf.ValueTypeNames.Float3: "vector",
          Sdf.ValueTypeNames.FloatArray: "float[]", Sdf.ValueTypeNames.Color4fArray: "color4[]"}

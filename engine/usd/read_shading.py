@@ -86,9 +86,7 @@ class ShadingReading:
         else:
             new = self._material(UsdShade.Material(prim), force=True)
             changes.materials.add(name)
-            layout = lambda m: (m.uv_name, m.needs_tangents, m.color_attribute,  # noqa: E731
-                                m.reads_generated)
-            relayout = users if old is None or layout(old) != layout(new) else set()
+            relayout = users if old is None or old.mesh_layout != new.mesh_layout else set()
         for path in relayout:
             p = self.stage.GetPrimAtPath(path)
             if p:
