@@ -326,14 +326,15 @@ class _Walker:
             inputs.setdefault("diffuseColor", (0.0, 0.0, 0.0))
             inputs.setdefault("ior", 1.0)
             self.emission(node.inputs["Color"], node.inputs["Strength"], inputs, weight)
-        elif kind == "ShaderNodeMixShader" and _transparent_slot(node) is not None:
-            return self.transparent_mix(node, inputs, weight)
         elif kind in {"ShaderNodeAddShader", "ShaderNodeMixShader"}:
-            shaders = [s for s in node.inputs if s.type == "SHADER"]
-            if kind == "ShaderNodeMixShader" and all(
-                    link is not None and link.from_node.bl_idname in MIXABLE_BSDFS
-                    for link in map(_link, shaders)):
-                return self.bsdf_mix(node, [_link(s) for s in shaders], inputs, weight)
+            links = [_link(s) for s in node.inputs if s.type == "SHADER"]
+            if kind == "ShaderNodeMixShader":
+                kinds = [link.from_node.bl_idname if link else None for link in links]
+                if kinds.count("ShaderNodeBsdfTransparent") == 1:
+                    return self.transparent_mix(node, links, kinds.index(
+                        "ShaderNodeBsdfTransparent"), inputs, weight)
+                if all(k in MIXABLE_BSDFS for k in kinds):
+                    return self.bsdf_mix(node, links, inputs, weight)
             weights = [weight, weight]
             if kind == "ShaderNodeMixShader":
                 fac = node.inputs[0]
@@ -343,7 +344,6 @@ class _Walker:
                 else:
                     f = min(max(_constant(fac, "float"), 0.0), 1.0)
                     weights = [weight * (1.0 - f), weight * f]
-            links = [_link(s) for s in shaders]
             pairs = [(l, w) for l, w in zip(links, weights) if l is not None and w > 0.0]
             bsdfs = [w for l, w in pairs if l.from_node.bl_idname != "ShaderNodeEmission"]
             if kind == "ShaderNodeMixShader" and (len(bsdfs) > 1 or any(w != weight for w in bsdfs)):
@@ -357,7 +357,6 @@ class _Walker:
             self.unsupported(node)
             return False
         return True
-
 
     def bsdf_mix(self, node, links, inputs, weight):
         """A Mix Shader of two Principled (or Diffuse) BSDFs: one layer whose inputs mix
@@ -379,13 +378,13 @@ class _Walker:
         if emitted and f is None:
             self.warn(f"material '{self.material.name}': node '{node.name}' (Mix Shader) "
                       f"emission under a textured factor is not exported")
-        elif len(emitted) == 1 or not any(isinstance(e, TexInput) for e in emitted):
-            inputs["emissiveColor"] = emitted[0] if len(emitted) == 1 else \
-                tuple(map(sum, zip(*emitted))) if emitted else (0.0, 0.0, 0.0)
-        else:
+        elif len(emitted) > 1 and any(isinstance(e, TexInput) for e in emitted):
             inputs["emissiveColor"] = emitted[0]
             self.warn(f"material '{self.material.name}': a textured emission cannot be "
                       f"added to another emission; keeping the first")
+        else:
+            inputs["emissiveColor"] = emitted[0] if len(emitted) == 1 else \
+                tuple(map(sum, zip(*emitted))) if emitted else (0.0, 0.0, 0.0)
         for target, (kind, names) in MIXED_INPUTS.items():
             sockets = [_bsdf_socket(l.from_node, names) for l in links]
             if all(s is None or _link(s) is None for s in sockets) and f is not None:
@@ -406,19 +405,17 @@ class _Walker:
                       f"first's is used")
         return True
 
-    def transparent_mix(self, node, inputs, weight):
-        """A Mix Shader of a Transparent BSDF and another shader: Cycles lets the
-        transparent share of the light through, which is the surface's opacity (as the
-        Principled BSDF's Alpha is): opacity = the other's share x its own opacity."""
-        slot = _transparent_slot(node)
-        shaders = [s for s in node.inputs if s.type == "SHADER"]
-        transparent = _link(shaders[slot]).from_node
+    def transparent_mix(self, node, links, slot, inputs, weight):
+        """A Mix Shader of a Transparent BSDF (in shader `slot`) and another shader: Cycles
+        lets the transparent share of the light through, which is the surface's opacity
+        (as the Principled BSDF's Alpha is): opacity = the other's share x its own."""
+        transparent = links[slot].from_node
         color = transparent.inputs["Color"]
         if _link(color) is not None or tuple(_constant(color, "color")) != (1.0, 1.0, 1.0):
             self.warn(f"material '{self.material.name}': node '{transparent.name}' "
                       f"(Transparent BSDF) colour is not exported (white: uncoloured "
                       f"transparency)")
-        other = _link(shaders[1 - slot])
+        other = links[1 - slot]
         filled = other is not None and self.shader(other, inputs, weight)
         if not filled:
             inputs.setdefault("diffuseColor", (0.0, 0.0, 0.0))
@@ -435,9 +432,7 @@ class _Walker:
         opacity = self.value(fac, "float", "opacity")
         if slot == 1:                                     # opacity = 1 - factor
             if isinstance(opacity, TexInput):
-                opacity = TexInput(dataclasses.replace(
-                    opacity.texture, scale=tuple(-s for s in opacity.texture.scale),
-                    bias=tuple(1.0 - b for b in opacity.texture.bias)), opacity.channel)
+                opacity = _remapped(opacity, -1.0, 1.0)
             else:
                 if self.pattern.graph.outputs.get("opacity") is not None:
                     self.pattern.complement("opacity")
@@ -448,10 +443,7 @@ class _Walker:
     def scaled_opacity(self, node, opacity, share):
         """`opacity` (a constant or a texture) times a constant share."""
         if isinstance(opacity, TexInput):
-            tex = opacity.texture
-            return TexInput(dataclasses.replace(
-                tex, scale=tuple(s * share for s in tex.scale),
-                bias=tuple(b * share for b in tex.bias)), opacity.channel)
+            return _remapped(opacity, share, 0.0)
         if self.pattern.graph.outputs.get("opacity") is not None and share != 1.0:
             self.warn(f"material '{self.material.name}': node '{node.name}' (Mix Shader) "
                       f"weight over a network's alpha is not exported; the network's alpha "
@@ -488,12 +480,11 @@ def _bsdf_socket(node, names):
     return node.inputs[name] if name is not None else None
 
 
-def _transparent_slot(node):
-    """Which of a Mix Shader's two shaders is a Transparent BSDF (0, 1), or None."""
-    shaders = [_link(s) for s in node.inputs if s.type == "SHADER"]
-    slots = [i for i, link in enumerate(shaders)
-             if link is not None and link.from_node.bl_idname == "ShaderNodeBsdfTransparent"]
-    return slots[0] if len(slots) == 1 else None
+def _remapped(inp: TexInput, a: float, b: float) -> TexInput:
+    """A texture input read as a * value + b (its UsdUVTexture scale and bias)."""
+    tex = inp.texture
+    return TexInput(dataclasses.replace(tex, scale=tuple(a * s for s in tex.scale),
+                                        bias=tuple(a * t + b for t in tex.bias)), inp.channel)
 
 
 def gather_material(material, warn, texture_dir=None):

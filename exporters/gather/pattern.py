@@ -268,16 +268,13 @@ class PatternBuilder:
         for `default`) by the factor socket `fac`: the Mix Shader of two BSDFs, input by
         input. Raises Unsupported (naming the node) as connect does."""
         nodes, names = list(self.graph.nodes), dict(self._names)
-        typ = "color" if kind == "color" else "float"
-        rec = PatternNode(name="", kind="mix",
-                          settings={"data_type": "RGBA" if typ == "color" else "FLOAT",
-                                    "clamp_factor": "1", "blend_type": "MIX",
-                                    "clamp_result": "0"} if typ == "color" else
-                          {"data_type": "FLOAT", "clamp_factor": "1"},
-                          outputs={"result": typ})
+        settings = {"data_type": "FLOAT", "clamp_factor": "1"}
+        if kind == "color":
+            settings.update(data_type="RGBA", blend_type="MIX", clamp_result="0")
+        rec = PatternNode(name="", kind="mix", settings=settings, outputs={"result": kind})
         try:
-            for name, socket, want in (("factor", fac, "float"), ("a", sockets[0], typ),
-                                       ("b", sockets[1], typ)):
+            for name, socket, want in (("factor", fac, "float"), ("a", sockets[0], kind),
+                                       ("b", sockets[1], kind)):
                 link = self.link_of(socket) if socket is not None else None
                 if link is None:
                     value = socket_value(socket, want) if socket is not None else default
