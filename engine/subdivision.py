@@ -6,6 +6,9 @@ smooth and sharp edge points by s, and each level lowers every sharpness by 1
 (MAX_SHARPNESS stays infinite). Open and non-manifold edges are infinitely sharp
 (interpolateBoundary edgeOnly / edgeAndCorner). Child vertices are numbered as
 OpenSubdiv and Blender number them: parent vertices, then one per edge, then one per face.
+
+`limit_points` then moves a refined mesh's points onto the limit surface, as Blender's
+modifier does with Use Limit Surface (its default) and as USD means a catmullClark mesh.
 """
 from dataclasses import dataclass
 
@@ -166,6 +169,57 @@ def refine_once(c: Cage) -> Cage:
         for pair, s in zip(hs.tolist(), vals):
             child.edge_sharpness[lookup[tuple(pair)]] = s
     return child
+
+
+def vertex_rules(c: Cage):
+    """Each point's rule on `c` as it stands (no more refinement): 0 smooth (or a dart,
+    one sharp edge), 1 crease (two sharp edges: open boundaries included), 2 corner
+    (more, a vertex sharpness, or a single-face boundary vertex under edgeAndCorner).
+    Remaining semi-sharp sharpness counts as sharp, as OpenSubdiv's limit masks do.
+    Also returns the edges and which of them are sharp."""
+    n_v = len(c.points)
+    edges, corner_edge = _edges(c.counts, c.indices)
+    edge_faces = np.bincount(corner_edge, minlength=len(edges))
+    sharp = (c.edge_sharpness > 0) | (edge_faces != 2)
+    count = np.bincount(edges[sharp].ravel(), minlength=n_v)
+    corner = (c.vertex_sharpness > 0) | (count > 2)
+    if c.corners_sharp:
+        faces_at = np.bincount(c.indices, minlength=n_v)
+        open_count = np.bincount(edges[edge_faces == 1].ravel(), minlength=n_v)
+        corner |= (open_count == 2) & (faces_at == 1)
+    return np.where(corner, 2, np.where(count == 2, 1, 0)), edges, sharp
+
+
+def limit_points(c: Cage) -> np.ndarray:
+    """The limit positions of an all-quad mesh's points (any level >= 1): smooth points
+    (n^2 v + 4 sum(edge neighbours) + sum(diagonals)) / (n (n + 5)), crease points the
+    cubic B-spline's (b0 + 4 v + b1) / 6 along their two sharp edges, corners fixed."""
+    if (c.counts != 4).any():
+        raise ValueError("limit_points needs an all-quad mesh (refine once first)")
+    n_v = len(c.points)
+    finite = np.concatenate([c.edge_sharpness, c.vertex_sharpness])
+    finite = finite[(finite > 0) & (finite < MAX_SHARPNESS)]
+    if len(finite):
+        # Semi-sharp features shape the surface for ceil(s) more levels: refine past
+        # them. A point's child keeps its number, and converges to the same limit.
+        return limit_points(refine(c, int(np.ceil(finite.max()))))[:n_v]
+    p = c.points
+    rule, edges, sharp = vertex_rules(c)
+    quads = c.indices.reshape(-1, 4)
+    valence = np.bincount(edges.ravel(), minlength=n_v).astype(np.float64)
+    e_sum = np.zeros((n_v, 3))
+    np.add.at(e_sum, edges[:, 0], p[edges[:, 1]])
+    np.add.at(e_sum, edges[:, 1], p[edges[:, 0]])
+    f_sum = np.zeros((n_v, 3))
+    for i in range(4):
+        np.add.at(f_sum, quads[:, i], p[quads[:, (i + 2) % 4]])
+    n = np.maximum(valence, 1)[:, None]
+    smooth = (n * n * p + 4 * e_sum + f_sum) / (n * (n + 5))
+    b_sum = np.zeros((n_v, 3))
+    np.add.at(b_sum, edges[sharp, 0], p[edges[sharp, 1]])
+    np.add.at(b_sum, edges[sharp, 1], p[edges[sharp, 0]])
+    crease = (b_sum + 4 * p) / 6
+    return np.where((rule == 0)[:, None], smooth, np.where((rule == 1)[:, None], crease, p))
 
 
 def _lower(s):

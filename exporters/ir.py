@@ -108,6 +108,7 @@ class SubdivisionRecord:
     corner_sharpnesses: np.ndarray  # (K,) float32
     interpolate_boundary: str       # "edgeOnly" / "edgeAndCorner"
     face_varying_linear_interpolation: str
+    limit_surface: bool = True      # Use Limit Surface: the level's points on the limit
 
 
 @dataclass

@@ -1,4 +1,5 @@
-"""A UsdGeom.Mesh with subdivisionScheme catmullClark -> its cage refined on the CPU.
+"""A UsdGeom.Mesh with subdivisionScheme catmullClark -> its cage refined on the CPU, and
+its points moved onto the limit surface (unless the stage says Use Limit Surface was off).
 
 The level is the exporter's `lantern:subdivisionRenderLevel`; without it (a stage from
 elsewhere) the cage is drawn, with a warning. Skinned cages are drawn unrefined (refining
@@ -7,9 +8,10 @@ after deformation is not built), with a warning.
 import numpy as np
 from pxr import UsdGeom, UsdSkel
 
-from ..subdivision import cage, parent_faces, refine, refine_face_varying
+from ..subdivision import cage, limit_points, parent_faces, refine, refine_face_varying
 
 LEVEL_ATTR = "lantern:subdivisionRenderLevel"
+LIMIT_ATTR = "lantern:subdivisionLimitSurface"   # written only when false
 
 
 def subdivision_level(prim, warnings):
@@ -65,6 +67,9 @@ class RefinedCage:
                               arr(mesh.GetCornerSharpnessesAttr(), np.float64),
                               boundary or "edgeAndCorner"), levels)
         self.points, self.counts, self.indices = refined.points, refined.counts, refined.indices
+        limit = mesh.GetPrim().GetAttribute(LIMIT_ATTR)
+        if levels > 0 and not (limit and limit.HasValue() and not limit.Get()):
+            self.points = limit_points(refined)
 
     def face_varying(self, per_cage_corner):
         return refine_face_varying(self.cage_counts, per_cage_corner, self.levels)

@@ -69,7 +69,8 @@ def subdivision_record(mod, mesh):
         crease_sharpnesses=edge_sharp.astype(np.float32),
         corner_indices=corner_index, corner_sharpnesses=corner_sharp.astype(np.float32),
         interpolate_boundary=BOUNDARY_RULES[mod.boundary_smooth],
-        face_varying_linear_interpolation=UV_RULES[mod.uv_smooth])
+        face_varying_linear_interpolation=UV_RULES[mod.uv_smooth],
+        limit_surface=bool(mod.use_limit_surface))
 
 
 def _attribute(mesh, name, size):

@@ -4,6 +4,8 @@ from pxr import Sdf, UsdGeom, UsdShade, Vt
 
 from .names import Namer, primvar_name
 
+LIMIT_ATTR = "lantern:subdivisionLimitSurface"
+
 
 def write_mesh(stage, path, rec, double_sided, slot_names):
     mesh = UsdGeom.Mesh.Define(stage, path)
@@ -69,6 +71,8 @@ def write_subdivision(mesh, sub):
     for name, level in (("lantern:subdivisionRenderLevel", sub.render_level),
                         ("lantern:subdivisionViewportLevel", sub.viewport_level)):
         prim.CreateAttribute(name, Sdf.ValueTypeNames.Int, custom=True).Set(int(level))
+    if not sub.limit_surface:      # only when off: on is Blender's default and USD's meaning
+        prim.CreateAttribute(LIMIT_ATTR, Sdf.ValueTypeNames.Bool, custom=True).Set(False)
 
 
 def face_slots(rec, slot_count):
