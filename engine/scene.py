@@ -162,6 +162,24 @@ OPAQUE_ALPHA = 1.0 - 1.0 / 1024.0
 
 
 @dataclass
+class PatchData:
+    """A subdivision surface for the GPU's tessellation stages: one bicubic Bezier
+    patch per quad of its cage refined `levels` times (engine/bezier_patches.py),
+    sorted by material. The tessellation pass writes the triangles into the mesh's
+    vertices each view, at most `cap` segments per patch edge."""
+    control: np.ndarray            # (P, 16, 3) float32 Bezier control points, B[v][u]
+    uv: np.ndarray                 # (P, 4, 2) float32 at the corners (0,0) (1,0) (1,1) (0,1)
+    ranges: list                   # [(material index, first patch, patch count)]
+    levels: int                    # CPU refinements before the patches
+    cap: int                       # most segments per patch edge
+
+    @property
+    def max_vertices(self) -> int:
+        """Triangle corners the patches make at most (2 cap^2 triangles each)."""
+        return len(self.control) * 6 * self.cap * self.cap
+
+
+@dataclass
 class MeshData:
     """Indexed triangles sorted by material. vertices: (V, 12) float32 = position 3,
     normal 3, uv 2, tangent 4 (w = handedness); indices: (3T,) uint32 into vertices.
@@ -183,6 +201,10 @@ class MeshData:
     # STREAMS): "colors", a colour attribute; "generated", Blender's Generated
     # coordinates (the rest points in their bounding box, as its auto texture space).
     streams: dict = field(default_factory=dict)
+    # A subdivision surface tessellated on the GPU: `vertices` and `indices` are then
+    # empty and `ranges` are the patches' (PatchData.ranges); the triangles are made
+    # each view (engine/gpu/passes/tessellation.py).
+    patches: "PatchData | None" = None
 
     def __post_init__(self):
         if self.bounds is None and len(self.vertices):

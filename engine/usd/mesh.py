@@ -13,8 +13,8 @@ from pxr import Sdf, Usd, UsdGeom
 
 from ...core.transforms import cross
 from ...core.triangulate import triangulate
-from ..scene import MeshData
-from .subdivision import RefinedCage, subdivision_level
+from ..scene import MeshData, PatchData
+from .subdivision import RefinedCage, limit_surface, subdivision_level
 
 
 class MeshError(ValueError):
@@ -78,10 +78,12 @@ def _finite(values, what, n_items=None):
         raise MeshError(f"{int(bad.sum())} of {len(bad)} {what} are not finite")
 
 
-def build_mesh(prim, time, materials, subsets, key, warnings=None) -> MeshData:
+def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=False) -> MeshData:
     """materials: [Material] (the prim's own first, then one per subset); subsets:
     [(index into materials, face indices)]. Zero-length normals are replaced by the
-    surface's own (with a warning in `warnings`)."""
+    surface's own (with a warning in `warnings`). `tessellate`: a subdivision surface
+    becomes patches for the GPU (MeshData.patches) where its materials need no more
+    than positions, normals and UVs, else it is refined here."""
     mesh = UsdGeom.Mesh(prim)
     pts = mesh.GetPointsAttr().Get(time)
     counts = mesh.GetFaceVertexCountsAttr().Get(time)
@@ -104,7 +106,12 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None) -> MeshData:
     if levels:
         # Normals and tangents are the refined surface's own (USD ignores authored ones
         # on a subdivision surface); UVs and subsets follow the refined faces.
-        refined = RefinedCage(mesh, pts, counts, idx, levels, time)
+        patches = tessellate and limit_surface(prim) and not any(
+            m.needs_tangents or m.reads_generated or m.color_attribute for m in materials)
+        refined = RefinedCage(mesh, pts, counts, idx, levels, time, patches=patches)
+        if refined.patches is not None:
+            return _patch_mesh(prim, mesh, refined, levels, time, materials, subsets, key,
+                               (counts, idx, len(pts)))
         cage_counts, cage_idx, cage_points = counts, idx, len(pts)
         pts, counts, idx = refined.points, refined.counts, refined.indices
     n_faces = len(counts)
@@ -207,17 +214,65 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None) -> MeshData:
     point_of_corner = idx[sorted_corners]
     vertices, indices, first = _index(soup, point_of_corner if per_point else sorted_corners,
                                       len(pts) if per_point else len(idx))
-    double = bool(mesh.GetDoubleSidedAttr().Get(time))
-    marker = prim.GetAttribute("lantern:backfaceCulling")
-    culling = bool(marker.Get(time)) if marker and marker.HasValue() else False
+    double, culling = _sidedness(prim, mesh, time)
     extra = {name: np.ascontiguousarray(vertices[:, 12 + 3 * k:15 + 3 * k])
              for k, name in enumerate(streams)}
     return MeshData(key=key, vertices=np.ascontiguousarray(vertices[:, :12]), indices=indices,
                     ranges=ranges, streams=extra,
                     materials=[m.name for m in materials], double_sided=double,
-                    backface_culling=culling and not double,
+                    backface_culling=culling,
                     point_of_vertex=point_of_corner[first].astype(np.int32),
                     surface_normals=normals is None)
+
+
+def _sidedness(prim, mesh, time):
+    """(double-sided, back faces culled as lantern:backfaceCulling asks)."""
+    double = bool(mesh.GetDoubleSidedAttr().Get(time))
+    marker = prim.GetAttribute("lantern:backfaceCulling")
+    culling = bool(marker.Get(time)) if marker and marker.HasValue() else False
+    return double, culling and not double
+
+
+def _patch_mesh(prim, mesh, refined, render_level, time, materials, subsets, key, cage):
+    """MeshData of a subdivision surface the GPU tessellates: its patches sorted by
+    material, their corner UVs, and a cap of one level finer than the render level."""
+    counts, idx, n_points = cage
+    control = refined.patches.reshape(-1, 4, 4, 3)
+    n = len(control)
+    uv_name = next((m.uv_name for m in materials if m.uv_name), None)
+    uvs, uv_interp = _pick_uv(mesh, uv_name, time)
+    if uvs is not None:
+        cage_uv = _per_corner(uvs, uv_interp, n_points, np.repeat(np.arange(len(counts)), counts),
+                              idx, len(counts), "uv")
+        uv = refined.face_varying(cage_uv).reshape(n, 4, 2)
+        _finite(uv, "texture coordinates (per corner)")
+    else:
+        uv = np.zeros((n, 4, 2))
+    if mesh.GetOrientationAttr().Get(time) == UsdGeom.Tokens.leftHanded:
+        control = control.transpose(0, 2, 1, 3)     # u and v swapped: the other side is front
+        uv = uv[:, [0, 3, 2, 1]]
+    face_mat = np.zeros(n, np.int64)
+    for mi, faces in subsets:
+        faces = refined.faces(faces)
+        face_mat[faces[(faces >= 0) & (faces < n)]] = mi
+    order = np.argsort(face_mat, kind="stable")
+    ranges = []
+    for mi in range(len(materials)):
+        sel = np.flatnonzero(face_mat[order] == mi)
+        if len(sel):
+            ranges.append((mi, int(sel[0]), len(sel)))
+    control = np.ascontiguousarray(control[order].reshape(n, 16, 3), np.float32)
+    points = control.reshape(-1, 3).astype(np.float64)
+    double, culling = _sidedness(prim, mesh, time)
+    cap = int(np.clip(2 ** (render_level - refined.levels + 1), 1, 64))
+    return MeshData(key=key, vertices=np.zeros((0, 12), np.float32),
+                    indices=np.zeros(0, np.uint32), ranges=[],
+                    materials=[m.name for m in materials], double_sided=double,
+                    backface_culling=culling,
+                    # A Bezier patch lies inside the hull of its control points.
+                    bounds=(points.min(axis=0), points.max(axis=0)),
+                    patches=PatchData(control, np.ascontiguousarray(uv[order], np.float32),
+                                      ranges, refined.levels, cap))
 
 
 def generated_coordinates(rest):

@@ -245,7 +245,8 @@ class FirstRead:
             if key not in self.scene.meshes or key not in self._built and \
                     (rebuild or key[0] in ("skinned", "varying")):
                 mesh = build_mesh(prim, self._t, mats, [(i + 1, f) for i, (_, f) in
-                                                        enumerate(subsets)], key, warnings)
+                                                        enumerate(subsets)], key, warnings,
+                                  tessellate=self.tessellate)
                 if binding is not None:
                     attach_skin(mesh, prim, binding, self._t, warnings)
                 self.scene.meshes[key] = mesh

@@ -30,8 +30,9 @@ class StageReader(FirstRead, InstancerReading, ShadingReading, EditTracking, Tim
     """One stage's records and what is needed to keep them current; each job's
     methods live in the module named for it, and share the state set up here."""
 
-    def __init__(self, stage: Usd.Stage):
+    def __init__(self, stage: Usd.Stage, tessellate: bool = False):
         self.stage = stage
+        self.tessellate = tessellate  # subdivision surfaces as patches for the GPU
         self.scene = Scene()
         self.tracker = ChangeTracker(stage)
         self.time = None              # the last sync's frame (None: Default)

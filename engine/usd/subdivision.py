@@ -8,10 +8,16 @@ after deformation is not built), with a warning.
 import numpy as np
 from pxr import UsdGeom, UsdSkel
 
-from ..subdivision import cage, limit_points, parent_faces, refine, refine_face_varying
+from ..bezier_patches import bezier_patches
+from ..subdivision import (MAX_SHARPNESS, cage, limit_points, parent_faces, refine,
+                           refine_face_varying)
 
 LEVEL_ATTR = "lantern:subdivisionRenderLevel"
 LIMIT_ATTR = "lantern:subdivisionLimitSurface"   # written only when false
+# Refinements before a cage becomes patches: extraordinary vertices are then apart and
+# the patches around them small. At 2, Blender's level-5 limit points lie within
+# 1.3e-3 of the bounding-box diagonal there (at 1: 4.5e-3), docs/subdivision.md.
+PATCH_LEVELS = 2
 
 
 def subdivision_level(prim, warnings):
@@ -36,15 +42,24 @@ def subdivision_level(prim, warnings):
     return max(0, int(level_attr.Get()))
 
 
+def limit_surface(prim) -> bool:
+    """The level's points belong on the limit surface (Blender's Use Limit Surface)."""
+    attr = prim.GetAttribute(LIMIT_ATTR)
+    return not (attr and attr.HasValue() and not attr.Get())
+
+
 def _warn(warnings, message):
     if warnings is not None:
         warnings.append(message)
 
 
 class RefinedCage:
-    """The refined points and faces, and how to carry cage data onto them."""
+    """The refined points and faces, and how to carry cage data onto them. With
+    `patches`, the cage is refined only as far as its patches need (PATCH_LEVELS, and past
+    any semi-sharp crease), and `self.patches` holds their Bezier control points: the limit
+    surface for the GPU to tessellate (engine/bezier_patches.py)."""
 
-    def __init__(self, mesh, pts, counts, idx, levels, time):
+    def __init__(self, mesh, pts, counts, idx, levels, time, patches=False):
         def arr(attr, dtype):
             v = attr.Get(time)
             return np.asarray(v, dtype) if v is not None else np.zeros(0, dtype)
@@ -61,14 +76,21 @@ class RefinedCage:
                 pair_sharp.append(s if s is not None else sharp[at - i + j])
             at += n
         boundary = mesh.GetInterpolateBoundaryAttr().Get(time)
+        base = cage(pts, counts, idx, np.reshape(pairs, (-1, 2)), pair_sharp,
+                    arr(mesh.GetCornerIndicesAttr(), np.int64),
+                    arr(mesh.GetCornerSharpnessesAttr(), np.float64),
+                    boundary or "edgeAndCorner")
+        self.patches = None
+        if patches:
+            finite = np.concatenate([base.edge_sharpness, base.vertex_sharpness])
+            finite = finite[(finite > 0) & (finite < MAX_SHARPNESS)]
+            levels = max(PATCH_LEVELS, int(np.ceil(finite.max())) if len(finite) else 0)
         self.cage_counts, self.levels = counts, levels
-        refined = refine(cage(pts, counts, idx, np.reshape(pairs, (-1, 2)), pair_sharp,
-                              arr(mesh.GetCornerIndicesAttr(), np.int64),
-                              arr(mesh.GetCornerSharpnessesAttr(), np.float64),
-                              boundary or "edgeAndCorner"), levels)
+        refined = refine(base, levels)
         self.points, self.counts, self.indices = refined.points, refined.counts, refined.indices
-        limit = mesh.GetPrim().GetAttribute(LIMIT_ATTR)
-        if levels > 0 and not (limit and limit.HasValue() and not limit.Get()):
+        if patches:
+            self.patches = bezier_patches(refined)
+        elif levels > 0 and limit_surface(mesh.GetPrim()):
             self.points = limit_points(refined)
 
     def face_varying(self, per_cage_corner):

@@ -1,0 +1,86 @@
+"""An all-quad Catmull-Clark mesh -> one bicubic Bezier patch per quad, for the GPU's
+tessellation stages (Loop and Schaefer's ACC-1, "Approximating Catmull-Clark
+Subdivision Surfaces with Bicubic Patches", 2008).
+
+Where a quad's four corners are regular (smooth with four edges, or on a straight
+crease or boundary), its patch is exactly the limit surface: the uniform B-spline patch
+of its ring, in Bezier form. Around an extraordinary vertex it approximates the limit
+surface; the distance is measured in docs/subdivision.md. Every control point on an
+edge is computed once for that edge and every corner once for its vertex, so two patches
+that share an edge share its curve: the surface has no cracks at any tessellation.
+
+A quad's 16 control points are row-major, B[v][u]: u runs from corner 0 to corner 1,
+v from corner 0 to corner 3 (counter-clockwise corners).
+"""
+import numpy as np
+
+from .subdivision import Cage, limit_points, vertex_rules
+
+# Corner i of a quad -> its control point, and the two edge points beside it:
+# (corner, along edge i towards corner i+1, along edge i-1 towards corner i-1).
+_CORNER = ((0, 0), (0, 3), (3, 3), (3, 0))
+_INTERIOR = ((1, 1), (1, 2), (2, 2), (2, 1))
+_NEXT = ((0, 1), (1, 3), (3, 2), (2, 0))   # on edge i, next to corner i
+_PREV = ((1, 0), (0, 2), (2, 3), (3, 1))   # on edge i-1, next to corner i
+
+
+def bezier_patches(c: Cage) -> np.ndarray:
+    """(F, 16, 3) control points of the quads of `c` (refined once at least)."""
+    if (c.counts != 4).any():
+        raise ValueError("bezier_patches needs an all-quad mesh (refine once first)")
+    quads = c.indices.reshape(-1, 4)
+    n_f = len(quads)
+    p = c.points
+    rule, edges, sharp_edge = vertex_rules(c)
+    valence = np.bincount(edges.ravel(), minlength=len(p)).astype(np.float64)
+    # Off the smooth rule, the ring's weights are the regular ones: exact on a straight
+    # crease or boundary (the B-spline with its ring mirrored), approximate elsewhere.
+    n = np.where(rule == 0, valence, 4.0)
+
+    q = [quads[:, i] for i in range(4)]
+    interior = np.empty((n_f, 4, 3))
+    for i in range(4):
+        ni = n[q[i]][:, None]
+        interior[:, i] = (ni * p[q[i]] + 2 * p[q[(i + 1) % 4]] + 2 * p[q[(i + 3) % 4]]
+                          + p[q[(i + 2) % 4]]) / (ni + 5)
+
+    # Each directed edge (corner i -> i+1) and its twin in the face across it.
+    a, b = quads.reshape(-1), quads[:, [1, 2, 3, 0]].reshape(-1)
+    edge_of = {pair: k for k, pair in enumerate(map(tuple, edges.tolist()))}
+    sharp = np.array([sharp_edge[edge_of[(min(x, y), max(x, y))]]
+                      for x, y in zip(a.tolist(), b.tolist())], bool)
+    directed = {(x, y): k for k, (x, y) in enumerate(zip(a.tolist(), b.tolist()))}
+    twin = np.array([directed.get((y, x), -1) for x, y in zip(a.tolist(), b.tolist())])
+    sharp |= twin < 0
+    flat_interior = interior.reshape(-1, 3)
+    faces, corners = np.divmod(np.arange(len(a)), 4)
+    near_a = np.where(sharp[:, None], (2 * p[a] + p[b]) / 3, 0.5 * (
+        flat_interior[faces * 4 + corners] +
+        flat_interior[np.where(twin < 0, 0, (twin // 4) * 4 + (twin % 4 + 1) % 4)]))
+    near_b = np.where(sharp[:, None], (p[a] + 2 * p[b]) / 3, 0.5 * (
+        flat_interior[faces * 4 + (corners + 1) % 4] +
+        flat_interior[np.where(twin < 0, 0, twin)]))
+    near_a, near_b = near_a.reshape(n_f, 4, 3), near_b.reshape(n_f, 4, 3)
+
+    limit = limit_points(c)
+    out = np.empty((n_f, 4, 4, 3))
+    for i in range(4):
+        out[:, _CORNER[i][0], _CORNER[i][1]] = limit[q[i]]
+        out[:, _INTERIOR[i][0], _INTERIOR[i][1]] = interior[:, i]
+        out[:, _NEXT[i][0], _NEXT[i][1]] = near_a[:, i]
+        out[:, _PREV[i][0], _PREV[i][1]] = near_b[:, (i + 3) % 4]
+    return out.reshape(n_f, 16, 3)
+
+
+def _bernstein(t):
+    t = np.asarray(t, np.float64)
+    s = 1 - t
+    return np.stack([s ** 3, 3 * s * s * t, 3 * s * t * t, t ** 3], axis=-1)
+
+
+def evaluate(patches: np.ndarray, u, v) -> np.ndarray:
+    """Points of each patch at the parameters (u, v) (arrays of one shape, or scalars):
+    (F, *shape, 3)."""
+    bu, bv = _bernstein(u), _bernstein(v)
+    grid = patches.reshape(len(patches), 4, 4, 3)
+    return np.einsum("...j,...i,fjic->f...c", bv, bu, grid)
