@@ -51,13 +51,14 @@ class Session:
         self._passes = render_passes.check(settings.passes)
         self.stage = stage
         self.size = usd_camera.resolution(stage, settings.width, settings.height)
-        self._reader = StageReader(stage)
         self._camera = None          # (key, Camera) of the stage camera last read
         t0 = time.perf_counter()
         run_gl(lambda gl: None)      # the process's GL context, made by its first job
         t1 = time.perf_counter()
         renderer = run_gl(lambda gl: Renderer(gl, self._preset, settings.srgb_filtering))
         self._renderer = renderer
+        self._reader = StageReader(stage, tessellate=renderer.features.tessellation and
+                                   settings.tessellation_px > 0)
         # What this session's first render reports besides its own work: the GL
         # context (zero when the process had one) and the GPU state's set-up.
         self._opening = {"context": t1 - t0, "setup": time.perf_counter() - t1}

@@ -53,6 +53,11 @@ class RenderSettings:
     # The image's format in host memory: "float32" (F12, files, compare) or "half"
     # (a viewport: half the bytes to copy; within float16 rounding of float32).
     readback: str = "float32"
+    # Subdivision surfaces on GL 4.3 and later: tessellated by the GPU from their limit
+    # surface's patches, each patch edge cut into pieces of about this many pixels
+    # (at most one level finer than the render level). 0, or GL 3.3 and 4.1: refined
+    # on the CPU to the render level. Read when the session opens.
+    tessellation_px: float = 4.0
 
     def __post_init__(self):
         if self.supersample is not None and (int(self.supersample) != self.supersample
@@ -63,6 +68,9 @@ class RenderSettings:
             raise ValueError(f"blur must be a finite sigma >= 0 (pixels), not {self.blur!r}")
         if not math.isfinite(self.exposure):
             raise ValueError(f"exposure must be finite, not {self.exposure!r}")
+        if not (self.tessellation_px >= 0.0 and math.isfinite(self.tessellation_px)):
+            raise ValueError(f"tessellation_px must be a finite length >= 0 (pixels), not "
+                             f"{self.tessellation_px!r}")
         if self.mirror not in ("", "x", "y", "xy"):
             raise ValueError(f"mirror must be '', 'x', 'y' or 'xy', not {self.mirror!r}")
         if self.readback not in READBACK_FORMATS:

@@ -74,6 +74,7 @@ class Geometry:
         self.objects = ObjectTable(ctx, uploads)
         self.points = PointClouds(ctx, uploads, self.objects)   # Points prims
         self.meshes = {}                         # mesh key -> (store, Slot)
+        self._tessellated = {}                   # mesh key -> its triangles' ranges
         self.draws = {}                          # instance path -> DrawObject
         self._worlds = {}                        # instanced paths -> (n, 4, 4) worlds
         self.moved = []                          # world boxes that changed this frame
@@ -121,33 +122,64 @@ class Geometry:
                 self._stale()
 
     def _upload_mesh(self, mesh):
-        skinned = mesh.skin is not None
+        # Skinned meshes and tessellated patches are written by a pass each frame or
+        # view (transform feedback), into the dynamic store; patches' triangles are
+        # unshared corners, so their indices count up once.
+        gpu_written = mesh.skin is not None or mesh.patches is not None
         old = self.meshes.get(mesh.key)
-        n_v, n_i = len(mesh.vertices), len(mesh.indices)
+        if mesh.patches is not None:
+            n_v = n_i = mesh.patches.max_vertices
+            indices = np.arange(n_v, dtype=np.uint32)
+        else:
+            n_v, n_i, indices = len(mesh.vertices), len(mesh.indices), mesh.indices
         if old is not None and (old[1].n_vertices, old[1].n_indices) == (n_v, n_i) and \
-                (old[0] is self.dynamic) == skinned:
+                (old[0] is self.dynamic) == gpu_written:
             store, slot = old              # same topology size: rewrite in place
         else:
             if old is not None:
                 self._free_mesh(mesh.key)
-            store = self._dynamic() if skinned else self.static
+            store = self._dynamic() if gpu_written else self.static
             slot = store.alloc(n_v, n_i)
             self.meshes[mesh.key] = (store, slot)
             self._stale()
-        if not skinned:
+        if not gpu_written:
             store.write_vertices(slot, mesh.vertices)
         for name, values in mesh.streams.items():   # not deformed: once, skinned or not
             store.write_stream(slot, name, values)
-        store.write_indices(slot, mesh.indices)
+        store.write_indices(slot, indices)
+        self._tessellated.pop(mesh.key, None)     # rebuilt patches: drawn once tessellated
         if old is not None:
             for path, d in self.draws.items():   # rebuilt data: same key, maybe new ranges
                 if d.mesh_key == mesh.key:
-                    d.ranges = _ranges(mesh, slot)
+                    d.ranges = self._ranges(mesh, slot)
                     d.local = self._local_box(mesh, self._worlds.get(path))
                     self._stale()
 
+    def _ranges(self, mesh, slot: Slot) -> list:
+        """[(material name, first index (absolute), count)] of a mesh's triangles."""
+        if mesh.patches is not None:
+            return list(self._tessellated.get(mesh.key, ()))
+        return [(mesh.materials[mi], slot.first_index + first, count)
+                for mi, first, count in mesh.ranges]
+
+    def tessellated(self, mesh_key) -> list:
+        """A tessellated mesh's ranges as last set (absolute first indices)."""
+        return list(self._tessellated.get(mesh_key, ()))
+
+    def set_ranges(self, mesh_key, ranges):
+        """A tessellated mesh's triangles as the tessellation pass left them:
+        [(material name, first index in the mesh's slot, count)]."""
+        store, slot = self.meshes[mesh_key]
+        absolute = [(m, slot.first_index + first, count) for m, first, count in ranges]
+        self._tessellated[mesh_key] = absolute
+        for d in self.draws.values():
+            if d.mesh_key == mesh_key and d.ranges != absolute:
+                d.ranges = list(absolute)
+                self._stale()
+
     def _free_mesh(self, key):
         entry = self.meshes.pop(key, None)
+        self._tessellated.pop(key, None)
         if entry is not None:
             entry[0].free(entry[1])
             self._stale()
@@ -172,11 +204,11 @@ class Geometry:
         if d is None:
             d = self.draws[inst.path] = DrawObject(
                 self.objects.new_ids(n), inst.path, inst.mesh_key, mesh.skin is not None,
-                _ranges(mesh, slot), _culls(mesh, cull_backfaces), mirrored, local, n=n)
+                self._ranges(mesh, slot), _culls(mesh, cull_backfaces), mirrored, local, n=n)
             self._stale()
         else:
             self._note_moved(d)
-            state = (inst.mesh_key, mirrored, _culls(mesh, cull_backfaces), _ranges(mesh, slot))
+            state = (inst.mesh_key, mirrored, _culls(mesh, cull_backfaces), self._ranges(mesh, slot))
             if state != (d.mesh_key, d.mirrored, d.cull, d.ranges):
                 self._stale()             # a new mesh or pipeline state: new commands
             d.mesh_key, d.mirrored, d.cull, d.ranges = state
@@ -224,7 +256,7 @@ class Geometry:
 
     # --- bounds -----------------------------------------------------------------------
     def world_boxes(self, local_of=None):
-        """(draws, lo (n, 3), hi (n, 3)): every object with triangles and its world box
+        """(draws, lo (n, 3), hi (n, 3)): every object with a box and its world box
         this frame, in command-rank order. local_of(draw) overrides skinned objects'
         local boxes (as posed this frame); the others are kept until something moves."""
         self.ensure_commands()
@@ -252,7 +284,9 @@ class Geometry:
         """The command arrays of every (object, range), and the casters' (one command
         per object), in numpy; on the GL 4.3 path also in GPU buffers."""
         self._release_commands()
-        draws = sorted((d for d in self.draws.values() if d.ranges and d.local is not None),
+        # Ranked with or without triangles: a tessellated object has none until the
+        # tessellation pass, after the view pass has taken every object's box.
+        draws = sorted((d for d in self.draws.values() if d.local is not None),
                        key=lambda d: d.path)
         self._ranked = draws
         self._rank = {d.path: i for i, d in enumerate(draws)}
@@ -266,7 +300,8 @@ class Geometry:
                                         for m in meta], np.int64)
         # A mirrored object's front faces wind clockwise: the winding is pipeline state
         # (culling, and gl_FrontFacing for two-sided shading), so it splits batches.
-        self._cmd_key = [(m[0].skinned, m[1], m[0].cull, m[0].mirrored) for m in meta]
+        self._cmd_key = [(self.meshes[m[0].mesh_key][0] is self.dynamic, m[1], m[0].cull,
+                          m[0].mirrored) for m in meta]
         self._cmd_object = np.array([self._rank[m[0].path] for m in meta], np.int64)
         distinct = sorted(set(self._cmd_key))
         index = {k: i for i, k in enumerate(distinct)}
@@ -345,8 +380,8 @@ class Geometry:
         batches, start = [], 0
         bounds = np.flatnonzero(np.diff(keys[order])) + 1
         for end in list(bounds) + [len(order)]:
-            skinned, material, cull, mirrored = self._cmd_key[order[start]]
-            store = self.dynamic if skinned else self.static
+            dynamic, material, cull, mirrored = self._cmd_key[order[start]]
+            store = self.dynamic if dynamic else self.static
             batches.append(Batch(store, material, cull, mirrored, start, end - start,
                                  int(self._cmd_instances[order[start:end]].sum())))
             start = end
@@ -438,11 +473,6 @@ class Geometry:
         if self.dynamic is not None:
             self.dynamic.release()
         self.objects.release()
-
-
-def _ranges(mesh, slot: Slot) -> list:
-    return [(mesh.materials[mi], slot.first_index + first, count)
-            for mi, first, count in mesh.ranges]
 
 
 def _culls(mesh, cull_backfaces: bool) -> bool:

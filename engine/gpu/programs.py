@@ -94,11 +94,13 @@ class ProgramCache:
         self.seconds = 0.0
 
     def get(self, vert: str, frag: str | None = None, defines=(), varyings=(), compute=False,
-            generated=()):
-        """`generated`: ((include name, source), ...) for load_source; part of the key."""
+            generated=(), tessellation=()):
+        """`generated`: ((include name, source), ...) for load_source; part of the key.
+        `tessellation`: (control shader, evaluation shader) between `vert` and the rest."""
         defines = tuple(sorted(set(defines)))
         generated = tuple(generated)
-        key = (vert, frag, defines, tuple(varyings), compute, generated)
+        tessellation = tuple(tessellation)
+        key = (vert, frag, defines, tuple(varyings), compute, generated, tessellation)
         prog = self._programs.get(key)
         if prog is None:
             t0 = time.perf_counter()
@@ -107,14 +109,20 @@ class ProgramCache:
             else:
                 sources = (load_source(vert, defines), None if frag is None else
                            load_source(frag, defines, generated=generated))
+            stages = tuple(load_source(name, defines) for name in tessellation)
             binaries = self._binaries()
             if binaries is not None:
-                entry = program_binaries.entry_key(sources + ("compute",) * compute,
+                entry = program_binaries.entry_key(sources + ("compute",) * compute + stages,
                                                    tuple(varyings), self._driver)
                 binaries.expect(entry, self._store.read(entry))
             try:
                 if compute:
                     prog = self.ctx.compute_shader(sources[0])
+                elif stages:
+                    prog = self.ctx.program(vertex_shader=sources[0], fragment_shader=sources[1],
+                                            tess_control_shader=stages[0],
+                                            tess_evaluation_shader=stages[1],
+                                            varyings=list(varyings))
                 elif frag is None:
                     prog = self.ctx.program(vertex_shader=sources[0], varyings=list(varyings))
                 else:

@@ -25,6 +25,7 @@ from .passes.post import PostPass
 from .passes.resolve import ResolvePass
 from .passes.shadows import ShadowPass
 from .passes.skinning import SkinningPass
+from .passes.tessellation import TessellationPass
 from .passes.transparency import TransparencyPass
 from .passes.view import ViewPass
 from .readback import Readback, ReadbackRequest
@@ -53,8 +54,8 @@ def supersample_factor(frame, size, max_texture: int) -> int:
 
 
 # Every counter a render reports, zero when nothing of the kind happened.
-COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "shadow_maps",
-            "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
+COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "meshes_tessellated",
+            "shadow_maps", "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
             "light_volumes", "stencil_marks", "batched_lights", "instances_drawn",
             "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws",
             "pattern_bytes")
@@ -85,6 +86,8 @@ class Renderer:
         self.textures = MaterialTextures(ctx, self.uploads, preset.anisotropy, srgb_filtering)
         self.environment = Environment(ctx, self.uploads, programs, gl.proc)
         self.skinning = SkinningPass(ctx, self.uploads, programs, self.geometry, gl.scratch)
+        self.tessellation = TessellationPass(ctx, self.uploads, programs, self.geometry,
+                                             gl.proc, gl.scratch)
         self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights,
                                   self.depth, self.textures)
         self.readback = Readback(ctx, programs, gl.proc, compute=self.features.multi_draw)
@@ -93,6 +96,7 @@ class Renderer:
         self.graph = FrameGraph(ctx, self.pool, [
             self.skinning,
             ViewPass(self.geometry, self.depth),
+            self.tessellation,
             self.shadows,
             GBufferPass(ctx, self.pool, programs, self.geometry, self.textures, self.depth),
             AovPass(ctx, self.pool, programs),
@@ -120,6 +124,7 @@ class Renderer:
         if changes.materials or changes.dropped_meshes:
             self.textures.prune(scene.materials.values())
         self.skinning.update(scene, changes)
+        self.tessellation.update(scene, changes)
         return meshes
 
     def render(self, scene, changes, camera, size, transparent, cull_backfaces,

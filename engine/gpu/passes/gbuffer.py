@@ -8,7 +8,7 @@ and its images stay on the GPU for the session. Blended materials (Material.alph
 draw here only their opaque texels, and not at all without an opacity map: the
 transparency pass draws the rest.
 
-reads: skinned (posed geometry), view
+reads: skinned (posed geometry), tessellated (optional), view
 writes: g_base (base colour + alpha), g_normal (world normal, clearcoat roughness),
         g_mat (metallic, roughness, dielectric F0, clearcoat), g_emit (emission), all
         RGBA16F; g_depth (32-bit
@@ -39,6 +39,7 @@ TARGETS = ("g_base", "g_normal", "g_mat", "g_emit", "g_depth")
 class GBufferPass(Pass):
     name = "gbuffer"
     reads = ("skinned", "view")
+    optional = ("tessellated",)
     writes = TARGETS
     writes_optional = ("g_smooth",)
     aovs = {"IndexOB": ("g_index", 0), "IndexMA": ("g_index", 1)}

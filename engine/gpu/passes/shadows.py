@@ -38,7 +38,7 @@ distances directly; ortho depth is linear already. The lookup (shaders/shadow_lo
 (normal offset + receiver-plane depth + slope-scaled constant), a PCSS blocker
 search, and PCF with hardware compares (sampler2DShadow, bilinear).
 
-reads: skinned (posed casters), view   writes: shadow_maps (light path -> ShadowMap)"""
+reads: skinned (posed casters), tessellated (optional), view   writes: shadow_maps (light path -> ShadowMap)"""
 from __future__ import annotations
 
 import numpy as np
@@ -110,6 +110,7 @@ def set_shadow_uniforms(prog, sm, preset, eye):
 class ShadowPass(Pass):
     name = "shadows"
     reads = ("skinned", "view")
+    optional = ("tessellated",)
     writes = ("shadow_maps",)
 
     def __init__(self, ctx, pool, programs, geometry, lights, depth, textures):

@@ -32,7 +32,7 @@ with an opacity map are the G-buffer's, ordered exactly by depth.
 Nothing is drawn, and nothing allocated, when no visible object has a blended
 material.
 
-reads: hdr, g_depth, view, shadow_maps (optional)   writes: hdr"""
+reads: hdr, g_depth, view, shadow_maps and tessellated (optional)   writes: hdr"""
 from __future__ import annotations
 
 import numpy as np
@@ -52,7 +52,7 @@ MAX_FORWARD_LIGHTS = 32       # shaders/transparent.frag
 class TransparencyPass(Pass):
     name = "transparency"
     reads = ("hdr", "g_depth", "view")
-    optional = ("shadow_maps",)
+    optional = ("shadow_maps", "tessellated")
     writes = ("hdr",)
 
     def __init__(self, ctx, pool, programs, geometry, textures, lights, environment, depth):
