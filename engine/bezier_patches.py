@@ -44,13 +44,12 @@ def bezier_patches(c: Cage) -> np.ndarray:
         interior[:, i] = (ni * p[q[i]] + 2 * p[q[(i + 1) % 4]] + 2 * p[q[(i + 3) % 4]]
                           + p[q[(i + 2) % 4]]) / (ni + 5)
 
-    # Each directed edge (corner i -> i+1) and its twin in the face across it.
+    # Each directed edge (corner i -> i+1) and its twin (b -> a) in the face across it.
     a, b = quads.reshape(-1), quads[:, [1, 2, 3, 0]].reshape(-1)
-    edge_of = {pair: k for k, pair in enumerate(map(tuple, edges.tolist()))}
-    sharp = np.array([sharp_edge[edge_of[(min(x, y), max(x, y))]]
-                      for x, y in zip(a.tolist(), b.tolist())], bool)
-    directed = {(x, y): k for k, (x, y) in enumerate(zip(a.tolist(), b.tolist()))}
-    twin = np.array([directed.get((y, x), -1) for x, y in zip(a.tolist(), b.tolist())])
+    n_p = np.int64(len(p))
+    sharp = sharp_edge[_find(edges[:, 0] * n_p + edges[:, 1],
+                             np.minimum(a, b) * n_p + np.maximum(a, b))]
+    twin = _find(a * n_p + b, b * n_p + a)
     sharp |= twin < 0
     flat_interior = interior.reshape(-1, 3)
     faces, corners = np.divmod(np.arange(len(a)), 4)
@@ -70,6 +69,14 @@ def bezier_patches(c: Cage) -> np.ndarray:
         out[:, _NEXT[i][0], _NEXT[i][1]] = near_a[:, i]
         out[:, _PREV[i][0], _PREV[i][1]] = near_b[:, (i + 3) % 4]
     return out.reshape(n_f, 16, 3)
+
+
+def _find(keys, wanted):
+    """Index of each wanted key in `keys` (unique where found), -1 where absent."""
+    order = np.argsort(keys, kind="stable")
+    at = np.searchsorted(keys[order], wanted).clip(0, len(keys) - 1)
+    found = keys[order][at] == wanted
+    return np.where(found, order[at], -1)
 
 
 def _bernstein(t):
