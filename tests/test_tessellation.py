@@ -154,15 +154,19 @@ def test_no_cracks_between_patches_cut_at_different_levels():
     assert len(uses) > 1000 and (uses == 2).all(), np.bincount(uses)
 
 
-def test_cpu_refinement_draws_the_same_image():
-    """tessellation_px 0 (and GL 3.3 and 4.1) refine on the CPU to the render level, with
-    the limit step: the same surface, within the refinement's flat triangles."""
+@pytest.mark.parametrize("cpu_path", ["tessellation_px 0", "GL 3.3"])
+def test_cpu_refinement_draws_the_same_image(monkeypatch, cpu_path):
+    """tessellation_px 0, GL 3.3 and 4.1 refine on the CPU to the render level, with the
+    limit step: the same surface, within the refinement's flat triangles."""
     images = []
-    for px in (2.0, 0.0):
+    for tessellated in (True, False):
+        px = 2.0 if tessellated or cpu_path == "GL 3.3" else 0.0
+        if not tessellated and cpu_path == "GL 3.3":
+            monkeypatch.setenv("LANTERN_MAX_GL", "33")
         with Session(_subdivided_cube(level=4), RenderSettings(width=160, height=120,
                                                               tessellation_px=px)) as s:
             res = s.render()
-            assert ("tessellation" in res.stats["passes"]) == (px > 0)
+            assert ("tessellation" in res.stats["passes"]) == tessellated
             images.append(res.rgba)
     diff = np.abs(images[0] - images[1])[..., :3]
     assert diff.mean() < 2e-3

@@ -98,9 +98,10 @@ class TessellationPass(Pass):
         prog = self.programs.get("tessellate.vert", None, varyings=VARYINGS,
                                  tessellation=("tessellate.tesc", "tessellate.tese"))
         w, h = frame.output_size or frame.size
+        nearest = self._nearest_worlds(scene, view)
         for key, patches in self.meshes.items():
             mesh = scene.meshes[key]
-            world = self._nearest_world(scene, key, view)
+            world = nearest.get(key)
             if world is None:
                 continue
             rel = np.array(world, np.float64)
@@ -119,20 +120,21 @@ class TessellationPass(Pass):
             frame.count("meshes_tessellated")
         board["tessellated"] = True
 
-    def _nearest_world(self, scene, key, view):
-        """The world matrix of the instance of `key` nearest the camera: the one whose
-        edges look longest sets the levels for all of them."""
-        best, best_d = None, np.inf
-        lo, hi = scene.meshes[key].bounds
-        centre = (np.asarray(lo) + np.asarray(hi)) / 2.0
+    def _nearest_worlds(self, scene, view) -> dict:
+        """{mesh key: the world matrix of its instance nearest the camera}: the one
+        whose edges look longest sets the levels for all of them."""
+        best = {}
         for inst in scene.instances.values():
-            if inst.mesh_key != key:
+            key = inst.mesh_key
+            if key not in self.meshes:
                 continue
+            lo, hi = scene.meshes[key].bounds
+            centre = (np.asarray(lo) + np.asarray(hi)) / 2.0
             for world in (inst.worlds if inst.worlds is not None else [inst.world]):
                 d = np.linalg.norm(world[:3, :3] @ centre + world[:3, 3] - view.origin)
-                if d < best_d:
-                    best, best_d = world, d
-        return best
+                if key not in best or d < best[key][0]:
+                    best[key] = (d, world)
+        return {key: world for key, (_, world) in best.items()}
 
     def _cut(self, prog, mesh, patches) -> list:
         """Tessellates `mesh` into its slot; returns its ranges [(material, first, count)]."""
