@@ -171,3 +171,13 @@ def test_cpu_refinement_draws_the_same_image(monkeypatch, cpu_path):
     diff = np.abs(images[0] - images[1])[..., :3]
     assert diff.mean() < 2e-3
     assert (diff.max(axis=2) > 0.05).mean() < 0.01     # a silhouette pixel here and there
+
+
+def test_a_high_render_level_caps_the_triangles_by_memory():
+    from lantern.engine.usd.mesh import MAX_TESSELLATED_VERTICES
+
+    with Session(_subdivided_cube(level=11), RenderSettings(width=64, height=48)) as s:
+        s.render()
+        patches = next(m.patches for m in s.scene.meshes.values())
+    assert patches.cap < 2 ** 10
+    assert patches.max_vertices <= MAX_TESSELLATED_VERTICES

@@ -225,6 +225,9 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
                     surface_normals=normals is None)
 
 
+MAX_TESSELLATED_VERTICES = 1 << 22
+
+
 def _sidedness(prim, mesh, time):
     """(double-sided, back faces culled as lantern:backfaceCulling asks)."""
     double = bool(mesh.GetDoubleSidedAttr().Get(time))
@@ -235,7 +238,8 @@ def _sidedness(prim, mesh, time):
 
 def _patch_mesh(prim, mesh, refined, render_level, time, materials, subsets, key, cage):
     """MeshData of a subdivision surface the GPU tessellates: its patches sorted by
-    material, their corner UVs, and a cap of one level finer than the render level."""
+    material, their corner UVs, and a cap of one level finer than the render level
+    (within a memory budget)."""
     counts, idx, n_points = cage
     control = refined.patches.reshape(-1, 4, 4, 3)
     n = len(control)
@@ -264,7 +268,10 @@ def _patch_mesh(prim, mesh, refined, render_level, time, materials, subsets, key
     control = np.ascontiguousarray(control[order].reshape(n, 16, 3), np.float32)
     points = control.reshape(-1, 3).astype(np.float64)
     double, culling = _sidedness(prim, mesh, time)
-    cap = int(np.clip(2 ** (render_level - refined.levels + 1), 1, 64))
+    # The GPU's place for the triangles is sized for the cap: at most
+    # MAX_TESSELLATED_VERTICES corners (192 MiB) a mesh, whatever its render level.
+    budget = int(np.sqrt(MAX_TESSELLATED_VERTICES / (6 * n)))
+    cap = int(np.clip(min(2 ** (render_level - refined.levels + 1), budget), 1, 64))
     return MeshData(key=key, vertices=np.zeros((0, 12), np.float32),
                     indices=np.zeros(0, np.uint32), ranges=[],
                     materials=[m.name for m in materials], double_sided=double,
