@@ -189,14 +189,19 @@ def test_limit_points_match_blenders_limit_surface(empty_scene, shape, levels, c
     assert _max_nearest(refined.points, theirs) > 1e-3 * diag
 
 
-@pytest.mark.parametrize("shape", ["cube", "suzanne"])
-def test_patches_match_blenders_level_5(empty_scene, shape):
+@pytest.mark.parametrize("shape, creases, bound", [
+    ("cube", None, 2e-3), ("suzanne", None, 2e-3),
+    ("creased", (1.0, 1.0), 4e-3),     # two infinitely sharp edges
+    ("creased", (0.5, 0.0), 2e-3),     # sharpness 2.5: patches after 3 refinements
+])
+def test_patches_match_blenders_level_5(empty_scene, shape, creases, bound):
     """The surface the GPU tessellates (the exported cage's Bezier patches) against
     Blender's Subdivision Surface at level 5 with Use Limit Surface: each patch evaluated
     where Blender's level-5 points lie, nearest-point distances. Regular patches lie on
     Blender's points to float rounding (bound 1e-5 of the bounding-box diagonal; the
     stated bound is 1e-3); patches at an extraordinary vertex or a boundary within 2e-3
-    (measured 1.2e-3 on the cube, 1.3e-3 on Suzanne)."""
+    (measured 1.2e-3 on the cube, 1.3e-3 on Suzanne), beside the end of an infinitely
+    sharp crease within 4e-3 (measured 2.6e-3 and 3.2e-3)."""
     from pxr import Usd, UsdGeom
     from scipy.spatial import cKDTree
 
@@ -211,6 +216,11 @@ def test_patches_match_blenders_level_5(empty_scene, shape):
         ob = bpy.context.active_object
     else:
         ob = cube_object(shape)
+    if creases is not None:
+        me = ob.data
+        values = np.zeros(len(me.edges), dtype=np.float32)
+        values[[0, 3]] = creases
+        me.attributes.new("crease_edge", "FLOAT", "EDGE").data.foreach_set("value", values)
     theirs, _ = _blender_refined(ob, 5, limit=True)
     stage, _ = export_current(ExportOptions(subdivision="cage"))
     prim = next(p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))
@@ -219,11 +229,12 @@ def test_patches_match_blenders_level_5(empty_scene, shape):
                           np.asarray(mesh.GetFaceVertexCountsAttr().Get(), np.int64),
                           np.asarray(mesh.GetFaceVertexIndicesAttr().Get(), np.int64), 5, t,
                           patches=True)
-    assert refined.levels == PATCH_LEVELS
-    steps = np.linspace(0.0, 1.0, 2 ** (5 - PATCH_LEVELS) + 1)
+    assert refined.levels == (3 if creases == (0.5, 0.0) else PATCH_LEVELS)
+    steps = np.linspace(0.0, 1.0, 2 ** (5 - refined.levels) + 1)
     u, v = np.meshgrid(steps, steps)
     ours = evaluate(refined.patches.reshape(-1, 16, 3), u, v).reshape(len(refined.patches), -1, 3)
-    c = refine(_blender_cage(ob), PATCH_LEVELS)
+    ob.modifiers.clear()
+    c = refine(_blender_cage(ob), refined.levels)
     quads = c.indices.reshape(-1, 4)
     rule, edges, _ = vertex_rules(c)
     valence = np.bincount(edges.ravel(), minlength=len(c.points))
@@ -231,6 +242,6 @@ def test_patches_match_blenders_level_5(empty_scene, shape):
     diag = np.linalg.norm(theirs.max(axis=0) - theirs.min(axis=0))
     dist = cKDTree(theirs).query(ours.reshape(-1, 3))[0].reshape(len(ours), -1) / diag
     back = cKDTree(ours.reshape(-1, 3)).query(theirs)[0] / diag
-    assert regular.sum() > 0.7 * len(regular)
+    assert regular.sum() > 0.5 * len(regular)
     assert dist[regular].max() < 1e-5
-    assert dist[~regular].max() < 2e-3 and back.max() < 2e-3
+    assert dist[~regular].max() < bound and back.max() < bound

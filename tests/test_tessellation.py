@@ -3,7 +3,7 @@ against the limit surface, the tessellation pass's triangles against the patches
 that follow the view, no cracks, and the CPU path's image."""
 import numpy as np
 import pytest
-from pxr import Sdf
+from pxr import Sdf, UsdGeom
 from scipy.spatial import cKDTree
 
 from lantern.engine import RenderSettings, Session
@@ -89,9 +89,16 @@ def _tessellated(session, key=None):
 
 def test_tessellated_triangles_are_the_patches_at_the_cap():
     """A target finer than any edge cuts every patch edge `cap` times: the triangles'
-    corners are the patches evaluated on that grid, and their normals the patches'."""
-    with Session(_subdivided_cube(level=3), RenderSettings(width=64, height=48,
-                                                          tessellation_px=1e-3)) as s:
+    corners are the patches evaluated on that grid, with the UVs of the cage's faces
+    refined linearly (bilinear in each patch, across the cube's UV seams), and their
+    normals point out."""
+    stage = _subdivided_cube(level=3)
+    mesh = stage.GetPrimAtPath("/root/c/mesh")
+    # Per face corner: each face its own square of UV space, so seams are everywhere.
+    uv = [(f % 3 + x, f // 3 + y) for f in range(6) for x, y in ((0, 0), (1, 0), (1, 1), (0, 1))]
+    UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray,
+                                            UsdGeom.Tokens.faceVarying).Set(uv)
+    with Session(stage, RenderSettings(width=64, height=48, tessellation_px=1e-3)) as s:
         res = s.render()
         assert res.stats["meshes_tessellated"] == 1
         data, patches = _tessellated(s)
@@ -101,7 +108,13 @@ def test_tessellated_triangles_are_the_patches_at_the_cap():
     t = np.linspace(0.0, 1.0, cap + 1)
     u, v = np.meshgrid(t, t)
     expected = evaluate(patches.control.astype(np.float64), u, v).reshape(-1, 3)
-    dist, _ = cKDTree(expected).query(data[:, :3].astype(np.float64))
+    c = patches.uv.astype(np.float64)[:, None, None]          # (P, 1, 1, 4, 2)
+    bilinear = ((1 - u)[..., None] * (1 - v)[..., None] * c[..., 0, :] + u[..., None] *
+                (1 - v)[..., None] * c[..., 1, :] + u[..., None] * v[..., None] * c[..., 2, :]
+                + (1 - u)[..., None] * v[..., None] * c[..., 3, :]).reshape(-1, 2)
+    assert bilinear.max() > 2.5                              # every face its own square
+    ours = np.concatenate([data[:, :3], data[:, 6:8]], axis=1).astype(np.float64)
+    dist, _ = cKDTree(np.concatenate([expected, bilinear], axis=1)).query(ours)
     assert dist.max() < 2e-6
     back, _ = cKDTree(data[:, :3]).query(expected)
     assert back.max() < 2e-6
