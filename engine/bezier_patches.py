@@ -14,7 +14,7 @@ v from corner 0 to corner 3 (counter-clockwise corners).
 """
 import numpy as np
 
-from .subdivision import Cage, limit_points, vertex_rules
+from .subdivision import Cage, limit_points, refine, vertex_rules
 
 # Corner i of a quad -> its control point, and the two edge points beside it:
 # (corner, along edge i towards corner i+1, along edge i-1 towards corner i-1).
@@ -25,12 +25,14 @@ _PREV = ((1, 0), (0, 2), (2, 3), (3, 1))   # on edge i-1, next to corner i
 
 
 def bezier_patches(c: Cage) -> np.ndarray:
-    """(F, 16, 3) control points of the quads of `c` (refined once at least)."""
+    """(F, 16, 3) control points of the quads of `c` (refined once at least); (F, 16, d)
+    for points of width d."""
     if (c.counts != 4).any():
         raise ValueError("bezier_patches needs an all-quad mesh (refine once first)")
     quads = c.indices.reshape(-1, 4)
     n_f = len(quads)
     p = c.points
+    d = p.shape[1]          # 3, or any width: every control point is linear in the points
     rule, edges, sharp_edge = vertex_rules(c)
     valence = np.bincount(edges.ravel(), minlength=len(p)).astype(np.float64)
     # Off the smooth rule, the ring's weights are the regular ones: exact on a straight
@@ -38,7 +40,7 @@ def bezier_patches(c: Cage) -> np.ndarray:
     n = np.where(rule == 0, valence, 4.0)
 
     q = [quads[:, i] for i in range(4)]
-    interior = np.empty((n_f, 4, 3))
+    interior = np.empty((n_f, 4, d))
     for i in range(4):
         ni = n[q[i]][:, None]
         interior[:, i] = (ni * p[q[i]] + 2 * p[q[(i + 1) % 4]] + 2 * p[q[(i + 3) % 4]]
@@ -51,7 +53,7 @@ def bezier_patches(c: Cage) -> np.ndarray:
                              np.minimum(a, b) * n_p + np.maximum(a, b))]
     twin = _find(a * n_p + b, b * n_p + a)
     sharp |= twin < 0
-    flat_interior = interior.reshape(-1, 3)
+    flat_interior = interior.reshape(-1, d)
     faces, corners = np.divmod(np.arange(len(a)), 4)
     near_a = np.where(sharp[:, None], (2 * p[a] + p[b]) / 3, 0.5 * (
         flat_interior[faces * 4 + corners] +
@@ -59,16 +61,16 @@ def bezier_patches(c: Cage) -> np.ndarray:
     near_b = np.where(sharp[:, None], (p[a] + 2 * p[b]) / 3, 0.5 * (
         flat_interior[faces * 4 + (corners + 1) % 4] +
         flat_interior[np.where(twin < 0, 0, twin)]))
-    near_a, near_b = near_a.reshape(n_f, 4, 3), near_b.reshape(n_f, 4, 3)
+    near_a, near_b = near_a.reshape(n_f, 4, d), near_b.reshape(n_f, 4, d)
 
     limit = limit_points(c)
-    out = np.empty((n_f, 4, 4, 3))
+    out = np.empty((n_f, 4, 4, d))
     for i in range(4):
         out[:, _CORNER[i][0], _CORNER[i][1]] = limit[q[i]]
         out[:, _INTERIOR[i][0], _INTERIOR[i][1]] = interior[:, i]
         out[:, _NEXT[i][0], _NEXT[i][1]] = near_a[:, i]
         out[:, _PREV[i][0], _PREV[i][1]] = near_b[:, (i + 3) % 4]
-    return out.reshape(n_f, 16, 3)
+    return out.reshape(n_f, 16, d)
 
 
 def _find(keys, wanted):
@@ -91,3 +93,28 @@ def evaluate(patches: np.ndarray, u, v) -> np.ndarray:
     bu, bv = _bernstein(u), _bernstein(v)
     grid = patches.reshape(len(patches), 4, 4, 3)
     return np.einsum("...j,...i,fjic->f...c", bv, bu, grid)
+
+
+def patch_stencils(base: Cage, levels: int, block: int = 256):
+    """The control points of `bezier_patches(refine(base, levels))` as weighted sums of
+    the cage's points, for cages that move after they are read (skinned): CSR arrays
+    (indptr (16F + 1,), point indices, weights), so that control point k is
+    sum(weights[j] * points[indices[j]] for j in indptr[k]:indptr[k + 1]). The rules are
+    linear in the points, so the weights are the pipeline applied to the identity, a
+    block of columns at a time."""
+    n = len(base.points)
+    rows, cols, vals = [], [], []
+    for start in range(0, n, block):
+        basis = np.zeros((n, min(block, n - start)))
+        basis[np.arange(start, start + basis.shape[1]), np.arange(basis.shape[1])] = 1.0
+        unit = Cage(basis, base.counts, base.indices, base.edges, base.edge_sharpness,
+                    base.vertex_sharpness, base.corners_sharp)
+        weights = bezier_patches(refine(unit, levels)).reshape(-1, basis.shape[1])
+        r, k = np.nonzero(weights)
+        rows.append(r)
+        cols.append(k + start)
+        vals.append(weights[r, k])
+    rows, cols, vals = np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
+    order = np.lexsort((cols, rows))
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=len(weights)))])
+    return indptr.astype(np.int64), cols[order].astype(np.int64), vals[order]

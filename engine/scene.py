@@ -172,6 +172,9 @@ class PatchData:
     ranges: list                   # [(material index, first patch, patch count)]
     levels: int                    # CPU refinements before the patches
     cap: int                       # most segments per patch edge
+    # A skinned cage: each control point as a weighted sum of the cage's points, CSR
+    # (indptr, point indices, weights), for the GPU to make the patches after each pose.
+    stencils: tuple | None = None
 
     @property
     def max_vertices(self) -> int:

@@ -66,10 +66,11 @@ def refine(c: Cage, levels: int) -> Cage:
 
 def refine_once(c: Cage) -> Cage:
     n_v, n_f = len(c.points), len(c.counts)
+    d = c.points.shape[1]       # 3, or any width: the rules are linear in the points
     edges, corner_edge = _edges(c.counts, c.indices)
     n_e = len(edges)
     corner_face = np.repeat(np.arange(n_f), c.counts)
-    face_points = np.zeros((n_f, 3))
+    face_points = np.zeros((n_f, d))
     np.add.at(face_points, corner_face, c.points[c.indices])
     face_points /= c.counts[:, None]
 
@@ -79,7 +80,7 @@ def refine_once(c: Cage) -> Cage:
 
     # Edge points.
     mid = 0.5 * (c.points[edges[:, 0]] + c.points[edges[:, 1]])
-    face_sum = np.zeros((n_e, 3))
+    face_sum = np.zeros((n_e, d))
     np.add.at(face_sum, corner_edge, face_points[corner_face])
     smooth = (c.points[edges[:, 0]] + c.points[edges[:, 1]] + face_sum) / \
         (2 + edge_faces)[:, None]
@@ -90,9 +91,9 @@ def refine_once(c: Cage) -> Cage:
     # runs out at this level (the parent's rule weighs by the mean vanishing sharpness).
     valence = np.bincount(edges.ravel(), minlength=n_v).astype(np.float64)
     faces_at = np.bincount(c.indices, minlength=n_v).astype(np.float64)
-    q = np.zeros((n_v, 3))
+    q = np.zeros((n_v, d))
     np.add.at(q, c.indices, face_points[corner_face])
-    r = np.zeros((n_v, 3))
+    r = np.zeros((n_v, d))
     np.add.at(r, edges[:, 0], mid)
     np.add.at(r, edges[:, 1], mid)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -104,7 +105,7 @@ def refine_once(c: Cage) -> Cage:
     is_sharp = sharp > 0
     sharp_count = np.zeros(n_v)
     np.add.at(sharp_count, edges[is_sharp].ravel(), 1)
-    crease_sum = np.zeros((n_v, 3))
+    crease_sum = np.zeros((n_v, d))
     np.add.at(crease_sum, edges[is_sharp, 0], c.points[edges[is_sharp, 1]])
     np.add.at(crease_sum, edges[is_sharp, 1], c.points[edges[is_sharp, 0]])
     crease_v = (crease_sum + 6 * c.points) / 8
@@ -196,7 +197,7 @@ def limit_points(c: Cage) -> np.ndarray:
     cubic B-spline's (b0 + 4 v + b1) / 6 along their two sharp edges, corners fixed."""
     if (c.counts != 4).any():
         raise ValueError("limit_points needs an all-quad mesh (refine once first)")
-    n_v = len(c.points)
+    n_v, d = c.points.shape
     finite = np.concatenate([c.edge_sharpness, c.vertex_sharpness])
     finite = finite[(finite > 0) & (finite < MAX_SHARPNESS)]
     if len(finite):
@@ -207,15 +208,15 @@ def limit_points(c: Cage) -> np.ndarray:
     rule, edges, sharp = vertex_rules(c)
     quads = c.indices.reshape(-1, 4)
     valence = np.bincount(edges.ravel(), minlength=n_v).astype(np.float64)
-    e_sum = np.zeros((n_v, 3))
+    e_sum = np.zeros((n_v, d))
     np.add.at(e_sum, edges[:, 0], p[edges[:, 1]])
     np.add.at(e_sum, edges[:, 1], p[edges[:, 0]])
-    f_sum = np.zeros((n_v, 3))
+    f_sum = np.zeros((n_v, d))
     for i in range(4):
         np.add.at(f_sum, quads[:, i], p[quads[:, (i + 2) % 4]])
     n = np.maximum(valence, 1)[:, None]
     smooth = (n * n * p + 4 * e_sum + f_sum) / (n * (n + 5))
-    b_sum = np.zeros((n_v, 3))
+    b_sum = np.zeros((n_v, d))
     np.add.at(b_sum, edges[sharp, 0], p[edges[sharp, 1]])
     np.add.at(b_sum, edges[sharp, 1], p[edges[sharp, 0]])
     crease = (b_sum + 4 * p) / 6

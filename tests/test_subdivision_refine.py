@@ -245,3 +245,61 @@ def test_patches_match_blenders_level_5(empty_scene, shape, creases, bound):
     assert regular.sum() > 0.5 * len(regular)
     assert dist[regular].max() < 1e-5
     assert dist[~regular].max() < bound and back.max() < bound
+
+
+def test_skinned_cage_is_refined_after_its_skinning(empty_scene):
+    """A tube skinned by a three-bone chain, subdivided after its Armature modifier, is
+    exported as a skinned cage; the GPU skins the cage, makes its patches from the
+    skinned points and tessellates them. At a posed frame the triangles' corners lie on
+    Blender's level-5 points (armature, then Subdivision Surface with its limit step)."""
+    from scipy.spatial import cKDTree
+
+    from _export_helpers import (add_armature_modifier, animate_pose, blender_world_points,
+                                 export_current, make_armature, make_tube, weight_by_height)
+    from lantern.engine import RenderSettings, Session
+    from lantern.engine.gpu.context import run_gl
+    from lantern.exporters.api import ExportOptions
+    from pxr import UsdGeom, UsdSkel
+
+    bones = ("Bone0", "Bone1", "Bone2")
+    arm = make_armature("Rig", bones)
+    tube = make_tube("Rig_Body")
+    weight_by_height(tube, bones)
+    add_armature_modifier(tube, arm)
+    mod = tube.modifiers.new("subsurf", "SUBSURF")
+    mod.levels = mod.render_levels = 4           # the GPU's cap: level 5's grid (2 + 3)
+    animate_pose(arm, frames=range(1, 4))
+    n_cage = len(tube.data.vertices)
+    stage, report = export_current(ExportOptions(subdivision="cage"))
+    prim = next(p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))
+    assert prim.HasAPI(UsdSkel.BindingAPI)
+    assert UsdGeom.Mesh(prim).GetSubdivisionSchemeAttr().Get() == "catmullClark"
+    assert len(UsdGeom.Mesh(prim).GetPointsAttr().Get()) == n_cage
+
+    mod.levels = mod.render_levels = 5
+    bpy.context.scene.frame_set(3)
+    theirs = blender_world_points(tube)
+    diag = np.linalg.norm(theirs.max(axis=0) - theirs.min(axis=0))
+    with Session(stage, RenderSettings(width=64, height=48, frame=3,
+                                       tessellation_px=1e-3)) as s:
+        res = s.render()
+        assert not [w for w in res.warnings if "subdivision" in w], res.warnings
+        assert res.stats["meshes_skinned"] == 1 and res.stats["meshes_tessellated"] == 1
+        key = next(iter(s._renderer.tessellation.meshes))
+        data = run_gl(lambda gl: s._renderer.tessellation.read(key))
+        world = next(i.world for i in s.scene.instances.values() if i.mesh_key == key)
+        rest = s.scene.meshes[key].patches.control.reshape(-1, 3).astype(np.float64)
+    ours = data[:, :3].astype(np.float64) @ world[:3, :3].T + world[:3, 3]
+    dist = cKDTree(theirs).query(ours)[0] / diag
+    back = cKDTree(ours).query(theirs)[0] / diag
+    assert dist.max() < 1e-4 and back.max() < 1e-4, (dist.max(), back.max())
+    # The pose matters: the rest patches are far from the posed surface.
+    rest_world = rest @ world[:3, :3].T + world[:3, 3]
+    assert cKDTree(theirs).query(rest_world)[0].max() / diag > 0.05
+    # The CPU path cannot refine after the GPU's skinning: the cage, and one warning.
+    with Session(stage, RenderSettings(width=64, height=48, frame=3, tessellation_px=0)) as s:
+        res = s.render()
+        assert [w for w in res.warnings if "skinned subdivision cage" in w] == [
+            f"{prim.GetPath()}: a skinned subdivision cage is refined only by GL 4.3's "
+            "tessellation, with Use Limit Surface; drawn as its cage"]
+        assert "tessellation" not in res.stats["passes"]

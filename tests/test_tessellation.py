@@ -194,3 +194,18 @@ def test_a_high_render_level_caps_the_triangles_by_memory():
         patches = next(m.patches for m in s.scene.meshes.values())
     assert patches.cap < 2 ** 10
     assert patches.max_vertices <= MAX_TESSELLATED_VERTICES
+
+
+def test_stencils_make_the_patches_from_any_points():
+    """A skinned cage's control points are weighted sums of its points (CSR stencils):
+    applied to moved points they give the patches of the moved cage, creases included."""
+    from lantern.engine.bezier_patches import patch_stencils
+
+    base = cage(CUBE_POINTS, [4] * 6, np.ravel(CUBE_FACES), crease_pairs=[(0, 1)],
+                crease_sharpness=[2.5])
+    rows, points, weights = patch_stencils(base, 3, block=3)      # blocks of 3 columns
+    moved = CUBE_POINTS * [1.0, 2.0, 0.5] + np.random.default_rng(1).normal(0, 0.1, (8, 3))
+    made = np.add.reduceat(weights[:, None] * moved[points], rows[:-1])
+    expected = bezier_patches(refine(cage(moved, base.counts, base.indices, [(0, 1)], [2.5]), 3))
+    assert np.abs(made - expected.reshape(-1, 3)).max() < 1e-12
+    assert (weights > 0).all() and np.allclose(np.add.reduceat(weights, rows[:-1]), 1.0)

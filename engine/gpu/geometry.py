@@ -28,7 +28,7 @@ from ...core.transforms import transform_aabbs
 from .objects import ObjectTable
 from .points import PointClouds
 from .programs import set_uniform
-from .stores import Slot, VertexStore
+from .stores import VERTEX_BYTES, Slot, VertexStore
 
 COMMAND_UINTS = 5            # DrawElementsIndirectCommand
 
@@ -75,6 +75,7 @@ class Geometry:
         self.points = PointClouds(ctx, uploads, self.objects)   # Points prims
         self.meshes = {}                         # mesh key -> (store, Slot)
         self._tessellated = {}                   # mesh key -> its triangles' ranges
+        self._cages = {}                         # skinned patch mesh key -> deformed cage
         self.draws = {}                          # instance path -> DrawObject
         self._worlds = {}                        # instanced paths -> (n, 4, 4) worlds
         self.moved = []                          # world boxes that changed this frame
@@ -144,6 +145,14 @@ class Geometry:
             self._stale()
         if not gpu_written:
             store.write_vertices(slot, mesh.vertices)
+        cage = self._cages.pop(mesh.key, None)
+        if cage is not None:
+            cage.release()
+        if mesh.patches is not None and mesh.skin is not None:
+            # A skinned cage: the skinning pass deforms its points here, and the
+            # tessellation pass makes its patches from them.
+            self._cages[mesh.key] = self.uploads.buffer(
+                reserve=len(mesh.vertices) * VERTEX_BYTES, kind="mesh")
         for name, values in mesh.streams.items():   # not deformed: once, skinned or not
             store.write_stream(slot, name, values)
         store.write_indices(slot, indices)
@@ -161,6 +170,15 @@ class Geometry:
             return list(self._tessellated.get(mesh.key, ()))
         return [(mesh.materials[mi], slot.first_index + first, count)
                 for mi, first, count in mesh.ranges]
+
+    def deform_target(self, mesh_key):
+        """(buffer, byte offset, vertices) where a skinned mesh's deformed vertices go:
+        its place in the dynamic store, or a skinned cage's own buffer."""
+        cage = self._cages.get(mesh_key)
+        if cage is not None:
+            return cage, 0, cage.size // VERTEX_BYTES
+        store, slot = self.meshes[mesh_key]
+        return store.vbo, slot.first_vertex * VERTEX_BYTES, slot.n_vertices
 
     def tessellated(self, mesh_key) -> list:
         """A tessellated mesh's ranges as last set (absolute first indices)."""
@@ -180,6 +198,9 @@ class Geometry:
     def _free_mesh(self, key):
         entry = self.meshes.pop(key, None)
         self._tessellated.pop(key, None)
+        cage = self._cages.pop(key, None)
+        if cage is not None:
+            cage.release()
         if entry is not None:
             entry[0].free(entry[1])
             self._stale()
@@ -469,6 +490,9 @@ class Geometry:
         self._release_commands()
         if self._ids is not None:
             self._ids.release()
+        for cage in self._cages.values():
+            cage.release()
+        self._cages.clear()
         self.static.release()
         if self.dynamic is not None:
             self.dynamic.release()

@@ -9,7 +9,7 @@ MeshError naming the defect."""
 from __future__ import annotations
 
 import numpy as np
-from pxr import Sdf, Usd, UsdGeom
+from pxr import Sdf, Usd, UsdGeom, UsdSkel
 
 from ...core.transforms import cross
 from ...core.triangulate import triangulate
@@ -102,16 +102,21 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
     if np.any(counts < 3):
         raise MeshError("face with fewer than 3 vertices")
     _finite(pts[np.unique(idx)], "points used by faces")
-    levels, refined = subdivision_level(prim, warnings), None
+    levels, refined = subdivision_level(prim, warnings, tessellate), None
+    patches = tessellate and limit_surface(prim) and not any(
+        m.needs_tangents or m.reads_generated or m.color_attribute for m in materials)
+    if levels and not patches and prim.HasAPI(UsdSkel.BindingAPI):
+        warnings.append(f"{prim.GetPath()}: a skinned subdivision cage whose materials need "
+                        "tangents, a colour attribute or Generated coordinates is drawn as "
+                        "its cage")
+        levels = 0
     if levels:
         # Normals and tangents are the refined surface's own (USD ignores authored ones
         # on a subdivision surface); UVs and subsets follow the refined faces.
-        patches = tessellate and limit_surface(prim) and not any(
-            m.needs_tangents or m.reads_generated or m.color_attribute for m in materials)
         refined = RefinedCage(mesh, pts, counts, idx, levels, time, patches=patches)
         if refined.patches is not None:
             return _patch_mesh(prim, mesh, refined, levels, time, materials, subsets, key,
-                               (counts, idx, len(pts)))
+                               (counts, idx, pts))
         cage_counts, cage_idx, cage_points = counts, idx, len(pts)
         pts, counts, idx = refined.points, refined.counts, refined.indices
     n_faces = len(counts)
@@ -228,6 +233,17 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
 MAX_TESSELLATED_VERTICES = 1 << 22
 
 
+def _stencil_rows(stencils, rows):
+    """CSR stencils (engine/bezier_patches.py patch_stencils) with their rows reordered:
+    new row i is old row rows[i]."""
+    indptr, indices, weights = stencils
+    starts = indptr[rows]
+    counts = indptr[rows + 1] - starts
+    new_ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    take = np.repeat(starts - new_ptr[:-1], counts) + np.arange(new_ptr[-1])
+    return new_ptr, indices[take], weights[take]
+
+
 def _sidedness(prim, mesh, time):
     """(double-sided, back faces culled as lantern:backfaceCulling asks)."""
     double = bool(mesh.GetDoubleSidedAttr().Get(time))
@@ -240,7 +256,8 @@ def _patch_mesh(prim, mesh, refined, render_level, time, materials, subsets, key
     """MeshData of a subdivision surface the GPU tessellates: its patches sorted by
     material, their corner UVs, and a cap of one level finer than the render level
     (within a memory budget)."""
-    counts, idx, n_points = cage
+    counts, idx, cage_points = cage
+    n_points = len(cage_points)
     control = refined.patches.reshape(-1, 4, 4, 3)
     n = len(control)
     uv_name = next((m.uv_name for m in materials if m.uv_name), None)
@@ -252,9 +269,13 @@ def _patch_mesh(prim, mesh, refined, render_level, time, materials, subsets, key
         _finite(uv, "texture coordinates (per corner)")
     else:
         uv = np.zeros((n, 4, 2))
+    stencils = refined.stencils
     if mesh.GetOrientationAttr().Get(time) == UsdGeom.Tokens.leftHanded:
         control = control.transpose(0, 2, 1, 3)     # u and v swapped: the other side is front
         uv = uv[:, [0, 3, 2, 1]]
+        if stencils is not None:
+            stencils = _stencil_rows(stencils, np.arange(n * 16).reshape(n, 4, 4)
+                                     .transpose(0, 2, 1).reshape(-1))
     face_mat = np.zeros(n, np.int64)
     for mi, faces in subsets:
         faces = refined.faces(faces)
@@ -267,19 +288,28 @@ def _patch_mesh(prim, mesh, refined, render_level, time, materials, subsets, key
             ranges.append((mi, int(sel[0]), len(sel)))
     control = np.ascontiguousarray(control[order].reshape(n, 16, 3), np.float32)
     points = control.reshape(-1, 3).astype(np.float64)
+    vertices, point_of_vertex = np.zeros((0, 12), np.float32), None
+    if stencils is not None:
+        # Skinned: the cage's points are the vertices the skinning pass deforms, and
+        # the patches are made from them again after each pose.
+        stencils = _stencil_rows(stencils, (order[:, None] * 16 + np.arange(16)).reshape(-1))
+        vertices = np.zeros((n_points, 12), np.float32)
+        vertices[:, :3] = cage_points
+        point_of_vertex = np.arange(n_points, dtype=np.int32)
+        points = cage_points      # the patches lie inside the hull of the cage
     double, culling = _sidedness(prim, mesh, time)
     # The GPU's place for the triangles is sized for the cap: at most
     # MAX_TESSELLATED_VERTICES corners (192 MiB) a mesh, whatever its render level.
     budget = int(np.sqrt(MAX_TESSELLATED_VERTICES / (6 * n)))
     cap = int(np.clip(min(2 ** (render_level - refined.levels + 1), budget), 1, 64))
-    return MeshData(key=key, vertices=np.zeros((0, 12), np.float32),
+    return MeshData(key=key, vertices=vertices, point_of_vertex=point_of_vertex,
                     indices=np.zeros(0, np.uint32), ranges=[],
                     materials=[m.name for m in materials], double_sided=double,
                     backface_culling=culling,
                     # A Bezier patch lies inside the hull of its control points.
                     bounds=(points.min(axis=0), points.max(axis=0)),
                     patches=PatchData(control, np.ascontiguousarray(uv[order], np.float32),
-                                      ranges, refined.levels, cap))
+                                      ranges, refined.levels, cap, stencils))
 
 
 def generated_coordinates(rest):

@@ -1,14 +1,16 @@
 """A UsdGeom.Mesh with subdivisionScheme catmullClark -> its cage refined on the CPU, and
-its points moved onto the limit surface (unless the stage says Use Limit Surface was off).
+its points moved onto the limit surface (unless the stage says Use Limit Surface was off),
+or its limit surface's patches for the GPU (and, for a skinned cage, the patches as
+weighted sums of its points).
 
 The level is the exporter's `lantern:subdivisionRenderLevel`; without it (a stage from
-elsewhere) the cage is drawn, with a warning. Skinned cages are drawn unrefined (refining
-after deformation is not built), with a warning.
+elsewhere) the cage is drawn, with a warning. A skinned cage is refined after its
+skinning by the GPU only; on the CPU path it is drawn unrefined, with a warning.
 """
 import numpy as np
 from pxr import UsdGeom, UsdSkel
 
-from ..bezier_patches import bezier_patches
+from ..bezier_patches import bezier_patches, patch_stencils
 from ..subdivision import (MAX_SHARPNESS, cage, limit_points, parent_faces, refine,
                            refine_face_varying)
 
@@ -20,8 +22,9 @@ LIMIT_ATTR = "lantern:subdivisionLimitSurface"   # written only when false
 PATCH_LEVELS = 2
 
 
-def subdivision_level(prim, warnings):
-    """Levels to refine `prim` by (0: draw the points as they are)."""
+def subdivision_level(prim, warnings, tessellate=False):
+    """Levels to refine `prim` by (0: draw the points as they are). A skinned cage is
+    refined only by the GPU (`tessellate`), after its skinning."""
     mesh = UsdGeom.Mesh(prim)
     scheme = mesh.GetSubdivisionSchemeAttr()
     if not scheme.HasAuthoredValue() or scheme.Get() == UsdGeom.Tokens.none:
@@ -36,8 +39,9 @@ def subdivision_level(prim, warnings):
         _warn(warnings, f"{path}: subdivisionScheme catmullClark without {LEVEL_ATTR}; "
                         "drawn as its cage")
         return 0
-    if prim.HasAPI(UsdSkel.BindingAPI):
-        _warn(warnings, f"{path}: a skinned subdivision cage is not refined; drawn as its cage")
+    if prim.HasAPI(UsdSkel.BindingAPI) and not (tessellate and limit_surface(prim)):
+        _warn(warnings, f"{path}: a skinned subdivision cage is refined only by GL 4.3's "
+                        "tessellation, with Use Limit Surface; drawn as its cage")
         return 0
     return max(0, int(level_attr.Get()))
 
@@ -80,7 +84,7 @@ class RefinedCage:
                     arr(mesh.GetCornerIndicesAttr(), np.int64),
                     arr(mesh.GetCornerSharpnessesAttr(), np.float64),
                     boundary or "edgeAndCorner")
-        self.patches = None
+        self.patches = self.stencils = None
         if patches:
             finite = np.concatenate([base.edge_sharpness, base.vertex_sharpness])
             finite = finite[(finite > 0) & (finite < MAX_SHARPNESS)]
@@ -90,6 +94,8 @@ class RefinedCage:
         self.points, self.counts, self.indices = refined.points, refined.counts, refined.indices
         if patches:
             self.patches = bezier_patches(refined)
+            if mesh.GetPrim().HasAPI(UsdSkel.BindingAPI):     # made again after each pose
+                self.stencils = patch_stencils(base, levels)
         elif levels > 0 and limit_surface(mesh.GetPrim()):
             self.points = limit_points(refined)
 

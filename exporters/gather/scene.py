@@ -89,7 +89,8 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False,
     Armature modifier is baked instead.
     `subdivision`: "apply" writes a Subdivision Surface modifier's result; "cage" writes
     the cage of a mesh whose last modifier is Catmull-Clark subdivision, with its rules
-    (not for rigged meshes, nor live, where no modifier may be switched off)."""
+    (a rigged mesh's too, skinned at rest, when its subdivision follows its Armature
+    modifier directly; not live, where no modifier may be switched off)."""
     scene = depsgraph.scene
     rec = SceneRecord(settings=_settings(scene, warn))
     visible = render_visible(depsgraph.view_layer)
@@ -110,12 +111,18 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False,
             originals[orig.name_full] = orig
             shown[orig.name_full] = inst.show_self
     animate = animation and depsgraph.mode == "VIEWPORT" and _animated_scene(scene)
+    cages = {}
+    if subdivision == "cage" and not live:
+        for key in sorted(originals):
+            mod = trailing_subdivision(originals[key], depsgraph)
+            if mod is not None:
+                cages[key] = mod
     rigs = {}
     if animate:
         for key in sorted(originals):
             ob = originals[key]
             if ob.type == "MESH":
-                rig = classify(ob, originals)
+                rig = classify(ob, originals, cages.get(key))
                 if rig is not None and rig.armature is not None and rig.reason is None \
                         and ob in _ancestors(rig.armature):
                     rig.reason, rig.disabled = "its armature is parented to the mesh", []
@@ -126,12 +133,9 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False,
                 if rig is not None:
                     rigs[key] = rig
 
-    cages = {}
-    if subdivision == "cage" and not live:
-        for key in sorted(originals):
-            mod = trailing_subdivision(originals[key], depsgraph)
-            if mod is not None and key not in rigs:
-                cages[key] = mod
+    # A rig UsdSkel cannot express is baked, with its subdivision applied.
+    cages = {key: mod for key, mod in cages.items()
+             if key not in rigs or rigs[key].reason is None}
 
     # Skinned meshes are written at rest: their Armature modifiers are off while the
     # meshes are read (and while sampling, which then skips Blender's skinning).

@@ -42,9 +42,11 @@ def _uses_envelopes(ob, arm_ob, deform_groups):
     return bool((totals <= MIN_CONTRIBUTION).any())
 
 
-def classify(ob, exported):
+def classify(ob, exported, cage=None):
     """MeshRig for a mesh object; None when nothing deforms it over time (a plain mesh).
-    `exported`: names of the objects being written."""
+    `exported`: names of the objects being written. `cage`: a trailing Subdivision
+    Surface modifier written as the cage's rules (the renderer subdivides after the
+    skinning, as Blender does after the armature), so it may follow the Armature."""
     mods = _active_modifiers(ob)
     arms = [m for m in mods if m.type == "ARMATURE" and m.object is not None]
     key = ob.data.shape_keys
@@ -83,7 +85,7 @@ def classify(ob, exported):
         rig.reason = "B-Bones (segments > 1)"
     elif mod.use_bone_envelopes and _uses_envelopes(ob, arm_ob, deform_groups):
         rig.reason = "bone envelopes"
-    elif position + 1 < len(mods):
+    elif position + 1 < len(mods) and mods[position + 1:] != [cage]:
         rig.reason = f"the modifier '{mods[position + 1].name}' follows the Armature modifier"
     elif has_keys and position > 0:
         rig.reason = "shape keys with modifiers before the Armature modifier"

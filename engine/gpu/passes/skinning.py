@@ -59,11 +59,12 @@ class _Input:
 
 class Posed:
     """What the skinning pass hands on: each skinned object's local box this frame
-    (joint-padded, conservative: culling and shadow fitting), and the skinned vertices
-    themselves on request (exact: the default view)."""
+    (joint-padded, conservative: culling and shadow fitting), the meshes it deformed this
+    frame, and the skinned vertices themselves on request (exact: the default view)."""
 
-    def __init__(self, boxes, read):
+    def __init__(self, boxes, read, deformed=frozenset()):
         self.boxes = boxes
+        self.deformed = deformed
         self._read = read
 
     def exact_box(self, draw):
@@ -168,18 +169,18 @@ class SkinningPass(Pass):
             if draw is not None:
                 lo, hi = boxes[path]
                 self.geometry.note_posed(draw, _world_box(lo, hi, inst.world))
+        board["skinned"] = Posed(boxes, self.read, frozenset(self._fresh))
         self._fresh.clear()
-        board["skinned"] = Posed(boxes, self.read)
 
     def _deform(self, mesh, inp):
         skin = mesh.skin
         prog = self.programs.get("skin.vert", None, defines(skin), varyings=VARYINGS)
         self._bind(prog, skin, inp)
-        store, slot = self.geometry.meshes[mesh.key]
-        self._vao(prog, inp, "rest").transform(
-            store.vbo, mode=self.ctx.POINTS, vertices=slot.n_vertices,
-            buffer_offset=slot.first_vertex * VERTEX_BYTES)
+        target, offset, n = self.geometry.deform_target(mesh.key)
+        self._vao(prog, inp, "rest").transform(target, mode=self.ctx.POINTS, vertices=n,
+                                               buffer_offset=offset)
         if mesh.surface_normals:
+            store, slot = self.geometry.meshes[mesh.key]
             self._surface_normals(mesh, inp, store, slot)
 
     def _surface_normals(self, mesh, inp, store, slot):
@@ -245,9 +246,10 @@ class SkinningPass(Pass):
             set_uniform(prog, "u_shape_points", int(skin.n_points))
 
     def read(self, mesh_key) -> np.ndarray:
-        """A skinned mesh's deformed vertices, (V, 12) float32, as drawn this frame."""
-        store, slot = self.geometry.meshes[mesh_key]
-        data = store.vbo.read(size=slot.n_vertices * VERTEX_BYTES, offset=slot.first_vertex * VERTEX_BYTES)
+        """A skinned mesh's deformed vertices, (V, 12) float32, as drawn this frame (a
+        skinned cage's: its points, before the tessellation pass refines them)."""
+        target, offset, n = self.geometry.deform_target(mesh_key)
+        data = target.read(size=n * VERTEX_BYTES, offset=offset)
         return np.frombuffer(data, np.float32).reshape(-1, 12)
 
     def release(self):

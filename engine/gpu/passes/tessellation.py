@@ -7,6 +7,12 @@ other passes then draw them as plain geometry, as they draw skinned meshes: the
 surface is the same in every pass, and tessellated once per view. A mesh is
 tessellated again only when the view of it, its patches or the image size changed.
 
+A skinned cage (PatchData.stencils) is skinned first, by the skinning pass, into a
+buffer of its own (Geometry.deform_target); whenever that pass deformed it, a compute
+shader makes its control points again from the deformed points (shaders/
+patch_stencils.comp) and the mesh is tessellated again: subdivision after the
+armature, as in Blender.
+
 Each material's patches are one draw, with a query counting the triangles it wrote;
 their counts become the mesh's draw ranges (Geometry.set_ranges). Reading the counts
 waits for the GPU to finish the pass, once per view that changed them.
@@ -14,7 +20,7 @@ waits for the GPU to finish the pass, once per view that changed them.
 ModernGL's transform() takes no patches, so the feedback draw is made with the GL
 calls below, through the context's entry points.
 
-reads: view   writes: tessellated"""
+reads: view, skinned (optional)   writes: tessellated"""
 from __future__ import annotations
 
 import ctypes
@@ -33,6 +39,7 @@ PATCH_VERTICES = 16
 GL_TRIANGLES, GL_PATCHES, GL_PATCH_VERTICES = 0x0004, 0x000E, 0x8E72
 GL_RASTERIZER_DISCARD, GL_TRANSFORM_FEEDBACK_BUFFER = 0x8C89, 0x8C8E
 GL_PRIMITIVES_WRITTEN, GL_QUERY_RESULT = 0x8C88, 0x8866
+VERTEX_ATTRIB_ARRAY_BARRIER_BIT = 0x1
 
 _u, _i, _p = ctypes.c_uint, ctypes.c_int, ctypes.c_ssize_t
 _SIGS = {
@@ -53,12 +60,14 @@ _SIGS = {
 @dataclass
 class _Patches:
     """One mesh's patches on the GPU, and the view they were last cut for."""
-    control: object               # 16 control points per patch: position, corner UV
+    control: object               # 16 control points per patch, positions
+    uv: object                    # the same points' UVs (the corners' on the first four)
+    stencils: tuple = ()          # a skinned cage's: row starts, points, weights
     vao: object = None
     cut_for: tuple = None
 
     def release(self):
-        for obj in (self.vao, self.control):
+        for obj in (self.vao, self.control, self.uv, *self.stencils):
             if obj is not None:
                 obj.release()
 
@@ -66,6 +75,7 @@ class _Patches:
 class TessellationPass(Pass):
     name = "tessellation"
     reads = ("view",)
+    optional = ("skinned",)
     writes = ("tessellated",)
 
     def __init__(self, ctx, uploads, programs, geometry, proc, scratch):
@@ -89,8 +99,16 @@ class TessellationPass(Pass):
                 p = mesh.patches
                 corner_uv = np.zeros((len(p.control), PATCH_VERTICES, 2), np.float32)
                 corner_uv[:, :4] = p.uv
-                data = np.concatenate([p.control, corner_uv], axis=2)
-                self.meshes[key] = _Patches(self.uploads.buffer(data, kind="mesh"))
+                uv = self.uploads.buffer(corner_uv, kind="mesh")
+                if p.stencils is None:
+                    self.meshes[key] = _Patches(self.uploads.buffer(p.control, kind="mesh"), uv)
+                    continue
+                rows, points, weights = p.stencils
+                stencils = (self.uploads.buffer(rows.astype(np.int32), kind="mesh"),
+                            self.uploads.buffer(points.astype(np.int32), kind="mesh"),
+                            self.uploads.buffer(weights.astype(np.float32), kind="mesh"))
+                self.meshes[key] = _Patches(
+                    self.uploads.buffer(reserve=p.control.nbytes, kind="mesh"), uv, stencils)
 
     def execute(self, frame, board):
         view = board["view"]
@@ -99,8 +117,13 @@ class TessellationPass(Pass):
                                  tessellation=("tessellate.tesc", "tessellate.tese"))
         w, h = frame.output_size or frame.size
         nearest = self._nearest_worlds(scene, view)
+        posed = board.get("skinned")
         for key, patches in self.meshes.items():
             mesh = scene.meshes[key]
+            if patches.stencils and (patches.cut_for is None or
+                                     (posed is not None and key in posed.deformed)):
+                self._pose(mesh, patches)
+                patches.cut_for = None
             world = nearest.get(key)
             if world is None:
                 continue
@@ -136,12 +159,26 @@ class TessellationPass(Pass):
                     best[key] = (d, world)
         return {key: world for key, (_, world) in best.items()}
 
+    def _pose(self, mesh, patches):
+        """A skinned cage's control points from its points as skinned this frame."""
+        prog = self.programs.get("patch_stencils.comp", compute=True)
+        cage, offset, _ = self.geometry.deform_target(mesh.key)
+        cage.bind_to_storage_buffer(0, offset=offset)
+        for binding, buffer in enumerate(patches.stencils, start=1):
+            buffer.bind_to_storage_buffer(binding)
+        patches.control.bind_to_storage_buffer(4)
+        n = 16 * len(mesh.patches.control)
+        set_uniform(prog, "n", n)
+        prog.run(group_x=-(-n // 64))
+        self.ctx.memory_barrier(VERTEX_ATTRIB_ARRAY_BARRIER_BIT)
+
     def _cut(self, prog, mesh, patches) -> list:
         """Tessellates `mesh` into its slot; returns its ranges [(material, first, count)]."""
         gl, ctx = self._gl, self.ctx
         store, slot = self.geometry.meshes[mesh.key]
         if patches.vao is None:
-            patches.vao = ctx.vertex_array(prog, [(patches.control, "3f 2f", "in_pos", "in_uv")])
+            patches.vao = ctx.vertex_array(prog, [(patches.control, "3f", "in_pos"),
+                                                  (patches.uv, "2f", "in_uv")])
         ranges = mesh.patches.ranges
         queries = (_u * len(ranges))()
         gl["glGenQueries"](len(ranges), queries)
