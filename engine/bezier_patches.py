@@ -89,9 +89,9 @@ def _bernstein(t):
 
 def evaluate(patches: np.ndarray, u, v) -> np.ndarray:
     """Points of each patch at the parameters (u, v) (arrays of one shape, or scalars):
-    (F, *shape, 3)."""
+    (F, *shape, d)."""
     bu, bv = _bernstein(u), _bernstein(v)
-    grid = patches.reshape(len(patches), 4, 4, 3)
+    grid = patches.reshape(len(patches), 4, 4, -1)
     return np.einsum("...j,...i,fjic->f...c", bv, bu, grid)
 
 

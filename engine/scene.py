@@ -168,7 +168,7 @@ class PatchData:
     sorted by material. The tessellation pass writes the triangles into the mesh's
     vertices each view, at most `cap` segments per patch edge."""
     control: np.ndarray            # (P, 16, 3) float32 Bezier control points, B[v][u]
-    uv: np.ndarray                 # (P, 4, 2) float32 at the corners (0,0) (1,0) (1,1) (0,1)
+    uv: np.ndarray                 # (P, 16, 2) float32 Bezier control points of the UVs
     ranges: list                   # [(material index, first patch, patch count)]
     levels: int                    # CPU refinements before the patches
     cap: int                       # most segments per patch edge

@@ -255,3 +255,46 @@ def parent_faces(counts, levels):
         parent = np.repeat(parent, counts if level == 0 else 4)
         counts = np.full(len(parent), 4, np.int64)
     return parent
+
+
+def face_varying_cage(c: Cage, values, rule: str) -> Cage:
+    """The cage of a face-varying channel (UVs): a point per distinct (point, value), the
+    same faces, the mesh's creases on the edges they lie on, and USD's
+    faceVaryingLinearInterpolation rule as sharpness where the channel's own
+    boundaries are (its seams and the mesh's open edges). Refined like positions, it
+    smooths the channel as OpenSubdiv does:
+      none           smooth everywhere, boundaries as B-spline curves
+      cornersOnly    and a boundary point of one face keeps its value
+      cornersPlus1   and so does one where three or more of the channel's regions meet
+      cornersPlus2   as cornersPlus1 (concave corners are not told apart)
+      boundaries     every boundary point keeps its value: linear along boundaries
+    ("all", linear everywhere, is refine_face_varying.)"""
+    values = np.asarray(values, np.float64)
+    key = np.concatenate([c.indices[:, None].astype(np.float64), values], axis=1)
+    unique, fv_index = np.unique(key, axis=0, return_inverse=True)
+    fv_index = fv_index.reshape(-1)
+    point_of = unique[:, 0].astype(np.int64)
+    fv = cage(unique[:, 1:], c.counts, fv_index, interpolate_boundary="edgeOnly")
+    # The mesh's creases, on the channel's edges between the same two points.
+    if (c.edge_sharpness > 0).any():
+        lookup = {tuple(e): s for e, s in zip(c.edges.tolist(), c.edge_sharpness.tolist()) if s > 0}
+        ends = np.sort(point_of[fv.edges], axis=1)
+        fv.edge_sharpness = np.array([lookup.get(tuple(e), 0.0) for e in ends.tolist()])
+    fv.vertex_sharpness = c.vertex_sharpness[point_of].copy()
+    edges, corner_edge = _edges(fv.counts, fv.indices)
+    open_edges = edges[np.bincount(corner_edge, minlength=len(edges)) == 1]
+    on_boundary = np.zeros(len(unique), bool)
+    on_boundary[open_edges.ravel()] = True
+    sharp = np.zeros(len(unique), bool)
+    if rule == "boundaries":
+        sharp = on_boundary
+    elif rule in ("cornersOnly", "cornersPlus1", "cornersPlus2"):
+        faces_at = np.bincount(fv.indices, minlength=len(unique))
+        sharp = on_boundary & (faces_at == 1)
+        if rule != "cornersOnly":
+            regions = np.bincount(point_of, minlength=len(c.points))[point_of]
+            sharp |= on_boundary & (regions >= 3)
+    elif rule != "none":
+        raise ValueError(f"faceVaryingLinearInterpolation {rule!r} is not a smooth rule")
+    fv.vertex_sharpness[sharp] = MAX_SHARPNESS
+    return fv

@@ -1,6 +1,7 @@
 #version 410 core
 // A point of a bicubic Bezier patch, its normal from the two partial derivatives, and
-// its UV bilinear between the corners' (the cage's UVs refined linearly per face).
+// its UV from the UVs' own patch (smoothed by the mesh's faceVaryingLinearInterpolation,
+// or bilinear per face for `all`).
 // Written by transform feedback in the vertex layout every mesh uses
 // (engine/gpu/stores.py), so every pass draws the result as plain triangles.
 layout(quads, equal_spacing, ccw) in;
@@ -36,6 +37,17 @@ void patch_point(vec2 t, out vec3 p, out vec3 pu, out vec3 pv) {
     }
 }
 
+vec2 patch_uv(vec2 t) {
+    vec4 bu, du, bv, dv;
+    bernstein(t.x, bu, du);
+    bernstein(t.y, bv, dv);
+    vec2 uv = vec2(0.0);
+    for (int j = 0; j < 4; ++j)
+        for (int i = 0; i < 4; ++i)
+            uv += bv[j] * bu[i] * e_uv[4 * j + i];
+    return uv;
+}
+
 void main() {
     vec2 t = gl_TessCoord.xy;
     vec3 p, pu, pv;
@@ -50,6 +62,6 @@ void main() {
     }
     out_pos = p;
     out_normal = normalize(n);
-    out_uv = mix(mix(e_uv[0], e_uv[1], t.x), mix(e_uv[3], e_uv[2], t.x), t.y);
+    out_uv = patch_uv(t);
     out_tangent = vec4(0.0);
 }

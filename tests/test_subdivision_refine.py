@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from _export_helpers import cube_object, vectors
-from lantern.engine.subdivision import cage, refine
+from lantern.engine.subdivision import cage, refine, refine_face_varying
 from lantern.exporters.gather.subdivision import crease_to_sharpness
 
 
@@ -48,10 +48,8 @@ def _blender_refined(ob, levels, limit=False):
 
 def _max_nearest(a, b):
     """Symmetric largest distance from a row of one set to the nearest row of the other."""
-    def one_way(x, y):
-        return max(np.sqrt(((x[i:i + 512, None, :] - y[None]) ** 2).sum(axis=2)).min(axis=1).max()
-                   for i in range(0, len(x), 512))
-    return max(one_way(a, b), one_way(b, a))
+    from scipy.spatial import cKDTree
+    return max(cKDTree(b).query(a)[0].max(), cKDTree(a).query(b)[0].max())
 
 
 @pytest.mark.parametrize("levels", [1, 2])
@@ -124,32 +122,56 @@ def test_exported_cage_refined_by_the_engine_matches_blender(empty_scene, limit)
     assert prim.GetAttribute("lantern:subdivisionLimitSurface").IsValid() == (not limit)
 
 
-def test_uvs_across_a_seam_match_blender_with_linear_uv_smoothing(empty_scene):
-    """UV Smooth None (faceVaryingLinearInterpolation all): each refined corner's (point,
-    UV) pair is one of Blender's; Suzanne's UV map has seams and open boundaries."""
-    from lantern.engine.subdivision import refine_face_varying
-
-    bpy.ops.mesh.primitive_monkey_add()
-    ob = bpy.context.active_object
-    me = ob.data
-    c = _blender_cage(ob)
-    uv = vectors(me.uv_layers.active.uv, "vector", 2).astype(np.float64)
-    ours = refine(c, 1)
-    ours_uv = refine_face_varying(c.counts, uv, 1)
-    mod = ob.modifiers.new("subsurf", "SUBSURF")
-    mod.levels, mod.use_limit_surface, mod.uv_smooth = 1, False, "NONE"
-    bpy.context.view_layer.update()
+def _corner_pairs(ob):
+    """Blender's evaluated (point, UV) of every face corner, (C, 5)."""
     ev = ob.evaluated_get(bpy.context.evaluated_depsgraph_get())
     out = ev.to_mesh()
     try:
-        pts = vectors(out.vertices, "co")
-        theirs = np.concatenate([pts[[l.vertex_index for l in out.loops]],
-                                 vectors(out.uv_layers.active.uv, "vector", 2)], axis=1)
+        loops = np.empty(len(out.loops), np.int64)
+        out.loops.foreach_get("vertex_index", loops)
+        return np.concatenate([vectors(out.vertices, "co")[loops],
+                               vectors(out.uv_layers.active.uv, "vector", 2)], axis=1)
     finally:
         ev.to_mesh_clear()
-    mine = np.concatenate([ours.points[ours.indices], ours_uv], axis=1)
+
+
+@pytest.mark.parametrize("uv_smooth", ["NONE", "PRESERVE_BOUNDARIES", "PRESERVE_CORNERS",
+                                       "PRESERVE_CORNERS_AND_JUNCTIONS", "SMOOTH_ALL"])
+@pytest.mark.parametrize("limit", [False, True])
+def test_uvs_follow_blenders_uv_smooth(empty_scene, uv_smooth, limit):
+    """Exported with its UV Smooth rule, Suzanne's cage refined by the engine gives
+    Blender's (point, UV) at every face corner of level 2, across its seams and open
+    boundaries. Smooth All with the limit step: Blender's UVs at the channel's boundary
+    corners differ from the crease limit by up to 3e-4 (a bound of 1e-3 there)."""
+    from pxr import Usd, UsdGeom
+
+    from _export_helpers import export_current
+    from lantern.engine.usd.subdivision import RefinedCage
+    from lantern.exporters.api import ExportOptions
+
+    bpy.ops.mesh.primitive_monkey_add()
+    ob = bpy.context.active_object
+    mod = ob.modifiers.new("subsurf", "SUBSURF")
+    mod.levels = mod.render_levels = 2
+    mod.use_limit_surface, mod.uv_smooth = limit, uv_smooth
+    theirs = _corner_pairs(ob)
+    stage, _ = export_current(ExportOptions(subdivision="cage"))
+    prim = next(p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))
+    mesh, t = UsdGeom.Mesh(prim), Usd.TimeCode.Default()
+    counts = np.asarray(mesh.GetFaceVertexCountsAttr().Get(), np.int64)
+    indices = np.asarray(mesh.GetFaceVertexIndicesAttr().Get(), np.int64)
+    refined = RefinedCage(mesh, np.asarray(mesh.GetPointsAttr().Get(), np.float64), counts,
+                          indices, 2, t)
+    primvar = next(p for p in UsdGeom.PrimvarsAPI(mesh).GetPrimvars()
+                   if p.GetTypeName() == "texCoord2f[]")
+    uv = np.asarray(primvar.ComputeFlattened(t), np.float64)
+    mine = np.concatenate([refined.points[refined.indices], refined.face_varying(uv)], axis=1)
     assert len(mine) == len(theirs)
-    assert _max_nearest(mine, theirs) < 1e-5
+    bound = 1e-3 if (uv_smooth, limit) == ("SMOOTH_ALL", True) else 1e-5
+    assert _max_nearest(mine, theirs) < bound
+    if uv_smooth != "NONE":     # the rule matters: linear UVs are far from Blender's
+        linear = refine_face_varying(counts, uv, 2)
+        assert _max_nearest(np.concatenate([mine[:, :3], linear], axis=1), theirs) > 1e-3
 
 
 def _blender_limit(ob, levels):
@@ -303,3 +325,33 @@ def test_skinned_cage_is_refined_after_its_skinning(empty_scene):
             f"{prim.GetPath()}: a skinned subdivision cage is refined only by GL 4.3's "
             "tessellation, with Use Limit Surface; drawn as its cage"]
         assert "tessellation" not in res.stats["passes"]
+
+
+def test_tessellated_uvs_match_blenders_level_5(empty_scene):
+    """Blender's cube (UV seams on six islands) with Keep Boundaries UV smoothing: the
+    GPU's (point, UV) at every tessellated corner against Blender's level-5 face corners.
+    Exact away from the cube's corners (median), within the patches' bound near them."""
+    from scipy.spatial import cKDTree
+
+    from _export_helpers import export_current
+    from lantern.engine import RenderSettings, Session
+    from lantern.engine.gpu.context import run_gl
+    from lantern.exporters.api import ExportOptions
+
+    bpy.ops.mesh.primitive_cube_add()
+    ob = bpy.context.active_object
+    mod = ob.modifiers.new("subsurf", "SUBSURF")
+    mod.levels = mod.render_levels = 4          # the GPU's cap: level 5's grid (2 + 3)
+    assert mod.uv_smooth == "PRESERVE_BOUNDARIES" and mod.use_limit_surface
+    stage, _ = export_current(ExportOptions(subdivision="cage"))
+    mod.levels = 5
+    theirs = _corner_pairs(ob)
+    with Session(stage, RenderSettings(width=64, height=48, tessellation_px=1e-3)) as s:
+        s.render()
+        key = next(iter(s._renderer.tessellation.meshes))
+        data = run_gl(lambda gl: s._renderer.tessellation.read(key)).astype(np.float64)
+    ours = np.concatenate([data[:, :3], data[:, 6:8]], axis=1)
+    dist = cKDTree(theirs).query(ours)[0]
+    assert np.median(dist) < 1e-6 and dist.max() < 5e-3
+    uv_only = cKDTree(theirs).query(np.concatenate([data[:, :3], 0 * data[:, 6:8]], axis=1))[0]
+    assert uv_only.max() > 0.1          # the UVs are part of what is compared

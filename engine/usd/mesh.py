@@ -265,14 +265,14 @@ def _patch_mesh(prim, mesh, refined, render_level, time, materials, subsets, key
     if uvs is not None:
         cage_uv = _per_corner(uvs, uv_interp, n_points, np.repeat(np.arange(len(counts)), counts),
                               idx, len(counts), "uv")
-        uv = refined.face_varying(cage_uv).reshape(n, 4, 2)
+        uv = refined.face_varying_patches(cage_uv).reshape(n, 4, 4, 2)
         _finite(uv, "texture coordinates (per corner)")
     else:
-        uv = np.zeros((n, 4, 2))
+        uv = np.zeros((n, 4, 4, 2))
     stencils = refined.stencils
     if mesh.GetOrientationAttr().Get(time) == UsdGeom.Tokens.leftHanded:
         control = control.transpose(0, 2, 1, 3)     # u and v swapped: the other side is front
-        uv = uv[:, [0, 3, 2, 1]]
+        uv = uv.transpose(0, 2, 1, 3)
         if stencils is not None:
             stencils = _stencil_rows(stencils, np.arange(n * 16).reshape(n, 4, 4)
                                      .transpose(0, 2, 1).reshape(-1))
@@ -308,7 +308,8 @@ def _patch_mesh(prim, mesh, refined, render_level, time, materials, subsets, key
                     backface_culling=culling,
                     # A Bezier patch lies inside the hull of its control points.
                     bounds=(points.min(axis=0), points.max(axis=0)),
-                    patches=PatchData(control, np.ascontiguousarray(uv[order], np.float32),
+                    patches=PatchData(control, np.ascontiguousarray(uv[order].reshape(n, 16, 2),
+                                                                    np.float32),
                                       ranges, refined.levels, cap, stencils))
 
 

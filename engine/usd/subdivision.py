@@ -11,8 +11,8 @@ import numpy as np
 from pxr import UsdGeom, UsdSkel
 
 from ..bezier_patches import bezier_patches, patch_stencils
-from ..subdivision import (MAX_SHARPNESS, cage, limit_points, parent_faces, refine,
-                           refine_face_varying)
+from ..subdivision import (MAX_SHARPNESS, cage, face_varying_cage, limit_points,
+                           parent_faces, refine, refine_face_varying)
 
 LEVEL_ATTR = "lantern:subdivisionRenderLevel"
 LIMIT_ATTR = "lantern:subdivisionLimitSurface"   # written only when false
@@ -84,6 +84,9 @@ class RefinedCage:
                     arr(mesh.GetCornerIndicesAttr(), np.int64),
                     arr(mesh.GetCornerSharpnessesAttr(), np.float64),
                     boundary or "edgeAndCorner")
+        self.base, self.limit = base, limit_surface(mesh.GetPrim())
+        # USD's fallback is cornersPlus1; Lantern's exporter always writes Blender's rule.
+        self.uv_rule = mesh.GetFaceVaryingLinearInterpolationAttr().Get(time) or "cornersPlus1"
         self.patches = self.stencils = None
         if patches:
             finite = np.concatenate([base.edge_sharpness, base.vertex_sharpness])
@@ -96,11 +99,31 @@ class RefinedCage:
             self.patches = bezier_patches(refined)
             if mesh.GetPrim().HasAPI(UsdSkel.BindingAPI):     # made again after each pose
                 self.stencils = patch_stencils(base, levels)
-        elif levels > 0 and limit_surface(mesh.GetPrim()):
+        elif levels > 0 and self.limit:
             self.points = limit_points(refined)
 
     def face_varying(self, per_cage_corner):
-        return refine_face_varying(self.cage_counts, per_cage_corner, self.levels)
+        """Per-corner values (UVs) on the refined faces, by the mesh's
+        faceVaryingLinearInterpolation (engine/subdivision.py face_varying_cage), on the
+        limit surface as the points are."""
+        if self.uv_rule == "all":
+            return refine_face_varying(self.cage_counts, per_cage_corner, self.levels)
+        fv = refine(face_varying_cage(self.base, per_cage_corner, self.uv_rule), self.levels)
+        return (limit_points(fv) if self.limit and self.levels > 0 else fv.points)[fv.indices]
+
+    def face_varying_patches(self, per_cage_corner):
+        """(F, 16, d) Bezier control points of per-corner values over the patches: the
+        channel's own patches, or for `all` its bilinear corners raised to bicubic."""
+        if self.uv_rule == "all":
+            corners = refine_face_varying(self.cage_counts, per_cage_corner, self.levels)
+            c = corners.reshape(-1, 4, corners.shape[1])
+            t = np.arange(4) / 3.0
+            u, v = t[None, :, None], t[:, None, None]          # B[v][u]
+            grid = ((1 - u) * (1 - v) * c[:, None, None, 0] + u * (1 - v) * c[:, None, None, 1]
+                    + u * v * c[:, None, None, 2] + (1 - u) * v * c[:, None, None, 3])
+            return grid.reshape(len(c), 16, -1)
+        return bezier_patches(refine(face_varying_cage(self.base, per_cage_corner,
+                                                       self.uv_rule), self.levels))
 
     def faces(self, cage_faces):
         parent = parent_faces(self.cage_counts, self.levels)

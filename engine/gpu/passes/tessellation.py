@@ -61,7 +61,7 @@ _SIGS = {
 class _Patches:
     """One mesh's patches on the GPU, and the view they were last cut for."""
     control: object               # 16 control points per patch, positions
-    uv: object                    # the same points' UVs (the corners' on the first four)
+    uv: object                    # 16 Bezier control points of the UVs per patch
     stencils: tuple = ()          # a skinned cage's: row starts, points, weights
     vao: object = None
     cut_for: tuple = None
@@ -97,9 +97,7 @@ class TessellationPass(Pass):
             mesh = scene.meshes.get(key)
             if mesh is not None and mesh.patches is not None:
                 p = mesh.patches
-                corner_uv = np.zeros((len(p.control), PATCH_VERTICES, 2), np.float32)
-                corner_uv[:, :4] = p.uv
-                uv = self.uploads.buffer(corner_uv, kind="mesh")
+                uv = self.uploads.buffer(p.uv, kind="mesh")
                 if p.stencils is None:
                     self.meshes[key] = _Patches(self.uploads.buffer(p.control, kind="mesh"), uv)
                     continue
