@@ -28,10 +28,17 @@ from collections import Counter
 import bpy
 
 from ..engine.usd.fragments import Mirror
-from ..exporters import export_depsgraph
+from ..exporters import ExportOptions, export_depsgraph
 from ..exporters.live import (NeedsFullExport, animated, export_data, export_geometry,
                               export_live, export_material, export_object, export_pose,
                               export_world, settings_key)
+
+
+def subdivision_option(scene) -> str:
+    """The scene's Lantern > Subdivision as ExportOptions.subdivision ("apply" where the
+    add-on's settings are not registered: the exporters used alone)."""
+    settings = getattr(scene, "lantern", None)
+    return settings.subdivision.lower() if settings is not None else "apply"
 
 
 class StillScene:
@@ -45,7 +52,8 @@ class StillScene:
         self.warnings = []
 
     def sync(self, depsgraph):
-        report = self.mirror.replace(lambda stage: export_depsgraph(depsgraph, stage))
+        options = ExportOptions(subdivision=subdivision_option(depsgraph.scene))
+        report = self.mirror.replace(lambda stage: export_depsgraph(depsgraph, stage, options))
         self.warnings = report.warnings
         return self.mirror.fragment()
 
@@ -89,13 +97,15 @@ class LiveScene:
 
     def _full(self, depsgraph):
         self.warnings = []
-        self.index = export_live(depsgraph, self.mirror.stage, self._warn)
+        self.index = export_live(depsgraph, self.mirror.stage, self._warn,
+                                 subdivision_option(depsgraph.scene))
         self._did("scene")
 
     # --- what kind of change ----------------------------------------------------------
     def _structure_changed(self, depsgraph) -> bool:
         index = self.index
-        if settings_key(depsgraph.scene) != index.settings:
+        if settings_key(depsgraph.scene) != index.settings or \
+                subdivision_option(depsgraph.scene) != index.subdivision:
             return True
         for update in depsgraph.updates:
             item = update.id

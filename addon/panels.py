@@ -79,6 +79,7 @@ class LANTERN_RENDER_PT_quality(LanternPanel, bpy.types.Panel):
         layout.use_property_decorate = False
         layout.prop(context.scene.lantern, "preset")
         layout.prop(context.scene.lantern, "viewport_resolution")
+        layout.prop(context.scene.lantern, "subdivision")
         layout.prop(context.scene.lantern, "viewport_stats")
 
 

@@ -19,6 +19,15 @@ class LanternSceneSettings(bpy.types.PropertyGroup):
         name="Viewport Resolution", default=1.0, min=0.1, max=1.0, subtype='FACTOR',
         description="Fraction of the viewport's pixels rendered in Rendered shading "
                     "(drawn stretched): lower is faster")
+    subdivision: bpy.props.EnumProperty(
+        name="Subdivision", default="APPLY",
+        items=(("APPLY", "Apply", "Blender subdivides: the Subdivision Surface modifier's "
+                                  "mesh is exported"),
+               ("CAGE", "Cage", "Lantern subdivides: a mesh whose last modifier is a "
+                                "Catmull-Clark Subdivision Surface is exported as its cage "
+                                "and refined by the GPU's tessellation (GL 4.3) or on the "
+                                "CPU; a viewport edit then sends the cage")),
+        description="Who subdivides Subdivision Surface meshes")
     viewport_stats: bpy.props.BoolProperty(
         name="Statistics", default=False,
         description="Show the frame time, GPU time and draw calls of the latest viewport "

@@ -38,6 +38,7 @@ from .gather.shapes import shape_weights
 from .gather.skeleton import (decompose, local_matrices, pose_index, pose_matrices,
                               relative_matrix, trs)
 from .gather.skin import animated
+from .gather.subdivision import data_cage
 from .gather.tangents import tangent_uv_map
 from .gather.world import gather_world
 from .ir import ObjectRecord, SceneRecord
@@ -72,6 +73,8 @@ class LiveIndex:
     moving: set = field(default_factory=set)        # objects a frame change may move
     world: str | None = None                        # the world's name
     settings: tuple = ()                            # what else a full export depends on
+    subdivision: str = "apply"                      # ExportOptions.subdivision
+    cages: set = field(default_factory=set)         # mesh keys written as subdivision cages
 
     @property
     def baked(self) -> list:
@@ -91,17 +94,22 @@ def settings_key(scene) -> tuple:
             scene.world.name_full if scene.world else None)
 
 
-def export_live(depsgraph, stage, warn) -> LiveIndex:
+def export_live(depsgraph, stage, warn, subdivision="apply") -> LiveIndex:
     """The whole scene at the current frame into `stage` (its root layer's content is
-    replaced; USD reports only what differs from what it held)."""
+    replaced; USD reports only what differs from what it held). `subdivision`:
+    "cage" writes a mesh whose data is its subdivision cage as that cage, so that its
+    edits send the cage (gather/subdivision.py data_cage)."""
     scene = depsgraph.scene
     frame = scene.frame_current
-    rec = gather_scene(depsgraph, warn, None, animation=True, live=True)
+    rec = gather_scene(depsgraph, warn, None, animation=True, live=True,
+                       subdivision=subdivision)
     scratch = Usd.Stage.CreateInMemory()
     paths = write_scene(scratch, rec, asset_resolver(None))
     stage.GetRootLayer().TransferContent(scratch.GetRootLayer())
     index = LiveIndex(frame=frame, paths=paths, settings=settings_key(scene),
-                      world=scene.world.name_full if scene.world else None)
+                      world=scene.world.name_full if scene.world else None,
+                      subdivision=subdivision,
+                      cages={k for k, m in rec.meshes.items() if m.subdivision is not None})
     for obj in rec.objects:
         index.objects[obj.key] = copy.copy(obj)
         index.objects[obj.key].points = index.objects[obj.key].instances = None
@@ -257,7 +265,11 @@ def export_geometry(depsgraph, stage, index, key, warn):
     rec = SceneRecord()
     fresh = ObjectRecord(key=key, name=ob.name, parent=obj.parent, matrix=obj.matrix,
                          kind="empty")
-    gather_geometry(ob.evaluated_get(depsgraph), fresh, rec, shared, None, {}, warn)
+    cage = data_cage(ob, depsgraph) if index.subdivision == "cage" else None
+    if (cage is not None) != (obj.mesh in index.cages):
+        raise NeedsFullExport(f"object {key}: its subdivision is no longer written as it was")
+    gather_geometry(ob.evaluated_get(depsgraph), fresh, rec, shared, None, {}, warn, cage,
+                    cage_from_data=True)
     if fresh.mesh != obj.mesh or fresh.mesh not in rec.meshes:
         raise NeedsFullExport(f"object {key}: its mesh is no longer written as it was")
     slots = [m[0] if m else None for m in fresh.materials]

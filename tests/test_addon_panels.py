@@ -79,7 +79,7 @@ def test_the_render_panels_show_only_what_the_engine_honours(addon, empty_scene)
     import bpy
     context = SimpleNamespace(engine="LANTERN", scene=empty_scene)
     assert _drawn(bpy.types.LANTERN_RENDER_PT_quality, context) == [
-        "preset", "viewport_resolution", "viewport_stats"]
+        "preset", "viewport_resolution", "subdivision", "viewport_stats"]
     assert _drawn(bpy.types.LANTERN_RENDER_PT_film, context) == ["film_transparent"]
 
 

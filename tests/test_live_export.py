@@ -236,3 +236,66 @@ def test_blend_shape_weights_at_a_new_frame(corpus):
         assert np.abs(live.rgba - before.rgba).max() > 1e-2     # the shapes moved
     finally:
         synced.close()
+
+
+def test_a_viewport_edit_of_a_subdivided_mesh_sends_its_cage(empty_scene, monkeypatch):
+    """With Lantern > Subdivision on Cage, a mesh whose only modifier is its Subdivision
+    Surface is exported as its cage, and moving one of its vertices in the viewport sends
+    the cage's points (507 for Suzanne), not the level-2 mesh's 7,958; the mirror then
+    equals a fresh cage export. With Apply, the same edit sends the refined mesh."""
+    import bpy
+    import lantern.addon.live as addon_live
+    from lantern.exporters.live import export_live
+
+    sent = {}
+    for option in ("cage", "apply"):
+        monkeypatch.setattr(addon_live, "subdivision_option", lambda scene: option)
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        bpy.ops.mesh.primitive_monkey_add()
+        ob = bpy.context.object
+        ob.modifiers.new("Subdivision", "SUBSURF").levels = 2
+        synced = Synced()
+        try:
+            synced.fragments.clear()
+            ob.data.vertices[0].co.z += 0.3
+            ob.data.update()
+            bpy.context.view_layer.update()
+            done = [kind for exports, _ in synced.fragments for kind, _ in exports]
+            assert done and "scene" not in done, done       # a partial export
+            arrays = [a for _, f in synced.fragments if f for a in f["arrays"]]
+            points = [a for path, _, _, a in arrays if path.endswith(".points")]
+            assert len(points) == 1
+            sent[option] = len(points[0])
+            if option == "cage":
+                fresh = Usd.Stage.CreateInMemory()
+                export_live(bpy.context.evaluated_depsgraph_get(), fresh, lambda m: None, "cage")
+                assert synced.live.mirror.stage.GetRootLayer().ExportToString() == \
+                    fresh.GetRootLayer().ExportToString()
+                mesh = next(p for p in fresh.Traverse() if p.GetTypeName() == "Mesh")
+                assert mesh.GetAttribute("subdivisionScheme").Get() == "catmullClark"
+        finally:
+            synced.close()
+    assert sent == {"cage": 507, "apply": 7958}
+
+
+def test_f12_exports_cages_when_lantern_subdivides(empty_scene, monkeypatch):
+    """F12's export (StillScene) follows Lantern > Subdivision too: Cage writes the
+    cage with its rules, Apply the modifier's mesh."""
+    import bpy
+    import lantern.addon.live as addon_live
+
+    bpy.ops.mesh.primitive_monkey_add()
+    bpy.context.object.modifiers.new("Subdivision", "SUBSURF").render_levels = 2
+    counts = {}
+    for option in ("cage", "apply"):
+        monkeypatch.setattr(addon_live, "subdivision_option", lambda scene: option)
+        still = addon_live.StillScene()
+        try:
+            still.sync(bpy.context.evaluated_depsgraph_get())
+            mesh = next(p for p in still.mirror.stage.Traverse() if p.GetTypeName() == "Mesh")
+            counts[option] = (len(mesh.GetAttribute("points").Get()),
+                              mesh.GetAttribute("subdivisionScheme").Get())
+        finally:
+            still.close()
+    assert counts["cage"] == (507, "catmullClark")
+    assert counts["apply"][0] > 507 and counts["apply"][1] != "catmullClark"

@@ -11,7 +11,7 @@ from .light import gather_light
 from .material import gather_material
 from .mesh import color_attribute_names, gather_mesh
 from .skeleton import relative_matrix, trs
-from .subdivision import subdivision_record, trailing_subdivision
+from .subdivision import data_cage, subdivision_record, trailing_subdivision
 from .tangents import mikktspace_tangents, tangent_uv_map
 from .skin import animated, classify, group_entries
 from .world import gather_world
@@ -90,7 +90,8 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False,
     `subdivision`: "apply" writes a Subdivision Surface modifier's result; "cage" writes
     the cage of a mesh whose last modifier is Catmull-Clark subdivision, with its rules
     (a rigged mesh's too, skinned at rest, when its subdivision follows its Armature
-    modifier directly; not live, where no modifier may be switched off)."""
+    modifier directly). Live, where no modifier may be switched off, only a mesh whose
+    data is its cage (gather/subdivision.py data_cage) is written as one."""
     scene = depsgraph.scene
     rec = SceneRecord(settings=_settings(scene, warn))
     visible = render_visible(depsgraph.view_layer)
@@ -112,9 +113,10 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False,
             shown[orig.name_full] = inst.show_self
     animate = animation and depsgraph.mode == "VIEWPORT" and _animated_scene(scene)
     cages = {}
-    if subdivision == "cage" and not live:
+    if subdivision == "cage":
+        find = data_cage if live else trailing_subdivision
         for key in sorted(originals):
-            mod = trailing_subdivision(originals[key], depsgraph)
+            mod = find(originals[key], depsgraph)
             if mod is not None:
                 cages[key] = mod
     rigs = {}
@@ -140,11 +142,12 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False,
     # Skinned meshes are written at rest: their Armature modifiers are off while the
     # meshes are read (and while sampling, which then skips Blender's skinning).
     # Subdivided meshes are read as their cages likewise.
-    off = [m for r in rigs.values() for m in r.disabled] + list(cages.values())
+    off = [m for r in rigs.values() for m in r.disabled] + \
+        ([] if live else list(cages.values()))
     with modifiers_disabled(off, depsgraph):
         evaluated = {k: ob.evaluated_get(depsgraph) for k, ob in originals.items()}
         groups = _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir,
-                                 instances, shown, materials, cages)
+                                 instances, shown, materials, cages, live)
         if animate:
             sampler = Sampler(depsgraph, rec, originals, rigs, warn)
             sampler.build_skeletons()
@@ -163,7 +166,7 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False,
 
 
 def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir, instances, shown,
-                    material_keys, cages):
+                    material_keys, cages, live):
     scene = depsgraph.scene
 
     def exported_parent(orig):
@@ -213,7 +216,8 @@ def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir, instance
             obj.kind = "camera"
             obj.camera = gather_camera(ob.data.original, scene.render, warn)
         elif ob.type in MESH_LIKE and shown[key]:
-            gather_geometry(ob, obj, rec, shared, rigs.get(key), groups, warn, cages.get(key))
+            gather_geometry(ob, obj, rec, shared, rigs.get(key), groups, warn, cages.get(key),
+                            cage_from_data=live)
             for mat in obj.materials:
                 if mat is not None:
                     material_keys.setdefault(mat[0], mat[1])
@@ -248,7 +252,10 @@ def _gather_points(ob, obj, instances, world, warn):
         require_finite(obj.points.points, f"object '{obj.name}'", "particle positions")
 
 
-def gather_geometry(ob, obj, rec, shared, rig, groups, warn, subdivision=None):
+def gather_geometry(ob, obj, rec, shared, rig, groups, warn, subdivision=None,
+                    cage_from_data=False):
+    """`subdivision`: the trailing Subdivision Surface written as the cage's rules (the
+    mesh read with it switched off, or from the data when `cage_from_data`)."""
     orig = ob.original
     is_shared = is_shareable(orig) and orig.data.name_full in shared
     mesh_key = ("proto:" + orig.data.name_full) if is_shared else ("object:" + orig.name_full)
@@ -259,7 +266,8 @@ def gather_geometry(ob, obj, rec, shared, rig, groups, warn, subdivision=None):
         # meshes have no other modifier), with the reference key's positions. A live
         # export reads a skinned mesh's rest shape from its data likewise.
         keyed = skinned and rig.shape_keys
-        from_data = keyed or (skinned and rig.rest_from_data)
+        from_data = keyed or (skinned and rig.rest_from_data) or \
+            (subdivision is not None and cage_from_data)
         mesh = orig.data if from_data else ob.to_mesh()
         try:
             if len(mesh.polygons) == 0:

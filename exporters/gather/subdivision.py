@@ -46,6 +46,19 @@ def trailing_subdivision(ob, depsgraph):
     return mod
 
 
+def data_cage(ob, depsgraph):
+    """The trailing subdivision of a mesh whose data is its cage as it stands: the
+    modifier is the only one on and no shape keys mix the points. A live export reads
+    such a cage from the data, switching nothing off (it runs inside a depsgraph
+    update), so a viewport edit of the mesh sends the cage."""
+    mod = trailing_subdivision(ob, depsgraph)
+    if mod is None:
+        return None
+    keys = ob.data.shape_keys
+    on = [m for m in ob.modifiers if getattr(m, _flag(depsgraph))]
+    return mod if on == [mod] and (keys is None or len(keys.key_blocks) <= 1) else None
+
+
 def subdivision_record(mod, mesh):
     """The modifier's rules over the cage `mesh` (evaluated without the modifier)."""
     edge_index, edge_sharp = np.zeros((0, 2), np.int32), np.zeros(0, np.float32)
