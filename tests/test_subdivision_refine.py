@@ -327,10 +327,15 @@ def test_skinned_cage_is_refined_after_its_skinning(empty_scene):
         assert "tessellation" not in res.stats["passes"]
 
 
-def test_tessellated_uvs_match_blenders_level_5(empty_scene):
-    """Blender's cube (UV seams on six islands) with Keep Boundaries UV smoothing: the
-    GPU's (point, UV) at every tessellated corner against Blender's level-5 face corners.
-    Exact away from the cube's corners (median), within the patches' bound near them."""
+def test_tessellated_surface_matches_blenders_level_5(empty_scene):
+    """Blender's cube (UV seams on six islands) with Keep Boundaries UV smoothing,
+    exported as a cage and tessellated by the GPU: its (point, UV) at every tessellated
+    corner against Blender's level-5 face corners. Exact away from extraordinary
+    vertices (median), within the patches' bound near them (2e-3 of the diagonal; the
+    UVs' own patches likewise). Suzanne is measured through its patches above
+    (test_patches_match_blenders_level_5), which the GPU's triangles equal
+    (tests/test_tessellation.py): tessellating it at level 5's grid here takes llvmpipe
+    minutes."""
     from scipy.spatial import cKDTree
 
     from _export_helpers import export_current
@@ -351,7 +356,8 @@ def test_tessellated_uvs_match_blenders_level_5(empty_scene):
         key = next(iter(s._renderer.tessellation.meshes))
         data = run_gl(lambda gl: s._renderer.tessellation.read(key)).astype(np.float64)
     ours = np.concatenate([data[:, :3], data[:, 6:8]], axis=1)
-    dist = cKDTree(theirs).query(ours)[0]
-    assert np.median(dist) < 1e-6 and dist.max() < 5e-3
+    diag = np.linalg.norm(theirs[:, :3].max(axis=0) - theirs[:, :3].min(axis=0))
+    dist = cKDTree(theirs).query(ours)[0] / diag
+    assert np.median(dist) < 1e-6 and dist.max() < 2e-3
     uv_only = cKDTree(theirs).query(np.concatenate([data[:, :3], 0 * data[:, 6:8]], axis=1))[0]
     assert uv_only.max() > 0.1          # the UVs are part of what is compared
