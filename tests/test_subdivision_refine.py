@@ -174,6 +174,21 @@ def test_uvs_follow_blenders_uv_smooth(empty_scene, uv_smooth, limit):
         assert _max_nearest(np.concatenate([mine[:, :3], linear], axis=1), theirs) > 1e-3
 
 
+def _shape(shape, creases=None):
+    """Suzanne, or a cube with edges 0 and 3 creased (Blender's crease values)."""
+    if shape == "suzanne":
+        bpy.ops.mesh.primitive_monkey_add()
+        ob = bpy.context.active_object
+    else:
+        ob = cube_object(shape)
+    if creases is not None:
+        me = ob.data
+        values = np.zeros(len(me.edges), dtype=np.float32)
+        values[[0, 3]] = creases
+        me.attributes.new("crease_edge", "FLOAT", "EDGE").data.foreach_set("value", values)
+    return ob
+
+
 def _blender_limit(ob, levels):
     return _blender_refined(ob, levels, limit=True)[0]
 
@@ -191,16 +206,7 @@ def test_limit_points_match_blenders_limit_surface(empty_scene, shape, levels, c
     and agrees again from level 3."""
     from lantern.engine.subdivision import limit_points
 
-    if shape == "suzanne":
-        bpy.ops.mesh.primitive_monkey_add()
-        ob = bpy.context.active_object
-    else:
-        ob = cube_object(shape)
-    if creases is not None:
-        me = ob.data
-        values = np.zeros(len(me.edges), dtype=np.float32)
-        values[[0, 3]] = creases
-        me.attributes.new("crease_edge", "FLOAT", "EDGE").data.foreach_set("value", values)
+    ob = _shape(shape, creases)
     refined = refine(_blender_cage(ob), levels)
     theirs = _blender_limit(ob, levels)
     ours = limit_points(refined)
@@ -233,16 +239,7 @@ def test_patches_match_blenders_level_5(empty_scene, shape, creases, bound):
     from lantern.engine.usd.subdivision import PATCH_LEVELS, RefinedCage
     from lantern.exporters.api import ExportOptions
 
-    if shape == "suzanne":
-        bpy.ops.mesh.primitive_monkey_add()
-        ob = bpy.context.active_object
-    else:
-        ob = cube_object(shape)
-    if creases is not None:
-        me = ob.data
-        values = np.zeros(len(me.edges), dtype=np.float32)
-        values[[0, 3]] = creases
-        me.attributes.new("crease_edge", "FLOAT", "EDGE").data.foreach_set("value", values)
+    ob = _shape(shape, creases)
     theirs, _ = _blender_refined(ob, 5, limit=True)
     stage, _ = export_current(ExportOptions(subdivision="cage"))
     prim = next(p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))
