@@ -167,7 +167,7 @@ class Geometry:
     def _ranges(self, mesh, slot: Slot) -> list:
         """[(material name, first index (absolute), count)] of a mesh's triangles."""
         if mesh.patches is not None:
-            return list(self._tessellated.get(mesh.key, ()))
+            return self.tessellated(mesh.key)
         return [(mesh.materials[mi], slot.first_index + first, count)
                 for mi, first, count in mesh.ranges]
 

@@ -9,12 +9,12 @@ MeshError naming the defect."""
 from __future__ import annotations
 
 import numpy as np
-from pxr import Sdf, Usd, UsdGeom, UsdSkel
+from pxr import Sdf, Usd, UsdGeom
 
 from ...core.transforms import cross
 from ...core.triangulate import triangulate
 from ..scene import MeshData, PatchData
-from .subdivision import RefinedCage, limit_surface, subdivision_level
+from .subdivision import RefinedCage, limit_surface, skinned_cage_unrefined, subdivision_level
 
 
 class MeshError(ValueError):
@@ -102,13 +102,10 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
     if np.any(counts < 3):
         raise MeshError("face with fewer than 3 vertices")
     _finite(pts[np.unique(idx)], "points used by faces")
-    levels, refined = subdivision_level(prim, warnings, tessellate), None
+    levels, refined = subdivision_level(prim, warnings), None
     patches = tessellate and limit_surface(prim) and not any(
         m.needs_tangents or m.reads_generated or m.color_attribute for m in materials)
-    if levels and not patches and prim.HasAPI(UsdSkel.BindingAPI):
-        warnings.append(f"{prim.GetPath()}: a skinned subdivision cage whose materials need "
-                        "tangents, a colour attribute or Generated coordinates is drawn as "
-                        "its cage")
+    if levels and skinned_cage_unrefined(prim, warnings, tessellate, patches):
         levels = 0
     if levels:
         # Normals and tangents are the refined surface's own (USD ignores authored ones

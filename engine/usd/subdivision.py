@@ -22,9 +22,8 @@ LIMIT_ATTR = "lantern:subdivisionLimitSurface"   # written only when false
 PATCH_LEVELS = 2
 
 
-def subdivision_level(prim, warnings, tessellate=False):
-    """Levels to refine `prim` by (0: draw the points as they are). A skinned cage is
-    refined only by the GPU (`tessellate`), after its skinning."""
+def subdivision_level(prim, warnings):
+    """Levels to refine `prim` by (0: draw the points as they are)."""
     mesh = UsdGeom.Mesh(prim)
     scheme = mesh.GetSubdivisionSchemeAttr()
     if not scheme.HasAuthoredValue() or scheme.Get() == UsdGeom.Tokens.none:
@@ -39,11 +38,23 @@ def subdivision_level(prim, warnings, tessellate=False):
         _warn(warnings, f"{path}: subdivisionScheme catmullClark without {LEVEL_ATTR}; "
                         "drawn as its cage")
         return 0
-    if prim.HasAPI(UsdSkel.BindingAPI) and not (tessellate and limit_surface(prim)):
+    return max(0, int(level_attr.Get()))
+
+
+def skinned_cage_unrefined(prim, warnings, tessellate, patches) -> bool:
+    """A skinned cage is refined only after its skinning, as the GPU's patches
+    (`patches`: this mesh becomes them). Otherwise it is drawn as its cage, with a
+    warning saying why; returns whether it is."""
+    if patches or not prim.HasAPI(UsdSkel.BindingAPI):
+        return False
+    path = prim.GetPath()
+    if tessellate and limit_surface(prim):
+        _warn(warnings, f"{path}: a skinned subdivision cage whose materials need tangents, "
+                        "a colour attribute or Generated coordinates is drawn as its cage")
+    else:
         _warn(warnings, f"{path}: a skinned subdivision cage is refined only by GL 4.3's "
                         "tessellation, with Use Limit Surface; drawn as its cage")
-        return 0
-    return max(0, int(level_attr.Get()))
+    return True
 
 
 def limit_surface(prim) -> bool:
