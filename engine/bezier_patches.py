@@ -53,14 +53,18 @@ def bezier_patches(c: Cage) -> np.ndarray:
                              np.minimum(a, b) * n_p + np.maximum(a, b))]
     twin = _find(a * n_p + b, b * n_p + a)
     sharp |= twin < 0
-    flat_interior = interior.reshape(-1, d)
-    faces, corners = np.divmod(np.arange(len(a)), 4)
-    near_a = np.where(sharp[:, None], (2 * p[a] + p[b]) / 3, 0.5 * (
-        flat_interior[faces * 4 + corners] +
-        flat_interior[np.where(twin < 0, 0, (twin // 4) * 4 + (twin % 4 + 1) % 4)]))
-    near_b = np.where(sharp[:, None], (p[a] + 2 * p[b]) / 3, 0.5 * (
-        flat_interior[faces * 4 + (corners + 1) % 4] +
-        flat_interior[np.where(twin < 0, 0, twin)]))
+    # Corner k (face k // 4) and the next corner of its face: interior points beside
+    # an edge's two ends, on this side and (through the twin) on the other.
+    by_corner = interior.reshape(-1, d)
+    k = np.arange(len(a))
+    other = np.where(twin < 0, 0, twin)
+
+    def following(k):
+        return k - k % 4 + (k + 1) % 4
+    near_a = np.where(sharp[:, None], (2 * p[a] + p[b]) / 3,
+                      0.5 * (by_corner[k] + by_corner[following(other)]))
+    near_b = np.where(sharp[:, None], (p[a] + 2 * p[b]) / 3,
+                      0.5 * (by_corner[following(k)] + by_corner[other]))
     near_a, near_b = near_a.reshape(n_f, 4, d), near_b.reshape(n_f, 4, d)
 
     limit = limit_points(c)

@@ -83,7 +83,6 @@ class TessellationPass(Pass):
         self.scratch = scratch
         self._gl = entry_points(proc, _SIGS)
         self.meshes = {}              # mesh key -> _Patches
-        self._queries = None
 
     def needed(self, frame):
         return bool(self.meshes)
