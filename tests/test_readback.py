@@ -12,13 +12,15 @@ engine/gpu/readback.py, engine/gpu/timers.py), on both GL paths:
 - every pass that ran has a GPU time >= 0, and they add up to at most the frame;
 - no draw reads GPU memory that nothing wrote: fresh buffers and textures filled with
   garbage (as a driver may hand them out; llvmpipe hands out zeros) give the same
-  image, with the vertex and index stores grown past their first size."""
+  image, with the vertex and index stores grown past their first size;
+- grown stores hold every byte written into them before and after they grew (NVIDIA's
+  driver lost the copied part of the index buffer until growth waited for its copy)."""
 import numpy as np
 import pytest
 from pxr import Gf, UsdGeom
 
 from lantern.engine import RenderSettings, Session, render_stage
-from lantern.engine.gpu import resources
+from lantern.engine.gpu import resources, stores
 from lantern.engine.gpu.context import GL_VERSIONS, Features, run_gl
 
 import session_scenes
@@ -182,6 +184,38 @@ def test_no_draw_reads_memory_that_nothing_wrote(gl_path, junk, monkeypatch):
     dirty = render_stage(stage, settings)
     assert clean.stats["nonfinite_pixels"] == dirty.stats["nonfinite_pixels"] == 0
     assert np.array_equal(clean.rgba, dirty.rgba)
+
+
+def test_grown_stores_hold_every_byte_written(gl_path, monkeypatch):
+    written = []        # (store, "vbo" or "ibo", byte offset, bytes) in the order written
+    write_vertices = stores.VertexStore.write_vertices
+    write_indices = stores.VertexStore.write_indices
+
+    def vertices(store, slot, data):
+        written.append((store.name, "vbo", slot.first_vertex * stores.VERTEX_BYTES,
+                        np.ascontiguousarray(data, np.float32).tobytes()))
+        write_vertices(store, slot, data)
+
+    def indices(store, slot, data):
+        absolute = np.asarray(data, np.uint32) + np.uint32(slot.first_vertex)
+        written.append((store.name, "ibo", slot.first_index * 4, absolute.tobytes()))
+        write_indices(store, slot, data)
+    monkeypatch.setattr(stores.VertexStore, "write_vertices", vertices)
+    monkeypatch.setattr(stores.VertexStore, "write_indices", indices)
+    with Session(_grown_stores_stage(), RenderSettings(width=W, height=H)) as session:
+        session.render()
+        static = run_gl(lambda gl: session._renderer.geometry.static)
+        held = run_gl(lambda gl: {"vbo": static.vbo.read(), "ibo": static.ibo.read()})
+    assert static.vertices.capacity > 1 << 14 and static.indices.capacity > 1 << 15
+    for buffer in ("vbo", "ibo"):
+        expected = np.zeros(len(held[buffer]), np.uint8)
+        mask = np.zeros(len(held[buffer]), bool)
+        for store, name, offset, data in written:
+            if (store, name) == ("static", buffer):
+                expected[offset:offset + len(data)] = np.frombuffer(data, np.uint8)
+                mask[offset:offset + len(data)] = True
+        got = np.frombuffer(held[buffer], np.uint8)
+        assert mask.sum() > 0 and np.array_equal(got[mask], expected[mask]), buffer
 
 
 def test_a_sequence_broken_off_leaves_the_session_usable():

@@ -103,6 +103,10 @@ class VertexStore:
     def _grown(self, old, capacity, new_capacity, unit):
         new = self.uploads.buffer(reserve=new_capacity * unit, kind="mesh")
         self.ctx.copy_buffer(new, old, size=capacity * unit)     # inside the GPU
+        # NVIDIA's driver (580) can lose the copied part when the new buffer is written
+        # before the copy has run (docs/gpu.md "Store growth on NVIDIA"); llvmpipe never
+        # does. A store doubles a few times a session, so waiting here costs little.
+        self.ctx.finish()
         old.release()
         return new
 
