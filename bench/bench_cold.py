@@ -7,9 +7,9 @@ Prints figures (medians of several new processes), asserts nothing.
      - no program cache (LANTERN_NO_PROGRAM_CACHE=1);
      - the code before (`git archive` of --baseline, default the commit where this
        branch left main, run in its place);
-     - Mesa's own shader cache off too (MESA_SHADER_CACHE_DISABLE=true), the cold of a
-       machine that never rendered (Mesa then offers no program binary format, so
-       Lantern's cache cannot help there);
+     - the driver's own shader cache off too (MESA_SHADER_CACHE_DISABLE=true, and
+       NVIDIA's __GL_SHADER_DISK_CACHE=0), the cold of a machine that never rendered
+       (Mesa then offers no program binary format, so Lantern's cache cannot help there);
      against a warm `Session.render` of the same view in this process. Goal: cold wall
      time <= warm render + 0.4 s with a warm cache.
   2. the first F12 of the demo (out/demo.blend at 640x360) in a new Blender process
@@ -21,7 +21,11 @@ Prints figures (medians of several new processes), asserts nothing.
      from its spawn to Lantern's first image) on three corpus scenes at 160x90, with the
      program cache empty and warm, and with the code before.
 
-    .venv/bin/python bench/bench_cold.py [--runs 5] [--baseline REV] [--parts cli,f12,compare]
+    .venv/bin/python bench/bench_cold.py [--runs 5] [--baseline REV|none] [--parts cli,f12,compare]
+                                         [--demo USD]
+
+`--parts cli --baseline none --demo FILE` runs without bpy or git (the GPU machine,
+../shared/gpu/README.md).
 """
 import argparse
 import json
@@ -103,7 +107,7 @@ def first_f12(blend, mode, env):
 def environment(cache=None, no_cache=False, mesa_off=False, code=None):
     env = dict(os.environ)
     for name in ("LANTERN_PROGRAM_CACHE_DIR", "LANTERN_NO_PROGRAM_CACHE",
-                 "MESA_SHADER_CACHE_DISABLE", "PYTHONPATH"):
+                 "MESA_SHADER_CACHE_DISABLE", "__GL_SHADER_DISK_CACHE"):
         env.pop(name, None)
     if cache is not None:
         env["LANTERN_PROGRAM_CACHE_DIR"] = str(cache)
@@ -111,8 +115,9 @@ def environment(cache=None, no_cache=False, mesa_off=False, code=None):
         env["LANTERN_NO_PROGRAM_CACHE"] = "1"
     if mesa_off:
         env["MESA_SHADER_CACHE_DISABLE"] = "true"
+        env["__GL_SHADER_DISK_CACHE"] = "0"
     if code is not None:          # ahead of the editable install's finder
-        env["PYTHONPATH"] = str(code)
+        env["PYTHONPATH"] = os.pathsep.join(filter(None, (str(code), env.get("PYTHONPATH"))))
     return env
 
 
@@ -199,8 +204,10 @@ def cli_part(args, tmp, code, commit, warm_cache):
         "cache warm": lambda i: environment(cache=warm_cache),
         "cache off": lambda i: environment(no_cache=True),
         f"before {commit}": lambda i: environment(code=code),
-        "Mesa cache off": lambda i: environment(no_cache=True, mesa_off=True),
+        "driver cache off": lambda i: environment(no_cache=True, mesa_off=True),
     }
+    if code is None:
+        del conditions[f"before {commit}"]
     table, programs = {}, {}
     for i in range(args.runs):      # interleaved, so that the machine's load is shared
         for name, env in conditions.items():
@@ -209,9 +216,9 @@ def cli_part(args, tmp, code, commit, warm_cache):
             programs[name] = run[1]
     warm = warm_session(max(args.runs, 5))
 
-    print(f"`lantern render out/demo.usdc -o demo.png --size {SIZE[0]}x{SIZE[1]}`, "
+    print(f"`lantern render {DEMO.name} -o demo.png --size {SIZE[0]}x{SIZE[1]}`, "
           f"medians of {args.runs} new processes (ms); cache: Lantern's program cache; "
-          "Mesa cache off: MESA_SHADER_CACHE_DISABLE=true and Lantern's off:")
+          "driver cache off: the driver's shader cache and Lantern's off:")
     columns = list(conditions)
     rows = medians([r for name in columns for r in table[name]])
     width = max(len(c) for c in columns)
@@ -281,7 +288,10 @@ def main():
                         help="git revision of the code before (default: git merge-base HEAD main)")
     parser.add_argument("--parts", default="cli,f12,compare",
                         help="which parts to run, of cli, f12 and compare")
+    parser.add_argument("--demo", type=pathlib.Path, help="the USD file of the cli part")
     args = parser.parse_args()
+    global DEMO
+    DEMO = (args.demo or DEMO).resolve()
     parts = set(args.parts.split(","))
     if not DEMO.is_file():
         print("out/demo.usdc is missing: building it (make demo)", flush=True)
@@ -289,10 +299,12 @@ def main():
 
     with tempfile.TemporaryDirectory(prefix="lantern-bench-cold-") as tmp:
         tmp = pathlib.Path(tmp)
-        rev = args.baseline or subprocess.run(
-            ["git", "merge-base", "HEAD", "main"], cwd=REPO, capture_output=True, text=True,
-            check=True).stdout.strip()
-        code, commit = baseline_code(rev, tmp / "baseline")
+        code, commit = None, None
+        if args.baseline != "none":
+            rev = args.baseline or subprocess.run(
+                ["git", "merge-base", "HEAD", "main"], cwd=REPO, capture_output=True,
+                text=True, check=True).stdout.strip()
+            code, commit = baseline_code(rev, tmp / "baseline")
         warm_cache = tmp / "warm-cache"
         os.environ["LANTERN_PROGRAM_CACHE_DIR"] = str(warm_cache)   # this process's too
         cli_cold(environment(cache=warm_cache), tmp / "demo.png")   # fills the warm cache

@@ -1,6 +1,7 @@
 """Frame time on the machine at hand, with the CPU and GPU time of every pass and the
 read-back: the demo scene, the 16-character crowd's frame change and a view change on
-1,000 cubes, at 640x360, 1920x1080 and 3840x2160, presets low to ultra.
+1,000 cubes, at 640x360, 1920x1080 and 3840x2160, presets low to ultra; and the demo
+with its subdivision exported as a cage (tessellated on the GPU from GL 4.3).
 
     python bench/bench_gpu.py prepare DIR      # here, with bpy: the scenes as USD files
     python bench/bench_gpu.py run DIR [--json F] [--images DIR] [--sizes ...] [--presets ...]
@@ -12,8 +13,8 @@ as on llvmpipe. A frame is `Session.render` until the image is in host memory, w
 (the scene read, programs compiled and meshes uploaded before). The readback is timed
 three ways: float32 blocking (F12), half floats blocking (a viewport), and queued
 behind a fence in a sequence (Session.render_frames), whose figure is the frame
-interval. `--images` saves each scene's medium image at each size as .npy, to compare
-one machine's pixels with another's (`compare DIR_A DIR_B`)."""
+interval. `--images` saves each scene's medium image at 640x360 (`--image-sizes`) as a
+compressed .npz, to compare one machine's pixels with another's (`compare DIR_A DIR_B`)."""
 from __future__ import annotations
 
 import argparse
@@ -28,7 +29,7 @@ import time
 import numpy as np
 
 HERE = pathlib.Path(__file__).resolve().parent
-SCENES = ("demo", "crowd", "cubes")
+SCENES = ("demo", "crowd", "cubes", "demo_cage")
 SIZES = {"640x360": (640, 360), "1920x1080": (1920, 1080), "3840x2160": (3840, 2160)}
 PRESETS = ("low", "medium", "high", "ultra")
 RUNS = 3
@@ -43,6 +44,7 @@ def prepare(folder: pathlib.Path):
     import lantern.exporters  # noqa: F401  (Blender's pxr first)
     import bpy
     from lantern.exporters import stage_from_depsgraph
+    from lantern.exporters.api import ExportOptions, export_depsgraph_to_file
     from bench_session import crowd_scene
     import session_scenes
     folder.mkdir(parents=True, exist_ok=True)
@@ -51,6 +53,11 @@ def prepare(folder: pathlib.Path):
         raise SystemExit(f"{demo}: missing; run `make demo` first")
     shutil.copy2(demo, folder / "demo.usdc")          # with its textures, by relative path
     shutil.copytree(demo.parent / "demo_textures", folder / "demo_textures", dirs_exist_ok=True)
+    bpy.ops.wm.open_mainfile(filepath=str(demo.with_suffix(".blend")))
+    cage = demo.parent / "demo_cage.usdc"     # beside demo_textures, which it names relatively
+    export_depsgraph_to_file(bpy.context.evaluated_depsgraph_get(), str(cage),
+                             ExportOptions(subdivision="cage", animation=False))
+    shutil.copy2(cage, folder / cage.name)
     crowd_scene()
     stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
     stage.Export(str(folder / "crowd.usdc"))
@@ -78,7 +85,7 @@ def _render(session, change, **kw):
     return session.render(view_matrix=view[0], projection_matrix=view[1], frame=frame, **kw)
 
 
-def measure(name, stage, size, preset, images):
+def measure(name, stage, size, preset, images, image_sizes):
     from lantern.engine import RenderSettings, Session
     from lantern.core.presets import preset as find_preset
     k = find_preset(preset).supersample
@@ -99,8 +106,9 @@ def measure(name, stage, size, preset, images):
             t0 = time.perf_counter()
             n = sum(1 for _ in s.render_frames([c[0] for c in changes[1:]]))
             queued = (time.perf_counter() - t0) / n
-        if images is not None and preset == "medium":
-            np.save(images / f"{name}_{size[0]}x{size[1]}.npy", last.rgba)
+        size_name = f"{size[0]}x{size[1]}"
+        if images is not None and preset == "medium" and size_name in image_sizes:
+            np.savez_compressed(images / f"{name}_{size_name}.npz", rgba=last.rgba)
     med = statistics.median
     return {
         "scene": name, "size": list(size), "preset": preset, "supersample": k,
@@ -118,7 +126,7 @@ def measure(name, stage, size, preset, images):
     }
 
 
-def run(folder, sizes, presets, json_path, images, everything):
+def run(folder, sizes, presets, json_path, images, everything, image_sizes=("640x360",)):
     from lantern.engine.usd.opening import open_stage
     if images is not None:
         images.mkdir(parents=True, exist_ok=True)
@@ -135,7 +143,7 @@ def run(folder, sizes, presets, json_path, images, everything):
                     print(f"  {name:<6} {size_name:>9} {preset:<7} skipped on llvmpipe "
                           f"({size[0] * k}x{size[1] * k} drawn; --all runs it)", flush=True)
                     continue
-                row = measure(name, stage, size, preset, images)
+                row = measure(name, stage, size, preset, images, image_sizes)
                 gl = row["gl"]
                 rows.append(row)
                 _print(row)
@@ -164,12 +172,12 @@ def _print(row):
 
 def compare(a: pathlib.Path, b: pathlib.Path):
     """Pixels of two machines' images: the share differing by more than 1e-2."""
-    for path in sorted(a.glob("*.npy")):
+    for path in sorted(a.glob("*.npz")):
         other = b / path.name
         if not other.is_file():
             print(f"  {path.name}: missing in {b}")
             continue
-        x, y = np.load(path), np.load(other)
+        x, y = np.load(path)["rgba"], np.load(other)["rgba"]
         diff = np.abs(x.astype(np.float64) - y).max(axis=-1)
         print(f"  {path.stem:<22} max {np.nanmax(diff):.4f}, "
               f"{100 * np.mean(diff > 1e-2):.3f}% of pixels > 1e-2")
@@ -185,6 +193,7 @@ def main():
     r.add_argument("--presets", nargs="+", default=list(PRESETS), choices=PRESETS)
     r.add_argument("--json")
     r.add_argument("--images", type=pathlib.Path)
+    r.add_argument("--image-sizes", nargs="+", default=["640x360"], choices=list(SIZES))
     r.add_argument("--all", action="store_true", help="also the largest targets on llvmpipe")
     c = sub.add_parser("compare")
     c.add_argument("a", type=pathlib.Path)
@@ -198,7 +207,8 @@ def main():
     if args.command == "prepare":
         prepare(args.folder)
     elif args.command == "run":
-        run(args.folder, args.sizes, args.presets, args.json, args.images, args.all)
+        run(args.folder, args.sizes, args.presets, args.json, args.images, args.all,
+            args.image_sizes)
     else:
         compare(args.a, args.b)
 
