@@ -1,6 +1,6 @@
 """The engine host starts before the first F12 (addon/prestart.py) and warms its
 programs up (engine/host/warmup.py): the first F12 of Blender's default scene then
-makes no program."""
+makes no program, and the textured, rigged demo asks for none the warm-up did not."""
 import pytest
 
 
@@ -49,3 +49,29 @@ def test_no_host_for_a_file_that_renders_with_another_engine(addon, tmp_path):
     scene_render.shutdown()
     bpy.ops.wm.open_mainfile(filepath=str(blend))
     assert not host.get().running()
+
+
+def test_the_warm_up_makes_every_program_of_the_textured_rigged_demo(tmp_path, monkeypatch):
+    """Not only the default scene's: the demo (image textures, a normal map, a rig, a
+    sun, area and point lights) asks for no program the warm-up did not."""
+    import bpy
+    from lantern.engine import RenderSettings, render_stage
+    from lantern.engine.gpu import programs
+    from lantern.engine.host.warmup import warm
+    from lantern.exporters import stage_from_depsgraph
+    from reference_scenes import build_demo
+    build_demo(str(tmp_path))
+    stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+    asked = []
+    get = programs.ProgramCache.get
+
+    def recorded(self, *args, **kwargs):
+        program = get(self, *args, **kwargs)
+        asked.append(program.extra)
+        return program
+    monkeypatch.setattr(programs.ProgramCache, "get", recorded)
+    warm(["medium"])
+    warmed = set(asked)
+    asked.clear()
+    render_stage(stage, RenderSettings(width=64, height=36, preset="medium"))
+    assert asked and set(asked) <= warmed, [key[:3] for key in set(asked) - warmed]
