@@ -180,6 +180,8 @@ def cli_cold(env, out):
             phases[match.group(1)] = float(match.group(2))
         elif line.strip().startswith("programs:"):
             programs = line.strip()[len("programs: "):]
+        elif line.strip().startswith("first frame's heaviest"):
+            programs += "; " + line.strip()
     phases["spawn to exit"] = wall * 1000.0
     # CPU seconds of the process and its threads (llvmpipe draws on every core): less
     # sensitive than wall time to what else the machine runs.

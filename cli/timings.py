@@ -39,6 +39,12 @@ class Phases:
         for name, seconds in rows:
             if seconds is not None:
                 print(f"  {name:<24}{seconds * 1000:8.1f}")
+        # Where a first frame's extra time lands: the CPU time issuing each pass holds
+        # what the driver does on a program's first draw (llvmpipe's code generation).
+        passes = sorted(((p, v) for p, v in t.items() if p in result.gpu_timings),
+                        key=lambda pv: -pv[1])[:4]
+        print("  first frame's heaviest passes (CPU / GPU ms): " + ", ".join(
+            f"{p} {v * 1000:.0f} / {result.gpu_timings[p] * 1000:.0f}" for p, v in passes))
         print(f"  programs: {s.get('programs_compiled', 0)} compiled, "
               f"{s.get('programs_loaded', 0)} loaded from the program cache")
 
