@@ -11,7 +11,7 @@ uploads only that."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -25,6 +25,9 @@ class TextureRef:
     scale: tuple = (1.0, 1.0, 1.0, 1.0)
     bias: tuple = (0.0, 0.0, 0.0, 0.0)
     channel: str = "rgb"           # rgb | r | g | b | a
+    # A UDIM image (a `<UDIM>` path): ((tile number, resolved path), ...) of the tiles
+    # found, first tile first; `path` is the first tile's. () for a plain image.
+    tiles: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -84,6 +87,23 @@ class Material:
         return "normal" in self.maps
 
     @property
+    def udim_tiles(self) -> tuple:
+        """The UDIM tile numbers its maps have, first tile first (() for none). The
+        first tile draws with this record; each other tile with `for_tile`'s, bound to
+        the triangles whose UVs lie in that tile (engine/usd/mesh.py)."""
+        return tuple(sorted({t for ref in self.maps.values() for t, _ in ref.tiles}))
+
+    def tile_name(self, tile: int) -> str:
+        return f"{self.name}<UDIM {tile}>"
+
+    def for_tile(self, tile: int) -> "Material":
+        """This material with each UDIM map reading `tile`'s image (a map without that
+        tile keeps its first tile's)."""
+        maps = {name: replace(ref, path=dict(ref.tiles).get(tile, ref.path), tiles=())
+                for name, ref in self.maps.items()}
+        return replace(self, name=self.tile_name(tile), maps=maps)
+
+    @property
     def color_attribute(self) -> str | None:
         """The colour primvar this material's network reads (its first attribute node)."""
         if self.pattern is None:
@@ -115,7 +135,8 @@ class Material:
     def mesh_layout(self) -> tuple:
         """What this material asks of the meshes it is bound to (engine/usd/mesh.py):
         they are built again when it changes."""
-        return (self.uv_name, self.needs_tangents, self.color_attribute, self.reads_generated)
+        return (self.uv_name, self.needs_tangents, self.color_attribute, self.reads_generated,
+                self.udim_tiles)
 
     @property
     def needs_smooth_normal(self) -> bool:

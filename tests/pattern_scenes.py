@@ -802,7 +802,57 @@ def build_bump(workdir=None):
                           ("normal_map_half", _network_normal_map(0.5))])
 
 
-SCENES = {"attribute": build_attribute,
+UDIM_TILES = (1001, 1002, 1011)
+
+
+def _udim_image():
+    """A UDIM image of three 16 x 16 8-bit sRGB tiles (1001, 1002, 1011), each its own
+    gradient and checker, as files `lantern-udim-<pid>.<tile>.png` in the temporary
+    folder, loaded as Blender does (source Tiled: it finds the tiles on disk)."""
+    import os
+    import tempfile
+    import bpy
+    import numpy as np
+    from reference_scenes import _write_image
+    stem = os.path.join(tempfile.gettempdir(), f"lantern-udim-{os.getpid()}")
+    for k, tile in enumerate(UDIM_TILES):
+        path = f"{stem}.{tile}.png"
+        if not os.path.exists(path):
+            y, x = np.mgrid[0:16, 0:16]
+            channels = [x * 16, y * 16, 255 - x * 8]
+            rgba = np.stack(channels[k:] + channels[:k] + [np.full_like(x, 255)], -1)
+            rgba[((x // (2 + 2 * k) + y // 4) % 2) == 1, :3] //= 3
+            _write_image(path, rgba.astype(np.uint8))
+    image = bpy.data.images.load(f"{stem}.1001.png", check_existing=True)
+    image.source = "TILED"
+    return image
+
+
+def _udim(u0, v0, size=1.0):
+    """The UDIM image straight on Base Color, the quad's UVs a square of `size` at
+    (u0, v0): inside tile 1001 + floor(u0) + 10 floor(v0)."""
+    def build(tree, bsdf):
+        node = tree.nodes.new("ShaderNodeTexImage")
+        node.image = _udim_image()
+        _to_base(tree, bsdf, node.outputs["Color"])
+
+    def mesh(me):
+        corners = [(u0, v0), (u0 + size, v0), (u0 + size, v0 + size), (u0, v0 + size)]
+        for loop, uv in zip(me.uv_layers.active.data, corners):
+            loop.uv = uv
+    build.mesh = mesh
+    return build
+
+
+def build_udim(workdir=None):
+    """An image of UDIM tiles on Base Color: each quad's UVs in another tile."""
+    return _grid("udim", [("tile_1001", _udim(0.0, 0.0)), ("tile_1002", _udim(1.0, 0.0)),
+                          ("tile_1011", _udim(0.0, 1.0)),
+                          ("tile_1002_zoomed", _udim(1.25, 0.25, 0.5))])
+
+
+SCENES = {"udim": build_udim,
+          "attribute": build_attribute,
           "mix_shader": build_mix_shader,
           "generated": build_generated,
           "bump": build_bump,

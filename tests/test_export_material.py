@@ -207,19 +207,44 @@ def test_transparent_bsdf_in_a_mix_shader_is_the_opacity(empty_scene):
         report.warnings
 
 
-def test_a_udim_image_exports_its_first_tile_with_one_warning(empty_scene, tmp_path):
-    """UDIM tiles are not supported: the first tile's file is used (not "not found"),
-    and the warning names the image and the tiles left out."""
+def _tiled_image(tmp_path, tiles=(1001, 1002)):
     from reference_scenes import _write_image
-    for tile in (1001, 1002):
+    for tile in tiles:
         _write_image(str(tmp_path / f"tiles.{tile}.png"), np.full((4, 4, 4), 200, np.uint8))
     img = bpy.data.images.load(str(tmp_path / "tiles.1001.png"))
     img.name = "Tiles"
-    img.source = "TILED"                     # Blender finds tiles.1002.png beside it
+    img.source = "TILED"                     # Blender finds the other tiles beside it
+    return img
+
+
+def test_a_udim_image_keeps_its_token_and_names_a_tile_without_a_file(empty_scene, tmp_path):
+    """Straight on an input, a UDIM image is written as USD's `<UDIM>` path; a tile
+    Blender lists but whose file is missing is one warning naming it."""
+    img = _tiled_image(tmp_path)
+    img.tiles.new(1003)                      # listed, never saved
     image_on_base_cube("Tiled", img)
     stage, report = export_current()
     shader, _ = source(surface(stage, "Tiled"), "diffuseColor")
-    assert os.path.basename(shader.GetInput("file").Get().path) == "tiles.1001.png"
+    assert os.path.basename(shader.GetInput("file").Get().path) == "tiles.<UDIM>.png"
+    assert len(report.warnings) == 1 and "'Tiles'" in report.warnings[0] and \
+        "1003" in report.warnings[0], report.warnings
+
+
+def test_a_udim_image_in_a_network_is_its_first_tile_with_one_warning(empty_scene, tmp_path):
+    """A network samples one image a node: the first tile's file, and a warning naming
+    the image and its tile count (not "not found")."""
+    img = _tiled_image(tmp_path)
+    mat, tree, bsdf = principled_material("Networked")
+    node = tree.nodes.new("ShaderNodeTexImage")
+    node.image = img
+    invert = tree.nodes.new("ShaderNodeInvert")
+    tree.links.new(node.outputs["Color"], invert.inputs["Color"])
+    tree.links.new(invert.outputs["Color"], bsdf.inputs["Base Color"])
+    cube_object("Cube").data.materials.append(mat)
+    stage, report = export_current()
+    files = [p.GetAttribute("inputs:file").Get().path for p in stage.Traverse()
+             if p.GetAttribute("inputs:file")]
+    assert [os.path.basename(f) for f in files] == ["tiles.1001.png"], files
     assert len(report.warnings) == 1 and "'Tiles'" in report.warnings[0] and \
         "2 tiles" in report.warnings[0] and "not found" not in report.warnings[0], report.warnings
 

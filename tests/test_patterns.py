@@ -253,3 +253,32 @@ def test_a_bad_node_is_one_warning_and_the_preview_value(edit, says):
     assert np.isfinite(bad.rgba).all()
     # Invert's fallback: its Color socket's default, lit as the base colour.
     assert np.abs(bad.rgba[16, 3, :3] - good.rgba[16, 3, :3]).max() > 0.01
+
+
+def test_udim_tiles_are_written_by_their_token_copied_and_read_from_the_file(tmp_path):
+    """The UDIM image straight on Base Color keeps its `<UDIM>` path; "copy" mode copies
+    every tile beside the layer; the file renders as the in-memory stage does."""
+    import os
+    import bpy
+    from pxr import Usd, UsdShade
+    from lantern.engine import RenderSettings, render_stage
+    from lantern.exporters import validation_errors
+    from lantern.exporters.api import ExportOptions, export_depsgraph_to_file
+    memory, _ = exported("udim")
+    pattern_scenes.build_udim()
+    out = tmp_path / "udim.usda"
+    report = export_depsgraph_to_file(bpy.context.evaluated_depsgraph_get(), str(out),
+                                      ExportOptions(textures="copy", animation=False))
+    assert not report.warnings, report.warnings
+    stage = Usd.Stage.Open(str(out))
+    assert validation_errors(stage) == []
+    files = {UsdShade.Shader(p).GetInput("file").Get().path for p in stage.Traverse()
+             if p.IsA(UsdShade.Shader) and UsdShade.Shader(p).GetIdAttr().Get() == "UsdUVTexture"}
+    stem = f"lantern-udim-{os.getpid()}"
+    assert files == {f"./udim_textures/{stem}.<UDIM>.png"}
+    assert sorted(os.listdir(tmp_path / "udim_textures")) == [
+        f"{stem}.{tile}.png" for tile in pattern_scenes.UDIM_TILES]
+    settings = RenderSettings(width=64, height=64)
+    from_file, in_memory = render_stage(stage, settings), render_stage(memory, settings)
+    assert not from_file.warnings, from_file.warnings
+    np.testing.assert_allclose(from_file.rgba, in_memory.rgba, atol=1e-6)

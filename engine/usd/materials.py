@@ -131,7 +131,8 @@ def _texture_ref(shader, channel, time, mat_path, warnings):
         warnings.append(f"{mat_path}: texture {shader.GetPath()} has no file; using the "
                         f"constant fallback")
         return None
-    resolved = asset.resolvedPath
+    tiles = _udim_tiles(shader, asset.path)
+    resolved = tiles[0][1] if tiles else asset.resolvedPath
     if not resolved or not os.path.isfile(resolved):
         warnings.append(f"{mat_path}: texture file {asset.path!r} not found; using the "
                         f"constant fallback")
@@ -144,7 +145,19 @@ def _texture_ref(shader, channel, time, mat_path, warnings):
         wrap_s=str(_input_value(shader, "wrapS", time, "useMetadata")).replace("useMetadata", "repeat"),
         wrap_t=str(_input_value(shader, "wrapT", time, "useMetadata")).replace("useMetadata", "repeat"),
         scale=tuple(float(c) for c in scale), bias=tuple(float(c) for c in bias),
-        channel=channel if channel in ("r", "g", "b", "a") else "rgb")
+        channel=channel if channel in ("r", "g", "b", "a") else "rgb", tiles=tiles)
+
+
+def _udim_tiles(shader, path) -> tuple:
+    """((tile, resolved path), ...) of a `<UDIM>` path's tiles on disk, resolved against
+    the layer that authored the file input; () for another path."""
+    if not UsdShade.UdimUtils.IsUdimIdentifier(path):
+        return ()
+    attr = shader.GetInput("file").GetAttr()
+    specs = attr.GetPropertyStack(Usd.TimeCode.Default())
+    layer = specs[0].layer if specs else shader.GetPrim().GetStage().GetRootLayer()
+    found = UsdShade.UdimUtils.ResolveUdimTilePaths(path, layer)
+    return tuple(sorted((int(tile), resolved) for resolved, tile in found))
 
 
 def might_vary(mat: UsdShade.Material) -> bool:

@@ -104,7 +104,8 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
     _finite(pts[np.unique(idx)], "points used by faces")
     levels, refined = subdivision_level(prim, warnings), None
     patches = tessellate and limit_surface(prim) and not any(
-        m.needs_tangents or m.reads_generated or m.color_attribute for m in materials)
+        m.needs_tangents or m.reads_generated or m.color_attribute or m.udim_tiles
+        for m in materials)
     if levels and skinned_cage_unrefined(prim, warnings, tessellate, patches):
         levels = 0
     if levels:
@@ -168,6 +169,7 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
         faces = faces[(faces >= 0) & (faces < n_faces)]
         face_mat[faces] = mi
     tri_mat = face_mat[face_of_tri]
+    materials, tri_mat = split_udim_tiles(materials, tri_mat, UV)
     order = np.argsort(tri_mat, kind="stable")
 
     T = np.zeros((len(corners), 4))
@@ -225,6 +227,28 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
                     backface_culling=culling,
                     point_of_vertex=point_of_corner[first].astype(np.int32),
                     surface_normals=normals is None)
+
+
+def split_udim_tiles(materials, tri_mat, uv):
+    """([Material], triangle -> material index) with the triangles of a UDIM material
+    whose UV centre lies in another of its tiles given that tile's record
+    (Material.for_tile), as Cycles picks a tile by the UV's integer part. Triangles in
+    the first tile, or in none of the image's tiles, keep the material's own record
+    (the first tile's image)."""
+    if not any(m.udim_tiles for m in materials):
+        return materials, tri_mat
+    materials, tri_mat = list(materials), tri_mat.copy()
+    column, row = np.floor(uv.reshape(-1, 3, 2).mean(axis=1)).T
+    inside = (column >= 0) & (column < 10) & (row >= 0)     # UDIM's ten tiles a row
+    tile = np.where(inside, 1001 + column + 10 * row, 0).astype(np.int64)
+    for mi, material in enumerate(list(materials)):
+        mine = tri_mat == mi
+        for t in material.udim_tiles[1:]:
+            sel = mine & (tile == t)
+            if sel.any():
+                materials.append(material.for_tile(t))
+                tri_mat[sel] = len(materials) - 1
+    return materials, tri_mat
 
 
 MAX_TESSELLATED_VERTICES = 1 << 22

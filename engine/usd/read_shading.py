@@ -56,10 +56,18 @@ class ShadingReading:
         name = str(prim.GetPath())
         if force or name not in self.scene.materials:
             warnings = self.scene.warnings[name] = []
-            self.scene.materials[name] = read_material(mat, self._t, warnings)
+            self._forget_tiles(name)
+            material = self.scene.materials[name] = read_material(mat, self._t, warnings)
+            for tile in material.udim_tiles[1:]:     # the first tile draws with `material`
+                self.scene.materials[material.tile_name(tile)] = material.for_tile(tile)
             self._material_varies[name] = material_might_vary(mat)
             self._read.add(name)
         return self.scene.materials[name]
+
+    def _forget_tiles(self, name):
+        old = self.scene.materials.get(name)
+        for tile in old.udim_tiles[1:] if old is not None else ():
+            self.scene.materials.pop(old.tile_name(tile), None)
 
     def _unuse_material(self, name, path):
         users = self._material_users.get(name)
@@ -70,6 +78,7 @@ class ShadingReading:
                 self._forget_material(name)
 
     def _forget_material(self, name):
+        self._forget_tiles(name)
         self.scene.materials.pop(name, None)
         self._material_varies.pop(name, None)
         self.scene.warnings.pop(name, None)
@@ -86,6 +95,7 @@ class ShadingReading:
         else:
             new = self._material(UsdShade.Material(prim), force=True)
             changes.materials.add(name)
+            changes.materials.update(new.tile_name(t) for t in new.udim_tiles[1:])
             relayout = users if old is None or old.mesh_layout != new.mesh_layout else set()
         for path in relayout:
             p = self.stage.GetPrimAtPath(path)

@@ -40,13 +40,19 @@ def memory_texture_dir():
     return _memory_dir
 
 
-def image_file(image, owner, warn, texture_dir):
-    """Absolute path of a file holding `image`, or None with a warning naming `owner`."""
+def image_file(image, owner, warn, texture_dir, udim=False):
+    """Absolute path of a file holding `image`, or None with a warning naming `owner`.
+    `udim`: a UDIM image of several tiles named by `<UDIM>` keeps that token (USD's
+    UDIM path: the tiles are the files with 1001, 1002, ... in its place); otherwise
+    its first tile stands for it."""
     if image is None:
         return None
     if image.packed_file is None and image.source in {"FILE", "SEQUENCE", "MOVIE", "TILED"}:
         path = os.path.normpath(bpy.path.abspath(image.filepath, library=image.library))
         if image.source == "TILED":
+            tiled = _tiles(image, path, owner, warn) if udim else None
+            if tiled is not None:
+                return tiled
             path = _first_tile(image, path, owner, warn)
         if os.path.isfile(path):
             return path
@@ -68,16 +74,34 @@ def image_file(image, owner, warn, texture_dir):
         return None
 
 
+def _tiles(image, path, owner, warn):
+    """The `<UDIM>` path of a UDIM image of several tiles whose files exist (those that
+    do not are named in a warning), or None: one tile, `<UVTILE>` naming (USD has no
+    such token), or no tile file at all."""
+    tiles = sorted(t.number for t in image.tiles)
+    if len(tiles) < 2 or "<UDIM>" not in path:
+        return None
+    missing = [t for t in tiles if not os.path.isfile(path.replace("<UDIM>", str(t)))]
+    if len(missing) == len(tiles):
+        return None
+    if missing:
+        warn(f"{owner}: UDIM image '{image.name}': no file for tile(s) "
+             f"{', '.join(map(str, missing))}; those tiles draw the first tile's image")
+    return path
+
+
 def _first_tile(image, path, owner, warn):
-    """A UDIM image's first tile's file (its <UDIM> or <UVTILE> token filled in): the
-    engine draws one image a texture, so the other tiles are left out, with a warning."""
+    """A UDIM image's first tile's file (its <UDIM> or <UVTILE> token filled in), where
+    the image is drawn as one texture: in a node network, an environment, or named by
+    `<UVTILE>`. The other tiles are left out, with a warning."""
     tiles = sorted(t.number for t in image.tiles) or [1001]
     first = tiles[0]
     u, v = (first - 1001) % 10 + 1, (first - 1001) // 10 + 1
     path = path.replace("<UDIM>", str(first)).replace("<UVTILE>", f"u{u}_v{v}")
     if len(tiles) > 1:
         warn(f"{owner}: UDIM image '{image.name}' has {len(tiles)} tiles; only tile "
-             f"{first} is exported (UDIM tiles are not supported)")
+             f"{first} is exported (UDIM tiles are drawn only for an image straight on "
+             f"a surface input, named by <UDIM>)")
     return path
 
 

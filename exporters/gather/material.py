@@ -139,7 +139,7 @@ class _Walker:
 
     def texture(self, node, raw=False):
         path = image_file(node.image, f"material '{self.material.name}', node '{node.name}'",
-                          self.warn, self.texture_dir)
+                          self.warn, self.texture_dir, udim=True)
         if path is None:
             return None
         space = node.image.colorspace_settings.name
