@@ -249,6 +249,81 @@ def test_a_udim_image_in_a_network_is_its_first_tile_with_one_warning(empty_scen
         "2 tiles" in report.warnings[0] and "not found" not in report.warnings[0], report.warnings
 
 
+def _group(name, inputs, outputs):
+    """A shader node group with `inputs` and `outputs` [(name, socket type)]; returns
+    (group tree, its Group Input node, its Group Output node)."""
+    group = bpy.data.node_groups.new(name, "ShaderNodeTree")
+    for sockets, in_out in ((inputs, "INPUT"), (outputs, "OUTPUT")):
+        for socket_name, kind in sockets:
+            group.interface.new_socket(name=socket_name, in_out=in_out, socket_type=kind)
+    return group, group.nodes.new("NodeGroupInput"), group.nodes.new("NodeGroupOutput")
+
+
+def test_node_groups_are_read_through_as_cycles_compiles_them(empty_scene, tmp_path):
+    """A Principled BSDF inside a group (inside another group): its Base Color comes
+    through the Group Input from an image outside, and its unlinked Roughness input
+    takes the group node's value."""
+    shading, inner_in, inner_out = _group("Shading", [("Colour", "NodeSocketColor"),
+                                                      ("Rough", "NodeSocketFloat")],
+                                          [("BSDF", "NodeSocketShader")])
+    bsdf = shading.nodes.new("ShaderNodeBsdfPrincipled")
+    shading.links.new(inner_in.outputs["Colour"], bsdf.inputs["Base Color"])
+    shading.links.new(inner_in.outputs["Rough"], bsdf.inputs["Roughness"])
+    shading.links.new(bsdf.outputs["BSDF"], inner_out.inputs["BSDF"])
+    wrapper, outer_in, outer_out = _group("Wrapper", [("Colour", "NodeSocketColor")],
+                                          [("BSDF", "NodeSocketShader")])
+    nested = wrapper.nodes.new("ShaderNodeGroup")
+    nested.node_tree = shading
+    nested.inputs["Rough"].default_value = 0.3
+    wrapper.links.new(outer_in.outputs["Colour"], nested.inputs["Colour"])
+    wrapper.links.new(nested.outputs["BSDF"], outer_out.inputs["BSDF"])
+    mat = bpy.data.materials.new("Grouped")
+    tree = mat.node_tree
+    tree.nodes.remove(tree.nodes["Principled BSDF"])
+    group = tree.nodes.new("ShaderNodeGroup")
+    group.node_tree = wrapper
+    tex = tree.nodes.new("ShaderNodeTexImage")
+    tex.image = saved_image(tmp_path, "grouped", "sRGB")
+    tree.links.new(tex.outputs["Color"], group.inputs["Colour"])
+    tree.links.new(group.outputs["BSDF"], tree.nodes["Material Output"].inputs["Surface"])
+    cube_object("Cube").data.materials.append(mat)
+    stage, report = export_current()
+    assert report.warnings == [], report.warnings
+    shader = surface(stage, "Grouped")
+    texture, _ = source(shader, "diffuseColor")
+    assert texture.GetIdAttr().Get() == "UsdUVTexture"
+    assert shader.GetInput("roughness").Get() == pytest.approx(0.3)
+
+
+def test_a_group_used_twice_reads_each_instances_inputs(empty_scene):
+    """One group (x * 2, a Math node inside) used twice in a network, with 0.1 and 0.3:
+    two Math nodes in the pattern graph, each with its own value, named by its group."""
+    double, group_in, group_out = _group("Double", [("x", "NodeSocketFloat")],
+                                         [("y", "NodeSocketFloat")])
+    times = double.nodes.new("ShaderNodeMath")
+    times.operation = "MULTIPLY"
+    times.inputs[1].default_value = 2.0
+    double.links.new(group_in.outputs["x"], times.inputs[0])
+    double.links.new(times.outputs[0], group_out.inputs["y"])
+    mat, tree, bsdf = principled_material("Twice")
+    add = tree.nodes.new("ShaderNodeMath")
+    for k, value in enumerate((0.1, 0.3)):
+        node = tree.nodes.new("ShaderNodeGroup")
+        node.node_tree = double
+        node.name = f"Double{k}"
+        node.inputs["x"].default_value = value
+        tree.links.new(node.outputs["y"], add.inputs[k])
+    tree.links.new(add.outputs[0], bsdf.inputs["Roughness"])
+    cube_object("Cube").data.materials.append(mat)
+    stage, report = export_current()
+    assert report.warnings == [], report.warnings
+    pattern = stage.GetPrimAtPath("/root/_materials/Twice/Pattern")
+    values = sorted(round(p.GetAttribute("inputs:a").Get(), 6) for p in pattern.GetChildren()
+                    if p.GetAttribute("lantern:nodeDef").Get() == "ND_lantern_math"
+                    and p.GetAttribute("inputs:b").Get() == 2.0)
+    assert values == [0.1, 0.3]
+
+
 def test_colour_attributes_are_written_as_the_primvars_networks_read(empty_scene):
     """The render colour attribute becomes primvars:displayColor, a named one its own
     (a valid identifier), both faceVarying colour, scene linear; a name the mesh lacks
@@ -770,3 +845,18 @@ def test_an_empty_material_slot_gets_the_default_surface_colour(empty_scene):
     bound = [UsdShade.MaterialBindingAPI(s.GetPrim()).ComputeBoundMaterial()[0]
              for s in UsdShade.MaterialBindingAPI(mesh).GetMaterialBindSubsets()]
     assert sorted(bool(m) for m in bound) == [False, True]
+
+
+def test_a_network_on_an_input_that_takes_constants_names_the_input(empty_scene):
+    """Coat Weight takes no network: the warning names the input and the node (a
+    supported one), not "not supported"."""
+    mat, tree, bsdf = principled_material("Coated")
+    half = tree.nodes.new("ShaderNodeMath")
+    half.operation = "MULTIPLY"
+    half.inputs[0].default_value, half.inputs[1].default_value = 0.5, 0.5
+    tree.links.new(half.outputs[0], bsdf.inputs["Coat Weight"])
+    cube_object("Cube").data.materials.append(mat)
+    _, report = export_current()
+    assert len(report.warnings) == 1, report.warnings
+    assert "'Coat Weight' takes a constant only" in report.warnings[0] and \
+        "ShaderNodeMath" in report.warnings[0] and "not supported" not in report.warnings[0]

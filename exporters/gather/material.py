@@ -7,6 +7,7 @@ import dataclasses
 import math
 
 from ..ir import MaterialRecord, TexInput, TextureRecord
+from . import node_groups
 from .image import image_file
 from .pattern import PatternBuilder, Unsupported, is_pattern
 
@@ -24,16 +25,9 @@ def principled_ior(ior, level):
 
 
 def _link(socket):
-    """The link feeding `socket`, through reroutes; None when unlinked or muted."""
-    while socket.is_linked:
-        link = socket.links[0]
-        if not link.is_valid or link.is_muted:
-            return None
-        if link.from_node.bl_idname == "NodeReroute":
-            socket = link.from_node.inputs[0]
-            continue
-        return link
-    return None
+    """The link feeding `socket`, through reroutes and node groups (node_groups.py);
+    None when unlinked or muted."""
+    return node_groups.link(socket)
 
 
 def _computed_coordinates(tex_node) -> bool:
@@ -115,6 +109,15 @@ class _Walker:
         self.warn(f"material '{self.material.name}': node '{node.name}' ({node.bl_idname}) "
                   f"{why}; using a constant")
 
+    def constant_only(self, socket):
+        """A warning when a node feeds `socket`, an input exported as its constant."""
+        link = _link(socket)
+        if link is not None:
+            node = link.from_node
+            self.warn(f"material '{self.material.name}': input '{socket.name}' takes a "
+                      f"constant only, not node '{node.name}' ({node.bl_idname}); using "
+                      f"its value")
+
     def uv_of(self, tex_node):
         link = _link(tex_node.inputs["Vector"])
         while link is not None:
@@ -186,6 +189,9 @@ class _Walker:
             except Unsupported as exc:
                 self.unsupported(exc.node, exc.why)
             return _constant(socket, kind)
+        if is_pattern(node):      # a supported node, on an input that takes no network
+            self.constant_only(socket)
+            return _constant(socket, kind)
         self.unsupported(node)
         return _constant(socket, kind)
 
@@ -226,8 +232,7 @@ class _Walker:
         inputs["metallic"] = self.value(get("Metallic"), "float", "metallic")
         inputs["roughness"] = self.value(get("Roughness"), "float", "roughness")
         for name in ("IOR", "Specular IOR Level"):
-            if _link(get(name)) is not None:
-                self.unsupported(_link(get(name)).from_node, f"on '{name}' is not supported")
+            self.constant_only(get(name))
         inputs["ior"] = principled_ior(_constant(get("IOR"), "float"),
                                        _constant(get("Specular IOR Level"), "float"))
         self.emission(get("Emission Color"), get("Emission Strength"), inputs, weight)

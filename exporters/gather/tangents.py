@@ -18,13 +18,22 @@ def tangent_uv_map(materials):
     or None when no material of the mesh has one: then no tangents are written."""
     for material in materials:
         tree = material.node_tree if material is not None else None
-        if tree is None:
-            continue
-        for node in tree.nodes:
+        for node in _nodes(tree, set()):
             if (node.bl_idname == "ShaderNodeNormalMap" and node.space == "TANGENT"
                     and node.outputs["Normal"].is_linked):
                 return node.uv_map
     return None
+
+
+def _nodes(tree, seen):
+    """The nodes of `tree` and of the node groups inside it, each tree once."""
+    if tree is None or tree.as_pointer() in seen:
+        return
+    seen.add(tree.as_pointer())
+    for node in tree.nodes:
+        yield node
+        if node.bl_idname == "ShaderNodeGroup":
+            yield from _nodes(node.node_tree, seen)
 
 
 def _loop_array(mesh, attr, width, dtype=np.float32):
