@@ -177,6 +177,14 @@ class _Walker:
             return TexInput(tex, "rgb" if kind == "color" else "r")
         if node.bl_idname in SEPARATE and getattr(node, "mode", "RGB") == "RGB":
             src = _link(node.inputs[0])
+            if src is not None and src.from_node.bl_idname == "ShaderNodeTexImage" and \
+                    target is not None and _computed_coordinates(src.from_node):
+                # One channel of a mapped image (an ORM map through Mapping): a network.
+                try:
+                    self.pattern.connect(target, link)
+                    return _constant(socket, kind)
+                except Unsupported:
+                    pass            # the channel on plain UVs, below (uv_of warns)
             if src is not None and src.from_node.bl_idname == "ShaderNodeTexImage":
                 tex = self.texture(src.from_node, raw=True)
                 if tex is not None:
@@ -265,16 +273,15 @@ class _Walker:
         """emissiveColor += weight x Color x Strength (Blender's emitted radiance).
         Emissions add up across Add and Mix Shaders; a texture carries the factor in
         its UsdUVTexture scale, and cannot be summed with another emission."""
-        strength_link = _link(strength_socket)
-        if strength_link is not None:
-            self.unsupported(strength_link.from_node, "on 'Emission Strength' is not supported")
+        self.constant_only(strength_socket)
         factor = _constant(strength_socket, "float") * weight
         if factor == 0.0:
             return
         have = inputs.get("emissiveColor", (0.0, 0.0, 0.0))
         link = _link(color_socket)
-        if link is not None and is_pattern(link.from_node) and \
-                link.from_node.bl_idname != "ShaderNodeTexImage":
+        if link is not None and is_pattern(link.from_node) and (
+                link.from_node.bl_idname != "ShaderNodeTexImage" or
+                _computed_coordinates(link.from_node)):     # an image through Mapping too
             if isinstance(have, TexInput) or any(have) or \
                     "emissiveColor" in self.pattern.graph.outputs:
                 self.warn(f"material '{self.material.name}': an emission from nodes cannot be "
