@@ -736,6 +736,12 @@ def _colors(mesh):
                            (1.5, 1.2, 0.2, 1)]):
         paint.data[i].color = c
     mesh.color_attributes.render_color_index = mesh.color_attributes.find("Col")
+    # Attributes of other types an Attribute node reads: a float per face, a vector per
+    # point (and the quad's UV map, a 2D vector per corner).
+    mesh.attributes.new("weight", "FLOAT", "FACE").data[0].value = 0.35
+    offset = mesh.attributes.new("offset", "FLOAT_VECTOR", "POINT")
+    for i, v in enumerate([(0.1, 0.5, 0.9), (0.9, 0.2, 0.1), (0.4, 0.9, 0.3), (0.7, 0.7, 0.2)]):
+        offset.data[i].vector = v
 
 
 def _attribute(node_type, name, output="Color"):
@@ -752,13 +758,17 @@ def _attribute(node_type, name, output="Color"):
 
 
 def build_attribute(workdir=None):
-    """Colour attributes read by networks: the render one and a named one, per corner
-    and per point, 8-bit and float, through the Color Attribute and Attribute nodes."""
+    """Attributes read by networks: the render colour one and a named one, per corner
+    and per point, 8-bit and float, through the Color Attribute and Attribute nodes; a
+    UV map, a float per face and a vector per point through the Attribute node."""
     return _grid("attribute", [
         ("render", _attribute("ShaderNodeVertexColor", "")),
         ("named_point", _attribute("ShaderNodeVertexColor", "Paint")),
         ("attribute_color", _attribute("ShaderNodeAttribute", "Col")),
-        ("attribute_fac", _attribute("ShaderNodeAttribute", "Paint", "Fac"))])
+        ("attribute_fac", _attribute("ShaderNodeAttribute", "Paint", "Fac")),
+        ("uv_map", _attribute("ShaderNodeAttribute", "UVMap")),
+        ("float_face", _attribute("ShaderNodeAttribute", "weight", "Fac")),
+        ("vector_point", _attribute("ShaderNodeAttribute", "offset", "Vector"))])
 
 
 def _unlinked(node_type, output="Color", **inputs):

@@ -361,6 +361,44 @@ def test_colour_attributes_are_written_as_the_primvars_networks_read(empty_scene
     assert [w for w in report.warnings if "Nowhere" in w and "Painted" in w], report.warnings
 
 
+def test_attributes_of_other_types_are_written_as_cycles_reads_them(empty_scene):
+    """An Attribute node reading a 2D vector per corner (a UV map), a float per face and
+    a vector per point: the UV map's own primvar, (f, f, f) and xyz per corner."""
+    ob = cube_object("Attributes")
+    me = ob.data
+    uv = me.attributes.new("_CustomUVMap", "FLOAT2", "CORNER")
+    uv.data.foreach_set("vector", np.tile([0.25, 0.75], len(me.loops)).astype(np.float32))
+    face = me.attributes.new("weight", "FLOAT", "FACE")
+    face.data.foreach_set("value", np.arange(len(me.polygons), dtype=np.float32))
+    point = me.attributes.new("offset", "FLOAT_VECTOR", "POINT")
+    point.data.foreach_set("vector", np.tile([1.0, 2.0, 3.0], len(me.vertices)).astype(np.float32))
+    mat, tree, bsdf = principled_material("ReadsAttributes")
+    add = tree.nodes.new("ShaderNodeVectorMath")
+    for k, name in enumerate(("_CustomUVMap", "weight")):
+        node = tree.nodes.new("ShaderNodeAttribute")
+        node.attribute_name = name
+        tree.links.new(node.outputs["Vector"], add.inputs[k])
+    offset = tree.nodes.new("ShaderNodeAttribute")
+    offset.attribute_name = "offset"
+    tree.links.new(add.outputs[0], bsdf.inputs["Base Color"])
+    tree.links.new(offset.outputs["Color"], bsdf.inputs["Emission Color"])
+    me.materials.append(mat)
+    stage, report = export_current()
+    assert report.warnings == [], report.warnings
+    mesh = next(p for p in stage.Traverse() if p.GetTypeName() == "Mesh")
+    primvars = UsdGeom.PrimvarsAPI(mesh)
+    values = {name: np.asarray(primvars.GetPrimvar(name).Get())
+              for name in ("_CustomUVMap", "weight", "offset")}
+    assert all(len(v) == 24 for v in values.values())
+    # A 2D vector per corner is a UV map: the network reads its own primvar as (u, v, 0).
+    assert str(primvars.GetPrimvar("_CustomUVMap").GetTypeName()) == "texCoord2f[]"
+    assert np.allclose(values["_CustomUVMap"], (0.25, 0.75))
+    assert np.allclose(values["offset"], (1.0, 2.0, 3.0))
+    counts = UsdGeom.Mesh(mesh).GetFaceVertexCountsAttr().Get()
+    assert np.allclose(values["weight"][:, 0], np.repeat(np.arange(len(counts)), counts))
+    assert np.allclose(values["weight"][:, 0], values["weight"][:, 2])
+
+
 def test_a_mix_of_two_bsdfs_mixes_their_inputs(empty_scene):
     """Mix Shader of two Principled BSDFs: constants mix into constants by a constant
     factor; a linked factor makes a network Mix per differing input; emissions add,

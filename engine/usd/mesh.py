@@ -195,8 +195,12 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
     if color_name is not None:
         streams.append("colors")
         colors, c_interp = _primvar(mesh, color_name, time) if refined is None else (None, None)
-        if colors is not None and colors.ndim == 2 and colors.shape[1] >= 3:
-            C = _per_corner(colors[:, :3], c_interp, len(pts), face_of_corner, idx, n_faces,
+        if colors is not None and colors.ndim == 2 and colors.shape[1] >= 2:
+            # A colour or vector as xyz; a 2D one (a UV map read by an Attribute node) as
+            # (x, y, 0), as Cycles reads it.
+            xyz = np.zeros((len(colors), 3))
+            xyz[:, :min(colors.shape[1], 3)] = colors[:, :3]
+            C = _per_corner(xyz, c_interp, len(pts), face_of_corner, idx, n_faces,
                             color_name)[corners]
             _finite(C, f"{color_name} (per corner)")
             per_point &= _per_point(c_interp)

@@ -5,10 +5,14 @@ import numpy as np
 
 from ..errors import require_finite
 from ..ir import MeshRecord
+from .node_groups import all_nodes
 
 # The primvar of a mesh's render colour attribute (a Color Attribute node naming none).
 RENDER_COLOR = "displayColor"
-COLOR_TYPES = {"FLOAT_COLOR", "BYTE_COLOR"}
+# Attribute types a network reads, as Cycles' Attribute node gives them: colours as
+# they are (scene linear), vectors as xyz, a 2D vector as (x, y, 0), a float as f, f, f.
+ATTRIBUTE_TYPES = {"FLOAT_COLOR": ("color", 4), "BYTE_COLOR": ("color", 4),
+                   "FLOAT_VECTOR": ("vector", 3), "FLOAT2": ("vector", 2), "FLOAT": ("value", 1)}
 
 
 def attribute_primvar(name: str) -> str:
@@ -21,11 +25,12 @@ def attribute_primvar(name: str) -> str:
 
 
 def color_attribute_names(materials) -> set:
-    """The colour attributes the materials' networks read ('' = the render one)."""
+    """The attributes the materials' networks read ('' = the render colour one), inside
+    node groups too."""
     names = set()
     for material in materials:
         tree = material.node_tree if material is not None else None
-        for node in (tree.nodes if tree is not None else ()):
+        for node in all_nodes(tree):
             if node.bl_idname == "ShaderNodeVertexColor":
                 names.add(node.layer_name)
             elif node.bl_idname == "ShaderNodeAttribute" and node.attribute_type == "GEOMETRY":
@@ -34,23 +39,33 @@ def color_attribute_names(materials) -> set:
 
 
 def _color_attribute(mesh, name, owner, warn):
-    """(corners, 3) scene-linear colours of colour attribute `name` ('' = the render one),
-    or None with a warning."""
+    """(corners, 3) values of attribute `name` ('' = the render colour attribute) as a
+    network reads them (ATTRIBUTE_TYPES), or None with a warning."""
     attrs = mesh.color_attributes
     if not name:
         index = attrs.render_color_index
         attr = attrs[index] if 0 <= index < len(attrs) else None
     else:
         attr = mesh.attributes.get(name)
-    if attr is None or attr.data_type not in COLOR_TYPES or attr.domain not in {"POINT", "CORNER"}:
+    if attr is None or attr.data_type not in ATTRIBUTE_TYPES or \
+            attr.domain not in {"POINT", "CORNER", "FACE"}:
         if warn is not None:
-            warn(f"{owner}: colour attribute '{name or '(render)'}' is not on the mesh as a "
-                 f"point or corner colour; its network reads black")
+            warn(f"{owner}: attribute '{name or '(render colour)'}' is not on the mesh as a "
+                 f"point, corner or face colour, vector or float; its network reads black")
         return None
-    values = _get(attr.data, "color", np.float32, 4)[:, :3]   # scene linear for both types
+    field, width = ATTRIBUTE_TYPES[attr.data_type]
+    raw = _get(attr.data, field, np.float32, width).reshape(len(attr.data), width)
+    values = np.zeros((len(raw), 3), np.float32)
+    if width == 1:
+        values[:] = raw
+    else:
+        values[:, :min(width, 3)] = raw[:, :3]      # colour: rgb (scene linear), no alpha
     if attr.domain == "POINT":
         values = values[_get(mesh.loops, "vertex_index", np.int32, 1)]
-    require_finite(values, owner, f"colour attribute '{attr.name}'")
+    elif attr.domain == "FACE":
+        corners_per_face = _get(mesh.polygons, "loop_total", np.int32, 1)
+        values = np.repeat(values, corners_per_face, axis=0)
+    require_finite(values, owner, f"attribute '{attr.name}'")
     return np.ascontiguousarray(values)
 
 
@@ -88,6 +103,8 @@ def gather_mesh(mesh, key, name, owner=None, color_names=(), warn=None):
 
     colors = {}
     for color_name in sorted(color_names):
+        if color_name in uvs:       # a UV map: its texCoord2f primvar is read as (u, v, 0)
+            continue
         values = _color_attribute(mesh, color_name, owner, warn)
         if values is not None:
             colors[attribute_primvar(color_name)] = values

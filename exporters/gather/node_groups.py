@@ -142,3 +142,15 @@ def _group_output(group, identifier):
     if active is None:
         return None
     return next((i for i in active.inputs if i.identifier == identifier), None)
+
+
+def all_nodes(tree, seen=None):
+    """The nodes of `tree` and of the node groups inside it, each group's tree once."""
+    seen = set() if seen is None else seen
+    if tree is None or tree.as_pointer() in seen:
+        return
+    seen.add(tree.as_pointer())
+    for node in tree.nodes:
+        yield node
+        if node.bl_idname == "ShaderNodeGroup":
+            yield from all_nodes(node.node_tree, seen)

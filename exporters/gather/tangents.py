@@ -10,6 +10,8 @@ import bmesh
 import bpy
 import numpy as np
 
+from .node_groups import all_nodes
+
 FACE_LAYER = "lantern_source_face"
 
 
@@ -18,22 +20,12 @@ def tangent_uv_map(materials):
     or None when no material of the mesh has one: then no tangents are written."""
     for material in materials:
         tree = material.node_tree if material is not None else None
-        for node in _nodes(tree, set()):
+        for node in all_nodes(tree):
             if (node.bl_idname == "ShaderNodeNormalMap" and node.space == "TANGENT"
                     and node.outputs["Normal"].is_linked):
                 return node.uv_map
     return None
 
-
-def _nodes(tree, seen):
-    """The nodes of `tree` and of the node groups inside it, each tree once."""
-    if tree is None or tree.as_pointer() in seen:
-        return
-    seen.add(tree.as_pointer())
-    for node in tree.nodes:
-        yield node
-        if node.bl_idname == "ShaderNodeGroup":
-            yield from _nodes(node.node_tree, seen)
 
 
 def _loop_array(mesh, attr, width, dtype=np.float32):
