@@ -56,7 +56,8 @@ KINDS = {
     # from the height's screen-space derivatives, and a tangent-space Normal Map whose
     # colour a network computes.
     "bump": {"invert": ("0", "1")},
-    # A mesh's colour attribute, by the primvar it is written as (its setting `name`).
+    # A mesh's attribute, by the primvar it is written as (its setting `name`); its
+    # alpha, where not all 1, by attribute_opacity(name).
     "attribute": {},
     "normal_map": {"space": ("TANGENT",)},
 }
@@ -67,6 +68,12 @@ SURFACE_INPUTS = {"diffuseColor": "color", "metallic": "float", "roughness": "fl
                   "opacity": "float", "emissiveColor": "color", "normal": "vector"}
 
 MAX_IMAGES = 4   # images per network: texture units t_pattern0..3 (engine/gpu/programs.py)
+
+
+def attribute_opacity(primvar: str) -> str:
+    """The float primvar holding an attribute's alpha beside its colour3f one: USD's
+    displayOpacity for displayColor, else `<primvar>_opacity`."""
+    return "displayOpacity" if primvar == "displayColor" else f"{primvar}_opacity"
 
 
 def unsupported_setting(kind: str, settings: dict) -> str | None:

@@ -16,6 +16,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 
+# Floats a vertex of each per-vertex stream (MeshData.streams).
+STREAM_WIDTHS = {"colors": 4, "generated": 3}
+
+
 @dataclass
 class TextureRef:
     path: str                      # resolved absolute path
@@ -221,9 +225,10 @@ class MeshData:
     # skinned or blend-shaped mesh has them computed again from its deformed surface.
     surface_normals: bool = False
     bounds: tuple | None = None    # (lo, hi) float64 of the vertex positions
-    # Per-vertex data bound networks read, (V, 3) float32 each (engine/gpu/stores.py
-    # STREAMS): "colors", a colour attribute; "generated", Blender's Generated
-    # coordinates (the rest points in their bounding box, as its auto texture space).
+    # Per-vertex data bound networks read, (V, STREAM_WIDTHS[name]) float32 each
+    # (engine/gpu/stores.py STREAMS): "colors", an attribute (rgb and alpha);
+    # "generated", Blender's Generated coordinates (the rest points in their bounding
+    # box, as its auto texture space).
     streams: dict = field(default_factory=dict)
     # A subdivision surface tessellated on the GPU: `vertices` and `indices` are then
     # empty and `ranges` are the patches' (PatchData.ranges); the triangles are made

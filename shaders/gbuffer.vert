@@ -17,8 +17,8 @@ out vec4 v_tangent;
 out vec3 v_position;        // camera-relative: a bump node's screen-space derivatives
 #endif
 #ifdef COLOR_ATTRIBUTE
-in vec3 in_color;           // the colour attribute a network reads (engine/gpu/stores.py)
-out vec3 v_color;
+in vec4 in_color;           // the colour attribute a network reads (engine/gpu/stores.py)
+out vec4 v_color;
 #endif
 #ifdef PATTERN_GENERATED
 in vec3 in_generated;       // Blender's Generated coordinates (engine/usd/mesh.py)

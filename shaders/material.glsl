@@ -96,10 +96,12 @@ vec3 tangent_space_normal(vec3 ts) {
 in vec3 v_position;                // gbuffer.vert
 #endif
 #ifdef COLOR_ATTRIBUTE
-in vec3 v_color;                   // gbuffer.vert: the mesh's colour attribute
-vec3 pt_color_attribute() { return v_color; }
+in vec4 v_color;                   // gbuffer.vert: the mesh's attribute, and its alpha
+vec3 pt_color_attribute() { return v_color.rgb; }
+float pt_color_alpha() { return v_color.a; }
 #else
 vec3 pt_color_attribute() { return vec3(0.0); }
+float pt_color_alpha() { return 0.0; }
 #endif
 #ifdef PATTERN_GENERATED
 in vec3 v_generated;               // gbuffer.vert: Blender's Generated coordinates

@@ -725,10 +725,10 @@ def _network_normal_map(strength):
 
 
 def _colors(mesh):
-    """Two colour attributes on a quad: "Col" per corner (8-bit, the render one) and
-    "Paint" per point (float); each corner or point its own colour."""
+    """Two colour attributes on a quad: "Col" per corner (8-bit, the render one, with
+    its own alpha) and "Paint" per point (float); each corner or point its own colour."""
     col = mesh.color_attributes.new("Col", "BYTE_COLOR", "CORNER")
-    for i, c in enumerate([(0.9, 0.1, 0.1, 1), (0.1, 0.8, 0.2, 1), (0.2, 0.3, 0.9, 1),
+    for i, c in enumerate([(0.9, 0.1, 0.1, 0.2), (0.1, 0.8, 0.2, 0.5), (0.2, 0.3, 0.9, 0.8),
                            (0.9, 0.8, 0.1, 1)]):
         col.data[i].color = c
     paint = mesh.color_attributes.new("Paint", "FLOAT_COLOR", "POINT")
@@ -768,7 +768,8 @@ def build_attribute(workdir=None):
         ("attribute_fac", _attribute("ShaderNodeAttribute", "Paint", "Fac")),
         ("uv_map", _attribute("ShaderNodeAttribute", "UVMap")),
         ("float_face", _attribute("ShaderNodeAttribute", "weight", "Fac")),
-        ("vector_point", _attribute("ShaderNodeAttribute", "offset", "Vector"))])
+        ("vector_point", _attribute("ShaderNodeAttribute", "offset", "Vector")),
+        ("render_alpha", _attribute("ShaderNodeVertexColor", "", "Alpha"))])
 
 
 def _unlinked(node_type, output="Color", **inputs):

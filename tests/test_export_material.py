@@ -361,6 +361,30 @@ def test_colour_attributes_are_written_as_the_primvars_networks_read(empty_scene
     assert [w for w in report.warnings if "Nowhere" in w and "Painted" in w], report.warnings
 
 
+def test_a_colour_attributes_alpha_is_written_only_where_a_network_needs_it(empty_scene):
+    """The render colour attribute with an alpha below 1 gets displayOpacity beside its
+    displayColor; a named one that is opaque gets no opacity primvar."""
+    ob = cube_object("Translucent")
+    col = ob.data.color_attributes.new("Col", "FLOAT_COLOR", "CORNER")
+    col.data[0].color = (0.5, 0.25, 1.0, 0.4)
+    ob.data.color_attributes.new("Opaque", "FLOAT_COLOR", "POINT")
+    ob.data.color_attributes.render_color_index = ob.data.color_attributes.find("Col")
+    mat, tree, bsdf = principled_material("ReadsAlpha")
+    render, named = (tree.nodes.new("ShaderNodeVertexColor") for _ in range(2))
+    named.layer_name = "Opaque"
+    tree.links.new(render.outputs["Alpha"], bsdf.inputs["Alpha"])
+    tree.links.new(named.outputs["Alpha"], bsdf.inputs["Roughness"])
+    ob.data.materials.append(mat)
+    stage, report = export_current()
+    assert report.warnings == [], report.warnings
+    mesh = next(p for p in stage.Traverse() if p.GetTypeName() == "Mesh")
+    primvars = UsdGeom.PrimvarsAPI(mesh)
+    opacity = primvars.GetPrimvar("displayOpacity")
+    assert opacity.GetInterpolation() == "faceVarying"
+    assert np.asarray(opacity.Get())[0] == pytest.approx(0.4)
+    assert not primvars.GetPrimvar("Opaque_opacity")
+
+
 def test_attributes_of_other_types_are_written_as_cycles_reads_them(empty_scene):
     """An Attribute node reading a 2D vector per corner (a UV map), a float per face and
     a vector per point: the UV map's own primvar, (f, f, f) and xyz per corner."""

@@ -210,6 +210,7 @@ class _Writer:
             out("color", "color", "pt_color_attribute()")
             out("vector", "vector", f"{p}_color")
             out("fac", "float", f"pt_vector_to_float({p}_color)")   # Cycles: the average
+            out("alpha", "float", "pt_color_alpha()")
         elif kind == "bump":
             invert = "true" if settings.get("invert", "0") == "1" else "false"
             normal_in = arg("normal", "vector") if "normal" in ins else "pt_N"

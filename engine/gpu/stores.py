@@ -15,12 +15,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..scene import STREAM_WIDTHS
+
 VERTEX_FORMAT = ("3f 3f 2f 4f", "in_pos", "in_normal", "in_uv", "in_tangent")
 VERTEX_BYTES = 48
 # Per-vertex data only some networks read (engine/scene.py MeshData.streams): a buffer
 # each beside the vertices, same vertex numbers, made when a first mesh has that stream.
-STREAMS = {"colors": ("3f", "in_color"), "generated": ("3f", "in_generated")}
-STREAM_BYTES = 12
+# name -> the vertex shader's attribute; floats a vertex: engine/scene.py STREAM_WIDTHS.
+STREAMS = {"colors": "in_color", "generated": "in_generated"}
 
 
 class Arena:
@@ -94,7 +96,8 @@ class VertexStore:
             setattr(self, attr, self._grown(getattr(self, attr), arena.capacity, capacity, unit))
             if attr == "vbo":
                 for name, buffer in self.streams.items():
-                    self.streams[name] = self._grown(buffer, arena.capacity, capacity, STREAM_BYTES)
+                    self.streams[name] = self._grown(buffer, arena.capacity, capacity,
+                                                     4 * STREAM_WIDTHS[name])
             arena.grow(capacity)
             self._drop_vaos()
             start = arena.alloc(n)
@@ -121,10 +124,10 @@ class VertexStore:
     def write_stream(self, slot: Slot, name: str, values: np.ndarray):
         if name not in self.streams:
             self.streams[name] = self.uploads.buffer(
-                reserve=self.vertices.capacity * STREAM_BYTES, kind="mesh")
+                reserve=self.vertices.capacity * 4 * STREAM_WIDTHS[name], kind="mesh")
             self._drop_vaos()          # the VAOs made before lack the stream
         self.uploads.write(self.streams[name], np.ascontiguousarray(values, np.float32),
-                           kind="mesh", offset=slot.first_vertex * STREAM_BYTES)
+                           kind="mesh", offset=slot.first_vertex * 4 * STREAM_WIDTHS[name])
 
     def write_indices(self, slot: Slot, indices: np.ndarray):
         absolute = np.asarray(indices, np.uint32) + np.uint32(slot.first_vertex)
@@ -136,7 +139,8 @@ class VertexStore:
         vao = self._vaos.get(key)
         if vao is None:
             content = [(self.vbo, *VERTEX_FORMAT)]
-            content += [(buffer, *STREAMS[name]) for name, buffer in self.streams.items()]
+            content += [(buffer, f"{STREAM_WIDTHS[name]}f", STREAMS[name])
+                        for name, buffer in self.streams.items()]
             if ids is not None:
                 content.append((ids, "1i/i", "in_object"))
             vao = self._vaos[key] = self.ctx.vertex_array(

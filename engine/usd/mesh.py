@@ -13,7 +13,8 @@ from pxr import Sdf, Usd, UsdGeom
 
 from ...core.transforms import cross
 from ...core.triangulate import triangulate
-from ..scene import MeshData, PatchData
+from ...core.pattern_nodes import attribute_opacity
+from ..scene import STREAM_WIDTHS, MeshData, PatchData
 from .subdivision import RefinedCage, limit_surface, skinned_cage_unrefined, subdivision_level
 
 
@@ -185,8 +186,8 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
         elif uvs is not None:
             T = compute_tangents(P, N, UV, idx[corners])   # a function of point and normal
 
-    # Streams bound networks read (MeshData.streams): three more columns each, split off
-    # below, so that they follow the vertices' order and sharing.
+    # Streams bound networks read (MeshData.streams): more columns each (STREAM_WIDTHS),
+    # split off below, so that they follow the vertices' order and sharing.
     color_name = next((m.color_attribute for m in materials if m.color_attribute), None)
     columns, streams = [P, N, UV, T], []
     if any(m.reads_generated for m in materials):
@@ -198,14 +199,20 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
         if colors is not None and colors.ndim == 2 and colors.shape[1] >= 2:
             # A colour or vector as xyz; a 2D one (a UV map read by an Attribute node) as
             # (x, y, 0), as Cycles reads it.
-            xyz = np.zeros((len(colors), 3))
-            xyz[:, :min(colors.shape[1], 3)] = colors[:, :3]
-            C = _per_corner(xyz, c_interp, len(pts), face_of_corner, idx, n_faces,
+            rgba = np.zeros((len(colors), 4))
+            rgba[:, :min(colors.shape[1], 3)] = colors[:, :3]
+            alpha, a_interp = _primvar(mesh, attribute_opacity(color_name), time)
+            if alpha is not None and alpha.ndim == 1 and a_interp == c_interp \
+                    and len(alpha) == len(colors):
+                rgba[:, 3] = alpha
+            else:
+                rgba[:, 3] = 1.0
+            C = _per_corner(rgba, c_interp, len(pts), face_of_corner, idx, n_faces,
                             color_name)[corners]
             _finite(C, f"{color_name} (per corner)")
             per_point &= _per_point(c_interp)
         else:
-            C = np.zeros((len(corners), 3))
+            C = np.zeros((len(corners), 4))
             if warnings is not None:
                 warnings.append(f"{prim.GetPath()}: no colour primvar {color_name!r} for its "
                                 f"material's network; it reads black")
@@ -223,8 +230,10 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
     vertices, indices, first = _index(soup, point_of_corner if per_point else sorted_corners,
                                       len(pts) if per_point else len(idx))
     double, culling = _sidedness(prim, mesh, time)
-    extra = {name: np.ascontiguousarray(vertices[:, 12 + 3 * k:15 + 3 * k])
-             for k, name in enumerate(streams)}
+    extra, at = {}, 12
+    for name in streams:
+        extra[name] = np.ascontiguousarray(vertices[:, at:at + STREAM_WIDTHS[name]])
+        at += STREAM_WIDTHS[name]
     return MeshData(key=key, vertices=np.ascontiguousarray(vertices[:, :12]), indices=indices,
                     ranges=ranges, streams=extra,
                     materials=[m.name for m in materials], double_sided=double,

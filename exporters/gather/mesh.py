@@ -39,8 +39,9 @@ def color_attribute_names(materials) -> set:
 
 
 def _color_attribute(mesh, name, owner, warn):
-    """(corners, 3) values of attribute `name` ('' = the render colour attribute) as a
-    network reads them (ATTRIBUTE_TYPES), or None with a warning."""
+    """(corners, 4) values of attribute `name` ('' = the render colour attribute) as a
+    network reads them (ATTRIBUTE_TYPES; alpha 1 but for colours), or None with a
+    warning."""
     attrs = mesh.color_attributes
     if not name:
         index = attrs.render_color_index
@@ -55,11 +56,12 @@ def _color_attribute(mesh, name, owner, warn):
         return None
     field, width = ATTRIBUTE_TYPES[attr.data_type]
     raw = _get(attr.data, field, np.float32, width).reshape(len(attr.data), width)
-    values = np.zeros((len(raw), 3), np.float32)
+    values = np.zeros((len(raw), 4), np.float32)
+    values[:, 3] = 1.0
     if width == 1:
-        values[:] = raw
+        values[:, :3] = raw
     else:
-        values[:, :min(width, 3)] = raw[:, :3]      # colour: rgb (scene linear), no alpha
+        values[:, :min(width, 4)] = raw[:, :4]      # a colour: rgba (rgb scene linear)
     if attr.domain == "POINT":
         values = values[_get(mesh.loops, "vertex_index", np.int32, 1)]
     elif attr.domain == "FACE":

@@ -107,12 +107,12 @@ def _attribute(node):
     mesh.py writes for it)."""
     if node.bl_idname == "ShaderNodeVertexColor":
         return "attribute", {"name": attribute_primvar(node.layer_name)}, {}, \
-            {"color": node.outputs["Color"]}
+            {"color": node.outputs["Color"], "alpha": node.outputs["Alpha"]}
     if node.attribute_type != "GEOMETRY":
         raise Unsupported(node, f"of type {node.attribute_type} is not supported")
     return "attribute", {"name": attribute_primvar(node.attribute_name)}, {}, \
         {"color": node.outputs["Color"], "vector": node.outputs["Vector"],
-         "fac": node.outputs["Fac"]}
+         "fac": node.outputs["Fac"], "alpha": node.outputs["Alpha"]}
 
 
 def _ramp(node):

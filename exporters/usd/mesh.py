@@ -2,6 +2,7 @@
 import numpy as np
 from pxr import Sdf, UsdGeom, UsdShade, Vt
 
+from ...core.pattern_nodes import attribute_opacity
 from .names import Namer, primvar_name
 
 LIMIT_ATTR = "lantern:subdivisionLimitSurface"
@@ -32,10 +33,15 @@ def write_mesh(stage, path, rec, double_sided, slot_names):
         pv = primvars.CreatePrimvar(primvar_name(name), Sdf.ValueTypeNames.TexCoord2fArray,
                                     UsdGeom.Tokens.faceVarying)
         pv.Set(Vt.Vec2fArray.FromNumpy(np.ascontiguousarray(rec.uvs[name])))
-    for name in sorted(rec.colors):                # colour attributes networks read
+    for name in sorted(rec.colors):                # attributes networks read
+        rgba = rec.colors[name]
         pv = primvars.CreatePrimvar(name, Sdf.ValueTypeNames.Color3fArray,
                                     UsdGeom.Tokens.faceVarying)
-        pv.Set(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(rec.colors[name])))
+        pv.Set(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(rgba[:, :3])))
+        if (rgba[:, 3] != 1.0).any():              # written only when not all opaque
+            pv = primvars.CreatePrimvar(attribute_opacity(name), Sdf.ValueTypeNames.FloatArray,
+                                        UsdGeom.Tokens.faceVarying)
+            pv.Set(Vt.FloatArray.FromNumpy(np.ascontiguousarray(rgba[:, 3])))
     if rec.tangents is not None:
         pv = primvars.CreatePrimvar("tangents", Sdf.ValueTypeNames.Float4Array,
                                     UsdGeom.Tokens.faceVarying)
