@@ -59,9 +59,30 @@ print(json.dumps({"cold": timed["cold_seconds"], "warm": timed["warm_seconds"]})
 """
 
 
-# A new Blender: the add-on, the file, two F12s (seconds each).
-F12 = """
+# What both F12 scripts below share: waiting for the engine host's warm-up, and two F12s
+# timed (printed as seconds, the last line).
+F12_COMMON = """
 import json, sys, time
+
+
+def wait_for_warm_up(log):
+    deadline = time.monotonic() + 60           # at most a minute
+    while not any("warmed up" in line for line in log()) and time.monotonic() < deadline:
+        time.sleep(0.02)
+
+
+def two_f12s():
+    import bpy
+    times = []
+    for _ in range(2):
+        start = time.perf_counter()
+        bpy.ops.render.render()
+        times.append(time.perf_counter() - start)
+    print(json.dumps(times))
+"""
+
+# A new Blender: the add-on, the file, two F12s.
+F12 = F12_COMMON + """
 import lantern.exporters  # noqa: F401  (Blender's pxr first)
 import bpy
 import lantern
@@ -70,24 +91,17 @@ lantern.register()
 if sys.argv[2] == "off":
     prestart.unregister()
 bpy.ops.wm.open_mainfile(filepath=sys.argv[1])
-if sys.argv[2] == "idle":      # until the host says it has warmed up (at most a minute)
-    deadline = time.monotonic() + 60
-    while not any("warmed up" in line for line in host.get().log) and time.monotonic() < deadline:
-        time.sleep(0.02)
-times = []
-for _ in range(2):
-    start = time.perf_counter()
-    bpy.ops.render.render()
-    times.append(time.perf_counter() - start)
-print(json.dumps(times))
+if sys.argv[2] == "idle":
+    wait_for_warm_up(lambda: host.get().log)
+two_f12s()
 lantern.unregister()
 """
 
 # As F12 in "idle" mode, but as users get Lantern: the extension zip installed into a
 # bpy process that hides every module a real Blender lacks, here and in the engine
 # host's child (tests/blender_only/sitecustomize.py, as tests/_addon_host.py does).
-F12_INSTALLED = """
-import importlib.util, json, os, sys, tempfile, time
+F12_INSTALLED = F12_COMMON + """
+import importlib.util, os, shutil, tempfile
 blend, zip_path, blender_only = sys.argv[1], sys.argv[3], sys.argv[4]
 spec = importlib.util.spec_from_file_location("blender_only",
                                               os.path.join(blender_only, "sitecustomize.py"))
@@ -100,17 +114,9 @@ bpy.ops.extensions.package_install_files(filepath=zip_path, repo="user_default",
                                          enable_on_install=True)
 host = sys.modules["bl_ext.user_default.lantern.addon.host"]
 bpy.ops.wm.open_mainfile(filepath=blend)
-deadline = time.monotonic() + 60
-while not any("warmed up" in line for line in host.get().log) and time.monotonic() < deadline:
-    time.sleep(0.02)
-times = []
-for _ in range(2):
-    start = time.perf_counter()
-    bpy.ops.render.render()
-    times.append(time.perf_counter() - start)
-print(json.dumps(times))
+wait_for_warm_up(lambda: host.get().log)
+two_f12s()
 bpy.ops.preferences.addon_disable(module="bl_ext.user_default.lantern")
-import shutil
 shutil.rmtree(user, ignore_errors=True)
 """
 
