@@ -84,6 +84,9 @@ class Material:
     # lantern:bumpMapCorrection: Cycles' correction of the shadow terminator of a normal
     # map (its default; Material > Settings > Bump Map Correction).
     bump_correction: bool = True
+    # lantern:baseColorOcclusion: the base colour is multiplied by the frame's ambient
+    # occlusion (an Ambient Occlusion node's Color on Base Color in Blender).
+    base_occlusion: bool = False
     pattern: PatternGraph | None = None  # the mtlx network feeding surface inputs
 
     @property

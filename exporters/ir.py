@@ -53,6 +53,9 @@ class MaterialRecord:
     pass_index: int = 0         # Blender's material pass index (render pass IndexMA)
     alpha_mode: str = ""        # "hashed" (Dithered and see-through), else "" (contract)
     bump_correction: bool = True  # Cycles' Bump Map Correction (contract: Material)
+    # The base colour comes through an Ambient Occlusion node's Color: times the
+    # renderer's ambient occlusion (contract: Material, lantern:baseColorOcclusion).
+    base_occlusion: bool = False
     graph: PatternGraph | None = None  # the node network feeding surface inputs, if any
 
 

@@ -46,7 +46,13 @@ void main() {
         vec4 nrm = texelFetch(g_normal, px, 0);
         vec3 n = normalize(nrm.xyz);
         vec3 v = cam_ortho ? -cam_forward : normalize(-p);
-        Surface s = make_surface(p, n, v, texelFetch(g_base, px, 0), texelFetch(g_mat, px, 0), nrm.w);
+        vec4 base = texelFetch(g_base, px, 0);
+#ifdef BASE_OCCLUSION
+        // An Ambient Occlusion node's Color on Base Color (g_emit.a marks it): the albedo
+        // darkened as Cycles darkens it, on top of the dome's own occlusion below.
+        base.rgb *= mix(1.0, texelFetch(ao_tex, px, 0).r, texelFetch(g_emit, px, 0).a);
+#endif
+        Surface s = make_surface(p, n, v, base, texelFetch(g_mat, px, 0), nrm.w);
 #ifdef BUMP_CORRECTION
         s.smooth_n = normalize(texelFetch(g_smooth, px, 0).xyz);
 #endif

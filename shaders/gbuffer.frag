@@ -1,7 +1,8 @@
 #version 330 core
 #include "lib.glsl"
 // G-buffer: RT0 base colour + alpha, RT1 world normal + clearcoat roughness, RT2
-// metallic / roughness / dielectric F0 / clearcoat, RT3 emission. The material itself
+// metallic / roughness / dielectric F0 / clearcoat, RT3 emission + the base-occlusion mark
+// (alpha: BASE_OCCLUSION in the lighting passes). The material itself
 // is material.glsl's.
 in vec3 v_normal;
 in vec2 v_uv;
@@ -35,7 +36,7 @@ void main() {
     rt_base = vec4(m.base, alpha);
     rt_normal = vec4(m.n, m.coat_roughness);
     rt_mat = m.mat;
-    rt_emit = vec4(m.emissive, 1.0);
+    rt_emit = vec4(m.emissive, u_base_occlusion);   // .a: BASE_OCCLUSION (light.frag)
 #ifdef WRITE_SMOOTH_NORMAL
     rt_smooth = vec4(m.smooth_n, 0.0);
 #endif

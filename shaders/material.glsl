@@ -11,6 +11,7 @@ uniform vec3 u_emissive;
 uniform float u_opacity;
 uniform float u_opacity_threshold;
 uniform float u_clearcoat;
+uniform float u_base_occlusion;    // 1: the base colour takes the frame's occlusion
 uniform float u_clearcoat_roughness;
 // Cycles' bump map correction (Material > Settings), for a normal-mapped material.
 uniform bool u_bump_correction = true;

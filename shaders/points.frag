@@ -64,7 +64,7 @@ void main() {
     rt_normal = vec4((p - v_center) / v_radius, clamp(u_clearcoat_roughness, 0.0, 1.0));
     rt_mat = vec4(clamp(u_metallic, 0.0, 1.0), clamp(u_roughness, 0.0, 1.0), f * f,
                   clamp(u_clearcoat, 0.0, 1.0));
-    rt_emit = vec4(clamp(u_emissive, 0.0, 60000.0), 1.0);
+    rt_emit = vec4(clamp(u_emissive, 0.0, 60000.0), 0.0);   // .a: no base occlusion
 #ifdef WRITE_SMOOTH_NORMAL
     rt_smooth = vec4(rt_normal.xyz, 0.0);
 #endif

@@ -43,6 +43,7 @@ SCENES = {
     "environment_diffuse": Spec((128, 72), 2048, "a white Lambert sphere under an asymmetric lat-long sky"),
     "environment_mirror": Spec((128, 72), 1024, "a mirror sphere under the same sky"),
     "ao_corner": Spec((128, 72), 2048, "a box in a corner under a uniform white world"),
+    "ao_node": Spec((128, 72), 2048, "ao_corner, its base colour through an Ambient Occlusion node"),
     "furnace_rough0": Spec((48, 48), 1024, "white dielectric sphere, roughness 0, uniform white world"),
     "furnace_rough05": Spec((48, 48), 1024, "white dielectric sphere, roughness 0.5, uniform white world"),
     "furnace_rough1": Spec((48, 48), 1024, "white dielectric sphere, roughness 1, uniform white world"),
@@ -283,6 +284,20 @@ def build_ao_corner(workdir):
     bpy.ops.mesh.primitive_cube_add(size=1.0, location=(-1.2, 1.2, 0.5))
     bpy.context.object.data.materials.append(white)
     _camera(scene, (3.2, -4.2, 2.6), (-0.8, 0.8, 0.6), lens=35.0)
+    return scene
+
+
+def build_ao_node(workdir):
+    """ao_corner whose surfaces take their base colour (0.8 grey) through an Ambient
+    Occlusion node's Color, its Distance the world's AO distance: Cycles darkens the
+    albedo by its own occlusion there, Lantern by its AO pass (which uses that distance)."""
+    import bpy
+    scene = build_ao_corner(workdir)
+    tree = bpy.data.materials["White"].node_tree
+    ao = tree.nodes.new("ShaderNodeAmbientOcclusion")
+    ao.inputs["Color"].default_value = (0.8, 0.8, 0.8, 1.0)
+    ao.inputs["Distance"].default_value = scene.world.light_settings.distance
+    tree.links.new(ao.outputs["Color"], tree.nodes["Principled BSDF"].inputs["Base Color"])
     return scene
 
 

@@ -922,3 +922,22 @@ def test_a_network_on_an_input_that_takes_constants_names_the_input(empty_scene)
     assert len(report.warnings) == 1, report.warnings
     assert "'Coat Weight' takes a constant only" in report.warnings[0] and \
         "ShaderNodeMath" in report.warnings[0] and "not supported" not in report.warnings[0]
+
+
+def test_an_ambient_occlusion_nodes_color_on_base_color_marks_the_material(empty_scene):
+    """AO Color -> Base Color: the base colour is the node's Color input, and the
+    material says the renderer's occlusion multiplies it; its AO output elsewhere is
+    still one warning."""
+    mat, tree, bsdf = principled_material("Occluded")
+    ao = tree.nodes.new("ShaderNodeAmbientOcclusion")
+    ao.inputs["Color"].default_value = (0.2, 0.4, 0.6, 1.0)
+    tree.links.new(ao.outputs["Color"], bsdf.inputs["Base Color"])
+    tree.links.new(ao.outputs["AO"], bsdf.inputs["Roughness"])
+    cube_object("Cube").data.materials.append(mat)
+    stage, report = export_current()
+    prim = stage.GetPrimAtPath("/root/_materials/Occluded")
+    assert prim.GetAttribute("lantern:baseColorOcclusion").Get() is True
+    assert tuple(surface(stage, "Occluded").GetInput("diffuseColor").Get()) == \
+        pytest.approx((0.2, 0.4, 0.6))
+    assert len(report.warnings) == 1 and "Ambient Occlusion" in report.warnings[0], \
+        report.warnings

@@ -145,6 +145,26 @@ def test_ao_corner_error_falls_with_the_preset_and_halves():
     assert errors["ultra"] <= 0.5 * off
 
 
+def test_an_ambient_occlusion_node_darkens_the_base_colour_by_the_ao_pass():
+    """ao_node: the surfaces' base colour through an Ambient Occlusion node. Drawn with
+    the AO pass's occlusion on the albedo it is nearer Cycles than the node ignored (a
+    plain 0.8 grey), and the error is the screen-space AO's own (ao_corner's)."""
+    from lantern.engine import RenderSettings, render_stage
+    stage, ref = stage_of("ao_node"), reference("ao_node")
+    material = next(p for p in stage.Traverse() if p.GetTypeName() == "Material")
+    flag = material.GetAttribute("lantern:baseColorOcclusion")
+    assert flag.Get() is True
+    w, h = reference_scenes.SCENES["ao_node"].size
+    with_node = mean_flip(render("ao_node").rgba, ref)
+    flag.Set(False)
+    try:
+        ignored = mean_flip(render_stage(stage, RenderSettings(width=w, height=h)).rgba, ref)
+    finally:
+        flag.Set(True)
+    print(f"ao_node FLIP (medium): {with_node:.4f}, the node ignored {ignored:.4f}")
+    assert with_node < 0.7 * ignored and with_node < 0.25
+
+
 def test_ao_radius_follows_blenders_ao_distance():
     """The world's AO distance is exported (lantern:aoDistance) and read: a short
     distance finds less occlusion in the corner than Blender's default 10 m."""

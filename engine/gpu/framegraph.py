@@ -40,7 +40,7 @@ TARGETS = {
     "g_base": "rgba16f",       # base colour, alpha
     "g_normal": "rgba16f",     # world normal, clearcoat roughness
     "g_mat": "rgba16f",        # metallic, roughness, dielectric F0, clearcoat
-    "g_emit": "rgba16f",       # emission
+    "g_emit": "rgba16f",       # emission; alpha 1 where the base colour takes the AO
     "g_depth": "depth",         # 32-bit float, reversed (engine/view.py)
     "g_smooth": "rgba16f",     # world normal before the normal map (bump map correction)
     "ao": "r32f",              # ambient occlusion of the dome's light

@@ -86,6 +86,9 @@ def read_material(mat: UsdShade.Material, time, warnings: list) -> Material:
     correction = mat.GetPrim().GetAttribute("lantern:bumpMapCorrection")
     if correction and correction.HasAuthoredValue():
         out.bump_correction = bool(correction.Get())
+    occlusion = mat.GetPrim().GetAttribute("lantern:baseColorOcclusion")
+    if occlusion and occlusion.HasAuthoredValue():
+        out.base_occlusion = bool(occlusion.Get())
     surface = mat.ComputeSurfaceSource()[0]
     if not surface or _shader_id(surface) != "UsdPreviewSurface":
         warnings.append(f"{path}: no UsdPreviewSurface surface; using the default material")

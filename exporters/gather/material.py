@@ -104,6 +104,7 @@ class _Walker:
         self.warn = warn
         self.texture_dir = texture_dir
         self.pattern = PatternBuilder(_link, self.image_path)
+        self.base_occlusion = False
 
     def unsupported(self, node, why="not supported"):
         self.warn(f"material '{self.material.name}': node '{node.name}' ({node.bl_idname}) "
@@ -158,6 +159,11 @@ class _Walker:
         if link is None:
             return _constant(socket, kind)
         node = link.from_node
+        if node.bl_idname == "ShaderNodeAmbientOcclusion" and target == "diffuseColor" and \
+                link.from_socket.name == "Color":
+            # Color x occlusion on Base Color: its Color input, times the renderer's AO.
+            self.base_occlusion = True
+            return self.value(node.inputs["Color"], kind, target)
         if node.bl_idname == "ShaderNodeTexImage" and target is not None and \
                 _computed_coordinates(node):
             # Mapped (or otherwise computed) coordinates: the image as a network node;
@@ -508,7 +514,7 @@ def gather_material(material, warn, texture_dir=None):
         "emissiveColor": (0.0, 0.0, 0.0),
         "opacity": 1.0,
     }
-    tree, graph = material.node_tree, None
+    tree, graph, walker = material.node_tree, None, None
     if tree is not None:
         walker = _Walker(material, warn, texture_dir)
         output = output_node(tree, "ShaderNodeOutputMaterial", f"material '{material.name}'", warn)
@@ -522,7 +528,8 @@ def gather_material(material, warn, texture_dir=None):
                           backface_culling=bool(material.use_backface_culling),
                           pass_index=int(material.pass_index),
                           alpha_mode=alpha_mode(material, inputs, graph), graph=graph,
-                          bump_correction=bump_correction(material))
+                          bump_correction=bump_correction(material),
+                          base_occlusion=walker is not None and walker.base_occlusion)
 
 
 def bump_correction(material) -> bool:

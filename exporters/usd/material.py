@@ -17,6 +17,7 @@ MTLX_INPUT_TYPES = {**INPUT_TYPES, "normal": Sdf.ValueTypeNames.Float3}
 # stage contract, "Material"): "hashed" for Blender's Dithered render method.
 ALPHA_MODE = "lantern:alphaMode"
 BUMP_CORRECTION = "lantern:bumpMapCorrection"
+BASE_OCCLUSION = "lantern:baseColorOcclusion"
 
 
 def write_material(stage, path, rec, default_uv, asset_path):
@@ -76,6 +77,9 @@ def write_material(stage, path, rec, default_uv, asset_path):
     if not rec.bump_correction:            # authored only where it differs from Cycles' default
         material.GetPrim().CreateAttribute(BUMP_CORRECTION, Sdf.ValueTypeNames.Bool,
                                            custom=True).Set(False)
+    if rec.base_occlusion:
+        material.GetPrim().CreateAttribute(BASE_OCCLUSION, Sdf.ValueTypeNames.Bool,
+                                           custom=True).Set(True)
     return material
 
 

@@ -37,16 +37,25 @@ def lighting_aovs(frame) -> bool:
 
 def bind_gbuffer(board, prog, view):
     """The G-buffer and the camera, as every screen-space lighting pass reads them
-    (positions from depth are camera-relative: lib.glsl)."""
+    (positions from depth are camera-relative: lib.glsl), and the frame's ambient
+    occlusion when it has one (surface_defines' BASE_OCCLUSION reads it)."""
     for name in GBUFFER + (("g_smooth",) if "g_smooth" in board else ()):
         board[name].use(UNITS[name])
+    if "ao" in board:
+        board["ao"].use(UNITS["ao_tex"])
     view.set_camera(prog)
 
 
-def bump_defines(board) -> list:
-    """The lighting shaders' variant for a frame whose G-buffer holds the normals before
-    the normal maps (the bump map correction: passes/gbuffer.py)."""
-    return ["BUMP_CORRECTION"] if "g_smooth" in board else []
+def surface_defines(frame, board) -> list:
+    """The lighting shaders' variant for what this frame's G-buffer holds: the normals
+    before the normal maps (BUMP_CORRECTION: the bump map correction, passes/gbuffer.py),
+    and base colours that take the frame's ambient occlusion (BASE_OCCLUSION: an Ambient
+    Occlusion node's Color on Base Color; g_emit.a marks those pixels)."""
+    defines = ["BUMP_CORRECTION"] if "g_smooth" in board else []
+    if "ao" in board and occludes(frame) and \
+            any(m.base_occlusion for m in frame.scene.materials.values()):
+        defines.append("BASE_OCCLUSION")
+    return defines
 
 
 class AmbientPass(Pass):
@@ -89,7 +98,7 @@ class AmbientPass(Pass):
         # preset has occlusion.
         ao = board.get("ao") if occludes(frame) else None
         defines = (["HAS_DOME_MAP"] if env is not None else []) + (["HAS_AO"] if ao else []) + \
-            (["WRITE_AOVS"] if aovs else []) + bump_defines(board)
+            (["WRITE_AOVS"] if aovs else []) + surface_defines(frame, board)
         prog = self.programs.get("fullscreen.vert", "ambient.frag", defines)
         bind_gbuffer(board, prog, board["view"])
         self.environment.bind(prog, dome, env)

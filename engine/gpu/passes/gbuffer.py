@@ -134,6 +134,7 @@ def set_material(prog, mat, textures, threshold, footprint=1.0):
     set_uniform(prog, "u_opacity", mat.opacity)
     set_uniform(prog, "u_opacity_threshold", threshold)
     set_uniform(prog, "u_clearcoat", mat.clearcoat)
+    set_uniform(prog, "u_base_occlusion", 1.0 if mat.base_occlusion else 0.0)
     set_uniform(prog, "u_clearcoat_roughness", mat.clearcoat_roughness)
     set_uniform(prog, "u_material_index", float(mat.pass_index))
     set_uniform(prog, "u_bump_correction", bool(mat.bump_correction))

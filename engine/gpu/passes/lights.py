@@ -30,7 +30,7 @@ from ....core.lights import KINDS, POINT, SPOT, SUN
 from ...view import translate
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
-from .ambient import (GBUFFER, LIGHTING_AOVS, LIGHTING_TARGETS, bind_gbuffer, bump_defines,
+from .ambient import (GBUFFER, LIGHTING_AOVS, LIGHTING_TARGETS, bind_gbuffer, surface_defines,
                       lighting_aovs)
 from .shadows import set_shadow_uniforms
 
@@ -95,7 +95,7 @@ def cone(light, length: float) -> np.ndarray:
 class LightPass(Pass):
     name = "lights"
     reads = GBUFFER + ("hdr", "view", "shadow_maps")
-    optional = ("g_smooth",)
+    optional = ("g_smooth", "ao")
     writes = ("hdr", "depth_stencil")
 
     def __init__(self, ctx, pool, programs, uploads, stencil, table, geometry, environment):
@@ -204,7 +204,8 @@ class LightPass(Pass):
                 self._instances[1].release()
             self._instances = (rows, self.uploads.buffer(rows, kind="lights"))
         prog = self.programs.get("volume.vert", "light.frag", ["LIGHT_SPHERE", "LIGHTS_INSTANCED"]
-                                 + (["WRITE_AOVS"] if self._aovs else []) + bump_defines(board))
+                                 + (["WRITE_AOVS"] if self._aovs else [])
+                                 + surface_defines(frame, board))
         bind_gbuffer(board, prog, view)
         set_uniform(prog, "mvp", view.view_proj)
         ctx.enable(ctx.BLEND)
@@ -221,9 +222,10 @@ class LightPass(Pass):
         frame.count("lights_drawn", len(paths))
         frame.count("batched_lights", len(paths))
 
-    def _program(self, board, view, vert, variant, row, sm):
+    def _program(self, frame, board, view, vert, variant, row, sm):
         prog = self.programs.get(vert, "light.frag", [variant] + (["HAS_SHADOW"] if sm else [])
-                                 + (["WRITE_AOVS"] if self._aovs else []) + bump_defines(board))
+                                 + (["WRITE_AOVS"] if self._aovs else [])
+                                 + surface_defines(frame, board))
         bind_gbuffer(board, prog, view)
         set_uniform(prog, "light_index", row)
         if sm is not None:
@@ -250,8 +252,8 @@ class LightPass(Pass):
         row = self.table.index[path]
         if light.kind == SUN:
             ctx.disable(ctx.DEPTH_TEST)
-            self.programs.fullscreen(self._program(board, view, "fullscreen.vert", "LIGHT_DISTANT",
-                                                   row, sm))
+            self.programs.fullscreen(self._program(frame, board, view, "fullscreen.vert",
+                                                   "LIGHT_DISTANT", row, sm))
             frame.count("lights_drawn")
             return
         variant = KINDS[light.kind].shader
@@ -274,7 +276,8 @@ class LightPass(Pass):
         if _crosses_far_plane(view, center, bound):
             # Its back faces would be clipped away: shade the (scissored) screen instead.
             ctx.disable(ctx.DEPTH_TEST)
-            self.programs.fullscreen(self._program(board, view, "fullscreen.vert", variant, row, sm))
+            self.programs.fullscreen(self._program(frame, board, view, "fullscreen.vert", variant,
+                                                   row, sm))
             frame.count("lights_drawn")
             return
         # Stencil marking: depth-fail counting of both faces against the scene depth
@@ -292,7 +295,7 @@ class LightPass(Pass):
         ctx.disable(ctx.DEPTH_TEST)
         ctx.enable(ctx.CULL_FACE)
         ctx.cull_face = "front"
-        prog = self._program(board, view, "volume.vert", variant, row, sm)
+        prog = self._program(frame, board, view, "volume.vert", variant, row, sm)
         set_uniform(prog, "mvp", mvp)
         self._vao(prog, vbo).render(ctx.TRIANGLES)
         self.stencil.end()
