@@ -299,3 +299,29 @@ def test_f12_exports_cages_when_lantern_subdivides(empty_scene, monkeypatch):
             still.close()
     assert counts["cage"] == (507, "catmullClark")
     assert counts["apply"][0] > 507 and counts["apply"][1] != "catmullClark"
+
+
+def test_an_edit_inside_a_node_group_reaches_the_material(empty_scene):
+    """The material's Principled BSDF sits in a node group: changing a value inside the
+    group exports that material again, as a full export would write it."""
+    import bpy
+    _scene()
+    group = bpy.data.node_groups.new("Shading", "ShaderNodeTree")
+    group.interface.new_socket(name="BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
+    inner = group.nodes.new("ShaderNodeBsdfPrincipled")
+    group.links.new(inner.outputs["BSDF"], group.nodes.new("NodeGroupOutput").inputs["BSDF"])
+    tree = bpy.data.materials["paint"].node_tree
+    node = tree.nodes.new("ShaderNodeGroup")
+    node.node_tree = group
+    tree.links.new(node.outputs["BSDF"], tree.nodes["Material Output"].inputs["Surface"])
+    bpy.context.view_layer.update()
+    synced = Synced()
+    try:
+        synced.fragments.clear()
+        inner.inputs["Base Color"].default_value = (0.1, 0.7, 0.2, 1.0)
+        bpy.context.view_layer.update()
+        done = {kind for exports, _ in synced.fragments for kind, _ in exports}
+        assert "material" in done, synced.fragments
+        assert synced.live.mirror.stage.GetRootLayer().ExportToString() == _fresh()
+    finally:
+        synced.close()
