@@ -548,6 +548,20 @@ def _bsdf_mix(factor, second, first_color=(0.8, 0.2, 0.1, 1.0)):
     return build
 
 
+def _bsdf_add(second, first_color=(0.4, 0.1, 0.05, 1.0), specular=0.0):
+    """An Add Shader of the Principled BSDF (base `first_color`, its Specular IOR Level
+    `specular`) and a second BSDF made by `second(tree)`."""
+    def build(tree, bsdf):
+        bsdf.inputs["Base Color"].default_value = first_color
+        bsdf.inputs["Specular IOR Level"].default_value = specular
+        output = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+        add = tree.nodes.new("ShaderNodeAddShader")
+        tree.links.new(bsdf.outputs["BSDF"], add.inputs[0])
+        tree.links.new(second(tree), add.inputs[1])
+        tree.links.new(add.outputs[0], output.inputs["Surface"])
+    return build
+
+
 def _second_principled(color=(0.1, 0.3, 0.9, 1.0), metallic=0.0, textured=False):
     def second(tree):
         node = tree.nodes.new("ShaderNodeBsdfPrincipled")
@@ -569,14 +583,20 @@ def _second_diffuse(tree):
 
 def build_mix_shader(workdir=None):
     """Mix Shaders of two BSDFs, input by input: base colours by a constant and by a
-    network, metal against dielectric, an image against a colour, a Diffuse BSDF."""
+    network, metal against dielectric, an image against a colour, a Diffuse BSDF; and
+    Add Shaders of two BSDFs (twice their even mix)."""
     return _grid("mix_shader", [
         ("colors", _bsdf_mix(0.3, _second_principled())),
         ("network", _bsdf_mix(_alpha_gradient, _second_principled())),
         ("metal", _bsdf_mix(0.5, _second_principled((0.9, 0.7, 0.3, 1.0), metallic=1.0),
                             (0.9, 0.7, 0.3, 1.0))),
         ("image", _bsdf_mix(0.4, _second_principled(textured=True))),
-        ("diffuse", _bsdf_mix(0.6, _second_diffuse))])
+        ("diffuse", _bsdf_mix(0.6, _second_diffuse)),
+        ("add_colors", _bsdf_add(_second_principled((0.1, 0.2, 0.4, 1.0)))),
+        ("add_diffuse", _bsdf_add(_second_diffuse)),
+        ("add_image", _bsdf_add(_second_principled(textured=True))),
+        ("add_metal", _bsdf_add(_second_principled((0.4, 0.3, 0.1, 1.0), metallic=1.0),
+                                (0.4, 0.3, 0.1, 1.0)))])
 
 
 def build_transparent(workdir=None):

@@ -941,3 +941,26 @@ def test_an_ambient_occlusion_nodes_color_on_base_color_marks_the_material(empty
         pytest.approx((0.2, 0.4, 0.6))
     assert len(report.warnings) == 1 and "Ambient Occlusion" in report.warnings[0], \
         report.warnings
+
+
+def test_an_add_shader_of_two_bsdfs_adds_their_base_colours(empty_scene):
+    """Add Shader of two Principled BSDFs (no specular): one layer whose base colour is
+    the sum, no warning; with a Glossy BSDF (not mixable) one warning says so."""
+    mat, tree, bsdf = principled_material("Added")
+    bsdf.inputs["Base Color"].default_value = (0.4, 0.1, 0.05, 1.0)
+    bsdf.inputs["Specular IOR Level"].default_value = 0.0
+    second = tree.nodes.new("ShaderNodeBsdfPrincipled")
+    second.inputs["Base Color"].default_value = (0.1, 0.2, 0.4, 1.0)
+    second.inputs["Specular IOR Level"].default_value = 0.0
+    add = tree.nodes.new("ShaderNodeAddShader")
+    tree.links.new(bsdf.outputs["BSDF"], add.inputs[0])
+    tree.links.new(second.outputs["BSDF"], add.inputs[1])
+    tree.links.new(add.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+    cube_object("Cube").data.materials.append(mat)
+    stage, report = export_current()
+    assert report.warnings == [], report.warnings
+    assert tuple(surface(stage, "Added").GetInput("diffuseColor").Get()) == \
+        pytest.approx((0.5, 0.3, 0.45))
+    tree.links.new(tree.nodes.new("ShaderNodeBsdfAnisotropic").outputs[0], add.inputs[1])
+    _, report = export_current()
+    assert [w for w in report.warnings if "Add Shader" in w and "Added" in w], report.warnings

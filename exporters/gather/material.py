@@ -353,6 +353,9 @@ class _Walker:
                         "ShaderNodeBsdfTransparent"), inputs, weight)
                 if all(k in MIXABLE_BSDFS for k in kinds):
                     return self.bsdf_mix(node, links, inputs, weight)
+            elif all(link is not None and link.from_node.bl_idname in MIXABLE_BSDFS
+                     for link in links):
+                return self.bsdf_add(node, links, inputs, weight)
             weights = [weight, weight]
             if kind == "ShaderNodeMixShader":
                 fac = node.inputs[0]
@@ -364,8 +367,9 @@ class _Walker:
                     weights = [weight * (1.0 - f), weight * f]
             pairs = [(l, w) for l, w in zip(links, weights) if l is not None and w > 0.0]
             bsdfs = [w for l, w in pairs if l.from_node.bl_idname != "ShaderNodeEmission"]
-            if kind == "ShaderNodeMixShader" and (len(bsdfs) > 1 or any(w != weight for w in bsdfs)):
-                self.warn(f"material '{self.material.name}': node '{node.name}' (Mix Shader) "
+            if len(bsdfs) > 1 or (kind == "ShaderNodeMixShader" and
+                                  any(w != weight for w in bsdfs)):
+                self.warn(f"material '{self.material.name}': node '{node.name}' ({node.bl_label}) "
                           f"BSDF weights are not exported (UsdPreviewSurface has one layer); "
                           f"emission is weighted exactly")
             # Emission last so that it adds to the BSDF rather than replacing it.
@@ -376,16 +380,39 @@ class _Walker:
             return False
         return True
 
-    def bsdf_mix(self, node, links, inputs, weight):
+    def bsdf_add(self, node, links, inputs, weight):
+        """An Add Shader of two Principled (or Diffuse) BSDFs: twice their even mix. The
+        base colour doubles, which adds the diffuse and metallic lobes exactly where the
+        two agree on the other inputs; the dielectric specular's F0 doubles, which
+        overstates Fresnel's rise at grazing angles; emissions add, as before."""
+        self.bsdf_mix(node, links, inputs, weight, added=True)
+        base = inputs.get("diffuseColor")
+        if "diffuseColor" in self.pattern.graph.outputs:
+            self.pattern.scale("diffuseColor", 2.0)
+        if isinstance(base, TexInput):
+            inputs["diffuseColor"] = TexInput(dataclasses.replace(
+                base.texture, scale=tuple(2.0 * s for s in base.texture.scale[:3]) + (1.0,)),
+                base.channel)
+        elif isinstance(base, tuple):
+            inputs["diffuseColor"] = tuple(2.0 * c for c in base)
+        f0 = ((inputs.get("ior", 1.5) - 1.0) / (inputs.get("ior", 1.5) + 1.0)) ** 2
+        r = min(math.sqrt(2.0 * f0), 0.999)
+        inputs["ior"] = (1.0 + r) / (1.0 - r)
+        return True
+
+    def bsdf_mix(self, node, links, inputs, weight, added=False):
         """A Mix Shader of two Principled (or Diffuse) BSDFs: one layer whose inputs mix
         by the factor. Exact where Cycles' closure mix is linear in them (base colour,
         metallic, alpha: the Principled BSDF blends its lobes by metallic too, and
         emission, weighted exactly as before); roughness and the other inputs mix as
-        values (one warning where they differ)."""
-        fac = node.inputs[0]
-        f = None if _link(fac) is not None else min(max(_constant(fac, "float"), 0.0), 1.0)
+        values (one warning where they differ). `added`: an Add Shader's two, mixed
+        evenly, each emission whole (bsdf_add doubles the rest)."""
+        fac = None if added else node.inputs[0]
+        f = 0.5 if added else (None if _link(fac) is not None else
+                               min(max(_constant(fac, "float"), 0.0), 1.0))
         sides = []
-        for link, share in zip(links, (None if f is None else 1.0 - f, f)):
+        shares = (1.0, 1.0) if added else (None if f is None else 1.0 - f, f)
+        for link, share in zip(links, shares):
             side = {}
             self.shader(link, side, weight if share is None else weight * share)
             sides.append(side)
@@ -413,12 +440,12 @@ class _Walker:
                 continue
             try:
                 self.pattern.connect_mix(target, kind, fac, sockets,
-                                         MIXED_DEFAULTS[target])
+                                         MIXED_DEFAULTS[target], factor=f)
             except Unsupported as exc:
                 self.unsupported(exc.node, exc.why)
         iors = {_bsdf_ior(link.from_node) for link in links}
         if len(iors) > 1:
-            self.warn(f"material '{self.material.name}': node '{node.name}' (Mix Shader) "
+            self.warn(f"material '{self.material.name}': node '{node.name}' ({node.bl_label}) "
                       f"mixes BSDFs of different specular (IOR and Specular IOR Level); the "
                       f"first's is used")
         return True

@@ -254,30 +254,25 @@ class PatternBuilder:
         """As connect, times a constant `factor` (an emission's strength and weight):
         a Vector Math Scale node after the output."""
         self.connect(target, link)
-        src, out = self.graph.outputs[target]
-        rec = PatternNode(name=f"n{len(self.graph.nodes)}_vector_math", kind="vector_math",
-                          settings={"operation": "SCALE"},
-                          values={"scale": ("float", float(factor))},
-                          links={"a": ("vector", src, out)},
-                          outputs={"vector": "vector", "value": "float"})
-        self.graph.nodes.append(rec)
-        self.graph.outputs[target] = (rec.name, "vector")
+        self.scale(target, factor)
 
-    def connect_mix(self, target, kind, fac, sockets, default) -> None:
+    def connect_mix(self, target, kind, fac, sockets, default, factor=0.5) -> None:
         """Surface input `target` reads a Mix node of the two `sockets` (a socket, or None
-        for `default`) by the factor socket `fac`: the Mix Shader of two BSDFs, input by
-        input. Raises Unsupported (naming the node) as connect does."""
+        for `default`) by the factor socket `fac` (None: the value `factor`): the Mix
+        Shader of two BSDFs, input by input. Raises Unsupported (naming the node) as
+        connect does."""
         nodes, names = list(self.graph.nodes), dict(self._names)
         settings = {"data_type": "FLOAT", "clamp_factor": "1"}
         if kind == "color":
             settings.update(data_type="RGBA", blend_type="MIX", clamp_result="0")
         rec = PatternNode(name="", kind="mix", settings=settings, outputs={"result": kind})
         try:
-            for name, socket, want in (("factor", fac, "float"), ("a", sockets[0], kind),
-                                       ("b", sockets[1], kind)):
+            for name, socket, want, unset in (("factor", fac, "float", factor),
+                                              ("a", sockets[0], kind, default),
+                                              ("b", sockets[1], kind, default)):
                 link = self.link_of(socket) if socket is not None else None
                 if link is None:
-                    value = socket_value(socket, want) if socket is not None else default
+                    value = socket_value(socket, want) if socket is not None else unset
                     rec.values[name] = (want, value)
                 else:
                     src = self._node(link.from_node, set())
@@ -289,6 +284,18 @@ class PatternBuilder:
         rec.name = f"n{len(self.graph.nodes)}_mix"
         self.graph.nodes.append(rec)
         self.graph.outputs[target] = (rec.name, "result")
+
+    def scale(self, target, factor) -> None:
+        """Surface input `target` reads `factor` times what it read (a Vector Math Scale
+        node after it)."""
+        src, out = self.graph.outputs[target]
+        rec = PatternNode(name=f"n{len(self.graph.nodes)}_vector_math", kind="vector_math",
+                          settings={"operation": "SCALE"},
+                          values={"scale": ("float", float(factor))},
+                          links={"a": ("vector", src, out)},
+                          outputs={"vector": "vector", "value": "float"})
+        self.graph.nodes.append(rec)
+        self.graph.outputs[target] = (rec.name, "vector")
 
     def complement(self, target) -> None:
         """Surface input `target` reads 1 - what it read (a Math Subtract node after it)."""
