@@ -531,35 +531,33 @@ def _transparent_mix(slot, factor, alpha=1.0):
     return build
 
 
-def _bsdf_mix(factor, second, first_color=(0.8, 0.2, 0.1, 1.0)):
-    """A Mix Shader of the Principled BSDF (base `first_color`) and a second BSDF made by
-    `second(tree)`, by `factor` (a constant, or function(tree) -> socket)."""
+def _shader_pair(kind, second, first_color, factor=None, specular=None):
+    """A Mix Shader (by `factor`: a constant, or function(tree) -> socket) or an Add
+    Shader (`kind`) of the Principled BSDF (base `first_color`, its Specular IOR Level
+    `specular` where given) and a second BSDF made by `second(tree)`."""
     def build(tree, bsdf):
         bsdf.inputs["Base Color"].default_value = first_color
+        if specular is not None:
+            bsdf.inputs["Specular IOR Level"].default_value = specular
         output = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
-        mix = tree.nodes.new("ShaderNodeMixShader")
-        tree.links.new(bsdf.outputs["BSDF"], mix.inputs[1])
-        tree.links.new(second(tree), mix.inputs[2])
-        tree.links.new(mix.outputs[0], output.inputs["Surface"])
+        node = tree.nodes.new(kind)
+        slots = [socket for socket in node.inputs if socket.type == "SHADER"]
+        tree.links.new(bsdf.outputs["BSDF"], slots[0])
+        tree.links.new(second(tree), slots[1])
+        tree.links.new(node.outputs[0], output.inputs["Surface"])
         if callable(factor):
-            tree.links.new(factor(tree), mix.inputs[0])
-        else:
-            mix.inputs[0].default_value = factor
+            tree.links.new(factor(tree), node.inputs[0])
+        elif factor is not None:
+            node.inputs[0].default_value = factor
     return build
+
+
+def _bsdf_mix(factor, second, first_color=(0.8, 0.2, 0.1, 1.0)):
+    return _shader_pair("ShaderNodeMixShader", second, first_color, factor=factor)
 
 
 def _bsdf_add(second, first_color=(0.4, 0.1, 0.05, 1.0), specular=0.0):
-    """An Add Shader of the Principled BSDF (base `first_color`, its Specular IOR Level
-    `specular`) and a second BSDF made by `second(tree)`."""
-    def build(tree, bsdf):
-        bsdf.inputs["Base Color"].default_value = first_color
-        bsdf.inputs["Specular IOR Level"].default_value = specular
-        output = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
-        add = tree.nodes.new("ShaderNodeAddShader")
-        tree.links.new(bsdf.outputs["BSDF"], add.inputs[0])
-        tree.links.new(second(tree), add.inputs[1])
-        tree.links.new(add.outputs[0], output.inputs["Surface"])
-    return build
+    return _shader_pair("ShaderNodeAddShader", second, first_color, specular=specular)
 
 
 def _second_principled(color=(0.1, 0.3, 0.9, 1.0), metallic=0.0, textured=False):
