@@ -316,10 +316,14 @@ def check_material_preview():
             if not returned.wait(60):
                 raise TimeoutError(f"no preview render for {name} in 60 s")
             preview = material.preview
+            # The job copies the frame into the preview while this reads it: a read can
+            # catch the copy half done. Done is non-empty and the same on two reads.
+            pixels = None
             while time.perf_counter() - t0 < 60:
-                pixels = np.array(preview.image_pixels_float[:], dtype=np.float32)
-                if pixels.any():
+                now = np.array(preview.image_pixels_float[:], dtype=np.float32)
+                if now.any() and pixels is not None and np.array_equal(now, pixels):
                     break
+                pixels = now
                 time.sleep(0.02)
             w, h = preview.image_size
             np.save(os.path.join(OUT, f"preview_{name}.npy"), pixels.reshape(h, w, 4))
