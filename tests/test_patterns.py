@@ -282,3 +282,40 @@ def test_udim_tiles_are_written_by_their_token_copied_and_read_from_the_file(tmp
     from_file, in_memory = render_stage(stage, settings), render_stage(memory, settings)
     assert not from_file.warnings, from_file.warnings
     np.testing.assert_allclose(from_file.rgba, in_memory.rgba, atol=1e-6)
+
+
+def test_the_materials_of_one_mesh_read_their_own_attributes(empty_scene):
+    """Two quads of one mesh, each with a material whose Color Attribute node names
+    another attribute of that mesh: each quad draws its own (the pattern scenes'
+    light: the pixel is the base colour)."""
+    import bpy
+    from lantern.engine import RenderSettings, render_stage
+    from lantern.exporters import stage_from_depsgraph
+    from reference_scenes import _camera, _mesh_object, _sun, _world
+    scene = bpy.context.scene
+    _world(scene, color=(0.0, 0.0, 0.0), strength=0.0)
+    _sun(scene, 3.141592653589793)
+    colours = {"Left": (0.7, 0.1, 0.1), "Right": (0.1, 0.2, 0.7)}
+    materials = []
+    for name in colours:
+        mat, tree, bsdf = pattern_scenes._principled(name)
+        node = tree.nodes.new("ShaderNodeVertexColor")
+        node.layer_name = name
+        tree.links.new(node.outputs["Color"], bsdf.inputs["Base Color"])
+        materials.append(mat)
+    ob = _mesh_object(scene, "Pair", [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (2, 0, 0),
+                                      (2, 1, 0)], [(0, 1, 2, 3), (1, 4, 5, 2)], materials[0],
+                      [(0, 0), (1, 0), (1, 1), (0, 1), (0, 0), (1, 0), (1, 1), (0, 1)])
+    ob.data.materials.append(materials[1])
+    ob.data.polygons[1].material_index = 1
+    for name, colour in colours.items():
+        attribute = ob.data.color_attributes.new(name, "FLOAT_COLOR", "POINT")
+        for item in attribute.data:
+            item.color = (*colour, 1.0)
+    _camera(scene, (1.0, 0.5, 10.0), (1.0, 0.5, 0.0), ortho_scale=2.0)
+    bpy.context.view_layer.update()
+    stage, report = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+    assert report.warnings == [], report.warnings
+    image = render_stage(stage, RenderSettings(width=64, height=32)).rgba
+    np.testing.assert_allclose(image[16, 12, :3], colours["Left"], atol=0.02)
+    np.testing.assert_allclose(image[16, 52, :3], colours["Right"], atol=0.02)

@@ -188,34 +188,33 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
 
     # Streams bound networks read (MeshData.streams): more columns each (STREAM_WIDTHS),
     # split off below, so that they follow the vertices' order and sharing.
-    color_name = next((m.color_attribute for m in materials if m.color_attribute), None)
+    # One attribute: on every triangle (per point where the primvar is). Several (the
+    # mesh's materials read different ones; one each): each on its material's
+    # triangles, and a point's value then depends on the face, so per corner.
+    attributes = {mi: m.color_attribute for mi, m in enumerate(materials) if m.color_attribute}
+    names = sorted(set(attributes.values()))
     columns, streams = [P, N, UV, T], []
     if any(m.reads_generated for m in materials):
         streams.append("generated")
         columns.append(generated_coordinates(_topology_points(mesh, pts))[idx[corners]])
-    if color_name is not None:
+    if attributes:
         streams.append("colors")
-        colors, c_interp = _primvar(mesh, color_name, time) if refined is None else (None, None)
-        if colors is not None and colors.ndim == 2 and colors.shape[1] >= 2:
-            # A colour or vector as xyz; a 2D one (a UV map read by an Attribute node) as
-            # (x, y, 0), as Cycles reads it.
-            rgba = np.zeros((len(colors), 4))
-            rgba[:, :min(colors.shape[1], 3)] = colors[:, :3]
-            alpha, a_interp = _primvar(mesh, attribute_opacity(color_name), time)
-            if alpha is not None and alpha.ndim == 1 and a_interp == c_interp \
-                    and len(alpha) == len(colors):
-                rgba[:, 3] = alpha
-            else:
-                rgba[:, 3] = 1.0
-            C = _per_corner(rgba, c_interp, len(pts), face_of_corner, idx, n_faces,
-                            color_name)[corners]
-            _finite(C, f"{color_name} (per corner)")
-            per_point &= _per_point(c_interp)
-        else:
-            C = np.zeros((len(corners), 4))
-            if warnings is not None:
-                warnings.append(f"{prim.GetPath()}: no colour primvar {color_name!r} for its "
-                                f"material's network; it reads black")
+        C = np.zeros((len(corners), 4))
+        per_point &= len(names) == 1
+        for name in names:
+            chosen = [mi for mi, n in attributes.items() if n == name] if len(names) > 1 else \
+                list(range(len(materials)))
+            mine = np.repeat(np.isin(tri_mat, chosen), 3)
+            rgba, interp = _attribute(mesh, name, time) if refined is None else (None, None)
+            if rgba is None:
+                if warnings is not None:
+                    warnings.append(f"{prim.GetPath()}: no colour primvar {name!r} for its "
+                                    f"material's network; it reads black")
+                continue
+            C[mine] = _per_corner(rgba, interp, len(pts), face_of_corner, idx, n_faces,
+                                  name)[corners][mine]
+            _finite(C[mine], f"{name} (per corner)")
+            per_point &= _per_point(interp)
         columns.append(C)
     width = sum(c.shape[1] for c in columns)
     soup = np.concatenate(columns, axis=1).reshape(-1, 3, width)[order].reshape(-1, width)
@@ -240,6 +239,21 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
                     backface_culling=culling,
                     point_of_vertex=point_of_corner[first].astype(np.int32),
                     surface_normals=normals is None)
+
+
+def _attribute(mesh, name, time):
+    """(values (n, 4), interpolation) of the primvar an attribute node reads, or (None,
+    None): a colour or vector as xyz, a 2D one (a UV map read by an Attribute node) as
+    (x, y, 0), as Cycles reads it; alpha from its opacity primvar, else 1."""
+    values, interp = _primvar(mesh, name, time)
+    if values is None or values.ndim != 2 or values.shape[1] < 2:
+        return None, None
+    rgba = np.zeros((len(values), 4))
+    rgba[:, :min(values.shape[1], 3)] = values[:, :3]
+    alpha, a_interp = _primvar(mesh, attribute_opacity(name), time)
+    ok = alpha is not None and alpha.ndim == 1 and a_interp == interp and len(alpha) == len(values)
+    rgba[:, 3] = alpha if ok else 1.0
+    return rgba, interp
 
 
 def split_udim_tiles(materials, tri_mat, uv):
