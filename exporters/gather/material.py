@@ -551,6 +551,12 @@ def gather_material(material, warn, texture_dir=None):
             walker.shader(link, found)
             inputs.update(found)
             graph = walker.pattern.graph if walker.pattern.graph.outputs else None
+    read = list(dict.fromkeys(n.settings["name"] for n in (graph.nodes if graph else ())
+                              if n.kind == "attribute"))
+    if len(read) > 1:      # one colour stream a material (engine/usd/mesh.py)
+        warn(f"material '{material.name}': its network reads attributes "
+             f"{', '.join(repr(n) for n in read)}; one attribute a material is drawn, so "
+             f"each of them reads {read[0]!r}")
     return MaterialRecord(key=material.name_full, name=material.name, inputs=inputs,
                           backface_culling=bool(material.use_backface_culling),
                           pass_index=int(material.pass_index),
