@@ -18,7 +18,8 @@ SIZE = 16
 
 
 def warm(presets, stop=lambda: False) -> float:
-    """Renders the warm-up stage once per preset, in order: the first always, the
+    """Renders the default stage once per preset, in order, then the feature stage at
+    the first preset without and with its normal map: the first render always, the
     others until stop() says a request waits (it then makes what it needs itself);
     returns the seconds it took."""
     from ..image_io import write_image

@@ -19,10 +19,7 @@ def default_scene():
     (docs/stage_contract.md)."""
     s = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(s, UsdGeom.Tokens.z)
-    cube = UsdGeom.Mesh.Define(s, "/root/Cube")
-    cube.CreatePointsAttr([Gf.Vec3f(*p) for p in CUBE_POINTS])
-    cube.CreateFaceVertexCountsAttr([4] * 6)
-    cube.CreateFaceVertexIndicesAttr(CUBE_FACES)
+    cube = _cube(s, "/root/Cube")
     material = UsdShade.Material.Define(s, "/root/Material")
     shader = UsdShade.Shader.Define(s, "/root/Material/Surface")
     shader.CreateIdAttr("UsdPreviewSurface")
@@ -59,7 +56,7 @@ def feature_scene(texture: str):
         UsdLux.ShadowAPI.Apply(light.GetPrim()).CreateShadowEnableAttr(True)
     UsdLux.SphereLight.Define(s, "/root/Light_unshadowed").CreateIntensityAttr(10.0)
     for name, slot in (("Textured", "diffuseColor"), ("NormalMapped", "normal")):
-        cube = UsdGeom.Mesh(_cube(s, f"/root/{name}", offset=3.0 if slot == "normal" else -3.0))
+        cube = _cube(s, f"/root/{name}", offset=3.0 if slot == "normal" else -3.0)
         uv = UsdGeom.PrimvarsAPI(cube).CreatePrimvar("UVMap", Sdf.ValueTypeNames.TexCoord2fArray,
                                                      UsdGeom.Tokens.faceVarying)
         uv.Set([(0, 0), (1, 0), (1, 1), (0, 1)] * 6)
@@ -86,7 +83,8 @@ def feature_scene(texture: str):
     return s
 
 
-def _cube(s, path, offset):
+def _cube(s, path, offset=0.0):
+    """Blender's default cube at `path`, moved `offset` along y."""
     cube = UsdGeom.Mesh.Define(s, path)
     cube.CreatePointsAttr([Gf.Vec3f(x, y + offset, z) for x, y, z in CUBE_POINTS])
     cube.CreateFaceVertexCountsAttr([4] * 6)
