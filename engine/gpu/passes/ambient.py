@@ -102,8 +102,6 @@ class AmbientPass(Pass):
         prog = self.programs.get("fullscreen.vert", "ambient.frag", defines)
         bind_gbuffer(board, prog, board["view"])
         self.environment.bind(prog, dome, env)
-        if ao is not None:
-            ao.use(UNITS["ao_tex"])
         set_uniform(prog, "has_dome", dome is not None)
         set_uniform(prog, "transparent", bool(frame.transparent))
         self.programs.fullscreen(prog)
