@@ -202,9 +202,8 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
         C = np.zeros((len(corners), 4))
         per_point &= len(names) == 1
         for name in names:
-            chosen = [mi for mi, n in attributes.items() if n == name] if len(names) > 1 else \
-                list(range(len(materials)))
-            mine = np.repeat(np.isin(tri_mat, chosen), 3)
+            mine = np.ones(len(corners), bool) if len(names) == 1 else np.repeat(
+                np.isin(tri_mat, [mi for mi, n in attributes.items() if n == name]), 3)
             rgba, interp = _attribute(mesh, name, time) if refined is None else (None, None)
             if rgba is None:
                 if warnings is not None:
