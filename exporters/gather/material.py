@@ -390,14 +390,14 @@ class _Walker:
         if "diffuseColor" in self.pattern.graph.outputs:
             self.pattern.scale("diffuseColor", 2.0)
         if isinstance(base, TexInput):
+            scale = base.texture.scale
             inputs["diffuseColor"] = TexInput(dataclasses.replace(
-                base.texture, scale=tuple(2.0 * s for s in base.texture.scale[:3]) + (1.0,)),
+                base.texture, scale=tuple(2.0 * s for s in scale[:3]) + tuple(scale[3:])),
                 base.channel)
         elif isinstance(base, tuple):
             inputs["diffuseColor"] = tuple(2.0 * c for c in base)
-        f0 = ((inputs.get("ior", 1.5) - 1.0) / (inputs.get("ior", 1.5) + 1.0)) ** 2
-        r = min(math.sqrt(2.0 * f0), 0.999)
-        inputs["ior"] = (1.0 + r) / (1.0 - r)
+        # Specular IOR Level 1 is twice the IOR's F0 (principled_ior).
+        inputs["ior"] = principled_ior(inputs.get("ior", 1.5), 1.0)
         return True
 
     def bsdf_mix(self, node, links, inputs, weight, added=False):
