@@ -255,3 +255,46 @@ def specular_albedo(f0, f90, nov, roughness) -> np.ndarray:
     fss = f0 + (f90 - f0) / 21.0
     fms = fss * e_avg / (1.0 - fss * (1.0 - e_avg))
     return (f0 * (y - x) + f90 * x) * (1 + fms * (1 / y - 1))
+
+
+def velvet_brdf(v, l, sigma) -> np.ndarray:
+    """Cycles' Ashikhmin velvet BRDF (shaders/sheen.glsl brdf_sheen, mode 2) for unit
+    directions v (to the viewer) and l (to the light) about the normal +Z, broadcast."""
+    v, l = np.asarray(v, float), np.asarray(l, float)
+    sigma = np.maximum(np.asarray(sigma, float), 0.01)
+    nov, nol = v[..., 2], l[..., 2]
+    h = v + l
+    h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-12)
+    noh, voh = h[..., 2], np.abs(np.sum(v * h, axis=-1))
+    valid = (nov > 0) & (nol > 0) & (np.abs(noh) < 1 - 1e-5) & (voh > 1e-5)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        ratio = np.maximum(noh / voh, 1e-5)
+        g = np.minimum(1.0, 2 * ratio * np.minimum(nov, nol))
+        sin2 = 1 - noh * noh
+        d = np.exp(-noh * noh / (sin2 * sigma * sigma)) / (sigma * sigma * math.pi * sin2 * sin2)
+        f = 0.25 * d * g / (nov * nol)
+    return np.where(valid, f, 0.0)
+
+
+VELVET_SIZE = 16       # n.v x roughness texels of the velvet albedo
+
+
+@functools.lru_cache(maxsize=1)
+def velvet_albedo_lut(size: int = VELVET_SIZE, steps: int = 64) -> np.ndarray:
+    """(size, size, 1) float32, row j = roughness j / (size - 1), column i = n.v
+    i / (size - 1) (texel centres, as dfg_lut): the velvet lobe's directional albedo,
+    the integral of f cos over the hemisphere of light directions (midpoint rule in
+    theta, phi; the lobe is mirror-symmetric in phi). Made at the first frame that
+    draws a velvet sheen."""
+    theta = (np.arange(steps) + 0.5) * (math.pi / 2) / steps
+    phi = (np.arange(2 * steps) + 0.5) * math.pi / (2 * steps)
+    th, ph = np.meshgrid(theta, phi, indexing="ij")
+    l = np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)], -1)
+    weight = np.cos(th) * np.sin(th) * (math.pi / 2 / steps) * (math.pi / (2 * steps)) * 2
+    c = np.linspace(0.0, 1.0, size)
+    table = np.zeros((size, size, 1), np.float32)
+    for i, nov in enumerate(np.maximum(c, 1e-3)):
+        v = np.array([math.sqrt(1 - nov * nov), 0.0, nov])
+        f = velvet_brdf(v, l[None], c[:, None, None])          # (roughness, theta, phi)
+        table[:, i, 0] = np.sum(f * weight, axis=(1, 2))
+    return table

@@ -87,7 +87,15 @@ class Material:
     # lantern:baseColorOcclusion: the base colour is multiplied by the frame's ambient
     # occlusion (an Ambient Occlusion node's Color on Base Color in Blender).
     base_occlusion: bool = False
+    # lantern:sheenMode, sheenColor, sheenRoughness: a sheen lobe (core/sheen.py), or none.
+    sheen_mode: str = ""
+    sheen: tuple = (0.0, 0.0, 0.0)
+    sheen_roughness: float = 0.5
     pattern: PatternGraph | None = None  # the mtlx network feeding surface inputs
+
+    @property
+    def has_sheen(self) -> bool:
+        return bool(self.sheen_mode) and max(self.sheen) > 0.0
 
     @property
     def has_normal_map(self) -> bool:

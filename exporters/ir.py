@@ -56,7 +56,17 @@ class MaterialRecord:
     # The base colour comes through an Ambient Occlusion node's Color: times the
     # renderer's ambient occlusion (contract: Material, lantern:baseColorOcclusion).
     base_occlusion: bool = False
+    sheen: SheenRecord | None = None   # a sheen lobe (contract: Sheen), if any
     graph: PatternGraph | None = None  # the node network feeding surface inputs, if any
+
+
+@dataclass
+class SheenRecord:
+    """A sheen lobe: the Principled BSDF's Sheen (weight x tint) or a Sheen BSDF added
+    to the surface, as core/sheen.py names its modes."""
+    mode: str                 # core/sheen.MODES
+    color: tuple              # linear RGB: Sheen Weight x Sheen Tint, or the BSDF's Color
+    roughness: float
 
 
 @dataclass

@@ -12,6 +12,9 @@ uniform sampler2D g_normal;
 uniform sampler2D g_mat;
 uniform sampler2D g_emit;
 uniform sampler2D g_depth;
+#ifdef SHEEN
+uniform sampler2D g_sheen;      // the sheen lobe (passes/gbuffer.py), sheen.glsl apply_sheen
+#endif
 #ifdef BUMP_CORRECTION
 uniform sampler2D g_smooth;     // the normals before the normal maps (lib.glsl bump_dome)
 #endif
@@ -55,6 +58,9 @@ void main() {
         Surface s = make_surface(p, n, v, base, texelFetch(g_mat, px, 0), nrm.w);
 #ifdef BUMP_CORRECTION
         s.smooth_n = normalize(texelFetch(g_smooth, px, 0).xyz);
+#endif
+#ifdef SHEEN
+        apply_sheen(s, texelFetch(g_sheen, px, 0));
 #endif
         emitted = texelFetch(g_emit, px, 0).rgb;
         float ao = 1.0;

@@ -50,7 +50,11 @@ void dome_light(Surface s, float ao, out vec3 diffuse, out vec3 glossy) {
     diffuse = vec3(0.0);
     glossy = vec3(0.0);
     if (!has_dome) return;
-    diffuse = brdf_diffuse(s) * dome_irradiance(s.n) * ao * bump_dome(s);
+    vec3 E = dome_irradiance(s.n);
+    diffuse = brdf_diffuse(s) * E * ao * bump_dome(s);
+#ifdef SHEEN
+    diffuse += sheen_ambient(s, E) * ao;
+#endif
     vec3 r = reflect(-s.v, s.n);
     glossy = s.under_coat * s.spec_albedo * dome_specular(r, s.roughness)
            * specular_occlusion(s.NoV, ao, s.roughness);

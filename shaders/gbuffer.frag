@@ -2,8 +2,9 @@
 #include "lib.glsl"
 // G-buffer: RT0 base colour + alpha, RT1 world normal + clearcoat roughness, RT2
 // metallic / roughness / dielectric F0 / clearcoat, RT3 emission + the base-occlusion mark
-// (alpha: BASE_OCCLUSION in the lighting passes). The material itself
-// is material.glsl's.
+// (alpha: BASE_OCCLUSION in the lighting passes); then, in the frames that need them,
+// the smooth normal and the sheen (lib.glsl apply_sheen). The material itself is
+// material.glsl's.
 in vec3 v_normal;
 in vec2 v_uv;
 in vec4 v_tangent;
@@ -15,9 +16,19 @@ layout(location = 3) out vec4 rt_emit;
 // The normal before the normal map, in frames with a normal-mapped material (the bump
 // map correction, lib.glsl bump_shadowing).
 layout(location = 4) out vec4 rt_smooth;
-#define INDEX_LOCATION 5
+#define SHEEN_LOCATION 5
 #else
-#define INDEX_LOCATION 4
+#define SHEEN_LOCATION 4
+#endif
+#ifdef WRITE_SHEEN
+layout(location = SHEEN_LOCATION) out vec4 rt_sheen;   // u_sheen (material.glsl)
+#if SHEEN_LOCATION == 5
+#define INDEX_LOCATION 6
+#else
+#define INDEX_LOCATION 5
+#endif
+#else
+#define INDEX_LOCATION SHEEN_LOCATION
 #endif
 #ifdef WRITE_INDEX
 // Render passes IndexOB and IndexMA (asked for only).
@@ -39,6 +50,9 @@ void main() {
     rt_emit = vec4(m.emissive, u_base_occlusion);   // .a: BASE_OCCLUSION (light.frag)
 #ifdef WRITE_SMOOTH_NORMAL
     rt_smooth = vec4(m.smooth_n, 0.0);
+#endif
+#ifdef WRITE_SHEEN
+    rt_sheen = u_sheen;
 #endif
 #ifdef WRITE_INDEX
     rt_index = vec2(v_object_index, u_material_index);

@@ -122,6 +122,14 @@ struct Surface {
     float coat_energy;
     float coat_albedo;  // coat weight x its albedo at n.v
     float under_coat;   // 1 - coat_albedo: what the layers below receive
+    // A sheen lobe (sheen.glsl apply_sheen; none: colour 0): its colour, roughness,
+    // mode (core/sheen.MODES), directional albedo at n.v and microfiber LTC terms.
+    vec3 sheen;
+    float sheen_roughness;
+    int sheen_mode;
+    float sheen_albedo;
+    float sheen_a;
+    float sheen_b;
 };
 
 // mat = (metallic, roughness, dielectric F0, clearcoat), as the G-buffer stores it.
@@ -157,6 +165,10 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, vec4 base, vec4 mat, float coat_rou
     }
     s.under_coat = 1.0 - s.coat_albedo;
     s.diffuse = s.base * (1.0 - s.metallic) * (1.0 - e_d) * s.under_coat;
+    s.sheen = vec3(0.0);
+    s.sheen_roughness = 0.0;
+    s.sheen_mode = 0;
+    s.sheen_albedo = s.sheen_a = s.sheen_b = 0.0;
     return s;
 }
 
@@ -253,3 +265,5 @@ vec3 srgb_to_linear(vec3 c) {
 
 // No shader hides NaN or Inf: the resolve pass counts the pixels that hold them and
 // names the prims they lie on (engine/gpu/passes/resolve.py).
+
+#include "sheen.glsl"

@@ -12,6 +12,9 @@ uniform sampler2D g_depth;
 uniform sampler2D g_emit;       // .a: the pixel's base colour takes the occlusion
 uniform sampler2D ao_tex;
 #endif
+#ifdef SHEEN
+uniform sampler2D g_sheen;      // the sheen lobe (passes/gbuffer.py), sheen.glsl apply_sheen
+#endif
 #ifdef BUMP_CORRECTION
 uniform sampler2D g_smooth;
 #endif
@@ -60,6 +63,9 @@ void main() {
     Surface s = make_surface(p, n, v, base, texelFetch(g_mat, px, 0), nrm.w);
 #ifdef BUMP_CORRECTION
     s.smooth_n = normalize(texelFetch(g_smooth, px, 0).xyz);
+#endif
+#ifdef SHEEN
+    apply_sheen(s, texelFetch(g_sheen, px, 0));
 #endif
     vec3 diffuse, glossy;        // what the light reflects diffusely, and specularly
 #ifdef LIGHT_DISTANT

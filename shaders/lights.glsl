@@ -122,6 +122,9 @@ void distant_light(Surface s, out vec3 diffuse, out vec3 glossy) {
     float a = ggx_alpha(s.roughness), ac = ggx_alpha(s.coat_roughness);
     E *= bump_visible(s, l);
     diffuse = E * light_diffuse * brdf_diffuse(s) * bump_shadowing(s, l);
+#ifdef SHEEN
+    diffuse += E * light_diffuse * brdf_sheen(s, l);
+#endif
     glossy = E * light_specular * (brdf_specular(s, l, a) + brdf_coat(s, l, ac));
 }
 
@@ -143,6 +146,9 @@ void sphere_light(Surface s, out vec3 diffuse, out vec3 glossy) {
     float widen = light_radius / max(2.0 * d, 1e-6);
     E *= bump_visible(s, l);
     diffuse = E * light_diffuse * brdf_diffuse(s) * bump_shadowing(s, l);
+#ifdef SHEEN
+    diffuse += E * light_diffuse * brdf_sheen(s, l);
+#endif
     glossy = E * light_specular * (brdf_specular(s, l, min(1.0, a + widen))
                                    + brdf_coat(s, l, min(1.0, ac + widen)));
 }
@@ -179,6 +185,9 @@ void area_light(Surface s, out vec3 diffuse, out vec3 glossy) {
     vec3 to_centre = normalize(light_pos - s.p);
     diffuse = E * light_diffuse * brdf_diffuse(s) * bump_visible(s, to_centre)
         * bump_shadowing(s, to_centre);
+#ifdef SHEEN
+    diffuse += E * light_diffuse * brdf_sheen(s, to_centre) * bump_visible(s, to_centre);
+#endif
     glossy = E * light_specular * step(0.0, dot(s.n, l)) * bump_visible(s, l)
         * (brdf_specular(s, l, min(1.0, a + widen)) + brdf_coat(s, l, min(1.0, ac + widen)));
 }

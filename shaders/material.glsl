@@ -13,6 +13,9 @@ uniform float u_opacity_threshold;
 uniform float u_clearcoat;
 uniform float u_base_occlusion;    // 1: the base colour takes the frame's occlusion
 uniform float u_clearcoat_roughness;
+#ifdef WRITE_SHEEN
+uniform vec4 u_sheen;   // what g_sheen holds (engine/gpu/passes/gbuffer.py sheen_texel)
+#endif
 // Cycles' bump map correction (Material > Settings), for a normal-mapped material.
 uniform bool u_bump_correction = true;
 // The footprint a lookup filters over, as a fraction of the fragment's own

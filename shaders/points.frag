@@ -26,6 +26,13 @@ layout(location = 2) out vec4 rt_mat;
 layout(location = 3) out vec4 rt_emit;
 #ifdef WRITE_SMOOTH_NORMAL
 layout(location = 4) out vec4 rt_smooth;     // as gbuffer.frag's: a sphere has no map
+#define SHEEN_LOCATION 5
+#else
+#define SHEEN_LOCATION 4
+#endif
+#ifdef WRITE_SHEEN
+layout(location = SHEEN_LOCATION) out vec4 rt_sheen;
+uniform vec4 u_sheen;
 #endif
 uniform vec3 u_diffuse;
 uniform float u_metallic;
@@ -67,6 +74,9 @@ void main() {
     rt_emit = vec4(clamp(u_emissive, 0.0, 60000.0), 0.0);   // .a: no base occlusion
 #ifdef WRITE_SMOOTH_NORMAL
     rt_smooth = vec4(rt_normal.xyz, 0.0);
+#endif
+#ifdef WRITE_SHEEN
+    rt_sheen = u_sheen;
 #endif
 #endif
 }

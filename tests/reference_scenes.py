@@ -59,6 +59,7 @@ SCENES = {
     "01_alpha_blend": Spec((128, 72), 1024, "corpus: blended plane in front of a cube"),
     "01_alpha_mask": Spec((128, 72), 1024, "corpus: alpha-masked plane"),
     "demo": Spec((128, 72), 1024, "Lantern's demo scene, frame 13"),
+    "sheen": Spec((240, 48), 1024, "sheen: Principled (layered, over a coat), Sheen BSDFs added and alone"),
 }
 
 # The sky: lat-long in Blender's equirectangular convention (row 0 = up, +Z; the
@@ -298,6 +299,54 @@ def build_ao_node(workdir):
     ao.inputs["Color"].default_value = (0.8, 0.8, 0.8, 1.0)
     ao.inputs["Distance"].default_value = scene.world.light_settings.distance
     tree.links.new(ao.outputs["Color"], tree.nodes["Principled BSDF"].inputs["Base Color"])
+    return scene
+
+
+# The sheen scene's spheres, left to right: (label, Principled inputs or None for none,
+# Sheen BSDF (distribution, colour, roughness) or None).
+SHEEN_SPHERES = (
+    ("principled", dict(color=(0.05, 0.1, 0.3), roughness=0.6, **{
+        "Sheen Weight": 1.0, "Sheen Roughness": 0.5}), None),
+    ("principled_tint_coat", dict(color=(0.5, 0.1, 0.1), roughness=0.4, **{
+        "Sheen Weight": 0.8, "Sheen Tint": (1.0, 0.8, 0.3, 1.0), "Sheen Roughness": 0.2,
+        "Coat Weight": 0.5, "Coat Roughness": 0.2}), None),
+    ("velvet_added", dict(color=(0.2, 0.2, 0.2), roughness=0.5),
+     ("ASHIKHMIN", (0.8, 0.6, 0.4), 0.5)),
+    ("microfiber_added", dict(color=(0.1, 0.3, 0.1), roughness=0.5),
+     ("MICROFIBER", (0.9, 0.9, 0.9), 0.8)),
+    ("microfiber_alone", None, ("MICROFIBER", (1.0, 1.0, 1.0), 0.3)),
+    ("velvet_alone", None, ("ASHIKHMIN", (1.0, 1.0, 1.0), 0.2)),
+)
+
+
+def build_sheen(workdir):
+    """A row of spheres with sheen (SHEEN_SPHERES), lit from behind and above by a sun
+    (sheen is a grazing lobe) and by a grey world."""
+    import bpy
+    scene = _empty_scene("sheen")
+    _world(scene, (0.3, 0.3, 0.3), 1.0)
+    _sun(scene, 3.0, rotation=(math.radians(-60.0), math.radians(20.0), 0.0))
+    for i, (label, principled, sheen) in enumerate(SHEEN_SPHERES):
+        inputs = dict(principled or {})
+        mat = _material(f"Sheen_{label}", inputs.pop("color", (0.8, 0.8, 0.8)),
+                        inputs.pop("roughness", 0.5), **inputs)
+        tree = mat.node_tree
+        output, bsdf = tree.nodes["Material Output"], tree.nodes["Principled BSDF"]
+        if sheen is not None:
+            node = tree.nodes.new("ShaderNodeBsdfSheen")
+            node.distribution = sheen[0]
+            node.inputs["Color"].default_value = (*sheen[1], 1.0)
+            node.inputs["Roughness"].default_value = sheen[2]
+            if principled is None:
+                tree.links.new(node.outputs[0], output.inputs["Surface"])
+            else:
+                add = tree.nodes.new("ShaderNodeAddShader")
+                tree.links.new(bsdf.outputs[0], add.inputs[0])
+                tree.links.new(node.outputs[0], add.inputs[1])
+                tree.links.new(add.outputs[0], output.inputs["Surface"])
+        _sphere(scene, f"Sphere_{label}", (1.2 * i, 0.0, 0.0), 0.5, mat)
+    centre = 1.2 * (len(SHEEN_SPHERES) - 1) / 2.0
+    _camera(scene, (centre, -10.0, 0.0), (centre, 0.0, 0.0), ortho_scale=7.2)
     return scene
 
 

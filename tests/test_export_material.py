@@ -980,3 +980,69 @@ def test_a_material_reading_two_attributes_is_one_warning(empty_scene):
     _, report = export_current()
     assert len(report.warnings) == 1 and "'A', 'B'" in report.warnings[0] and \
         "ReadsTwo" in report.warnings[0], report.warnings
+
+
+def _sheen(stage, name):
+    prim = stage.GetPrimAtPath(f"/root/_materials/{name}")
+    mode = prim.GetAttribute("lantern:sheenMode")
+    if not mode:
+        return None
+    return (mode.Get(), tuple(prim.GetAttribute("lantern:sheenColor").Get()),
+            prim.GetAttribute("lantern:sheenRoughness").Get())
+
+
+def test_sheen_is_the_principled_bsdfs_or_a_sheen_bsdfs(empty_scene):
+    """The Principled BSDF's sheen (weight x tint, layered) and a Sheen BSDF added to it
+    or alone (its distribution) are one sheen lobe each, weighted exactly by a Mix
+    Shader; a second sheen, and a network on a sheen input, are one warning each."""
+    mat, tree, bsdf = principled_material("Fabric")
+    bsdf.inputs["Sheen Weight"].default_value = 0.5
+    bsdf.inputs["Sheen Tint"].default_value = (1.0, 0.5, 0.25, 1.0)
+    bsdf.inputs["Sheen Roughness"].default_value = 0.3
+    cube_object("Cube").data.materials.append(mat)
+    stage, report = export_current()
+    assert report.warnings == [], report.warnings
+    mode, color, roughness = _sheen(stage, "Fabric")
+    assert mode == "principled" and color == pytest.approx((0.5, 0.25, 0.125))
+    assert roughness == pytest.approx(0.3)
+
+    # The glTF importer's older velvet: a Sheen BSDF added to the Principled BSDF.
+    bsdf.inputs["Sheen Weight"].default_value = 0.0
+    velvet = tree.nodes.new("ShaderNodeBsdfSheen")
+    velvet.distribution = "ASHIKHMIN"
+    velvet.inputs["Color"].default_value = (0.1, 0.2, 0.3, 1.0)
+    velvet.inputs["Roughness"].default_value = 0.6
+    add = tree.nodes.new("ShaderNodeAddShader")
+    out = tree.nodes["Material Output"].inputs["Surface"]
+    tree.links.new(bsdf.outputs[0], add.inputs[0])
+    tree.links.new(velvet.outputs[0], add.inputs[1])
+    tree.links.new(add.outputs[0], out)
+    stage, report = export_current()
+    assert report.warnings == [], report.warnings
+    assert _sheen(stage, "Fabric")[0] == "ashikhmin"
+    assert _sheen(stage, "Fabric")[1] == pytest.approx((0.1, 0.2, 0.3))
+
+    mix = tree.nodes.new("ShaderNodeMixShader")
+    mix.inputs[0].default_value = 0.25
+    tree.links.new(bsdf.outputs[0], mix.inputs[1])
+    tree.links.new(velvet.outputs[0], mix.inputs[2])
+    tree.links.new(mix.outputs[0], out)
+    stage, report = export_current()
+    assert _sheen(stage, "Fabric")[1] == pytest.approx((0.025, 0.05, 0.075))
+    assert len(report.warnings) == 1 and "BSDF weights" in report.warnings[0], report.warnings
+
+    tree.links.new(velvet.outputs[0], out)             # alone: nothing else reflects
+    velvet.distribution = "MICROFIBER"
+    stage, report = export_current()
+    assert report.warnings == [] and _sheen(stage, "Fabric")[0] == "microfiber"
+    assert tuple(surface(stage, "Fabric").GetInput("diffuseColor").Get()) == (0, 0, 0)
+
+    tree.links.new(add.outputs[0], out)
+    bsdf.inputs["Sheen Weight"].default_value = 1.0
+    tree.links.new(tree.nodes.new("ShaderNodeTexChecker").outputs["Color"],
+                   velvet.inputs["Color"])
+    stage, report = export_current()
+    assert _sheen(stage, "Fabric")[0] == "principled"
+    assert any("second sheen" in w for w in report.warnings), report.warnings
+    assert any("'Color' takes a constant only" in w for w in report.warnings), report.warnings
+    assert not any("not supported" in w for w in report.warnings), report.warnings

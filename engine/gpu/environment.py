@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from ..lighting import dfg_lut, latlong_sh
+from ..lighting import dfg_lut, latlong_sh, velvet_albedo_lut
 from ..textures import read_image_linear
 from .programs import UNITS, set_uniform
 from .stencil import entry_points
@@ -84,6 +84,7 @@ class Environment:
         self.lut.repeat_x = self.lut.repeat_y = False
         self.map: EnvironmentMap | None = None
         self.failed: dict = {}       # path -> the reason it could not be read
+        self.velvet = None           # the velvet sheen's albedo table, made when first drawn
 
     # --- per map ---------------------------------------------------------------------
     def prepare(self, dome) -> EnvironmentMap | None:
@@ -175,7 +176,22 @@ class Environment:
             set_uniform(prog, "env_lod_max", float(SPECULAR_LEVELS - 1))
         set_uniform(prog, "dome_radiance", np.asarray(dome.radiance, float))
 
+    def bind_sheen(self, materials):
+        """The velvet sheen's albedo table (shaders/sheen.glsl sheen_lut), made at the
+        first frame that draws one of `materials` with a velvet sheen."""
+        if not any(m.has_sheen and m.sheen_mode == "ashikhmin" for m in materials):
+            return
+        if self.velvet is None:
+            table = velvet_albedo_lut()
+            self.velvet = self.uploads.texture(table.shape[1::-1], table.shape[2], table,
+                                               kind="textures", dtype="f4")
+            self.velvet.filter = (self.ctx.LINEAR, self.ctx.LINEAR)
+            self.velvet.repeat_x = self.velvet.repeat_y = False
+        self.velvet.use(UNITS["sheen_lut"])
+
     def release(self):
+        if self.velvet is not None:
+            self.velvet.release()
         self.lut.release()
         if self.map is not None:
             self.map.release()

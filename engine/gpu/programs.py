@@ -40,7 +40,8 @@ UNITS = {name: unit for unit, name in enumerate((
     "u_objects", "u_lights",
     "dfg_lut", "env_specular", "radiance", "ao_tex", "post_src", "post_aux",
     "overlay_image", "overlay_atlas",
-    "t_pattern0", "t_pattern1", "t_pattern2", "t_pattern3", "g_smooth"))}
+    "t_pattern0", "t_pattern1", "t_pattern2", "t_pattern3", "g_smooth", "g_sheen",
+    "sheen_lut"))}
 UNITS.update(zip(("u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences",
                   "u_deformed", "u_incidence"), range(UNITS["t_diffuse"], UNITS["t_diffuse"] + 6)))
 

@@ -13,6 +13,7 @@ import os
 import numpy as np
 from pxr import Usd, UsdShade
 
+from ...core.sheen import MODES as SHEEN_MODES
 from ..scene import Material, TextureRef
 from .patterns import read_pattern
 
@@ -74,6 +75,25 @@ def _uv_name(tex_shader, time):
     return str(v) if v else None
 
 
+def _read_sheen(prim, out: Material, time, warnings: list):
+    """lantern:sheenMode, sheenColor, sheenRoughness (docs/stage_contract.md, "Sheen")."""
+    mode = prim.GetAttribute("lantern:sheenMode")
+    if not mode or not mode.HasAuthoredValue():
+        return
+    mode = str(mode.Get(time))
+    if mode not in SHEEN_MODES:
+        warnings.append(f"{prim.GetPath()}: lantern:sheenMode {mode!r} is not one of "
+                        f"{', '.join(SHEEN_MODES)}; no sheen")
+        return
+    color = prim.GetAttribute("lantern:sheenColor")
+    roughness = prim.GetAttribute("lantern:sheenRoughness")
+    out.sheen_mode = mode
+    if color and color.HasAuthoredValue():
+        out.sheen = tuple(float(c) for c in color.Get(time))
+    if roughness and roughness.HasAuthoredValue():
+        out.sheen_roughness = float(roughness.Get(time))
+
+
 def read_material(mat: UsdShade.Material, time, warnings: list) -> Material:
     path = str(mat.GetPath())
     out = Material(name=path)
@@ -89,6 +109,7 @@ def read_material(mat: UsdShade.Material, time, warnings: list) -> Material:
     occlusion = mat.GetPrim().GetAttribute("lantern:baseColorOcclusion")
     if occlusion and occlusion.HasAuthoredValue():
         out.base_occlusion = bool(occlusion.Get())
+    _read_sheen(mat.GetPrim(), out, time, warnings)
     surface = mat.ComputeSurfaceSource()[0]
     if not surface or _shader_id(surface) != "UsdPreviewSurface":
         warnings.append(f"{path}: no UsdPreviewSurface surface; using the default material")

@@ -6,7 +6,8 @@ the node, and a constant."""
 import dataclasses
 import math
 
-from ..ir import MaterialRecord, TexInput, TextureRecord
+from ...core.sheen import DISTRIBUTIONS
+from ..ir import MaterialRecord, SheenRecord, TexInput, TextureRecord
 from . import node_groups
 from .image import image_file
 from .pattern import PatternBuilder, Unsupported, is_pattern
@@ -105,6 +106,7 @@ class _Walker:
         self.texture_dir = texture_dir
         self.pattern = PatternBuilder(_link, self.image_path)
         self.base_occlusion = False
+        self.sheen = None          # SheenRecord: the first sheen lobe met
 
     def unsupported(self, node, why="not supported"):
         self.warn(f"material '{self.material.name}': node '{node.name}' ({node.bl_idname}) "
@@ -255,6 +257,27 @@ class _Walker:
         if normal is not None:
             inputs["normal"] = normal
         self.coat(node, inputs)
+        for name in ("Sheen Weight", "Sheen Tint"):
+            self.constant_only(get(name))
+        sheen = _constant(get("Sheen Weight"), "float")
+        self.sheen_lobe(node, "principled",
+                        tuple(sheen * c for c in _constant(get("Sheen Tint"), "color")),
+                        get("Sheen Roughness"), weight)
+
+    def sheen_lobe(self, node, mode, color, roughness, weight):
+        """A sheen lobe of `color` x `weight` (closure weights scale it exactly, as they
+        scale emission): one a material, a second is a warning. Cycles clamps its
+        roughness to [0, 1] and its colour to >= 0."""
+        self.constant_only(roughness)
+        color = tuple(max(c, 0.0) * weight for c in color)
+        if not any(color):
+            return
+        if self.sheen is not None:
+            self.warn(f"material '{self.material.name}': node '{node.name}' is a second sheen "
+                      f"(one a material is exported); keeping the first")
+            return
+        self.sheen = SheenRecord(mode, color,
+                                 min(max(_constant(roughness, "float"), 0.0), 1.0))
 
     def coat(self, node, inputs):
         """Coat Weight and Roughness -> clearcoat, clearcoatRoughness (as Blender's USD
@@ -330,7 +353,7 @@ class _Walker:
 
     def shader(self, link, inputs, weight=1.0):
         """Fill `inputs` from the shader feeding Surface with closure weight `weight`;
-        returns False if nothing fit. Only emission is weighted exactly: a BSDF's
+        returns False if nothing fit. Only emission and sheen are weighted exactly: a BSDF's
         weight has no UsdPreviewSurface equivalent (one layer)."""
         node = link.from_node
         kind = node.bl_idname
@@ -340,6 +363,14 @@ class _Walker:
             inputs["diffuseColor"] = self.value(node.inputs["Color"], "color", "diffuseColor")
             inputs["roughness"] = 1.0
             inputs["ior"] = 1.0  # no specular layer
+        elif kind == "ShaderNodeBsdfSheen":
+            # Alone, the surface is the sheen: nothing else reflects.
+            inputs.setdefault("diffuseColor", (0.0, 0.0, 0.0))
+            inputs.setdefault("ior", 1.0)
+            self.constant_only(node.inputs["Color"])
+            self.sheen_lobe(node, DISTRIBUTIONS[node.distribution],
+                            _constant(node.inputs["Color"], "color"), node.inputs["Roughness"],
+                            weight)
         elif kind == "ShaderNodeEmission":
             inputs.setdefault("diffuseColor", (0.0, 0.0, 0.0))
             inputs.setdefault("ior", 1.0)
@@ -366,14 +397,14 @@ class _Walker:
                     f = min(max(_constant(fac, "float"), 0.0), 1.0)
                     weights = [weight * (1.0 - f), weight * f]
             pairs = [(l, w) for l, w in zip(links, weights) if l is not None and w > 0.0]
-            bsdfs = [w for l, w in pairs if l.from_node.bl_idname != "ShaderNodeEmission"]
+            bsdfs = [w for l, w in pairs if l.from_node.bl_idname not in EXACTLY_WEIGHTED]
             if len(bsdfs) > 1 or (kind == "ShaderNodeMixShader" and
                                   any(w != weight for w in bsdfs)):
                 self.warn(f"material '{self.material.name}': node '{node.name}' ({node.bl_label}) "
                           f"BSDF weights are not exported (UsdPreviewSurface has one layer); "
-                          f"emission is weighted exactly")
-            # Emission last so that it adds to the BSDF rather than replacing it.
-            pairs.sort(key=lambda p: p[0].from_node.bl_idname == "ShaderNodeEmission")
+                          f"emission and sheen are weighted exactly")
+            # Emission and sheen last so that they add to the BSDF rather than replace it.
+            pairs.sort(key=lambda p: p[0].from_node.bl_idname in EXACTLY_WEIGHTED)
             return any([self.shader(l, inputs, w) for l, w in pairs])
         else:
             self.unsupported(node)
@@ -497,6 +528,9 @@ class _Walker:
         return float(opacity) * share
 
 
+# Shaders an Add or Mix Shader weights exactly: their closure weight scales them.
+EXACTLY_WEIGHTED = {"ShaderNodeEmission", "ShaderNodeBsdfSheen"}
+
 # BSDFs a Mix Shader mixes input by input (bsdf_mix), and those inputs: surface input ->
 # (kind, {BSDF: socket}); a BSDF without the socket takes MIXED_DEFAULTS (a Diffuse
 # BSDF: no metal, fully rough, opaque).
@@ -562,7 +596,8 @@ def gather_material(material, warn, texture_dir=None):
                           pass_index=int(material.pass_index),
                           alpha_mode=alpha_mode(material, inputs, graph), graph=graph,
                           bump_correction=bump_correction(material),
-                          base_occlusion=walker is not None and walker.base_occlusion)
+                          base_occlusion=walker is not None and walker.base_occlusion,
+                          sheen=walker.sheen if walker is not None else None)
 
 
 def bump_correction(material) -> bool:

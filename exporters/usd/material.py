@@ -18,6 +18,10 @@ MTLX_INPUT_TYPES = {**INPUT_TYPES, "normal": Sdf.ValueTypeNames.Float3}
 ALPHA_MODE = "lantern:alphaMode"
 BUMP_CORRECTION = "lantern:bumpMapCorrection"
 BASE_OCCLUSION = "lantern:baseColorOcclusion"
+# A sheen lobe (contract: "Sheen"; core/sheen.py its modes).
+SHEEN = (("lantern:sheenMode", Sdf.ValueTypeNames.Token),
+         ("lantern:sheenColor", Sdf.ValueTypeNames.Color3f),
+         ("lantern:sheenRoughness", Sdf.ValueTypeNames.Float))
 
 
 def write_material(stage, path, rec, default_uv, asset_path):
@@ -80,6 +84,11 @@ def write_material(stage, path, rec, default_uv, asset_path):
     if rec.base_occlusion:
         material.GetPrim().CreateAttribute(BASE_OCCLUSION, Sdf.ValueTypeNames.Bool,
                                            custom=True).Set(True)
+    if rec.sheen is not None:
+        sheen = rec.sheen
+        for (name, kind), value in zip(SHEEN, (sheen.mode, Gf.Vec3f(*sheen.color),
+                                               sheen.roughness)):
+            material.GetPrim().CreateAttribute(name, kind, custom=True).Set(value)
     return material
 
 

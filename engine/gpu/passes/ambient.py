@@ -6,7 +6,8 @@ Ambient occlusion, when the AO pass ran, dims the dome's light only. It starts t
 HDR target.
 
 reads: g_base, g_normal, g_mat, g_emit, g_depth, view, ao (optional), g_smooth (optional:
-       the normals before the normal maps, for the bump map correction)   writes: hdr
+       the normals before the normal maps, for the bump map correction), g_sheen
+       (optional: the sheen lobes)   writes: hdr
 render passes (with the light pass): DiffDir, GlossDir, Env, Shadow: see LIGHTING_AOVS"""
 from __future__ import annotations
 
@@ -39,7 +40,7 @@ def bind_gbuffer(board, prog, view):
     """The G-buffer and the camera, as every screen-space lighting pass reads them
     (positions from depth are camera-relative: lib.glsl), and the frame's ambient
     occlusion when it has one (surface_defines' BASE_OCCLUSION reads it)."""
-    for name in GBUFFER + (("g_smooth",) if "g_smooth" in board else ()):
+    for name in GBUFFER + tuple(n for n in ("g_smooth", "g_sheen") if n in board):
         board[name].use(UNITS[name])
     if "ao" in board:
         board["ao"].use(UNITS["ao_tex"])
@@ -50,8 +51,10 @@ def surface_defines(frame, board) -> list:
     """The lighting shaders' variant for what this frame's G-buffer holds: the normals
     before the normal maps (BUMP_CORRECTION: the bump map correction, passes/gbuffer.py),
     and base colours that take the frame's ambient occlusion (BASE_OCCLUSION: an Ambient
-    Occlusion node's Color on Base Color; g_emit.a marks those pixels)."""
-    defines = ["BUMP_CORRECTION"] if "g_smooth" in board else []
+    Occlusion node's Color on Base Color; g_emit.a marks those pixels), and sheen lobes
+    (SHEEN: shaders/sheen.glsl)."""
+    defines = (["BUMP_CORRECTION"] if "g_smooth" in board else []) + \
+        (["SHEEN"] if "g_sheen" in board else [])
     if "ao" in board and occludes(frame) and \
             any(m.base_occlusion for m in frame.scene.materials.values()):
         defines.append("BASE_OCCLUSION")
@@ -61,7 +64,7 @@ def surface_defines(frame, board) -> list:
 class AmbientPass(Pass):
     name = "ambient"
     reads = GBUFFER + ("view",)
-    optional = ("ao", "g_smooth")
+    optional = ("ao", "g_smooth", "g_sheen")
     writes = ("hdr",)
     aovs = LIGHTING_AOVS
 
@@ -102,6 +105,7 @@ class AmbientPass(Pass):
         prog = self.programs.get("fullscreen.vert", "ambient.frag", defines)
         bind_gbuffer(board, prog, board["view"])
         self.environment.bind(prog, dome, env)
+        self.environment.bind_sheen(frame.scene.materials.values())
         set_uniform(prog, "has_dome", dome is not None)
         set_uniform(prog, "transparent", bool(frame.transparent))
         self.programs.fullscreen(prog)

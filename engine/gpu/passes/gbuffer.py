@@ -14,13 +14,16 @@ writes: g_base (base colour + alpha), g_normal (world normal, clearcoat roughnes
         RGBA16F; g_depth (32-bit
         float, reversed: cleared to 0, tested GREATER; engine/view.py); g_smooth (the
         normal before the normal map, RGBA16F) only in frames with a normal-mapped
-        material, for Cycles' bump map correction (shaders/lib.glsl bump_shadowing)
+        material, for Cycles' bump map correction (shaders/lib.glsl bump_shadowing);
+        g_sheen (RGBA16F: the sheen colour, its roughness + 2 x its mode's number in
+        core/sheen.MODES) only in frames with a sheen (shaders/lib.glsl apply_sheen)
 A material with a pattern graph (engine/gpu/pattern.py) draws with its shape's
 generated variant and its parameters (stats: pattern_bytes).
 render passes: IndexOB, IndexMA into g_index (RG32F), only when asked for (a
         shader variant with a fifth output)"""
 from __future__ import annotations
 
+from ....core.sheen import MODES as SHEEN_MODES
 from ..framegraph import Pass
 from ..points import set_camera_facing
 from ..pattern import material_variant, pattern_images, set_parameters
@@ -34,6 +37,9 @@ MAP_SLOTS = [("diffuseColor", "diffuse", "HAS_DIFFUSE_MAP"), ("metallic", "metal
 WRAP = {"repeat": 0, "mirror": 1, "clamp": 2, "black": 3}
 CHANNEL = {"rgb": -1, "r": 0, "g": 1, "b": 2, "a": 3}
 TARGETS = ("g_base", "g_normal", "g_mat", "g_emit", "g_depth")
+# The optional targets, in this order after the first four, and the define of the
+# shader output that writes each (gbuffer.frag, points.frag).
+OUTPUT_DEFINES = {"g_smooth": "WRITE_SMOOTH_NORMAL", "g_sheen": "WRITE_SHEEN"}
 
 
 class GBufferPass(Pass):
@@ -41,7 +47,7 @@ class GBufferPass(Pass):
     reads = ("skinned", "view")
     optional = ("tessellated",)
     writes = TARGETS
-    writes_optional = ("g_smooth",)
+    writes_optional = ("g_smooth", "g_sheen")
     aovs = {"IndexOB": ("g_index", 0), "IndexMA": ("g_index", 1)}
 
     def __init__(self, ctx, pool, programs, geometry, textures, depth):
@@ -51,15 +57,18 @@ class GBufferPass(Pass):
     def wanted(self, frame):
         # The normal before the normal map, for Cycles' bump map correction (lib.glsl
         # bump_shadowing), only in frames that draw a normal-mapped material.
-        needed = any(m.needs_smooth_normal for m in frame.scene.materials.values())
-        return ("g_smooth",) if needed else ()
+        # A sheen, only in frames that draw one.
+        materials = frame.scene.materials.values()
+        return (("g_smooth",) if any(m.needs_smooth_normal for m in materials) else ()) + \
+            (("g_sheen",) if any(m.has_sheen for m in materials) else ())
 
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]
         index = "g_index" in self.aov_targets(frame)
-        smooth = "g_smooth" in board
-        colors = [board[n] for n in TARGETS[:4]] + ([board["g_smooth"]] if smooth else []) + \
+        extra = [n for n in ("g_smooth", "g_sheen") if n in board]
+        colors = [board[n] for n in TARGETS[:4] + tuple(extra)] + \
             ([board["g_index"]] if index else [])
+        outputs = [OUTPUT_DEFINES[n] for n in extra]
         fbo = self.pool.framebuffer(colors, depth=board["g_depth"])
         fbo.use()
         fbo.clear(0.0, 0.0, 0.0, 0.0, depth=0.0)
@@ -79,8 +88,8 @@ class GBufferPass(Pass):
             threshold = mat.gbuffer_threshold
             if threshold is None:
                 continue                   # wholly see-through: the transparency pass's
-            defines = map_defines(mat) + self.geometry.object_defines() + \
-                (["WRITE_SMOOTH_NORMAL"] if smooth else []) + (["WRITE_INDEX"] if index else [])
+            defines = map_defines(mat) + self.geometry.object_defines() + outputs + \
+                (["WRITE_INDEX"] if index else [])
             prog = self.programs.get("gbuffer.vert", "gbuffer.frag", defines,
                                      generated=material_variant(mat))
             set_uniform(prog, "view_proj", view.view_proj)
@@ -100,7 +109,7 @@ class GBufferPass(Pass):
         ctx.front_face = "ccw"
         ctx.disable(ctx.CULL_FACE)
         if self.geometry.points.clouds:
-            self._points(frame, view, materials, ["WRITE_SMOOTH_NORMAL"] if smooth else [])
+            self._points(frame, view, materials, outputs)
         ctx.disable(ctx.DEPTH_TEST)
         self.depth.far_clip(False)
 
@@ -136,6 +145,7 @@ def set_material(prog, mat, textures, threshold, footprint=1.0):
     set_uniform(prog, "u_clearcoat", mat.clearcoat)
     set_uniform(prog, "u_clearcoat_roughness", mat.clearcoat_roughness)
     set_uniform(prog, "u_base_occlusion", 1.0 if mat.base_occlusion else 0.0)
+    set_uniform(prog, "u_sheen", sheen_texel(mat))
     set_uniform(prog, "u_material_index", float(mat.pass_index))
     set_uniform(prog, "u_bump_correction", bool(mat.bump_correction))
     pattern_bytes = set_parameters(prog, mat)
@@ -146,6 +156,15 @@ def set_material(prog, mat, textures, threshold, footprint=1.0):
     for k, ref in enumerate(pattern_images(mat)):
         _bind_map(prog, f"pattern{k}", ref, textures)
     return pattern_bytes
+
+
+def sheen_texel(mat) -> tuple:
+    """What g_sheen holds for `mat`: its sheen colour, and its roughness + 2 x its mode's
+    number (0 for none: a black colour adds nothing)."""
+    if not mat.has_sheen:
+        return (0.0, 0.0, 0.0, 0.0)
+    return (*mat.sheen, min(max(mat.sheen_roughness, 0.0), 1.0) +
+            2.0 * SHEEN_MODES.index(mat.sheen_mode))
 
 
 def _bind_map(prog, short, ref, textures):

@@ -17,7 +17,8 @@ Shadow-casting lights read their map from the shadow pass. Volumes are placed
 relative to the camera (positions are camera-relative, as the surfaces they light).
 
 reads: g_base, g_normal, g_mat, g_emit, g_depth, hdr, view, shadow_maps (optional),
-       g_smooth (optional: normals before the normal maps, for the bump map correction)
+       g_smooth (optional: normals before the normal maps, for the bump map correction),
+       g_sheen (optional: the sheen lobes)
 writes: hdr, depth_stencil
 render passes: adds to DiffDir, GlossDir, Shadow (passes/ambient.py LIGHTING_AOVS)"""
 from __future__ import annotations
@@ -95,7 +96,7 @@ def cone(light, length: float) -> np.ndarray:
 class LightPass(Pass):
     name = "lights"
     reads = GBUFFER + ("hdr", "view", "shadow_maps")
-    optional = ("g_smooth", "ao")
+    optional = ("g_smooth", "g_sheen", "ao")
     writes = ("hdr", "depth_stencil")
 
     def __init__(self, ctx, pool, programs, uploads, stencil, table, geometry, environment):
@@ -145,6 +146,7 @@ class LightPass(Pass):
         ctx.blend_equation = ctx.FUNC_ADD
         self.table.texture.use(UNITS["u_lights"])
         self.environment.lut.use(UNITS["dfg_lut"])
+        self.environment.bind_sheen(frame.scene.materials.values())
 
         batched = []
         for path, light in frame.scene.lights.items():
