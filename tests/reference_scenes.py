@@ -59,7 +59,7 @@ SCENES = {
     "01_alpha_blend": Spec((128, 72), 1024, "corpus: blended plane in front of a cube"),
     "01_alpha_mask": Spec((128, 72), 1024, "corpus: alpha-masked plane"),
     "demo": Spec((128, 72), 1024, "Lantern's demo scene, frame 13"),
-    "sheen": Spec((240, 48), 1024, "sheen: Principled (layered, over a coat), Sheen BSDFs added and alone"),
+    "sheen": Spec((240, 48), 256, "sheen: Principled (layered, over a coat), Sheen BSDFs added and alone"),
 }
 
 # The sky: lat-long in Blender's equirectangular convention (row 0 = up, +Z; the
