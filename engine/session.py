@@ -174,6 +174,16 @@ class Session:
                             self._renderer.warnings(),
                             timings=timings, gpu_timings=gpu, stats=stats)
 
+    def programs_pending(self) -> int:
+        """Programs a viewport's frames wait for (settings.background_compile): render
+        again once this is 0 to draw the materials as they are."""
+        return run_gl(lambda gl: self._renderer.programs_pending())
+
+    def wait_programs(self, timeout: float | None = None) -> bool:
+        """Blocks until no program is pending (False when `timeout` passed first)."""
+        helper = run_gl(lambda gl: gl.programs.background)
+        return True if helper is None else helper.wait(timeout)
+
     def skinned_points(self, frame: float) -> dict:
         """GPU-deformed geometry read back: {mesh path: (points, normals)}, world space,
         one row per mesh point (normals as drawn), for every mesh with

@@ -58,6 +58,11 @@ class RenderSettings:
     # (at most one level finer than the render level). 0, or GL 3.3 and 4.1: refined
     # on the CPU to the render level. Read when the session opens.
     tessellation_px: float = 4.0
+    # A viewport's frames: a material whose network changed shape is drawn as it was
+    # until a helper process has made its new program (engine/gpu/compiler.py), so
+    # the edit never waits on a compile (stats: programs_pending). Off for final
+    # images, which draw every material as it is.
+    background_compile: bool = False
 
     def __post_init__(self):
         if self.supersample is not None and (int(self.supersample) != self.supersample

@@ -235,6 +235,51 @@ def test_a_graph_shape_edit_compiles_one_variant():
     assert np.abs(after.rgba[16, 3, :3] - before.rgba[16, 3, :3]).max() > 0.05
 
 
+def _shape_edit_renders(blend, background=True):
+    """(before the edit, the edit's first frame, the frame after its program is made, the
+    session's stats along the way) of a Mix blend-type edit in one Session."""
+    from lantern.engine import RenderSettings, Session
+    stage = _one_quad_stage(pattern_scenes._mix_blend("MULTIPLY"))
+    settings = RenderSettings(width=32, height=32, background_compile=background)
+    with Session(stage, settings) as session:
+        session.render()
+        before = session.render()
+        mix = _pattern_node(stage, "mix")
+        mix.GetInput("blend_type").Set(blend)   # clamped: a shape no other test draws
+        mix.GetInput("clamp_result").Set("1")
+        edited = session.render()
+        pending = session.programs_pending()
+        assert session.wait_programs(timeout=120)
+        after = session.render()
+    with Session(stage, RenderSettings(width=32, height=32)) as fresh:
+        expected = fresh.render()
+    return before, edited, after, expected, pending
+
+
+def test_a_viewports_graph_edit_is_compiled_off_the_render_thread():
+    """With background_compile (the viewport's), a graph-shape edit's frame draws the
+    old variant and compiles nothing; a helper process makes the new program and
+    stores its binary, and the next frame loads it and draws the edit, as a session
+    without the helper draws it."""
+    before, edited, after, expected, pending = _shape_edit_renders("DIFFERENCE")
+    assert edited.stats["programs_pending"] == 1 and pending in (0, 1)
+    assert edited.stats["programs_compiled"] == 0
+    assert np.array_equal(edited.rgba, before.rgba)          # the old variant, as it was
+    assert after.stats["programs_pending"] == 0
+    assert after.stats["programs_compiled"] == 0 and after.stats["programs_loaded"] == 1
+    assert np.array_equal(after.rgba, expected.rgba)
+    assert np.abs(after.rgba[16, 3, :3] - before.rgba[16, 3, :3]).max() > 0.05
+
+
+def test_without_program_binaries_a_graph_edit_compiles_in_place(monkeypatch):
+    """No persistent program cache (LANTERN_NO_PROGRAM_CACHE=1): nothing can be made
+    elsewhere, so the edit's own frame compiles it and draws it."""
+    monkeypatch.setenv("LANTERN_NO_PROGRAM_CACHE", "1")
+    before, edited, after, expected, _ = _shape_edit_renders("EXCLUSION")
+    assert edited.stats["programs_pending"] == 0 and edited.stats["programs_compiled"] == 1
+    assert np.array_equal(edited.rgba, expected.rgba)
+
+
 @pytest.mark.parametrize("edit, says", [
     (lambda node: node.GetPrim().GetAttribute("lantern:nodeDef").Set("ND_image_color3"),
      "is not supported"),

@@ -140,3 +140,36 @@ def test_only_debug_says_an_entry_was_rebuilt(corpus, tmp_path):
     said = render("--debug")
     assert said.count("program cache:") == len(entries), said
     assert "truncated" in said
+
+
+def test_the_compilers_helper_stores_a_binary_or_says_why_it_cannot(tmp_path, monkeypatch):
+    """engine/gpu/compiler.py's helper makes a program into the cache folder, where the
+    render process finds it; a helper whose GL differs from the render context's is
+    not used (what was handed over is then compiled in place)."""
+    from lantern.engine.gpu import program_binaries
+    from lantern.engine.gpu.compiler import BackgroundCompiler
+    from lantern.engine.gpu.context import run_gl
+    monkeypatch.setenv("LANTERN_PROGRAM_CACHE_DIR", str(tmp_path))
+    key = ("fullscreen.vert", "post.frag", ("HELPER_TEST",), (), False, (), ())
+
+    def driver(gl):
+        info = gl.ctx.info
+        return info["GL_VENDOR"], info["GL_RENDERER"], info["GL_VERSION"], gl.loader.active
+    *same, active = run_gl(driver)
+    if not active or program_binaries.disabled():
+        pytest.skip("this driver stores no program binaries")
+    helper = BackgroundCompiler(tuple(same))
+    try:
+        assert helper.submit(key, key) and helper.wait(timeout=120)
+        assert helper.broken is None and helper.failure(key) is None
+        assert run_gl(lambda gl: gl.programs.ready(*key))       # stored: a load away
+        assert len(os.listdir(tmp_path)) == 1
+    finally:
+        helper.close()
+    other = BackgroundCompiler(("another vendor", "another GPU", "9.9"))
+    try:
+        other.submit(key, key)
+        assert other.wait(timeout=120)
+        assert "not the render context's" in other.broken
+    finally:
+        other.close()

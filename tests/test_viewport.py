@@ -255,6 +255,41 @@ def test_edits_send_the_minimal_delta_and_the_image_follows(viewport):
     np.testing.assert_allclose(posed, _fresh(scene, view), atol=2e-3)
 
 
+def test_a_graph_edit_draws_the_old_variant_until_the_new_one_is_made(viewport):
+    """A Mix node's blend type changes the network's shape: the engine host draws the
+    material as it was while its compiler's helper makes the new variant, keeps the
+    frames not final meanwhile, and its final frame draws the edit with a program it
+    loaded, not compiled (engine/gpu/compiler.py)."""
+    import bpy
+    import pattern_scenes
+    scene, vp = viewport
+    paint = bpy.data.materials["paint"]
+    bsdf = paint.node_tree.nodes["Principled BSDF"]
+    sent, _ = _edit(vp, lambda: pattern_scenes._mix_blend("MULTIPLY")(paint.node_tree, bsdf))
+    view = _camera_view(scene, bpy.context.evaluated_depsgraph_get())
+    before, _ = vp.frame(view)
+    mix = next(n for n in paint.node_tree.nodes if n.bl_idname == "ShaderNodeMix")
+
+    def edit():     # clamped: a shape no other test draws
+        mix.blend_type, mix.clamp_result = "SCREEN", True
+    channel = vp.render.host.channel(vp.render.name)
+    frames = []
+
+    class Recorded(type(channel.event)):
+        def set(self):              # on the reader thread, as each frame arrives
+            frames.append(channel.latest)
+            super().set()
+    channel.event = Recorded()
+    _edit(vp, edit)
+    after, frame = vp.frame(view)
+    first = frames[0]
+    assert first.stats["programs_pending"] == 1 and not first.final, first.stats
+    assert all(f.stats["programs_compiled"] == 0 for f in frames), [f.stats for f in frames]
+    assert frame.stats["programs_pending"] == 0 and frame.stats["programs_loaded"] == 1
+    assert _changed(before, after).any()
+    np.testing.assert_allclose(after, _fresh(scene, view), atol=2e-3)
+
+
 def test_views_are_progressive_and_send_no_edit(viewport):
     import bpy
     scene, vp = viewport

@@ -81,7 +81,9 @@ def load_source(name: str, defines=(), _seen=None, generated=()) -> str:
 class ProgramCache:
     """Programs by (shaders, variant), made on first use: loaded from the persistent
     cache when `binaries` (the context's BinaryLoader) has them, else compiled.
-    `compiled`, `loaded` and `seconds` count what making them cost, for the stats."""
+    `compiled`, `loaded` and `seconds` count what making them cost, for the stats.
+    `ready` and `make_later` let a viewport hand a program to the compiler's helper
+    process (compiler.py) instead of compiling it on the render thread."""
 
     def __init__(self, ctx, binaries=None):
         self.ctx = ctx
@@ -93,63 +95,120 @@ class ProgramCache:
         self.compiled = 0
         self.loaded = 0
         self.seconds = 0.0
+        self.background = None      # compiler.BackgroundCompiler, at the first make_later
+
+    @staticmethod
+    def _key(vert, frag=None, defines=(), varyings=(), compute=False, generated=(),
+             tessellation=()):
+        return (vert, frag, tuple(sorted(set(defines))), tuple(varyings), compute,
+                tuple(generated), tuple(tessellation))
+
+    def _sources(self, key):
+        """(the final sources of key's stages, the name of its stored binary or None when
+        the persistent cache is off)."""
+        vert, frag, defines, varyings, compute, generated, tessellation = key
+        if compute:
+            sources = (load_source(vert, defines), None)
+        else:
+            sources = (load_source(vert, defines), None if frag is None else
+                       load_source(frag, defines, generated=generated))
+        stages = tuple(load_source(name, defines) for name in tessellation)
+        entry = None
+        if self._binaries() is not None:
+            entry = program_binaries.entry_key(sources + ("compute",) * compute + stages,
+                                               tuple(varyings), self._driver)
+        return sources, stages, entry
 
     def get(self, vert: str, frag: str | None = None, defines=(), varyings=(), compute=False,
             generated=(), tessellation=()):
         """`generated`: ((include name, source), ...) for load_source; part of the key.
         `tessellation`: (control shader, evaluation shader) between `vert` and the rest."""
-        defines = tuple(sorted(set(defines)))
-        generated = tuple(generated)
-        tessellation = tuple(tessellation)
-        key = (vert, frag, defines, tuple(varyings), compute, generated, tessellation)
+        key = self._key(vert, frag, defines, varyings, compute, generated, tessellation)
         prog = self._programs.get(key)
         if prog is None:
-            t0 = time.perf_counter()
+            prog = self._make(key)
+        return prog
+
+    def has(self, *args, **kwargs) -> bool:
+        """Whether get(same arguments) returns a program already made."""
+        return self._key(*args, **kwargs) in self._programs
+
+    def ready(self, *args, **kwargs) -> bool:
+        """Whether get(same arguments) returns at once: made, or its binary stored (a
+        load of milliseconds), or the helper gave up on it (then get compiles it, or
+        says why it fails)."""
+        key = self._key(*args, **kwargs)
+        if key in self._programs:
+            return True
+        _, _, entry = self._sources(key)
+        if entry is None:
+            return True                     # no cache: nothing can be made elsewhere
+        if self._store.read(entry) is not None:
+            return True
+        helper = self.background
+        return helper is not None and (helper.broken is not None or
+                                       helper.failure(key) is not None)
+
+    def make_later(self, *args, **kwargs) -> bool:
+        """Hands get(same arguments) to the helper process (compiler.py), which stores
+        its binary; False when that cannot be done (then get compiles in place)."""
+        key = self._key(*args, **kwargs)
+        if self._binaries() is None:
+            return False
+        if self.background is None:
+            from .compiler import BackgroundCompiler
+            self.background = BackgroundCompiler(self._driver)
+        return self.background.submit(key, key)
+
+    def forget(self, prog):
+        """Releases a program made by get (the helper keeps none)."""
+        self._programs.pop(prog.extra, None)
+        vao = self._screen.pop(prog.extra, None)
+        if vao is not None:
+            vao.release()
+        prog.release()
+
+    def _make(self, key):
+        vert, frag, defines, varyings, compute, generated, tessellation = key
+        t0 = time.perf_counter()
+        sources, stages, entry = self._sources(key)
+        binaries = self._binaries() if entry is not None else None
+        if binaries is not None:
+            binaries.expect(entry, self._store.read(entry))
+        try:
             if compute:
-                sources = (load_source(vert, defines), None)
+                prog = self.ctx.compute_shader(sources[0])
+            elif stages:
+                prog = self.ctx.program(vertex_shader=sources[0], fragment_shader=sources[1],
+                                        tess_control_shader=stages[0],
+                                        tess_evaluation_shader=stages[1],
+                                        varyings=list(varyings))
+            elif frag is None:
+                prog = self.ctx.program(vertex_shader=sources[0], varyings=list(varyings))
             else:
-                sources = (load_source(vert, defines), None if frag is None else
-                           load_source(frag, defines, generated=generated))
-            stages = tuple(load_source(name, defines) for name in tessellation)
-            binaries = self._binaries()
+                prog = self.ctx.program(vertex_shader=sources[0], fragment_shader=sources[1])
+        except Exception as exc:
+            raise ShaderError(f"{vert} + {frag} [variant: {', '.join(defines) or 'base'}] "
+                              f"failed to compile: {exc}") from exc
+        finally:
             if binaries is not None:
-                entry = program_binaries.entry_key(sources + ("compute",) * compute + stages,
-                                                   tuple(varyings), self._driver)
-                binaries.expect(entry, self._store.read(entry))
-            try:
-                if compute:
-                    prog = self.ctx.compute_shader(sources[0])
-                elif stages:
-                    prog = self.ctx.program(vertex_shader=sources[0], fragment_shader=sources[1],
-                                            tess_control_shader=stages[0],
-                                            tess_evaluation_shader=stages[1],
-                                            varyings=list(varyings))
-                elif frag is None:
-                    prog = self.ctx.program(vertex_shader=sources[0], varyings=list(varyings))
-                else:
-                    prog = self.ctx.program(vertex_shader=sources[0], fragment_shader=sources[1])
-            except Exception as exc:
-                raise ShaderError(f"{vert} + {frag} [variant: {', '.join(defines) or 'base'}] "
-                                  f"failed to compile: {exc}") from exc
-            finally:
-                if binaries is not None:
-                    binaries.done()
-            if binaries is not None and binaries.outcome == "loaded":
-                self.loaded += 1
-            else:
-                self.compiled += 1
-            if binaries is not None:
-                if binaries.failure:
-                    log.debug("program cache: %s + %s [%s]: %s; compiled", vert, frag,
-                              ", ".join(defines) or "base", binaries.failure)
-                if binaries.captured:
-                    self._store.write(entry, *binaries.captured)
-            self.seconds += time.perf_counter() - t0
-            for name, unit in UNITS.items():
-                if name in prog:
-                    prog[name].value = unit
-            prog.extra = key
-            self._programs[key] = prog
+                binaries.done()
+        if binaries is not None and binaries.outcome == "loaded":
+            self.loaded += 1
+        else:
+            self.compiled += 1
+        if binaries is not None:
+            if binaries.failure:
+                log.debug("program cache: %s + %s [%s]: %s; compiled", vert, frag,
+                          ", ".join(defines) or "base", binaries.failure)
+            if binaries.captured:
+                self._store.write(entry, *binaries.captured)
+        self.seconds += time.perf_counter() - t0
+        for name, unit in UNITS.items():
+            if name in prog:
+                prog[name].value = unit
+        prog.extra = key
+        self._programs[key] = prog
         return prog
 
     def _binaries(self):
@@ -177,6 +236,9 @@ class ProgramCache:
         return len(self._programs)
 
     def release(self):
+        if self.background is not None:
+            self.background.close()
+            self.background = None
         for vao in self._screen.values():
             vao.release()
         for prog in self._programs.values():

@@ -5,6 +5,7 @@ draws it. Everything here is released by `release` (Session.close)."""
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -58,7 +59,7 @@ COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "meshes
             "shadow_maps", "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
             "light_volumes", "stencil_marks", "batched_lights", "instances_drawn",
             "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws",
-            "pattern_bytes")
+            "pattern_bytes", "programs_pending")
 
 
 def _path_name(features) -> str:
@@ -93,12 +94,15 @@ class Renderer:
         self.readback = Readback(ctx, programs, gl.proc, compute=self.features.multi_draw)
         self.resolve = ResolvePass(ctx, self.pool, programs, self.geometry, self.depth,
                                    self.readback)
+        self.gbuffer = GBufferPass(ctx, self.pool, programs, self.geometry, self.textures,
+                                   self.depth)
+        self._drawn = {}            # material name -> the record its last frame drew
         self.graph = FrameGraph(ctx, self.pool, [
             self.skinning,
             ViewPass(self.geometry, self.depth),
             self.tessellation,
             self.shadows,
-            GBufferPass(ctx, self.pool, programs, self.geometry, self.textures, self.depth),
+            self.gbuffer,
             AovPass(ctx, self.pool, programs),
             AoPass(ctx, self.pool, programs),
             AmbientPass(ctx, self.pool, programs, self.environment),
@@ -148,6 +152,7 @@ class Renderer:
                       options=settings or RenderSettings(),
                       readback=readback or ReadbackRequest())
         frame.stats["meshes_uploaded"] = self.update(scene, changes, cull_backfaces)
+        frame.scene = self._drawable(frame)
         frame.timings["upload"] = time.perf_counter() - t0
         k = supersample_factor(frame, size, self.ctx.info.get("GL_MAX_TEXTURE_SIZE", 16384))
         frame.supersample, frame.output_size = k, tuple(size)
@@ -157,6 +162,7 @@ class Renderer:
             board = self.graph.run(frame)
         finally:
             self.depth.end()
+        self._drawn = dict(frame.scene.materials)
         # Render passes were drawn at the supersampled size too: light is filtered as
         # the image is, data (depth, normals, indices) keeps the centre sub-pixel.
         board["aovs"] = {name: (centre_samples(a, k) if name in DATA_PASSES else downsample(a, k))
@@ -171,6 +177,36 @@ class Renderer:
         frame.board = board
         self._restore_state()
         return frame
+
+    def _drawable(self, frame):
+        """The frame's scene, in which a material whose network changed shape since its
+        last frame, and whose new G-buffer variant is neither made nor stored, is drawn
+        as it was (its old record) while the compiler's helper makes the new one
+        (engine/gpu/compiler.py; settings.background_compile: the viewport). One with
+        nothing old to draw, or whose meshes change layout with it, is compiled in
+        place, as is every program without the helper. stats: programs_pending."""
+        scene, drawn = frame.scene, self._drawn
+        if not frame.options.background_compile:
+            return scene
+        older = {}
+        for name, mat in scene.materials.items():
+            old = drawn.get(name)
+            if old is None or mat.pattern is None or old.pattern is None or \
+                    old.pattern.shape == mat.pattern.shape or old.mesh_layout != mat.mesh_layout:
+                continue
+            new_args = self.gbuffer.frame_program_args(frame, mat)
+            if self.programs.ready(*new_args) or \
+                    not self.programs.has(*self.gbuffer.frame_program_args(frame, old)):
+                continue
+            if self.programs.make_later(*new_args):
+                older[name] = old
+        frame.stats["programs_pending"] = len(older)
+        return replace(scene, materials={**scene.materials, **older}) if older else scene
+
+    def programs_pending(self) -> int:
+        """Programs the compiler's helper is still making (0 without one)."""
+        helper = self.programs.background
+        return 0 if helper is None else helper.pending()
 
     def finish(self, frame):
         """(rgba, aovs, stats, timings, gpu timings) of a submitted frame, its pixels in

@@ -1,4 +1,5 @@
-"""Starts the engine host: `python -s -P boot.py PACKAGE_DIR HANDLE`.
+"""Starts the engine host: `python -s -P boot.py PACKAGE_DIR HANDLE`, or the program
+compiler's helper (engine/gpu/compiler.py) with `compiler` in HANDLE's place.
 
 Run by Blender's own Python in a child process. The package is loaded from its
 folder under the name `lantern` (inside Blender it is `bl_ext.<repo>.lantern`, which a
@@ -18,6 +19,9 @@ def main():
     package = importlib.util.module_from_spec(spec)
     sys.modules["lantern"] = package
     spec.loader.exec_module(package)
+    if handle == "compiler":
+        from lantern.engine.gpu import compiler
+        sys.exit(compiler.main())
     from lantern.engine.host import child
     sys.exit(child.main(handle))
 

@@ -38,6 +38,7 @@ class Scene:
         self.blocks = {}           # slot name -> SharedMemory
         self.free = []             # slots this process may write
         self.moving = (None, None)  # (scale, seconds) of the last moving frame
+        self.compiling = False      # its last frame drew an edited material as it was
 
     def session(self, preset):
         """The scene's Session, set to `preset`."""
@@ -58,6 +59,10 @@ class Scene:
         for block in self.blocks.values():
             protocol.release_block(block, unlink)
         self.blocks, self.free = {}, []
+
+    def session_pending(self) -> int:
+        """Programs its session's frames wait for (0 without a session)."""
+        return 0 if self._session is None else self._session.programs_pending()
 
     def close(self, unlink=False):
         if self._session is not None:
@@ -146,6 +151,13 @@ class Host:
         if waiting:
             return min(waiting)[1], None
         for name, scene in self.scenes.items():
+            # A frame that drew an edited network's old variant: again once the
+            # compiler's helper has made the new one (engine/gpu/compiler.py).
+            if scene.request is not None and scene.compiling:
+                if scene.session_pending() == 0:
+                    return name, None
+                due = protocol.PROGRAM_POLL_SECONDS
+        for name, scene in self.scenes.items():
             if scene.request is not None and scene.level == 1:
                 left = scene.touched + protocol.SETTLE_SECONDS - now
                 if left <= 0:
@@ -183,7 +195,8 @@ class Host:
         try:
             session = scene.session(preset)
             session.configure(width=w, height=h, transparent=req["transparent"],
-                              passes=frozenset(req["passes"]), camera=req.get("camera"))
+                              passes=frozenset(req["passes"]), camera=req.get("camera"),
+                              background_compile=req["progressive"])
             # The image is read straight into the slot, in Blender's bottom-up rows.
             result = session.render(view_matrix=req.get("view"),
                                     projection_matrix=req.get("projection"),
@@ -198,13 +211,17 @@ class Host:
         for pass_name, channels, offset in frame_layout[1:]:
             protocol.view(block, w, h, channels, offset)[:] = result.passes[pass_name][::-1]
         scene.level = 2 if final else 1
+        # Not final while an edited material draws its old variant: Blender keeps
+        # polling, and the frame with the new one follows.
+        scene.compiling = result.stats.get("programs_pending", 0) > 0
         if not final:
             scene.touched = time.monotonic()    # settling counts from the frame shown
             # GL work and read-back of the moving frame: what the next one's size is
             # chosen from (the stage read is the same at any size).
             scene.moving = (scale, result.timings["total"] - result.timings.get("load", 0.0))
         self._send(protocol.FRAME, scene=name, request=req["id"], tag=req.get("tag"), slot=slot,
-                   width=w, height=h, layout=frame_layout, final=final, preset=preset,
+                   width=w, height=h, layout=frame_layout,
+                   final=final and not scene.compiling, preset=preset,
                    stats=result.stats, timings=result.timings, gpu_timings=result.gpu_timings,
                    warnings=result.warnings)
         return True

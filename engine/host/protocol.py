@@ -33,6 +33,8 @@ INTERACTIVE_BUDGET = 1 / 30          # seconds
 INTERACTIVE_SCALES = (1.0, 0.75, 0.5, 0.375, 0.25)   # steps, so sizes do not jitter
 INTERACTIVE_MIN_PIXELS = 320 * 180
 SETTLE_SECONDS = 0.15
+# How often the host asks whether the programs a viewport frame waits for are made.
+PROGRAM_POLL_SECONDS = 0.05
 
 
 def interactive_scale(last_scale: float | None, last_seconds: float | None,

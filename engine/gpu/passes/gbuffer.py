@@ -62,10 +62,23 @@ class GBufferPass(Pass):
         return (("g_smooth",) if any(m.needs_smooth_normal for m in materials) else ()) + \
             (("g_sheen",) if any(m.has_sheen for m in materials) else ())
 
+    def program_args(self, mat, outputs, index):
+        """ProgramCache.get's arguments for `mat`'s variant, with these optional
+        outputs (OUTPUT_DEFINES' values) and the index render passes or not."""
+        defines = map_defines(mat) + self.geometry.object_defines() + list(outputs) + \
+            (["WRITE_INDEX"] if index else [])
+        return "gbuffer.vert", "gbuffer.frag", defines, (), False, material_variant(mat)
+
+    def frame_program_args(self, frame, mat):
+        """program_args as this frame will draw `mat` (its targets: wanted, aov_targets)."""
+        wanted = self.wanted(frame)
+        return self.program_args(mat, [d for n, d in OUTPUT_DEFINES.items() if n in wanted],
+                                 "g_index" in self.aov_targets(frame))
+
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]
         index = "g_index" in self.aov_targets(frame)
-        extra = [n for n in ("g_smooth", "g_sheen") if n in board]
+        extra = [n for n in OUTPUT_DEFINES if n in board]
         colors = [board[n] for n in TARGETS[:4] + tuple(extra)] + \
             ([board["g_index"]] if index else [])
         outputs = [OUTPUT_DEFINES[n] for n in extra]
@@ -88,10 +101,7 @@ class GBufferPass(Pass):
             threshold = mat.gbuffer_threshold
             if threshold is None:
                 continue                   # wholly see-through: the transparency pass's
-            defines = map_defines(mat) + self.geometry.object_defines() + outputs + \
-                (["WRITE_INDEX"] if index else [])
-            prog = self.programs.get("gbuffer.vert", "gbuffer.frag", defines,
-                                     generated=material_variant(mat))
+            prog = self.programs.get(*self.program_args(mat, outputs, index))
             set_uniform(prog, "view_proj", view.view_proj)
             set_uniform(prog, "u_far", view.far_clip)
             view.set_origin(prog)
