@@ -62,6 +62,11 @@ COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "meshes
             "pattern_bytes", "programs_pending")
 
 
+def _shape(material):
+    """The shape of a material's network (None: it has none), which names its variant."""
+    return None if material.pattern is None else material.pattern.shape
+
+
 def _path_name(features) -> str:
     """The GL paths taken, for stats and --debug."""
     draw = "multi-draw (GL 4.3)" if features.multi_draw else "draw per object (GL 3.3)"
@@ -180,7 +185,7 @@ class Renderer:
 
     def _drawable(self, frame):
         """The frame's scene, in which a material whose network changed shape since its
-        last frame, and whose new G-buffer variant is neither made nor stored, is drawn
+        last frame (or was made or removed), and whose new G-buffer variant is neither made nor stored, is drawn
         as it was (its old record) while the compiler's helper makes the new one
         (engine/gpu/compiler.py; settings.background_compile: the viewport). One with
         nothing old to draw, or whose meshes change layout with it, is compiled in
@@ -191,8 +196,7 @@ class Renderer:
         older = {}
         for name, mat in scene.materials.items():
             old = drawn.get(name)
-            if old is None or mat.pattern is None or old.pattern is None or \
-                    old.pattern.shape == mat.pattern.shape or old.mesh_layout != mat.mesh_layout:
+            if old is None or _shape(old) == _shape(mat) or old.mesh_layout != mat.mesh_layout:
                 continue
             new_args = self.gbuffer.frame_program_args(frame, mat)
             if self.programs.ready(*new_args) or \
