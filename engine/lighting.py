@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 
 import numpy as np
 
@@ -224,16 +225,40 @@ def _trapezoid(y, x):
     return ((y[..., 1:] + y[..., :-1]) * 0.5 * np.diff(x)).sum(axis=-1)
 
 
+TABLES = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "shaders",
+                      "tables")
+
+
+def _stored(name: str, compute) -> np.ndarray:
+    """shaders/tables/<name>.npy, the table `compute()` makes, written by
+    shaders/tables/make_tables.py so that no process pays for the integration (about
+    0.15 s for the split-sum table on 2 cores); computed when the file is missing or
+    not of the computed table's shape and type (tests/test_shading.py checks that it
+    equals the computation)."""
+    try:
+        table = np.load(os.path.join(TABLES, name + ".npy"), allow_pickle=False)
+    except (OSError, ValueError):
+        return compute()
+    if table.dtype != np.float32 or table.shape != TABLE_SHAPES[name] or \
+            not np.isfinite(table).all():
+        return compute()
+    return table
+
+
 @functools.lru_cache(maxsize=1)
-def dfg_lut(size: int = DFG_SIZE) -> np.ndarray:
+def dfg_lut() -> np.ndarray:
+    """The split-sum table the shaders read (compute_dfg_lut), stored."""
+    return _stored("dfg_lut", compute_dfg_lut)
+
+
+def compute_dfg_lut(size: int = DFG_SIZE) -> np.ndarray:
     """(size, size, 4) float32, row j = roughness j / (size - 1), column i = n.v
     i / (size - 1): the table the shaders read, at texel centres for those values
     (lib.glsl dfg_uv), so that n.v and roughness 0 and 1 are in it, not clamped half a
     texel short (E at n.v 1 and roughness 1 read 0.326 that way; it is 0.307);
     channels: dfg_terms, the exact-Fresnel albedo at COAT_IOR, and the lobe's albedo
     averaged over the hemisphere, E_avg = 2 * integral of E(mu) mu (the same in every
-    column; Cycles' multiple-scattering Fresnel needs it: lib.glsl lobe_energy).
-    Computed once per process."""
+    column; Cycles' multiple-scattering Fresnel needs it: lib.glsl lobe_energy)."""
     c = np.linspace(0.0, 1.0, size)
     rows = [np.concatenate([dfg_terms(c, r), dfg_terms(c, r, fresnel_ior=COAT_IOR)[:, None]],
                            axis=1) for r in c]                       # row by row: cache-sized
@@ -280,12 +305,16 @@ VELVET_SIZE = 16       # n.v x roughness texels of the velvet albedo
 
 
 @functools.lru_cache(maxsize=1)
-def velvet_albedo_lut(size: int = VELVET_SIZE, steps: int = 64) -> np.ndarray:
+def velvet_albedo_lut() -> np.ndarray:
+    """The velvet albedo table the shaders read (compute_velvet_albedo_lut), stored."""
+    return _stored("velvet_albedo", compute_velvet_albedo_lut)
+
+
+def compute_velvet_albedo_lut(size: int = VELVET_SIZE, steps: int = 64) -> np.ndarray:
     """(size, size, 1) float32, row j = roughness j / (size - 1), column i = n.v
     i / (size - 1) (texel centres, as dfg_lut): the velvet lobe's directional albedo,
     the integral of f cos over the hemisphere of light directions (midpoint rule in
-    theta, phi; the lobe is mirror-symmetric in phi). Made at the first frame that
-    draws a velvet sheen."""
+    theta, phi; the lobe is mirror-symmetric in phi)."""
     theta = (np.arange(steps) + 0.5) * (math.pi / 2) / steps
     phi = (np.arange(2 * steps) + 0.5) * math.pi / (2 * steps)
     th, ph = np.meshgrid(theta, phi, indexing="ij")
@@ -298,3 +327,7 @@ def velvet_albedo_lut(size: int = VELVET_SIZE, steps: int = 64) -> np.ndarray:
         f = velvet_brdf(v, l[None], c[:, None, None])          # (roughness, theta, phi)
         table[:, i, 0] = np.sum(f * weight, axis=(1, 2))
     return table
+
+
+# The stored tables' shapes (float32), as their compute_ functions make them.
+TABLE_SHAPES = {"dfg_lut": (DFG_SIZE, DFG_SIZE, 4), "velvet_albedo": (VELVET_SIZE, VELVET_SIZE, 1)}

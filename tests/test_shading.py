@@ -46,6 +46,30 @@ def test_dfg_table_matches_brute_force_integration(nov, roughness):
         assert abs(got - want) <= 0.01 * want + 1e-3, (f0, got, want)
 
 
+@pytest.mark.parametrize("name", ["dfg_lut", "velvet_albedo"])
+def test_stored_tables_are_the_computed_ones(name, tmp_path, monkeypatch):
+    """shaders/tables/ holds what engine/lighting.py computes (make_tables.py writes
+    them); a missing or foreign file is computed instead."""
+    from lantern.engine import lighting
+    compute = {"dfg_lut": lighting.compute_dfg_lut,
+               "velvet_albedo": lighting.compute_velvet_albedo_lut}[name]
+    want = compute()
+    assert np.array_equal(lighting._stored(name, lambda: None), want)
+    monkeypatch.setattr(lighting, "TABLES", str(tmp_path))
+    assert np.array_equal(lighting._stored(name, compute), want)          # missing
+    np.save(tmp_path / f"{name}.npy", np.zeros((2, 2), np.float32))
+    assert np.array_equal(lighting._stored(name, compute), want)          # foreign
+
+
+def test_the_velvet_albedo_integrates_cycles_velvet():
+    """The velvet table's integral against a finer one, and a grazing view's albedo
+    near 1 (the velvet lobe sends grazing light back), within 0.02."""
+    from lantern.engine.lighting import compute_velvet_albedo_lut
+    coarse, fine = compute_velvet_albedo_lut(), compute_velvet_albedo_lut(steps=192)
+    assert np.abs(coarse - fine).max() < 0.02
+    assert 0.9 < coarse[8, 0, 0] < 1.05
+
+
 def test_multiple_scattering_restores_a_white_metal():
     """A white furnace: f0 = 1 reflects everything at any roughness once the energy
     factor is applied (Kulla-Conty as Filament uses it)."""

@@ -1,8 +1,8 @@
 """The environment's light on the GPU (docs/design.md, Image-based lighting), made once
 and kept for the session:
 
-  dfg_lut         the split-sum table (engine/lighting.py dfg_lut, computed once per
-                  process): every shading program reads its lobes' albedos from it.
+  dfg_lut         the split-sum table (engine/lighting.py dfg_lut, stored in
+                  shaders/tables/): every shading program reads its lobes' albedos from it.
   per dome map    - the lat-long image (float32, mipmapped): the background, exactly
                     as UsdLux maps it;
                   - its irradiance harmonics (order 2, numpy, in the dome's frame):
