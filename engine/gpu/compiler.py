@@ -10,8 +10,8 @@ cache on, the driver storing binaries, and the helper's GL vendor, renderer and
 version the render context's (it says which it has when it starts; else it stops, and
 programs are compiled in place as before). The helper starts at the first program it
 is handed and lives as long as the render process; it is a plain Python process
-started as the engine host is (engine/host/boot.py), talking over its stdin and
-stdout."""
+started as the engine host is (engine/host/boot.py) running compile_helper.py, talking
+over its stdin and stdout."""
 from __future__ import annotations
 
 import os
@@ -24,13 +24,13 @@ import threading
 _LENGTH = struct.Struct("<I")
 
 
-def _send(stream, message):
+def send(stream, message):
     data = pickle.dumps(message)
     stream.write(_LENGTH.pack(len(data)) + data)
     stream.flush()
 
 
-def _receive(stream):
+def receive(stream):
     """The next message, or None at the end of the stream."""
     head = stream.read(_LENGTH.size)
     if len(head) < _LENGTH.size:
@@ -63,7 +63,7 @@ class BackgroundCompiler:
                 return False
             self._pending.add(key)
             try:
-                _send(self._proc.stdin, (key, args))
+                send(self._proc.stdin, (key, args))
             except OSError as error:
                 self._stop(f"the helper is gone ({error})")
                 return False
@@ -86,7 +86,7 @@ class BackgroundCompiler:
 
     def _start(self) -> bool:
         package = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-        boot = os.path.join(package, "engine", "host", "boot.py")
+        boot = os.path.join(package, "engine", "host", "boot.py")   # runs compile_helper
         try:
             self._proc = subprocess.Popen([sys.executable, "-s", "-P", boot, package, "compiler"],
                                           stdin=subprocess.PIPE, stdout=subprocess.PIPE)
@@ -99,7 +99,7 @@ class BackgroundCompiler:
 
     def _read(self):
         proc = self._proc
-        hello = _receive(proc.stdout)
+        hello = receive(proc.stdout)
         with self._lock:
             if hello is None or tuple(hello) != tuple(self.driver):
                 self._stop("the helper's GL is not the render context's: "
@@ -107,7 +107,7 @@ class BackgroundCompiler:
                            "the helper has no GL context, or no program binaries")
                 return
         while True:
-            message = _receive(proc.stdout)
+            message = receive(proc.stdout)
             with self._lock:
                 if message is None:
                     self._stop("the helper stopped")
@@ -138,28 +138,3 @@ class BackgroundCompiler:
             except (OSError, subprocess.TimeoutExpired):
                 proc.kill()
 
-
-def main() -> int:
-    """The helper: says its GL driver (nothing when it cannot store binaries), then
-    makes each program it is handed through a ProgramCache, which stores its binary,
-    and answers (key, None) or (key, why it failed)."""
-    inp, out = sys.stdin.buffer, sys.stdout.buffer
-    sys.stdout = sys.stderr            # nothing else may write to the channel
-    from . import program_binaries
-    from .context import GLContext
-    gl = GLContext()
-    if program_binaries.disabled() or not gl.loader.active:
-        return 1
-    info = gl.ctx.info
-    _send(out, (info["GL_VENDOR"], info["GL_RENDERER"], info["GL_VERSION"]))
-    while True:
-        job = _receive(inp)
-        if job is None:
-            return 0
-        key, args = job
-        try:
-            prog = gl.programs.get(*args)
-            gl.programs.forget(prog)
-            _send(out, (key, None))
-        except Exception as error:
-            _send(out, (key, f"{type(error).__name__}: {error}"))

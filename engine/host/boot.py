@@ -1,5 +1,5 @@
 """Starts the engine host: `python -s -P boot.py PACKAGE_DIR HANDLE`, or the program
-compiler's helper (engine/gpu/compiler.py) with `compiler` in HANDLE's place.
+compiler's helper (engine/gpu/compile_helper.py) with `compiler` in HANDLE's place.
 
 Run by Blender's own Python in a child process. The package is loaded from its
 folder under the name `lantern` (inside Blender it is `bl_ext.<repo>.lantern`, which a
@@ -20,8 +20,8 @@ def main():
     sys.modules["lantern"] = package
     spec.loader.exec_module(package)
     if handle == "compiler":
-        from lantern.engine.gpu import compiler
-        sys.exit(compiler.main())
+        from lantern.engine.gpu import compile_helper
+        sys.exit(compile_helper.main())
     from lantern.engine.host import child
     sys.exit(child.main(handle))
 
