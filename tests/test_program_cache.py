@@ -173,3 +173,16 @@ def test_the_compilers_helper_stores_a_binary_or_says_why_it_cannot(tmp_path, mo
         assert "not the render context's" in other.broken
     finally:
         other.close()
+
+
+def test_a_program_the_helper_keeps_too_long_is_made_in_place():
+    """A helper that never answers does not hold a viewport on the old variant: after
+    compiler.PATIENCE the program counts as failed there, so the render process makes
+    it itself (ProgramCache.ready)."""
+    import time
+    from lantern.engine.gpu import compiler
+    helper = compiler.BackgroundCompiler(("v", "r", "1"))
+    helper._pending["late"] = time.monotonic() - compiler.PATIENCE - 1.0
+    helper._pending["recent"] = time.monotonic()
+    assert helper.pending() == 1
+    assert "not made within" in helper.failure("late") and helper.failure("recent") is None

@@ -20,8 +20,12 @@ import struct
 import subprocess
 import sys
 import threading
+import time
 
 _LENGTH = struct.Struct("<I")
+# Seconds a program may stay with the helper before the render process makes it itself
+# (a helper that hangs must not keep a viewport on the old variant).
+PATIENCE = 30.0
 
 
 def send(stream, message):
@@ -42,14 +46,15 @@ def receive(stream):
 
 class BackgroundCompiler:
     """The render process's side: `submit` hands a program to the helper (once per
-    key), `finished` says which are done since, `wait` blocks until none is left."""
+    key), `pending` counts those not done, `failure` says why one was not made, `wait`
+    blocks until none is left."""
 
     def __init__(self, driver: tuple):
         self.driver = driver            # the render context's (vendor, renderer, version)
         self.broken = None              # why the helper cannot serve, once it cannot
         self._proc = None
         self._lock = threading.Condition()
-        self._pending = set()           # keys handed over and not done
+        self._pending = {}              # key handed over and not done -> when
         self._done = {}                 # key -> None, or why the helper failed it
 
     def submit(self, key, args) -> bool:
@@ -61,7 +66,7 @@ class BackgroundCompiler:
                 return True
             if self._proc is None and not self._start():
                 return False
-            self._pending.add(key)
+            self._pending[key] = time.monotonic()
             try:
                 send(self._proc.stdin, (key, args))
             except OSError as error:
@@ -71,12 +76,24 @@ class BackgroundCompiler:
 
     def pending(self) -> int:
         with self._lock:
+            self._expire()
             return len(self._pending)
 
     def failure(self, key):
         """Why the helper could not make `key` (None: made, or not handed over)."""
         with self._lock:
+            self._expire()
             return self._done.get(key)
+
+    def _expire(self):
+        """(under the lock) Gives up on programs the helper has had for PATIENCE."""
+        now = time.monotonic()
+        for key, since in list(self._pending.items()):
+            if now - since > PATIENCE:
+                del self._pending[key]
+                self._done[key] = f"not made within {PATIENCE:g} s"
+        if not self._pending:
+            self._lock.notify_all()
 
     def wait(self, timeout: float | None = None) -> bool:
         """Blocks until every program handed over is done (or the helper stopped);
@@ -113,7 +130,7 @@ class BackgroundCompiler:
                     self._stop("the helper stopped")
                     return
                 key, error = message
-                self._pending.discard(key)
+                self._pending.pop(key, None)
                 self._done[key] = error
                 self._lock.notify_all()
 
