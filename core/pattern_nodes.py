@@ -65,7 +65,8 @@ KINDS = {
 
 # The surface inputs (UsdPreviewSurface's names) a network can feed, and their types.
 SURFACE_INPUTS = {"diffuseColor": "color", "metallic": "float", "roughness": "float",
-                  "opacity": "float", "emissiveColor": "color", "normal": "vector"}
+                  "opacity": "float", "emissiveColor": "color", "normal": "vector",
+                  "sheenColor": "color", "sheenRoughness": "float"}
 
 MAX_IMAGES = 4   # images per network: texture units t_pattern0..3 (engine/gpu/programs.py)
 

@@ -95,7 +95,8 @@ class Material:
 
     @property
     def has_sheen(self) -> bool:
-        return bool(self.sheen_mode) and max(self.sheen) > 0.0
+        return bool(self.sheen_mode) and (max(self.sheen) > 0.0 or (
+            self.pattern is not None and self.pattern.feeds("sheenColor")))
 
     @property
     def has_normal_map(self) -> bool:

@@ -52,7 +52,7 @@ void main() {
     rt_smooth = vec4(m.smooth_n, 0.0);
 #endif
 #ifdef WRITE_SHEEN
-    rt_sheen = u_sheen;
+    rt_sheen = m.sheen;
 #endif
 #ifdef WRITE_INDEX
     rt_index = vec2(v_object_index, u_material_index);

@@ -119,9 +119,11 @@ vec3 pt_generated() { return vec3(0.0); }
 // The surface inputs a pattern graph feeds replace the constants and maps
 // (engine/gpu/pattern.py); without one this is the constants.
 void pattern_inputs(vec2 uv, inout vec3 diffuse, inout float metallic, inout float roughness,
-                    inout float opacity, inout vec3 emissive, inout vec3 normal) {
+                    inout float opacity, inout vec3 emissive, inout vec3 normal,
+                    inout vec3 sheen, inout float sheen_roughness) {
 #ifdef HAS_PATTERN
-    pattern_eval(uv, diffuse, metallic, roughness, opacity, emissive, normal);
+    pattern_eval(uv, diffuse, metallic, roughness, opacity, emissive, normal, sheen,
+                 sheen_roughness);
 #endif
 }
 
@@ -150,9 +152,9 @@ float material_alpha(vec2 uv) {
     alpha = sample_map(t_opacity, m_opacity, uv).x;
 #endif
 #ifdef HAS_PATTERN
-    vec3 d = vec3(0.0), e = vec3(0.0), n = vec3(0.0);
-    float mt = 0.0, r = 0.0;
-    pattern_eval(uv, d, mt, r, alpha, e, n);
+    vec3 d = vec3(0.0), e = vec3(0.0), n = vec3(0.0), sh = vec3(0.0);
+    float mt = 0.0, r = 0.0, sr = 0.0;
+    pattern_eval(uv, d, mt, r, alpha, e, n, sh, sr);
 #endif
     return alpha;
 }
@@ -166,6 +168,7 @@ struct MaterialSample {
     vec4 mat;         // metallic, roughness, dielectric F0, clearcoat
     float coat_roughness;
     vec3 emissive;    // [0, 60000]
+    vec4 sheen;       // what g_sheen holds (passes/gbuffer.py sheen_texel): 0 without
 };
 
 // normal, tangent: the interpolated vertex attributes (world); front: gl_FrontFacing.
@@ -196,7 +199,15 @@ MaterialSample material_sample(vec2 uv, vec3 normal, vec4 tangent, bool front) {
     pt_P = v_position;
 #endif
     float opacity = 1.0;
-    pattern_inputs(uv, base, metallic, roughness, opacity, emissive, n);
+#ifdef WRITE_SHEEN
+    vec3 sheen = u_sheen.rgb;
+    float sheen_mode = u_sheen.a < 0.0 ? -1.0 : floor(u_sheen.a * 0.5);
+    float sheen_roughness = u_sheen.a - 2.0 * sheen_mode;
+#else
+    vec3 sheen = vec3(0.0);
+    float sheen_mode = -1.0, sheen_roughness = 0.0;
+#endif
+    pattern_inputs(uv, base, metallic, roughness, opacity, emissive, n, sheen, sheen_roughness);
 #ifdef HAS_NORMAL_MAP
     n = tangent_space_normal(sample_map(t_normal, m_normal, uv).xyz);
 #endif
@@ -210,5 +221,8 @@ MaterialSample material_sample(vec2 uv, vec3 normal, vec4 tangent, bool front) {
                  clamp(u_clearcoat, 0.0, 1.0));
     m.coat_roughness = clamp(u_clearcoat_roughness, 0.0, 1.0);
     m.emissive = clamp(emissive, 0.0, 60000.0);
+    // A material without a sheen (alpha < 0) writes none, whatever its network says.
+    m.sheen = sheen_mode < 0.0 ? vec4(0.0, 0.0, 0.0, -1.0) :
+        vec4(max(sheen, vec3(0.0)), clamp(sheen_roughness, 0.0, 1.0) + 2.0 * sheen_mode);
     return m;
 }

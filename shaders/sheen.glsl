@@ -29,13 +29,15 @@ float sheen_ltc_albedo(float x, float y) {
     return exp(-0.5 * z * z) / (s * sqrt(2.0 * PI)) + o;
 }
 
-// A G-buffer sheen texel (colour; roughness + 2 x mode) into the surface. The
+// A G-buffer sheen texel (colour; roughness + 2 x mode, or alpha -1: none) into the
+// surface. The
 // Principled BSDF's sheen (mode 0) is its top layer: what lies below (coat, specular,
 // diffuse) receives 1 - the sheen's albedo, its largest channel, as Cycles'
 // closure_layering_weight has it. A Sheen BSDF (modes 1, 2) is added, on nothing.
 void apply_sheen(inout Surface s, vec4 texel) {
+    if (texel.a < 0.0) return;                  // no sheen (passes/gbuffer.py sheen_texel)
     s.sheen = max(texel.rgb, vec3(0.0));
-    s.sheen_mode = int(floor(max(texel.a, 0.0) * 0.5));
+    s.sheen_mode = int(floor(texel.a * 0.5));
     s.sheen_roughness = clamp(texel.a - 2.0 * float(s.sheen_mode), 0.0, 1.0);
     if (s.sheen_mode == 2) {
         vec2 n = vec2(textureSize(sheen_lut, 0));

@@ -59,7 +59,7 @@ SCENES = {
     "01_alpha_blend": Spec((128, 72), 1024, "corpus: blended plane in front of a cube"),
     "01_alpha_mask": Spec((128, 72), 1024, "corpus: alpha-masked plane"),
     "demo": Spec((128, 72), 1024, "Lantern's demo scene, frame 13"),
-    "sheen": Spec((240, 48), 256, "sheen: Principled (layered, over a coat), Sheen BSDFs added and alone"),
+    "sheen": Spec((280, 48), 256, "sheen: Principled (layered, over a coat), Sheen BSDFs added, alone, textured"),
 }
 
 # The sky: lat-long in Blender's equirectangular convention (row 0 = up, +Z; the
@@ -316,6 +316,9 @@ SHEEN_SPHERES = (
      ("MICROFIBER", (0.9, 0.9, 0.9), 0.8)),
     ("microfiber_alone", None, ("MICROFIBER", (1.0, 1.0, 1.0), 0.3)),
     ("velvet_alone", None, ("ASHIKHMIN", (1.0, 1.0, 1.0), 0.2)),
+    # Its colour a Checker Texture, its roughness 0.2 + 0.5 x the checker's Fac (Math).
+    ("velvet_textured", dict(color=(0.2, 0.2, 0.2), roughness=0.5),
+     ("ASHIKHMIN", "checker", 0.5)),
 )
 
 
@@ -335,8 +338,20 @@ def build_sheen(workdir):
         if sheen is not None:
             node = tree.nodes.new("ShaderNodeBsdfSheen")
             node.distribution = sheen[0]
-            node.inputs["Color"].default_value = (*sheen[1], 1.0)
             node.inputs["Roughness"].default_value = sheen[2]
+            if sheen[1] == "checker":
+                checker = tree.nodes.new("ShaderNodeTexChecker")
+                checker.inputs["Scale"].default_value = 3.0
+                checker.inputs["Color1"].default_value = (0.9, 0.3, 0.1, 1.0)
+                checker.inputs["Color2"].default_value = (0.1, 0.4, 0.9, 1.0)
+                rough = tree.nodes.new("ShaderNodeMath")
+                rough.operation = "MULTIPLY_ADD"
+                rough.inputs[1].default_value, rough.inputs[2].default_value = 0.5, 0.2
+                tree.links.new(checker.outputs["Color"], node.inputs["Color"])
+                tree.links.new(checker.outputs["Fac"], rough.inputs[0])
+                tree.links.new(rough.outputs[0], node.inputs["Roughness"])
+            else:
+                node.inputs["Color"].default_value = (*sheen[1], 1.0)
             if principled is None:
                 tree.links.new(node.outputs[0], output.inputs["Surface"])
             else:
@@ -346,7 +361,8 @@ def build_sheen(workdir):
                 tree.links.new(add.outputs[0], output.inputs["Surface"])
         _sphere(scene, f"Sphere_{label}", (1.2 * i, 0.0, 0.0), 0.5, mat)
     centre = 1.2 * (len(SHEEN_SPHERES) - 1) / 2.0
-    _camera(scene, (centre, -10.0, 0.0), (centre, 0.0, 0.0), ortho_scale=7.2)
+    _camera(scene, (centre, -10.0, 0.0), (centre, 0.0, 0.0),
+            ortho_scale=1.2 * len(SHEEN_SPHERES))
     return scene
 
 

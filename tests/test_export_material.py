@@ -994,7 +994,8 @@ def _sheen(stage, name):
 def test_sheen_is_the_principled_bsdfs_or_a_sheen_bsdfs(empty_scene):
     """The Principled BSDF's sheen (weight x tint, layered) and a Sheen BSDF added to it
     or alone (its distribution) are one sheen lobe each, weighted exactly by a Mix
-    Shader; a second sheen, and a network on a sheen input, are one warning each."""
+    Shader, and networks on its colour and roughness feed the pattern graph; a second
+    sheen is one warning."""
     mat, tree, bsdf = principled_material("Fabric")
     bsdf.inputs["Sheen Weight"].default_value = 0.5
     bsdf.inputs["Sheen Tint"].default_value = (1.0, 0.5, 0.25, 1.0)
@@ -1037,12 +1038,20 @@ def test_sheen_is_the_principled_bsdfs_or_a_sheen_bsdfs(empty_scene):
     assert report.warnings == [] and _sheen(stage, "Fabric")[0] == "microfiber"
     assert tuple(surface(stage, "Fabric").GetInput("diffuseColor").Get()) == (0, 0, 0)
 
-    tree.links.new(add.outputs[0], out)
-    bsdf.inputs["Sheen Weight"].default_value = 1.0
+    # A network on the sheen's colour and roughness: the pattern graph's sheenColor and
+    # sheenRoughness (the constants stay the fallback).
     tree.links.new(tree.nodes.new("ShaderNodeTexChecker").outputs["Color"],
                    velvet.inputs["Color"])
+    math = tree.nodes.new("ShaderNodeMath")
+    tree.links.new(math.outputs[0], velvet.inputs["Roughness"])
+    stage, report = export_current()
+    assert report.warnings == [], report.warnings
+    mtlx = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/Fabric/MtlxSurface"))
+    assert all(mtlx.GetInput(n).HasConnectedSource() for n in ("sheenColor", "sheenRoughness"))
+
+    tree.links.new(add.outputs[0], out)
+    bsdf.inputs["Sheen Weight"].default_value = 1.0
     stage, report = export_current()
     assert _sheen(stage, "Fabric")[0] == "principled"
     assert any("second sheen" in w for w in report.warnings), report.warnings
-    assert any("'Color' takes a constant only" in w for w in report.warnings), report.warnings
     assert not any("not supported" in w for w in report.warnings), report.warnings

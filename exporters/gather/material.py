@@ -257,26 +257,39 @@ class _Walker:
         if normal is not None:
             inputs["normal"] = normal
         self.coat(node, inputs)
-        for name in ("Sheen Weight", "Sheen Tint"):
-            self.constant_only(get(name))
-        sheen = _constant(get("Sheen Weight"), "float")
-        self.sheen_lobe(node, "principled",
-                        tuple(sheen * c for c in _constant(get("Sheen Tint"), "color")),
-                        get("Sheen Roughness"), weight)
+        self.constant_only(get("Sheen Weight"))
+        self.sheen_lobe(node, "principled", get("Sheen Tint"),
+                        _constant(get("Sheen Weight"), "float"), get("Sheen Roughness"), weight)
 
-    def sheen_lobe(self, node, mode, color, roughness, weight):
-        """A sheen lobe of `color` x `weight` (closure weights scale it exactly, as they
-        scale emission): one a material, a second is a warning. Cycles clamps its
-        roughness to [0, 1] and its colour to >= 0."""
-        self.constant_only(roughness)
-        color = tuple(max(c, 0.0) * weight for c in color)
-        if not any(color):
+    def sheen_lobe(self, node, mode, color, factor, roughness, weight):
+        """A sheen lobe: the `color` socket x `factor` x `weight` (closure weights scale
+        it exactly, as they scale emission), and the `roughness` socket; a network on
+        either feeds the pattern graph's sheenColor or sheenRoughness, their constants
+        are the fallback. One sheen a material: a second is a warning. Cycles clamps the
+        roughness to [0, 1] and the colour to >= 0."""
+        scale = max(factor, 0.0) * weight
+        constant = tuple(max(c, 0.0) * scale for c in _constant(color, "color"))
+        networks = {target: link for target, link in (("sheenColor", _link(color)),
+                                                      ("sheenRoughness", _link(roughness)))
+                    if link is not None and is_pattern(link.from_node)}
+        for socket in (color, roughness):
+            if _link(socket) is not None and not is_pattern(_link(socket).from_node):
+                self.unsupported(_link(socket).from_node)
+        if scale <= 0.0 or ("sheenColor" not in networks and not any(constant)):
             return
         if self.sheen is not None:
             self.warn(f"material '{self.material.name}': node '{node.name}' is a second sheen "
                       f"(one a material is exported); keeping the first")
             return
-        self.sheen = SheenRecord(mode, color,
+        for target, link in networks.items():
+            try:
+                if target == "sheenColor":
+                    self.pattern.connect_scaled(target, link, scale)
+                else:
+                    self.pattern.connect(target, link)
+            except Unsupported as exc:
+                self.unsupported(exc.node, exc.why)
+        self.sheen = SheenRecord(mode, constant,
                                  min(max(_constant(roughness, "float"), 0.0), 1.0))
 
     def coat(self, node, inputs):
@@ -367,10 +380,8 @@ class _Walker:
             # Alone, the surface is the sheen: nothing else reflects.
             inputs.setdefault("diffuseColor", (0.0, 0.0, 0.0))
             inputs.setdefault("ior", 1.0)
-            self.constant_only(node.inputs["Color"])
-            self.sheen_lobe(node, DISTRIBUTIONS[node.distribution],
-                            _constant(node.inputs["Color"], "color"), node.inputs["Roughness"],
-                            weight)
+            self.sheen_lobe(node, DISTRIBUTIONS[node.distribution], node.inputs["Color"], 1.0,
+                            node.inputs["Roughness"], weight)
         elif kind == "ShaderNodeEmission":
             inputs.setdefault("diffuseColor", (0.0, 0.0, 0.0))
             inputs.setdefault("ior", 1.0)

@@ -169,10 +169,11 @@ def set_material(prog, mat, textures, threshold, footprint=1.0):
 
 
 def sheen_texel(mat) -> tuple:
-    """What g_sheen holds for `mat`: its sheen colour, and its roughness + 2 x its mode's
-    number (0 for none: a black colour adds nothing)."""
+    """What g_sheen holds for `mat` (its network may replace the colour and roughness:
+    material.glsl): its sheen colour, and its roughness + 2 x its mode's number; alpha
+    -1 for none."""
     if not mat.has_sheen:
-        return (0.0, 0.0, 0.0, 0.0)
+        return (0.0, 0.0, 0.0, -1.0)
     return (*mat.sheen, min(max(mat.sheen_roughness, 0.0), 1.0) +
             2.0 * SHEEN_MODES.index(mat.sheen_mode))
 
