@@ -68,7 +68,7 @@ SURFACE_INPUTS = {"diffuseColor": "color", "metallic": "float", "roughness": "fl
                   "opacity": "float", "emissiveColor": "color", "normal": "vector",
                   "sheenColor": "color", "sheenRoughness": "float"}
 
-MAX_IMAGES = 4   # images per network: texture units t_pattern0..3 (engine/gpu/programs.py)
+MAX_IMAGES = 8   # images per network: texture units t_pattern0..7 (engine/gpu/programs.py)
 
 
 def attribute_opacity(primvar: str) -> str:

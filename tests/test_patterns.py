@@ -235,6 +235,41 @@ def test_a_graph_shape_edit_compiles_one_variant():
     assert np.abs(after.rgba[16, 3, :3] - before.rgba[16, 3, :3]).max() > 0.05
 
 
+def test_a_network_of_eight_images_reads_each_from_its_own_unit(tmp_path):
+    """core/pattern_nodes.MAX_IMAGES images in one network (Vector Math Add of eight
+    solid raw images): the sum is exact, so no image reads another's texture unit
+    (images 5-8 share units with the overlays and the environment's prefilter)."""
+    import bpy
+    from lantern.core.pattern_nodes import MAX_IMAGES
+    from lantern.engine import RenderSettings, render_stage
+    from reference_scenes import _write_image
+    colours = [np.array([(k + 1) * 10, (MAX_IMAGES - k) * 9, (k % 3) * 20 + 5]) for k in
+               range(MAX_IMAGES)]
+
+    def build(tree, bsdf):
+        total = None
+        for k, colour in enumerate(colours):
+            path = str(tmp_path / f"solid{k}.png")
+            _write_image(path, np.concatenate([np.broadcast_to(colour, (4, 4, 3)),
+                                               np.full((4, 4, 1), 255)], -1).astype(np.uint8))
+            node = tree.nodes.new("ShaderNodeTexImage")
+            node.image = bpy.data.images.load(path)
+            node.image.colorspace_settings.name = "Non-Color"
+            if total is None:
+                total = node.outputs["Color"]
+                continue
+            add = tree.nodes.new("ShaderNodeVectorMath")
+            add.operation = "ADD"
+            tree.links.new(total, add.inputs[0])
+            tree.links.new(node.outputs["Color"], add.inputs[1])
+            total = add.outputs[0]
+        tree.links.new(total, bsdf.inputs["Base Color"])
+    stage = _one_quad_stage(build)
+    rgba = render_stage(stage, RenderSettings(width=32, height=32)).rgba
+    want = np.sum(colours, axis=0) / 255.0
+    assert np.allclose(rgba[16, 3, :3], want, atol=3e-3), (rgba[16, 3, :3], want)
+
+
 def _shape_edit_renders(blend, background=True):
     """(before the edit, the edit's first frame, the frame after its program is made, the
     session's stats along the way) of a Mix blend-type edit in one Session."""

@@ -31,19 +31,23 @@ _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.M)
 # environment, ambient occlusion, post-processing and overlay inputs. Every unit stays
 # below 32: llvmpipe reports 32 fragment units, and a fragment sampler on unit 32 or
 # above read another unit's texture there (a second network image read the first).
-# The skinning programs (transform feedback: no material, no lighting) take the
-# material maps' units.
+# Programs that never share a draw may share units: the skinning programs (transform
+# feedback: no material, no lighting) take the material maps' units, and a network's
+# images 5-8 those of programs that draw no material (the environment's prefilter, the
+# overlays).
 UNITS = {name: unit for unit, name in enumerate((
     "g_base", "g_normal", "g_mat", "g_emit", "g_depth", "latlong", "shadow_cmp", "shadow_raw",
     "hdr",
     "t_diffuse", "t_metallic", "t_roughness", "t_emissive", "t_opacity", "t_normal",
     "u_objects", "u_lights",
-    "dfg_lut", "env_specular", "radiance", "ao_tex", "post_src", "post_aux",
+    "dfg_lut", "env_specular", "radiance", "ao_tex", "post_src", "t_pattern4",
     "overlay_image", "overlay_atlas",
     "t_pattern0", "t_pattern1", "t_pattern2", "t_pattern3", "g_smooth", "g_sheen",
     "sheen_lut"))}
 UNITS.update(zip(("u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences",
                   "u_deformed", "u_incidence"), range(UNITS["t_diffuse"], UNITS["t_diffuse"] + 6)))
+UNITS.update(t_pattern5=UNITS["radiance"], t_pattern6=UNITS["overlay_image"],
+             t_pattern7=UNITS["overlay_atlas"])
 
 
 class ShaderError(RuntimeError):
