@@ -13,7 +13,9 @@ uniform float u_opacity_threshold;
 uniform float u_clearcoat;
 uniform float u_base_occlusion;    // 1: the base colour takes the frame's occlusion
 uniform float u_clearcoat_roughness;
-#ifdef WRITE_SHEEN
+// A sheen: the G-buffer writes it (WRITE_SHEEN), the transparency pass shades it (SHEEN).
+#if defined(WRITE_SHEEN) || defined(SHEEN)
+#define MATERIAL_SHEEN
 uniform vec4 u_sheen;   // what g_sheen holds (engine/gpu/passes/gbuffer.py sheen_texel)
 #endif
 // Cycles' bump map correction (Material > Settings), for a normal-mapped material.
@@ -199,7 +201,7 @@ MaterialSample material_sample(vec2 uv, vec3 normal, vec4 tangent, bool front) {
     pt_P = v_position;
 #endif
     float opacity = 1.0;
-#ifdef WRITE_SHEEN
+#ifdef MATERIAL_SHEEN
     vec3 sheen = u_sheen.rgb;
     float sheen_mode = u_sheen.a < 0.0 ? -1.0 : floor(u_sheen.a * 0.5);
     float sheen_roughness = u_sheen.a - 2.0 * sheen_mode;

@@ -41,6 +41,9 @@ void main() {
     vec3 v = cam_ortho ? -cam_forward : normalize(-p);
     Surface s = make_surface(p, m.n, v, vec4(m.base, alpha), m.mat, m.coat_roughness);
     s.smooth_n = m.smooth_n;
+#ifdef SHEEN
+    apply_sheen(s, m.sheen);
+#endif
     vec3 c = vec3(0.0), diffuse, glossy;
 #ifdef AMBIENT
     dome_light(s, 1.0, diffuse, glossy);      // no ambient occlusion: it is screen space

@@ -318,3 +318,37 @@ def test_sheen_lobes_match_cycles():
     assert "g_sheen" not in wanted
     assert sum("lantern:sheenMode 'none' is not one of" in line
                for line in without.warnings) == len(spheres), without.warnings
+
+
+def test_a_blended_sheen_is_half_the_opaque_one_over_the_world():
+    """A see-through material's sheen is drawn (by the transparency pass): a sheen
+    sphere at alpha 0.5 over the uniform world is half its opaque self and half the
+    world, as Cycles mixes the whole BSDF with a transparent one (shadows and the
+    screen-space occlusion, which the two passes treat differently, off)."""
+    import bpy
+    from lantern.engine import RenderSettings, render_stage
+    from lantern.exporters import stage_from_depsgraph
+    workdir = pathlib.Path(__import__("tempfile").gettempdir()) / "lantern-looks-tests"
+    reference_scenes.build("sheen", workdir)
+    bpy.data.objects["Sun"].data.use_shadow = False
+    material = bpy.data.materials["Sheen_principled"]
+    material.use_backface_culling = True     # the sphere's far side would show through
+    bsdf = material.node_tree.nodes["Principled BSDF"]
+    w, h = reference_scenes.SCENES["sheen"].size
+    settings = RenderSettings(width=w, height=h, preset="medium", ambient_occlusion=False)
+    images = {}
+    for alpha in (1.0, 0.5):
+        bsdf.inputs["Alpha"].default_value = alpha
+        stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+        images[alpha] = render_stage(stage, settings).rgba[..., :3].astype(np.float64)
+    world = 0.3
+    cols = slice(0, w // len(reference_scenes.SHEEN_SPHERES))
+    opaque, blended = images[1.0][:, cols], images[0.5][:, cols]
+    sphere = interior(np.abs(opaque - world).max(axis=-1) > 0.02)
+    expected = 0.5 * opaque + 0.5 * world
+    error = np.abs(blended - expected)[sphere].mean() / expected[sphere].mean()
+    rim = sphere & (opaque.mean(axis=-1) > np.percentile(opaque.mean(axis=-1)[sphere], 90))
+    print(f"blended sheen sphere: relative error {error:.4f} over {sphere.sum()} px")
+    assert sphere.sum() > 200 and rim.any()
+    assert error < 0.01
+    assert np.abs(blended - expected)[rim].mean() < 0.01

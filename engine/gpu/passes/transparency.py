@@ -157,7 +157,8 @@ class TransparencyPass(Pass):
         ctx = self.ctx
         dome, env = environment
         defines = map_defines(mat) + (["HAS_DOME_MAP"] if env is not None else []) + \
-            (["AMBIENT"] if ambient else []) + (["HAS_SHADOW"] if sm is not None else [])
+            (["AMBIENT"] if ambient else []) + (["HAS_SHADOW"] if sm is not None else []) + \
+            (["SHEEN"] if mat.has_sheen else [])
         prog = self.programs.get("gbuffer.vert", "transparent.frag", defines,
                                  generated=material_variant(mat))
         set_uniform(prog, "view_proj", view.view_proj)
@@ -168,6 +169,7 @@ class TransparencyPass(Pass):
         set_uniform(prog, "u_opaque_alpha", OPAQUE_ALPHA if "opacity" in mat.maps or mat.opacity_varies
                     else 2.0)
         self.environment.bind(prog, dome, env)    # and the split-sum table every draw needs
+        self.environment.bind_sheen([mat])
         set_uniform(prog, "has_dome", dome is not None)
         if "light_rows" in prog:
             prog["light_rows"].value = [int(r) for r in rows] + \
