@@ -37,3 +37,34 @@ def test_shadow_casting_lights_take_the_stencil_path():
     result = _render(POSITIONS[:3], shadow=True)
     assert result.stats.get("batched_lights", 0) == 0
     assert result.stats["stencil_marks"] == 3 and result.stats["shadow_maps"] == 3
+
+
+def test_a_preset_change_repacks_the_light_table_only_for_disk_lights():
+    """The presets differ in a disk light's polygon: moving between a viewport's
+    interactive preset and the scene's re-uploads the light table only where a disk
+    light is drawn with it."""
+    import numpy as np
+    from lantern.core.lights import DISK, SUN
+    from lantern.engine.gpu.lights import LightTable
+    from lantern.engine.scene import Light, Scene
+
+    class Uploads:
+        def __init__(self):
+            self.writes = 0
+
+        def rewrite_float_texture(self, texture, data, kind):
+            self.writes += 1
+            return "texture"
+
+        def write_texture(self, *args, **kwargs):
+            self.writes += 1
+
+    for kinds, repacked in (((SUN,), 0), ((SUN, DISK), 1)):
+        scene = Scene(lights={f"/{k}": Light(kind=k, name=k, color=np.ones(3), radius=0.5)
+                              for k in kinds})
+        uploads = Uploads()
+        table = LightTable(uploads)
+        table.update(scene, set(scene.lights), 16)
+        table.update(scene, set(), 32)
+        table.update(scene, set(), 16)
+        assert uploads.writes - 1 == 2 * repacked, kinds

@@ -289,6 +289,21 @@ def test_a_graph_edit_draws_the_old_variant_until_the_new_one_is_made(viewport):
     assert _changed(before, after).any()
     np.testing.assert_allclose(after, _fresh(scene, view), atol=2e-3)
 
+    # A value edit (the Mix's factor) is parameters only: a small message, no program
+    # made, no GPU upload but the network's parameters (at most 1 KB a frame).
+    frames.clear()
+    sent, exports = _edit(vp, lambda: setattr(mix.inputs[0], "default_value", 0.3))
+    assert exports == [("material", "paint")]
+    edits = [size for kind, size in sent if kind == "edit"]
+    assert len(edits) == 1 and edits[0] < 1500, edits
+    valued, frame = vp.frame(view)
+    assert all(f.stats["programs_compiled"] + f.stats["programs_loaded"] == 0 for f in frames)
+    assert all(f.stats["bytes_uploaded"] == 0 for f in frames), [f.stats["bytes_by_kind"]
+                                                                  for f in frames]
+    assert 0 < frame.stats["pattern_bytes"] <= 1024
+    assert _changed(after, valued).any()
+    np.testing.assert_allclose(valued, _fresh(scene, view), atol=2e-3)
+
 
 def test_views_are_progressive_and_send_no_edit(viewport):
     import bpy

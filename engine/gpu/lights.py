@@ -66,7 +66,11 @@ class LightTable:
     def update(self, scene, changed: set, disk_sides: int):
         """Rows for the lights in `changed`; the whole table when lights were added or
         removed (rows follow the scene's light order) or the preset's disk polygon
-        changed."""
+        changed (only when a disk light draws with it: a viewport moving between its
+        interactive preset and the scene's uploads nothing for the others)."""
+        if self.disk_sides is not None and \
+                not any(light.kind == DISK for light in scene.lights.values()):
+            disk_sides = self.disk_sides
         if not changed and self.texture is not None and disk_sides == self.disk_sides:
             return
         paths = list(scene.lights)
