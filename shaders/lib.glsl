@@ -52,9 +52,14 @@ float ggx_alpha(float roughness) {
 // Fresnel of IOR 1.5, w = y averaged over the hemisphere, by n.v (s) and perceptual
 // roughness (t), texel i at i / (size - 1). Every program that shades a Surface binds it.
 uniform sampler2D dfg_lut;
+// The coordinates of (s, t) in [0, 1]^2 in a table of `size` texels stored at texel
+// centres, as engine/lighting.py makes them (the split-sum and velvet tables).
+vec2 table_uv(ivec2 size, float s, float t) {
+    vec2 n = vec2(size);
+    return (clamp(vec2(s, t), 0.0, 1.0) * (n - 1.0) + 0.5) / n;
+}
 vec2 dfg_uv(float NoV, float roughness) {
-    vec2 n = vec2(textureSize(dfg_lut, 0));
-    return (clamp(vec2(NoV, roughness), 0.0, 1.0) * (n - 1.0) + 0.5) / n;
+    return table_uv(textureSize(dfg_lut, 0), NoV, roughness);
 }
 vec2 dfg(float NoV, float roughness) { return texture(dfg_lut, dfg_uv(NoV, roughness)).xy; }
 float dfg_ior15(float NoV, float roughness) { return texture(dfg_lut, dfg_uv(NoV, roughness)).z; }
@@ -91,6 +96,12 @@ vec3 fresnel_avg(vec3 f0, vec3 f90) { return f0 + (f90 - f0) / 21.0; }
 
 const float COAT_F0 = 0.04;   // UsdPreviewSurface's clearcoat: IOR 1.5, white
 const float COAT_IOR = 1.5;
+
+// A sheen texel's alpha (engine/gpu/passes/gbuffer.py sheen_texel): roughness + 2 x
+// the mode's number in core/sheen.MODES, or -1 for no sheen. Its mode (-1: none) and
+// its roughness.
+float sheen_mode_of(float a) { return a < 0.0 ? -1.0 : floor(a * 0.5); }
+float sheen_roughness_of(float a) { return a - 2.0 * max(sheen_mode_of(a), 0.0); }
 
 // A shaded point and its layers, top down (Cycles' Principled BSDF): an optional
 // clearcoat (white GGX, F0 0.04, on the base normal) takes its directional albedo

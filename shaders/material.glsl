@@ -203,8 +203,8 @@ MaterialSample material_sample(vec2 uv, vec3 normal, vec4 tangent, bool front) {
     float opacity = 1.0;
 #ifdef MATERIAL_SHEEN
     vec3 sheen = u_sheen.rgb;
-    float sheen_mode = u_sheen.a < 0.0 ? -1.0 : floor(u_sheen.a * 0.5);
-    float sheen_roughness = u_sheen.a - 2.0 * sheen_mode;
+    float sheen_mode = sheen_mode_of(u_sheen.a);
+    float sheen_roughness = sheen_roughness_of(u_sheen.a);
 #else
     vec3 sheen = vec3(0.0);
     float sheen_mode = -1.0, sheen_roughness = 0.0;

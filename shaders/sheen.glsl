@@ -35,14 +35,14 @@ float sheen_ltc_albedo(float x, float y) {
 // diffuse) receives 1 - the sheen's albedo, its largest channel, as Cycles'
 // closure_layering_weight has it. A Sheen BSDF (modes 1, 2) is added, on nothing.
 void apply_sheen(inout Surface s, vec4 texel) {
-    if (texel.a < 0.0) return;                  // no sheen (passes/gbuffer.py sheen_texel)
+    float mode = sheen_mode_of(texel.a);
+    if (mode < 0.0) return;                     // no sheen (passes/gbuffer.py sheen_texel)
     s.sheen = max(texel.rgb, vec3(0.0));
-    s.sheen_mode = int(floor(texel.a * 0.5));
-    s.sheen_roughness = clamp(texel.a - 2.0 * float(s.sheen_mode), 0.0, 1.0);
+    s.sheen_mode = int(mode);
+    s.sheen_roughness = clamp(sheen_roughness_of(texel.a), 0.0, 1.0);
     if (s.sheen_mode == 2) {
-        vec2 n = vec2(textureSize(sheen_lut, 0));
-        vec2 uv = (vec2(s.NoV, s.sheen_roughness) * (n - 1.0) + 0.5) / n;
-        s.sheen_albedo = texture(sheen_lut, uv).r;
+        s.sheen_albedo = texture(sheen_lut, table_uv(textureSize(sheen_lut, 0), s.NoV,
+                                                     s.sheen_roughness)).r;
         return;
     }
     float r = max(s.sheen_roughness, 0.01);
