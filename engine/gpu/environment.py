@@ -77,11 +77,7 @@ class Environment:
         self._fn = entry_points(proc, _SIGS)
         # Cube lookups filter across faces (core since GL 3.2; off by default).
         self._fn["glEnable"](GL_TEXTURE_CUBE_MAP_SEAMLESS)
-        table = dfg_lut()
-        self.lut = uploads.texture(table.shape[1::-1], table.shape[2], table, kind="textures",
-                                   dtype="f4")
-        self.lut.filter = (ctx.LINEAR, ctx.LINEAR)
-        self.lut.repeat_x = self.lut.repeat_y = False
+        self.lut = self._table(dfg_lut())
         self.map: EnvironmentMap | None = None
         self.failed: dict = {}       # path -> the reason it could not be read
         self.velvet = None           # the velvet sheen's albedo table, made when first drawn
@@ -182,12 +178,17 @@ class Environment:
         if not any(m.has_sheen and m.sheen_mode == "ashikhmin" for m in materials):
             return
         if self.velvet is None:
-            table = velvet_albedo_lut()
-            self.velvet = self.uploads.texture(table.shape[1::-1], table.shape[2], table,
-                                               kind="textures", dtype="f4")
-            self.velvet.filter = (self.ctx.LINEAR, self.ctx.LINEAR)
-            self.velvet.repeat_x = self.velvet.repeat_y = False
+            self.velvet = self._table(velvet_albedo_lut())
         self.velvet.use(UNITS["sheen_lut"])
+
+    def _table(self, table):
+        """A (rows, columns, channels) float32 table (engine/lighting.py) as a linearly
+        filtered texture, clamped at its edges (shaders/lib.glsl table_uv)."""
+        tex = self.uploads.texture(table.shape[1::-1], table.shape[2], table, kind="textures",
+                                   dtype="f4")
+        tex.filter = (self.ctx.LINEAR, self.ctx.LINEAR)
+        tex.repeat_x = tex.repeat_y = False
+        return tex
 
     def release(self):
         if self.velvet is not None:
