@@ -63,6 +63,21 @@ class RenderSettings:
     # the edit never waits on a compile (stats: programs_pending). Off for final
     # images, which draw every material as it is.
     background_compile: bool = False
+    # GL 4.3 and later run the passes that do not rasterise (lighting, ambient
+    # occlusion, the dome, post, the supersample reduction, the render passes, the
+    # resolve) and skinning as compute shaders, which every shader core of a GPU runs
+    # (fragment and vertex work runs on a few of a datacenter GPU's). None: wherever the
+    # context allows; False: their raster forms (full-screen fragment passes, transform
+    # feedback), as GL 3.3 and 4.1 draw them. Both forms share one GLSL body.
+    compute: bool | None = None
+    # How lights are shaded: "clustered" (lights culled into screen tiles and depth
+    # slices on the GPU, then one compute pass; needs compute) or "volumes" (a light
+    # volume per light, the GL 3.3/4.1 path). None: clustered wherever compute runs.
+    lighting: str | None = None
+    # Clustered lighting's error bound, as a fraction of each pixel's light: far lights
+    # are shaded in groups where that stays within it (0: every light on its own, cut
+    # where its volume ends, as the volumes do).
+    light_error: float = 0.01
 
     def __post_init__(self):
         if self.supersample is not None and (int(self.supersample) != self.supersample
@@ -81,6 +96,13 @@ class RenderSettings:
         if self.readback not in READBACK_FORMATS:
             raise ValueError(f"readback must be one of {', '.join(READBACK_FORMATS)}, not "
                              f"{self.readback!r}")
+        if self.lighting not in (None, "clustered", "volumes"):
+            raise ValueError(f"lighting must be 'clustered' or 'volumes', not {self.lighting!r}")
+        if self.lighting == "clustered" and self.compute is False:
+            raise ValueError("clustered lighting runs in compute: it needs compute not False")
+        if not (0.0 <= self.light_error < 1.0):
+            raise ValueError(f"light_error must be a fraction from 0 to below 1, not "
+                             f"{self.light_error!r}")
         if self.srgb_filtering not in ("encoded", "linear"):
             raise ValueError(f"srgb_filtering must be 'encoded' or 'linear', not "
                              f"{self.srgb_filtering!r}")

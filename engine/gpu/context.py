@@ -40,18 +40,20 @@ class Features:
     clip_control: GL 4.5's glClipControl, for reversed float depth written directly
     (engine/gpu/depth.py); else the [-1, 1] fallback. tessellation: subdivision
     surfaces tessellated by the GPU (GL 4.3, beside the multi-draw path); else refined
-    on the CPU. LANTERN_MAX_GL=33 (or 330) caps a session at the GL 3.3 path, for drivers whose
+    on the CPU. compute: the screen passes and skinning as compute shaders (GL 4.3;
+    RenderSettings.compute). LANTERN_MAX_GL=33 (or 330) caps a session at the GL 3.3 path, for drivers whose
     newer paths misbehave and for testing that path on any machine."""
     version: int
     multi_draw: bool
     clip_control: bool = False
     tessellation: bool = False
+    compute: bool = False
 
     @staticmethod
     def of(version: int) -> "Features":
         usable = min(version, _version_cap() or version)
         return Features(version=usable, multi_draw=usable >= 430, clip_control=usable >= 450,
-                        tessellation=usable >= 430)
+                        tessellation=usable >= 430, compute=usable >= 430)
 
 
 def _version_cap():

@@ -78,6 +78,11 @@ class Frame:
     supersample: int = 1
     output_size: tuple | None = None
     readback: ReadbackRequest = field(default_factory=ReadbackRequest)
+    # The forms this frame's passes take (resolved from the settings and the context
+    # by the renderer): compute shaders or their raster forms; clustered lighting or
+    # light volumes.
+    compute: bool = False
+    lighting: str = "volumes"
     slot: object = None            # the read-back slot the resolve pass used
     stamps: object = None          # the GPU timestamps around its passes (timers.py)
     board: dict | None = None      # what the graph handed on, until the frame is finished

@@ -156,6 +156,7 @@ class Renderer:
                       stats={name: 0 for name in COUNTERS},
                       options=settings or RenderSettings(),
                       readback=readback or ReadbackRequest())
+        frame.compute, frame.lighting = self._forms(frame.options)
         frame.stats["meshes_uploaded"] = self.update(scene, changes, cull_backfaces)
         frame.scene = self._drawable(frame)
         frame.timings["upload"] = time.perf_counter() - t0
@@ -182,6 +183,17 @@ class Renderer:
         frame.board = board
         self._restore_state()
         return frame
+
+    def _forms(self, options) -> tuple:
+        """(compute, lighting) of a frame with these settings on this context."""
+        if options.compute and not self.features.compute:
+            raise ValueError(f"compute passes need GL 4.3; this context is GL "
+                             f"{self.features.version // 100}.{self.features.version // 10 % 10}")
+        compute = self.features.compute and options.compute is not False
+        lighting = options.lighting or ("clustered" if compute else "volumes")
+        if lighting == "clustered" and not compute:
+            raise ValueError("clustered lighting needs compute passes (GL 4.3)")
+        return compute, lighting
 
     def _drawable(self, frame):
         """The frame's scene, in which a material whose network changed shape since its
