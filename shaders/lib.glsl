@@ -27,6 +27,15 @@ vec3 pixel_ray(vec2 uv, mat4 inv_view_proj, bool ortho, vec3 forward) {
     return ortho ? forward : normalize(position_from_depth(uv, 1.0, inv_view_proj));
 }
 
+// The centre of the pixel being shaded, in window coordinates: gl_FragCoord in a
+// fragment shader; a compute shader sets shaded_pixel first.
+#ifdef COMPUTE
+vec2 shaded_pixel;
+vec2 pixel_centre() { return shaded_pixel; }
+#else
+vec2 pixel_centre() { return gl_FragCoord.xy; }
+#endif
+
 // --- BRDF (Filament's model, layered as Cycles' Principled BSDF) ----------------
 // GGX / Trowbridge-Reitz, alpha = roughness^2.
 float d_ggx(float NoH, float a) {

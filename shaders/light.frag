@@ -4,24 +4,7 @@
 // (full-screen), LIGHT_SPHERE (point and spot, drawn as a light volume), LIGHT_AREA
 // (rect and disk as a polygon, drawn as a light volume). See engine/usd/lights.py for
 // the light forms; the light itself, and what it reflects, come from lights.glsl.
-uniform sampler2D g_base;
-uniform sampler2D g_normal;
-uniform sampler2D g_mat;
-uniform sampler2D g_depth;
-#ifdef BASE_OCCLUSION
-uniform sampler2D g_emit;       // .a: the pixel's base colour takes the occlusion
-uniform sampler2D ao_tex;
-#endif
-#ifdef SHEEN
-uniform sampler2D g_sheen;      // the sheen lobe (passes/gbuffer.py), sheen.glsl apply_sheen
-#endif
-#ifdef BUMP_CORRECTION
-uniform sampler2D g_smooth;
-#endif
-uniform mat4 inv_view_proj;
-uniform vec3 cam_forward;
-uniform bool cam_ortho;
-
+#include "gbuffer_surface.glsl"
 #include "lights.glsl"
 #ifdef LIGHTS_INSTANCED
 flat in int v_light;        // many shadowless sphere lights in one draw (volume.vert)
@@ -50,23 +33,8 @@ void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(g_depth, px, 0).r;
     if (is_background(depth)) discard;
-    vec2 uv = (vec2(px) + 0.5) / vec2(textureSize(g_depth, 0));
-    vec3 p = position_from_depth(uv, depth, inv_view_proj);   // camera-relative
-    vec4 nrm = texelFetch(g_normal, px, 0);
-    vec3 n = normalize(nrm.xyz);
-    vec3 v = cam_ortho ? -cam_forward : normalize(-p);
-    vec4 base = texelFetch(g_base, px, 0);
-#ifdef BASE_OCCLUSION
-    // An Ambient Occlusion node's Color on Base Color: Cycles darkens the albedo itself.
-    base.rgb *= mix(1.0, texelFetch(ao_tex, px, 0).r, texelFetch(g_emit, px, 0).a);
-#endif
-    Surface s = make_surface(p, n, v, base, texelFetch(g_mat, px, 0), nrm.w);
-#ifdef BUMP_CORRECTION
-    s.smooth_n = normalize(texelFetch(g_smooth, px, 0).xyz);
-#endif
-#ifdef SHEEN
-    apply_sheen(s, texelFetch(g_sheen, px, 0));
-#endif
+    Surface s = gbuffer_surface(px, depth);
+    vec3 p = s.p, n = s.n;
     vec3 diffuse, glossy;        // what the light reflects diffusely, and specularly
 #ifdef LIGHT_DISTANT
     distant_light(s, diffuse, glossy);

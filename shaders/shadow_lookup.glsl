@@ -100,7 +100,7 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
     vec3 t = normalize(cross(axis, abs(axis.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
     vec3 b = cross(axis, t);
     // Interleaved gradient noise: rotates the tap pattern per pixel (noise, not bands).
-    float rot = 6.2831853 * fract(52.9829189 * fract(dot(gl_FragCoord.xy, vec2(0.06711056, 0.00583715))));
+    float rot = 6.2831853 * fract(52.9829189 * fract(dot(pixel_centre(), vec2(0.06711056, 0.00583715))));
     float max_kernel = MAX_KERNEL_TEXELS * texel;
 
     // Blocker search.
@@ -228,7 +228,7 @@ float area_shadow_factor(vec3 p, vec3 n, vec3 c, vec3 x, vec3 y, vec2 half_exten
     vec3 q = p + n * texel * (0.5 + 1.5 * sin_t);
     float D = length(q - c);
     vec3 ex = x * half_extent.x, ey = y * half_extent.y;
-    float ign = fract(52.9829189 * fract(dot(gl_FragCoord.xy, vec2(0.06711056, 0.00583715))));
+    float ign = fract(52.9829189 * fract(dot(pixel_centre(), vec2(0.06711056, 0.00583715))));
     vec2 jitter = vec2(ign, fract(ign * 1.6180340 + 0.5));
 
     float blockers = 0.0, block_sum = 0.0, nearest = NO_SURFACE, farthest = 0.0;

@@ -41,8 +41,19 @@ def pixel_points(cam_z=CAM_Z):
     return np.stack([X, Y, np.zeros_like(X)], axis=-1)
 
 
-def render(stage):
-    res = render_stage(stage, RenderSettings(width=W, height=H))
+# Both forms of the light pass (engine/gpu/passes/lights.py, clustered.py); the
+# clustered one at error 0, where every light is shaded on its own within its volume.
+FORMS = {"volumes": dict(lighting="volumes", compute=False),
+         "clustered": dict(lighting="clustered", light_error=0.0)}
+
+
+@pytest.fixture(params=sorted(FORMS))
+def form(request):
+    return request.param
+
+
+def render(stage, form="clustered"):
+    res = render_stage(stage, RenderSettings(width=W, height=H, **FORMS[form]))
     assert np.isfinite(res.rgba).all()
     return res
 
@@ -75,19 +86,20 @@ def point_expected(P, pos, I, r, soft):
 
 
 @pytest.mark.parametrize("soft", [True, False])
-def test_point_light(soft):
+def test_point_light(soft, form):
     stage = plane_stage()
     pos, intensity, r = (0.5, -0.3, 1.0), 1.0, 0.25
     sphere(stage, pos, intensity, r, soft=soft)
-    res = render(stage)
+    res = render(stage, form)
     exp = point_expected(pixel_points(), pos, intensity / 4, r, soft)
     err = compare(res.rgba, exp, exp > 0.02 * exp.max())
     print(f"point soft={soft}: worst relative error {err:.2e}")
     assert err < TOL
-    assert res.stats["light_volumes"] == 1  # camera inside its volume: still a volume
+    if form == "volumes":
+        assert res.stats["light_volumes"] == 1  # camera inside its volume: still a volume
 
 
-def test_point_light_outside_volume_is_cut_at_range():
+def test_point_light_outside_volume_is_cut_at_range(form):
     """Cut where it reflects 1e-4 W/(sr m2). The scene's level is set by a bright
     light under the plane (lighting none of it): in a scene of dim lights only, the
     threshold is relative (engine/lighting.py)."""
@@ -95,7 +107,7 @@ def test_point_light_outside_volume_is_cut_at_range():
     pos, intensity = (1.5, 0.0, 0.3), 1e-3
     sphere(stage, pos, intensity, 0.0, point=True)
     sphere(stage, (0.0, 0.0, -30.0), 100.0, 0.0, point=True, path="/root/under")
-    res = render(stage)
+    res = render(stage, form)
     P = pixel_points()
     exp = point_expected(P, pos, intensity / 4, 0.0, True)
     from lantern.engine.lighting import VOLUME_THRESHOLD
@@ -103,14 +115,29 @@ def test_point_light_outside_volume_is_cut_at_range():
     dist = np.linalg.norm(P - np.asarray(pos), axis=-1)
     assert compare(res.rgba, exp, dist < 0.9 * R) < TOL
     assert np.all(res.rgba[..., 0][dist > 1.1 * R] == 0)
-    assert res.stats["light_volumes"] == 2
+    if form == "volumes":
+        assert res.stats["light_volumes"] == 2
 
 
-def test_camera_inside_point_volume():
+def test_a_tree_light_is_not_cut_at_its_volume():
+    """With an error bound (the default), a point light without shadows lights
+    everything its light reaches: far from it, it joins a group of the light tree
+    (engine/light_tree.py), never cut."""
+    stage = plane_stage()
+    pos, intensity = (1.5, 0.0, 0.3), 1e-3
+    sphere(stage, pos, intensity, 0.0, point=True)
+    sphere(stage, (0.0, 0.0, -30.0), 100.0, 0.0, point=True, path="/root/under")
+    for name in ("/root/light", "/root/under"):
+        UsdLux.ShadowAPI.Apply(stage.GetPrimAtPath(name)).CreateShadowEnableAttr(False)
+    res = render_stage(stage, RenderSettings(width=W, height=H))
+    exp = point_expected(pixel_points(), pos, intensity / 4, 0.0, True)
+    assert compare(res.rgba, exp, exp > 0) < TOL
+
+def test_camera_inside_point_volume(form):
     stage = plane_stage(cam_z=2.0)
     pos = (0.2, 0.1, 1.0)
     sphere(stage, pos, 0.01, 0.1)
-    res = render(stage)
+    res = render(stage, form)
     P = pixel_points(cam_z=2.0)
     from lantern.engine.lighting import VOLUME_THRESHOLD
     R = math.sqrt(0.01 / 4 / (math.pi * VOLUME_THRESHOLD))
@@ -118,10 +145,11 @@ def test_camera_inside_point_volume():
     exp = point_expected(P, pos, 0.01 / 4, 0.1, True)
     dist = np.linalg.norm(P - np.asarray(pos), axis=-1)
     assert compare(res.rgba, exp, dist < 0.9 * R) < TOL
-    assert res.stats["light_volumes"] == 1
+    if form == "volumes":
+        assert res.stats["light_volumes"] == 1
 
 
-def test_spot_light():
+def test_spot_light(form):
     """Blender's cone form is exact for a point-sized spot; a spot with a radius has
     its edge softened as Cycles does (tests/test_shadows_vs_cycles.py measures that)."""
     stage = plane_stage()
@@ -130,7 +158,7 @@ def test_spot_light():
     shaping = UsdLux.ShapingAPI.Apply(light.GetPrim())
     shaping.CreateShapingConeAngleAttr(half)
     shaping.CreateShapingConeSoftnessAttr(blend)
-    res = render(stage)
+    res = render(stage, form)
     P = pixel_points()
     base = point_expected(P, pos, 5.0 / 4, 0.0, True)
     d = P - np.asarray(pos)
@@ -150,16 +178,17 @@ def test_spot_light():
     print(f"spot: inside {e_in:.2e}, blend {e_blend:.2e}")
     assert e_in < TOL and e_blend < 0.05  # blend: steep gradient over a pixel
     assert np.all(res.rgba[..., 0][outside] == 0)
-    assert res.stats["light_volumes"] == 1  # drawn as a cone volume
+    if form == "volumes":
+        assert res.stats["light_volumes"] == 1  # drawn as a cone volume
 
 
-def test_distant_light_at_angle():
+def test_distant_light_at_angle(form):
     stage = plane_stage()
     light = UsdLux.DistantLight.Define(stage, "/root/sun")
     light.CreateIntensityAttr(3.0)
     light.CreateNormalizeAttr(True)
     light.AddRotateXOp().Set(40.0)
-    res = render(stage)
+    res = render(stage, form)
     exp = np.full((H, W), 3.0 * math.cos(math.radians(40)) / math.pi)
     err = compare(res.rgba, exp, np.ones((H, W), bool))
     print(f"sun: worst relative error {err:.2e}")
@@ -181,7 +210,7 @@ def area_expected(P, samples, normal, L, dA):
     return out / math.pi
 
 
-def test_rect_light():
+def test_rect_light(form):
     stage = plane_stage()
     pos, w, h, intensity = np.array([0.3, 0.2, 1.5]), 1.2, 0.8, 50.0
     light = UsdLux.RectLight.Define(stage, "/root/rect")
@@ -190,7 +219,7 @@ def test_rect_light():
     light.CreateWidthAttr(w)
     light.CreateHeightAttr(h)
     light.AddTranslateOp().Set(Gf.Vec3d(*pos))
-    res = render(stage)
+    res = render(stage, form)
     n = 120
     u = (np.arange(n) + 0.5) / n - 0.5
     U, V = np.meshgrid(u * w, u * h)
@@ -202,7 +231,7 @@ def test_rect_light():
     assert err < TOL
 
 
-def test_disk_light():
+def test_disk_light(form):
     stage = plane_stage()
     pos, r, intensity = np.array([-0.2, 0.1, 1.0]), 0.5, 30.0
     light = UsdLux.DiskLight.Define(stage, "/root/disk")
@@ -210,7 +239,7 @@ def test_disk_light():
     light.CreateNormalizeAttr(True)
     light.CreateRadiusAttr(r)
     light.AddTranslateOp().Set(Gf.Vec3d(*pos))
-    res = render(stage)
+    res = render(stage, form)
     nr, nphi = 60, 180
     rr = (np.arange(nr) + 0.5) / nr * r
     phi = (np.arange(nphi) + 0.5) / nphi * 2 * math.pi

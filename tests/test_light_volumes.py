@@ -17,7 +17,8 @@ def _render(lights, shadow=False):
                      name=f"point_{i:02d}")
     top_down_camera(stage, 8.0)
     # FXAA is not additive: compare the light's sums without it.
-    return render_stage(stage, RenderSettings(width=64, height=64, fxaa=False))
+    return render_stage(stage, RenderSettings(width=64, height=64, fxaa=False,
+                                              lighting="volumes", compute=False))
 
 
 def test_batched_lights_equal_the_sum_of_single_lights():

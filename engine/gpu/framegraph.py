@@ -131,7 +131,7 @@ class FrameGraph:
         self.ctx, self.pool, self.passes = ctx, pool, list(passes)
         self.timer = PassTimer(proc, SLOTS)     # a queued frame's stamps are read late
         written = set()
-        self.producers = {}         # render pass name -> the pass that writes it
+        self.producers = {}     # render pass name -> the passes that can write it, in order
         for p in self.passes:
             missing = [r for r in p.reads + p.optional if r not in written]
             if missing:
@@ -140,7 +140,7 @@ class FrameGraph:
             for aov, (target, _) in p.aovs.items():
                 if target not in TARGETS:
                     raise ValueError(f"pass {p.name} writes {aov} into {target}, not a target")
-                self.producers[aov] = p
+                self.producers.setdefault(aov, []).append(p)
 
     def run(self, frame: Frame) -> dict:
         board = {}
@@ -148,10 +148,16 @@ class FrameGraph:
         if unknown:
             raise ValueError(f"no pass writes the render passes {unknown}")
         live = [p for p in self.passes if p.needed(frame)]
+        # Each asked-for render pass comes from the last pass that runs and writes it
+        # (the lighting ones are started by the ambient pass and added to by the light
+        # pass of the frame's form).
+        producers = {}
         for aov in frame.aovs:
-            if self.producers[aov] not in live:
-                raise RuntimeError(f"the pass writing {aov} ({self.producers[aov].name}) "
-                                   "did not run")
+            running = [p for p in self.producers[aov] if p in live]
+            if not running:
+                raise RuntimeError(f"the pass writing {aov} "
+                                   f"({self.producers[aov][-1].name}) did not run")
+            producers[aov] = running[-1]
         writes = {p: p.writes + p.wanted(frame) + p.aov_targets(frame) for p in live}
         kept = {t for p in live for t in p.aov_targets(frame)}   # read back at the end
         last_use = {}
@@ -175,7 +181,7 @@ class FrameGraph:
                 frame.timings[p.name] = frame.timings.get(p.name, 0.0) + time.perf_counter() - t0
                 for name in [n for n, last in last_use.items() if last == i and n in board]:
                     self.pool.release(board.pop(name))
-            board["aovs"] = {aov: self._read_back(board, *self.producers[aov].aovs[aov], aov)
+            board["aovs"] = {aov: self._read_back(board, *producers[aov].aovs[aov], aov)
                              for aov in sorted(frame.aovs)}
         finally:
             for name in [n for n in board if n in TARGETS]:

@@ -13,7 +13,11 @@ Row layout (texels, must match shaders/lights.glsl):
 flags: 1 soft falloff, 2 spot, 4 disk, 8 headlight (shines along the view), 16 distant
 (a sun: shaders/lights.glsl's light_radiance picks the kind by these).
 The position is a double split in two floats: shaders make it camera-relative
-(shaders/origin.glsl), so the table does not change when the view does."""
+(shaders/origin.glsl), so the table does not change when the view does.
+
+Clustered lighting also reads the light tree (engine/light_tree.py) of the point
+lights without shadows, as a storage buffer: built when a clustered frame first asks
+for it after the lights or the error bound changed (tree_for)."""
 from __future__ import annotations
 
 import math
@@ -21,6 +25,7 @@ import math
 import numpy as np
 
 from ...core.lights import DISK, RECT, SPOT, SUN
+from .. import light_tree
 from ..lighting import disk_polygon, rect_polygon, volume_radius, volume_threshold
 from ..view import split_double
 
@@ -62,6 +67,8 @@ class LightTable:
         self.index = {}            # light path -> row
         self.ranges = {}           # light path -> volume radius R
         self.threshold = None      # the scene's volume threshold the ranges use
+        self.version = 0           # counts the updates that changed a light
+        self.tree = None           # (version, error, LightTree or None, buffer or None)
 
     def update(self, scene, changed: set, disk_sides: int):
         """Rows for the lights in `changed`; the whole table when lights were added or
@@ -73,6 +80,7 @@ class LightTable:
             disk_sides = self.disk_sides
         if not changed and self.texture is not None and disk_sides == self.disk_sides:
             return
+        self.version += 1
         paths = list(scene.lights)
         threshold = volume_threshold(scene.lights.values())
         if paths != list(self.index) or self.texture is None or \
@@ -97,6 +105,27 @@ class LightTable:
                     kind="lights", viewport=((i % LIGHTS_PER_LINE) * ROW_TEXELS,
                                              i // LIGHTS_PER_LINE, ROW_TEXELS, 1))
 
+    def tree_for(self, scene, error: float):
+        """(LightTree or None, its storage buffer or None): the tree of the scene's
+        tree lights (light_tree.in_tree) for the error bound, rebuilt only when a light
+        or the bound changed since it was built."""
+        if self.tree is not None and self.tree[:2] == (self.version, error):
+            return self.tree[2:]
+        self._release_tree()
+        paths = [p for p, light in scene.lights.items() if light_tree.in_tree(light)]
+        tree = light_tree.build([scene.lights[p] for p in paths],
+                                [self.index[p] for p in paths],
+                                [self.ranges[p] for p in paths], error)
+        buffer = None if tree is None else self.uploads.buffer(tree.nodes, kind="lights")
+        self.tree = (self.version, error, tree, buffer)
+        return tree, buffer
+
+    def _release_tree(self):
+        if self.tree is not None and self.tree[3] is not None:
+            self.tree[3].release()
+        self.tree = None
+
     def release(self):
+        self._release_tree()
         if self.texture is not None:
             self.texture.release()

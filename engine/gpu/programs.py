@@ -112,7 +112,8 @@ class ProgramCache:
         the persistent cache is off)."""
         vert, frag, defines, varyings, compute, generated, tessellation = key
         if compute:
-            sources = (load_source(vert, defines), None)
+            # COMPUTE: the stage, for the includes that differ there (lib.glsl pixel_centre).
+            sources = (load_source(vert, defines + ("COMPUTE",)), None)
         else:
             sources = (load_source(vert, defines), None if frag is None else
                        load_source(frag, defines, generated=generated))

@@ -21,6 +21,8 @@ from .passes.antialias import SupersamplePass, centre_samples, downsample
 from .passes.ao import AoPass
 from .passes.aovs import AovPass
 from .passes.gbuffer import GBufferPass
+from .passes.clustered import ClusteredLightPass
+from .passes.light_cull import LightCullPass
 from .passes.lights import LightPass
 from .passes.post import PostPass
 from .passes.resolve import ResolvePass
@@ -59,7 +61,8 @@ COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "meshes
             "shadow_maps", "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
             "light_volumes", "stencil_marks", "batched_lights", "instances_drawn",
             "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws",
-            "pattern_bytes", "programs_pending")
+            "pattern_bytes", "programs_pending", "light_clusters", "light_items",
+            "clusters_overflowed")
 
 
 def _shape(material):
@@ -102,6 +105,7 @@ class Renderer:
         self.gbuffer = GBufferPass(ctx, self.pool, programs, self.geometry, self.textures,
                                    self.depth)
         self._drawn = {}            # material name -> the record its last frame drew
+        self.light_cull = LightCullPass(ctx, programs, self.uploads, self.lights)
         self.graph = FrameGraph(ctx, self.pool, [
             self.skinning,
             ViewPass(self.geometry, self.depth),
@@ -113,6 +117,8 @@ class Renderer:
             AmbientPass(ctx, self.pool, programs, self.environment),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
                       self.geometry, self.environment),
+            self.light_cull,
+            ClusteredLightPass(ctx, programs, self.lights, self.environment, self.light_cull),
             TransparencyPass(ctx, self.pool, programs, self.geometry, self.textures,
                              self.lights, self.environment, self.depth),
             SupersamplePass(ctx, self.pool, programs),
@@ -235,6 +241,8 @@ class Renderer:
             frame.timings["readback"] = frame.timings.get("readback", 0.0) + \
                 time.perf_counter() - t0
         self.resolve.finish(frame, board["view"], rgba)
+        if "clusters" in board:
+            self.light_cull.finish(frame, board["clusters"])
         self._restore_state()
         frame.board = None
         return rgba, board["aovs"], frame.stats, frame.timings, self.graph.gpu_times(frame)

@@ -45,28 +45,45 @@ def is_light(prim: Usd.Prim) -> bool:
     return prim.HasAPI(UsdLux.LightAPI)
 
 
-def might_vary(prim: Usd.Prim) -> bool:
-    """Whether any of the light's own values may change over time (its transform is
-    the reader's concern)."""
-    return any(a.ValueMightBeTimeVarying() for a in prim.GetAuthoredAttributes()
-               if not a.GetName().startswith("xformOp"))
+# The schemas' fallbacks of every input a light reads (UsdLux 25.08), and Lantern's own:
+# a light reads its authored attributes once (light_values) and takes these for the rest.
+FALLBACKS = {
+    "inputs:intensity": 1.0, "inputs:exposure": 0.0, "inputs:color": (1.0, 1.0, 1.0),
+    "inputs:normalize": False, "inputs:diffuse": 1.0, "inputs:specular": 1.0,
+    "inputs:shadow:enable": True, "inputs:radius": 0.5, "treatAsPoint": False,
+    "inputs:shaping:cone:angle": 90.0, "inputs:shaping:cone:softness": 0.0,
+    "inputs:angle": 0.53, "inputs:width": 1.0, "inputs:height": 1.0,
+    "lantern:shadowResolution": 0, "lantern:softFalloff": True, "lantern:aoDistance": None,
+}
 
 
-def _get(prim, name, default, time):
-    attr = prim.GetAttribute(name)
-    if attr and attr.HasValue():
-        v = attr.Get(time)
-        if v is not None:
-            return v
-    return default
+def light_values(prim: Usd.Prim, time) -> tuple[dict, bool]:
+    """({input name: value} of the light's authored values at `time`, whether any may
+    change over time): one pass over its authored attributes (its transform is the
+    reader's concern), so a stage of many lights costs a few calls a light."""
+    values, varies = {}, False
+    for attr in prim.GetAuthoredAttributes():
+        name = attr.GetName()
+        if name.startswith("xformOp"):
+            continue
+        varies = varies or attr.ValueMightBeTimeVarying()
+        if name in FALLBACKS or name == "inputs:texture:file":
+            value = attr.Get(time)
+            if value is not None:
+                values[name] = value
+    return values, varies
+
+
+def _get(values, name):
+    return values.get(name, FALLBACKS[name])
 
 
 def _axis_lengths(world):
-    return np.linalg.norm(world[:3, :3], axis=0)
+    return np.sqrt(np.einsum("ij,ij->j", world[:3, :3], world[:3, :3]))
 
 
 def _unit(v):
-    n = np.linalg.norm(v)
+    n = math.sqrt(float(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]))
     return v / n if n > 1e-30 else v
 
 
@@ -76,12 +93,13 @@ class _Bad(ValueError):
 
 def _valid(value, what, ok="finite", positive=False, nonneg=False):
     """value (float or sequence) if finite (and > 0 / >= 0 as asked), else _Bad."""
-    arr = np.atleast_1d(np.asarray(value, np.float64))
-    if not np.isfinite(arr).all():
+    items = (float(value),) if isinstance(value, (int, float)) else \
+        tuple(float(v) for v in np.ravel(value))
+    if not all(math.isfinite(v) for v in items):
         raise _Bad(f"{what} is {_show(value)}")
-    if positive and not (arr > 0).all():
+    if positive and not all(v > 0 for v in items):
         raise _Bad(f"{what} is {_show(value)}, not positive")
-    if nonneg and not (arr >= 0).all():
+    if nonneg and not all(v >= 0 for v in items):
         raise _Bad(f"{what} is {_show(value)}, negative")
     return value
 
@@ -106,33 +124,33 @@ def _scale(intensity, exposure, color):
     return s
 
 
-def read_light(prim: Usd.Prim, world: np.ndarray, time, warnings: list):
-    """A Light record, a Dome, or None (unsupported or invalid, with a warning)."""
+def read_light(prim: Usd.Prim, world: np.ndarray, values: dict, warnings: list):
+    """A Light record, a Dome, or None (unsupported or invalid, with a warning), from
+    the light's authored `values` (light_values)."""
     path = str(prim.GetPath())
     try:
-        return _read_light(prim, world, time, warnings)
+        return _read_light(prim, world, values, warnings)
     except _Bad as bad:
         warnings.append(f"{path}: {bad}; light dropped")
         return None
 
 
-def _read_light(prim, world, time, warnings):
+def _read_light(prim, world, values, warnings):
     tname = prim.GetTypeName()
     path = str(prim.GetPath())
-    api = UsdLux.LightAPI(prim)
-    intensity = float(api.GetIntensityAttr().Get(time) or 0.0)
-    exposure = float(api.GetExposureAttr().Get(time) or 0.0)
-    color = np.array(api.GetColorAttr().Get(time) or (1, 1, 1), dtype=np.float64)
-    normalize = bool(api.GetNormalizeAttr().Get(time))
+    intensity = float(_get(values, "inputs:intensity") or 0.0)
+    exposure = float(_get(values, "inputs:exposure") or 0.0)
+    color = np.array(_get(values, "inputs:color"), dtype=np.float64)
+    normalize = bool(_get(values, "inputs:normalize"))
     if not np.isfinite(world).all():
         raise _Bad("its transform is not finite")
     s = _scale(intensity, exposure, color)
     if tname == "DomeLight":
-        return read_dome(prim, world, s, time, warnings)
-    diffuse = float(_valid(_get(prim, "inputs:diffuse", 1.0, time), "inputs:diffuse"))
-    specular = float(_valid(_get(prim, "inputs:specular", 1.0, time), "inputs:specular"))
-    shadow = bool(_get(prim, "inputs:shadow:enable", True, time))
-    shadow_res = int(_get(prim, "lantern:shadowResolution", 0, time) or 0)
+        return read_dome(prim, world, s, values, warnings)
+    diffuse = float(_valid(_get(values, "inputs:diffuse"), "inputs:diffuse"))
+    specular = float(_valid(_get(values, "inputs:specular"), "inputs:specular"))
+    shadow = bool(_get(values, "inputs:shadow:enable"))
+    shadow_res = int(_get(values, "lantern:shadowResolution") or 0)
     scale = _axis_lengths(world)
     pos = world[:3, 3].copy()
     axis = _unit(-world[:3, 2])
@@ -140,36 +158,36 @@ def _read_light(prim, world, time, warnings):
                   y_axis=_unit(world[:3, 1]), diffuse=diffuse, specular=specular, shadow=shadow,
                   shadow_resolution=shadow_res)
     shaped = prim.HasAPI(UsdLux.ShapingAPI)
-    cone = float(_get(prim, "inputs:shaping:cone:angle", 90.0, time))
+    cone = float(_get(values, "inputs:shaping:cone:angle"))
     if shaped:
         _valid(cone, "inputs:shaping:cone:angle", positive=True)
     kind = kind_of_usd(tname, spot=shaped and cone < 90.0)
 
     if kind in (POINT, SPOT):
-        radius = float(_valid(_get(prim, "inputs:radius", 0.5, time), "inputs:radius",
+        radius = float(_valid(_get(values, "inputs:radius"), "inputs:radius",
                               nonneg=True)) * float(np.mean(scale))
-        point = bool(_get(prim, "treatAsPoint", False, time)) or radius <= 0
+        point = bool(_get(values, "treatAsPoint")) or radius <= 0
         if normalize:
             I = s / 4.0
         else:
             I = s if point else s * math.pi * radius * radius
-        soft = float(_valid(_get(prim, "inputs:shaping:cone:softness", 0.0, time),
+        soft = float(_valid(_get(values, "inputs:shaping:cone:softness"),
                             "inputs:shaping:cone:softness"))
         return Light(kind=kind, color=I, radius=0.0 if point else radius,
-                     soft_falloff=bool(_get(prim, "lantern:softFalloff", True, time)),
+                     soft_falloff=bool(_get(values, "lantern:softFalloff")),
                      cone_angle=cone, cone_softness=max(soft, 0.0), **common)
     if kind == SUN:
-        angle = float(_valid(_get(prim, "inputs:angle", 0.53, time), "inputs:angle", nonneg=True))
+        angle = float(_valid(_get(values, "inputs:angle"), "inputs:angle", nonneg=True))
         return Light(kind=SUN, color=s, angle=angle, **common)
     if kind == RECT:
-        w = float(_valid(_get(prim, "inputs:width", 1.0, time), "inputs:width", positive=True))
-        h = float(_valid(_get(prim, "inputs:height", 1.0, time), "inputs:height", positive=True))
+        w = float(_valid(_get(values, "inputs:width"), "inputs:width", positive=True))
+        h = float(_valid(_get(values, "inputs:height"), "inputs:height", positive=True))
         w, h = w * scale[0], h * scale[1]
         if not w * h > 0:
             raise _Bad("its transform scales it to no area")
         return Light(kind=RECT, color=s / (w * h) if normalize else s, width=w, height=h, **common)
     if kind == DISK:
-        r = float(_valid(_get(prim, "inputs:radius", 0.5, time), "inputs:radius",
+        r = float(_valid(_get(values, "inputs:radius"), "inputs:radius",
                          positive=True)) * float(np.mean(scale[:2]))
         if not r > 0:
             raise _Bad("its transform scales it to no area")
@@ -178,12 +196,11 @@ def _read_light(prim, world, time, warnings):
     return None
 
 
-def read_dome(prim, world, radiance, time, warnings) -> Dome:
+def read_dome(prim, world, radiance, values, warnings) -> Dome:
     path = str(prim.GetPath())
     rot = world[:3, :3] / np.maximum(_axis_lengths(world), 1e-30)
     tex = None
-    attr = prim.GetAttribute("inputs:texture:file")
-    asset = attr.Get(time) if attr else None
+    asset = values.get("inputs:texture:file")
     if asset is not None and asset.path:
         resolved = asset.resolvedPath
         if resolved and os.path.isfile(resolved):
@@ -191,7 +208,7 @@ def read_dome(prim, world, radiance, time, warnings) -> Dome:
         else:
             warnings.append(f"{path}: dome texture {asset.path!r} not found; "
                             f"using the uniform colour")
-    distance = _get(prim, "lantern:aoDistance", None, time)
+    distance = _get(values, "lantern:aoDistance")
     if distance is not None and not (math.isfinite(float(distance)) and float(distance) > 0):
         warnings.append(f"{path}: lantern:aoDistance {distance!r} is not a positive number; "
                         f"using the default")

@@ -8,8 +8,7 @@ from pxr import UsdGeom, UsdShade
 
 from ..lighting import default_dome, headlight
 from ..scene import Changes
-from .lights import Dome, read_light
-from .lights import might_vary as light_might_vary
+from .lights import Dome, light_values, read_light
 from .materials import default_material, read_material
 from .materials import might_vary as material_might_vary
 from .paths import traversal_order
@@ -106,9 +105,9 @@ class ShadingReading:
         path = str(prim.GetPath())
         self._read.add(path)
         warnings = self.scene.warnings[path] = []
-        varies = light_might_vary(prim) or self._xform_varies(prim)
-        self._light_prims[path] = varies
-        rec = read_light(prim, self._world(path), self._t, warnings)
+        values, varies = light_values(prim, self._t)
+        self._light_prims[path] = varies or self._xform_varies(prim)
+        rec = read_light(prim, self._world(path), values, warnings)
         if isinstance(rec, Dome):
             self._domes[path] = rec
             changes.dome = True

@@ -115,7 +115,7 @@ class LightPass(Pass):
         return LIGHTING_TARGETS if lighting_aovs(frame) else ()
 
     def needed(self, frame):
-        return bool(frame.scene.lights) or lighting_aovs(frame)
+        return frame.lighting == "volumes" and (bool(frame.scene.lights) or lighting_aovs(frame))
 
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]
@@ -268,9 +268,8 @@ class LightPass(Pass):
         else:
             vbo = self._sphere_vbo()
             mvp = view.view_proj @ translate(center) @ np.diag([R, R, R, 1.0])
-            hull = center + R * 1.3 * np.array(
-                [[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
-        rect = _scissor(view, frame.size, hull)
+            hull = sphere_hull(center, R)
+        rect = screen_rect(view, frame.size, hull)
         if rect is not None and (rect[2] <= 0 or rect[3] <= 0):
             return                                 # wholly off screen
         ctx.scissor = rect
@@ -323,7 +322,14 @@ class LightPass(Pass):
         self._cones.clear()
 
 
-def _scissor(view, size, points):
+def sphere_hull(center, R) -> np.ndarray:
+    """Corners of a box around a light volume of radius R (its icosphere's faces
+    circumscribe the sphere: 1.3 R holds them) at a camera-relative centre."""
+    return center + R * 1.3 * np.array(
+        [[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+
+
+def screen_rect(view, size, points):
     """Pixel rectangle (x, y, w, h) bounding the projected (camera-relative) points,
     None (the whole screen) when any lies behind the camera's near plane."""
     w, h = size

@@ -1,0 +1,127 @@
+// The light tree (engine/light_tree.py builds it and documents the node): many point
+// lights as groups, a group shaded as one light where it stands for its lights within
+// the bound. Include after lights.glsl.
+layout(std430, binding = 3) readonly buffer LightTree { vec4 tree_nodes[]; };
+uniform int tree_leaves;            // 0: no tree
+uniform bool tree_exact;            // error 0: every light on its own, within its volume
+uniform float light_error;          // the bound (RenderSettings.light_error)
+const int NODE_TEXELS = 8;
+const float ERROR_CONSTANT = 1.5;   // engine/light_tree.py
+
+vec4 node_texel(int i, int k) { return tree_nodes[i * NODE_TEXELS + k]; }
+bool node_is_leaf(int i) { return i >= tree_leaves - 1; }
+// Camera-relative centroid of node i.
+vec3 node_centre(int i) { return rebase(node_texel(i, 0).xyz, node_texel(i, 1).xyz); }
+float node_group_distance(int i) { return node_texel(i, 0).w; }
+float node_radius(int i) { return node_texel(i, 1).w; }
+float node_count(int i) { return node_texel(i, 2).w; }
+float node_reach(int i) { return node_texel(i, 3).w; }
+int node_light_row(int i) { return int(node_texel(i, 5).w); }
+float node_spread(int i) { return node_texel(i, 6).w; }
+
+// Whether group i stands for its lights at a surface facing n, u = centre - p, d = |u|
+// (light_tree.py: within light_error of its irradiance there; its lights all above
+// the horizon is the caller's test).
+bool group_holds(int i, vec3 u, float d, vec3 n) {
+    float r = node_radius(i);
+    return !tree_exact && ERROR_CONSTANT * r * r * r / (d * d) + 3.0 * node_spread(i)
+                          <= light_error * dot(n, u);
+}
+
+// The range of n.(x - p) over node i's box of lights, for a surface at p facing n
+// (centre: its camera-relative centroid): all above the horizon when .x > 0, all below
+// when .y <= 0.
+vec2 node_horizon(int i, vec3 centre, vec3 p, vec3 n) {
+    vec3 lo = node_texel(i, 6).xyz, hi = node_texel(i, 7).xyz;
+    vec3 a = n * lo, b = n * hi;
+    float base = dot(n, centre - p);
+    return base + vec2(dot(min(a, b), vec3(1.0)), dot(max(a, b), vec3(1.0)));
+}
+
+// The irradiance per unit power that group i sends onto (p, n), u = centre - p: the
+// light at its centroid plus the second-order term of its spread (light_tree.py
+// group_irradiance, which the tests compare with this).
+float group_irradiance(int i, vec3 u, vec3 n) {
+    vec4 c0 = node_texel(i, 4), c1 = node_texel(i, 5);
+    mat3 M = mat3(c0.x, c0.w, c1.x,
+                  c0.w, c0.y, c1.y,
+                  c1.x, c1.y, c0.z);
+    float d2 = dot(u, u);
+    float d = sqrt(d2);
+    float nu = dot(n, u);
+    float d5 = d2 * d2 * d;
+    float corr = (-3.0 * dot(n, M * u) - 1.5 * nu * (c0.x + c0.y + c0.z)) / d5
+               + 7.5 * nu * dot(u, M * u) / (d5 * d2);
+    return nu / (d2 * d) + corr;
+}
+
+// What group i (all of its lights above s's horizon) sends from s towards the viewer:
+// its diffuse power through group_irradiance, its specular power as a sphere light of
+// the group's radius at the centroid (the lobe widened, as sphere_light widens it).
+void group_reflected(Surface s, int i, vec3 centre, out vec3 diffuse, out vec3 glossy) {
+    vec3 u = centre - s.p;
+    float d = length(u);
+    vec3 l = u / d;
+    float NoL = dot(s.n, l);
+    diffuse = glossy = vec3(0.0);
+    if (NoL <= 0.0) return;
+    vec3 Ed = node_texel(i, 2).rgb * max(group_irradiance(i, u, s.n), 0.0) * bump_visible(s, l);
+    vec3 Es = node_texel(i, 3).rgb * (NoL / (d * d)) * bump_visible(s, l);
+    float a = ggx_alpha(s.roughness), ac = ggx_alpha(s.coat_roughness);
+    float widen = node_radius(i) / max(2.0 * d, 1e-6);
+    diffuse = Ed * brdf_diffuse(s) * bump_shadowing(s, l);
+#ifdef SHEEN
+    diffuse += Ed * brdf_sheen(s, l);
+#endif
+    glossy = Es * (brdf_specular(s, l, min(1.0, a + widen)) + brdf_coat(s, l, min(1.0, ac + widen)));
+}
+
+// What tree light i (a leaf) sends from s, added to sum_d and sum_g; view_forward: the
+// camera's axis (a headlight's direction).
+void shade_leaf(Surface s, int i, vec3 view_forward, inout vec3 sum_d, inout vec3 sum_g) {
+    if (node_count(i) <= 0.0) return;
+    vec3 diffuse, glossy;
+    load_light(node_light_row(i), view_forward);
+    if (!tree_exact) light_range = 3.0e38;           // a tree light has no volume
+    sphere_light(s, diffuse, glossy);
+    sum_d += diffuse;
+    sum_g += glossy;
+}
+
+// What group i's lights send from s, added to sum_d and sum_g: the group as one light
+// where it is far enough and above the horizon; else walking down its subtree, each
+// part the same way and each light on its own.
+#define TREE_STACK 32
+void shade_group(Surface s, int root, vec3 view_forward, inout vec3 sum_d, inout vec3 sum_g) {
+    int stack[TREE_STACK];
+    int top = 0;
+    stack[top++] = root;
+    while (top > 0) {
+        int i = stack[--top];
+        if (node_is_leaf(i)) {
+            shade_leaf(s, i, view_forward, sum_d, sum_g);
+            continue;
+        }
+        if (node_count(i) <= 0.0) continue;
+        vec3 centre = node_centre(i);
+        float d = length(centre - s.p);
+        if (tree_exact && d > node_reach(i)) continue;
+        vec2 horizon = node_horizon(i, centre, s.p, s.n);
+        if (horizon.y <= 0.0) continue;              // every light below: nothing
+        if (horizon.x > 0.0 && group_holds(i, centre - s.p, d, s.n)) {
+            vec3 diffuse, glossy;
+            group_reflected(s, i, centre, diffuse, glossy);
+            sum_d += diffuse;
+            sum_g += glossy;
+            continue;
+        }
+        stack[top++] = 2 * i + 2;
+        stack[top++] = 2 * i + 1;
+    }
+}
+
+// What node i's lights send from s (shade_leaf or shade_group).
+void shade_node(Surface s, int i, vec3 view_forward, inout vec3 sum_d, inout vec3 sum_g) {
+    if (node_is_leaf(i)) shade_leaf(s, i, view_forward, sum_d, sum_g);
+    else shade_group(s, i, view_forward, sum_d, sum_g);
+}

@@ -1,0 +1,87 @@
+#version 430 core
+#include "lib.glsl"
+#include "gbuffer_surface.glsl"
+#include "lights.glsl"
+#include "light_tree.glsl"
+#include "clusters.glsl"
+#ifdef HAS_SHADOW
+#include "shadow_lookup.glsl"
+#endif
+// The clustered light pass (engine/gpu/passes/clustered.py): every light a pixel's
+// cluster lists (clusters.glsl), shaded with the light volumes' own functions
+// (gbuffer_surface.glsl, lights.glsl) and the light tree's groups (light_tree.glsl),
+// added once into the HDR target and the lighting render passes. SINGLE_LIGHT: one
+// light over a rectangle, with its shadow map (HAS_SHADOW), for the lights whose shadow
+// maps this frame made: each map is its own texture, bound by itself.
+layout(local_size_x = TILE, local_size_y = TILE) in;
+layout(rgba32f, binding = 0) uniform image2D hdr_image;
+#ifdef WRITE_AOVS
+// Render passes (engine/gpu/passes/ambient.py LIGHTING_AOVS), added like the light.
+layout(rgba32f, binding = 1) uniform image2D aov_diffuse_image;
+layout(rgba32f, binding = 2) uniform image2D aov_glossy_image;
+layout(rgba32f, binding = 3) uniform image2D aov_shadow_image;  // luminance with shadows, without
+#endif
+layout(std430, binding = 8) readonly buffer ExactLights { int exact_rows[]; };
+uniform int n_exact;
+uniform ivec2 u_offset;             // the dispatch's first pixel
+#ifdef SINGLE_LIGHT
+uniform int light_index;
+#endif
+
+void add_light(Surface s, inout vec3 sum_d, inout vec3 sum_g) {
+    vec3 diffuse, glossy;
+    light_reflected(s, diffuse, glossy);
+    sum_d += diffuse;
+    sum_g += glossy;
+}
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy) + u_offset;
+    if (any(greaterThanEqual(px, imageSize(hdr_image)))) return;
+    shaded_pixel = vec2(px) + 0.5;
+    float depth = texelFetch(g_depth, px, 0).r;
+    if (is_background(depth)) return;
+    Surface s = gbuffer_surface(px, depth);
+    vec3 sum_d = vec3(0.0), sum_g = vec3(0.0);
+    float lit = 1.0;
+#ifdef SINGLE_LIGHT
+    load_light(light_index, cam_forward);
+    add_light(s, sum_d, sum_g);
+    vec3 radiance = sum_d + sum_g;
+    if (max(radiance.r, max(radiance.g, radiance.b)) <= 0.0) return;
+#ifdef HAS_SHADOW
+    lit = light_shadow(s.p, s.n, dot(s.p, cam_forward));
+#endif
+#else
+    uvec2 range = cluster_ranges[cluster_of(px, dot(s.p, cam_forward))];
+    if (range.y == OVERFLOW) {
+        // Its list did not fit: every light, the tree from its root.
+        if (tree_leaves > 0) shade_node(s, 0, cam_forward, sum_d, sum_g);
+        for (int k = 0; k < n_exact; ++k) {
+            load_light(exact_rows[k], cam_forward);
+            add_light(s, sum_d, sum_g);
+        }
+    } else {
+        if (range.y == 0u) return;
+        for (uint k = 0u; k < range.y; ++k) {
+            uint item = cluster_items[range.x + k];
+            if ((item & TREE_ITEM) != 0u) {
+                shade_node(s, int(item & ~TREE_ITEM), cam_forward, sum_d, sum_g);
+            } else {
+                load_light(int(item), cam_forward);
+                add_light(s, sum_d, sum_g);
+            }
+        }
+    }
+    vec3 radiance = sum_d + sum_g;
+#endif
+    // NaN or Inf goes through: the resolve pass counts it.
+    imageStore(hdr_image, px, imageLoad(hdr_image, px) + vec4(radiance * lit, 0.0));
+#ifdef WRITE_AOVS
+    imageStore(aov_diffuse_image, px, imageLoad(aov_diffuse_image, px) + vec4(sum_d * lit, 0.0));
+    imageStore(aov_glossy_image, px, imageLoad(aov_glossy_image, px) + vec4(sum_g * lit, 0.0));
+    float luminance = dot(radiance, vec3(0.2126, 0.7152, 0.0722));
+    imageStore(aov_shadow_image, px,
+               imageLoad(aov_shadow_image, px) + vec4(luminance * lit, luminance, 0.0, 0.0));
+#endif
+}
