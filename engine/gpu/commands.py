@@ -219,10 +219,10 @@ class DrawCommands:
                                                            count=len(cast))
             else:
                 vao = store.vao(prog)
-                for count, n, first, _, oid in cast:
+                for count, instances, first, _, oid in cast:
                     prog["u_object"].value = int(oid)
                     vao.render(self.ctx.TRIANGLES, vertices=int(count), first=int(first),
-                               instances=int(n))
+                               instances=int(instances))
             n += len(cast)
         return n
 
