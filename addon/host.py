@@ -13,7 +13,9 @@ each scene is what gets drawn. F12 waits for its frame on Blender's render threa
 polling Esc. If the child dies or cannot get a GL context, `failure` says why, every
 waiter wakes up, and the next `ensure()` (the next redraw or render) starts a new one
 (after a GL failure, at most every RESTART_SECONDS). `shutdown()` stops the child and
-its threads and unlinks every slot: nothing is left behind.
+its threads and unlinks every slot: nothing is left behind. The child's program cache
+lives in the extension's own user folder (program_cache_dir), which Blender removes
+when the extension is uninstalled.
 """
 from __future__ import annotations
 
@@ -42,6 +44,18 @@ PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 class HostError(RuntimeError):
     pass
+
+
+def program_cache_dir():
+    """Where the engine process keeps its program cache (engine/gpu/program_binaries.py)
+    when Lantern runs as an extension: the extension's own user folder, which Blender
+    deletes with the extension. None otherwise (a legacy add-on, an editable install):
+    the engine's default, the user's cache folder."""
+    root = (__package__ or "").rpartition(".")[0]      # bl_ext.<repository>.lantern
+    if not root.startswith("bl_ext."):
+        return None
+    import bpy
+    return bpy.utils.extension_path_user(root, path="programs")
 
 
 @dataclass
@@ -160,6 +174,9 @@ class Host:
         env = dict(os.environ)
         env["PYTHONPATH"] = os.pathsep.join(
             module_dirs() + [d for d in env.get("PYTHONPATH", "").split(os.pathsep) if d])
+        cache = program_cache_dir()
+        if cache is not None and not env.get("LANTERN_PROGRAM_CACHE_DIR"):   # the user's wins
+            env["LANTERN_PROGRAM_CACHE_DIR"] = cache
         command = [sys.executable, "-s", "-P",
                    os.path.join(PACKAGE_DIR, "engine", "host", "boot.py"), PACKAGE_DIR]
         handle = child_end.fileno()

@@ -2,6 +2,7 @@
 import bpy
 from bpy_extras.io_utils import ExportHelper
 
+from ..core.subdivision_modes import FILE_DEFAULT, SUBDIVISION_MODES
 from ..exporters import ExportError, ExportOptions, export_depsgraph_to_file
 
 
@@ -17,6 +18,13 @@ class EXPORT_SCENE_OT_lantern_usd(bpy.types.Operator, ExportHelper):
         name="Textures", default="reference",
         items=(("reference", "Reference", "Point at images where they are"),
                ("copy", "Copy", "Copy images beside the USD file")))
+
+    subdivision: bpy.props.EnumProperty(
+        name="Subdivision", default=FILE_DEFAULT,
+        items=tuple((name, name.capitalize(), text[0].upper() + text[1:])
+                    for name, text in SUBDIVISION_MODES.items()),
+        description="What is written for a mesh whose last modifier is a Catmull-Clark "
+                    "Subdivision Surface")
 
     limit_influences: bpy.props.BoolProperty(
         name="Limit Influences", default=False,
@@ -36,7 +44,7 @@ class EXPORT_SCENE_OT_lantern_usd(bpy.types.Operator, ExportHelper):
         try:
             report = export_depsgraph_to_file(
                 context.evaluated_depsgraph_get(), path, ExportOptions(
-                    textures=self.textures,
+                    textures=self.textures, subdivision=self.subdivision,
                     max_influences=self.max_influences if self.limit_influences else None))
         except ExportError as error:
             self.report({'ERROR'}, str(error))

@@ -7,6 +7,7 @@ import os
 import sys
 
 from ..core import interrupt
+from ..core.subdivision_modes import FILE_DEFAULT, SUBDIVISION_MODES
 from ..core.text import error_text, one_line
 from ..core.version import installed_version
 
@@ -153,6 +154,17 @@ def status_writer(args):
         except OSError:          # the reader went away: the work goes on
             pass
     return write
+
+
+def add_subdivision_option(parser, scope=""):
+    """--subdivision: what `lantern export` writes, and what `lantern render` renders of
+    a .blend (the same)."""
+    parser.add_argument(
+        "--subdivision", choices=tuple(SUBDIVISION_MODES), default=FILE_DEFAULT,
+        help=f"for a mesh{scope} whose last modifier is a Catmull-Clark Subdivision "
+             "Surface, write " + "; ".join(f"{name}: {text}"
+                                          for name, text in SUBDIVISION_MODES.items())
+             + f" (default {FILE_DEFAULT})")
 
 
 def check_preset(name):

@@ -4,8 +4,9 @@ import argparse
 import os
 
 from ..core.text import one_line
-from .common import (EXIT_STATUSES, USD_SUFFIXES, CommandError, check_farm, check_folder,
-                     check_output, make_folder, print_warnings, status_writer, usage)
+from .common import (EXIT_STATUSES, USD_SUFFIXES, CommandError, add_subdivision_option,
+                     check_farm, check_folder, check_output, make_folder, print_warnings,
+                     status_writer, usage)
 
 
 def add_parser(commands, parents):
@@ -23,6 +24,7 @@ def add_parser(commands, parents):
                         help="reference images where they are, or copy them beside the USD file")
     export.add_argument("--max-influences", type=int, default=None, metavar="N",
                         help="keep the N largest joint influences per vertex (default: all)")
+    add_subdivision_option(export)
 
 
 def run(args):
@@ -56,7 +58,8 @@ def _export_one(blend, out_path, args):
     if not os.path.isfile(blend):
         raise CommandError(f"{blend}: no such file")
     from ..exporters import ExportError, ExportOptions, export_blend
-    options = ExportOptions(textures=args.textures, max_influences=args.max_influences)
+    options = ExportOptions(textures=args.textures, max_influences=args.max_influences,
+                            subdivision=args.subdivision)
     try:
         report = export_blend(blend, out_path, options)
     except ExportError as error:
@@ -83,6 +86,6 @@ def _export_batch(args):
         return export_batch(ExportBatchOptions(
             scheduler=args.scheduler, jobs=args.jobs, collect=args.collect, resume=args.resume,
             status=status_writer(args), textures=args.textures,
-            max_influences=args.max_influences), jobs)
+            max_influences=args.max_influences, subdivision=args.subdivision), jobs)
     except FarmError as error:
         raise CommandError(str(error))

@@ -8,9 +8,10 @@ import os
 from ..core import interrupt
 from ..core.text import error_text, one_line
 from .common import (EXIT_STATUSES, FAILED, IMAGE_SUFFIXES, MAX_SIDE, RENDER_PROCESSES,
-                     USD_SUFFIXES, CommandError, check_farm, check_folder, check_output,
-                     check_preset, fail, internal_error, make_folder, number, parse_frames,
-                     parse_size, print_warnings, status_writer, usage, write_output)
+                     USD_SUFFIXES, CommandError, add_subdivision_option, check_farm,
+                     check_folder, check_output, check_preset, fail, internal_error,
+                     make_folder, number, parse_frames, parse_size, print_warnings,
+                     status_writer, usage, write_output)
 from .timings import Phases
 
 
@@ -56,6 +57,7 @@ def add_parser(commands, parents):
     render.add_argument("-j", "--jobs", type=int, default=RENDER_PROCESSES,
                         help="worker processes for a sequence on this machine "
                              f"(default {RENDER_PROCESSES})")
+    add_subdivision_option(render, " of a .blend input")
     from .overlays import add_options as add_overlay_options
     add_overlay_options(render)
 
@@ -97,7 +99,7 @@ def run(args):
     except FarmError as error:
         raise CommandError(str(error))
     try:
-        stage = _stage_from_blend(args.scene) if is_blend else _open_usd(args.scene)
+        stage = _stage_from_blend(args.scene, args.subdivision) if is_blend else _open_usd(args.scene)
         _check_camera(stage, args)
         args.colour = _colour(stage, args)
         from .overlays import from_args as overlays_from_args
@@ -228,11 +230,12 @@ def _open_usd(path):
     return stage
 
 
-def _stage_from_blend(blend):
-    """Export a .blend into an in-memory stage, in this process (with Blender's own pxr)."""
-    from ..exporters import ExportError, stage_from_blend
+def _stage_from_blend(blend, subdivision):
+    """Export a .blend into an in-memory stage, in this process (with Blender's own pxr),
+    as `lantern export` would write it."""
+    from ..exporters import ExportError, ExportOptions, stage_from_blend
     try:
-        stage, report = stage_from_blend(blend)
+        stage, report = stage_from_blend(blend, ExportOptions(subdivision=subdivision))
     except ExportError as error:
         raise CommandError(one_line(str(error)))
     print_warnings(report.warnings, set())
@@ -275,7 +278,7 @@ def _render_frame(args, is_blend, phases):
     """args.scene, one frame, into args.output."""
     from ..engine import render_stage
     from ..engine.image_io import write_image
-    stage = _stage_from_blend(args.scene) if is_blend else _open_usd(args.scene)
+    stage = _stage_from_blend(args.scene, args.subdivision) if is_blend else _open_usd(args.scene)
     _check_camera(stage, args)
     phases.mark("stage open")
     # An .exr is scene linear: the scene's view transform (OpenColorIO) is for displays.

@@ -8,6 +8,7 @@ import bpy
 from pxr import Usd
 
 from ..core.files import atomic_write
+from ..core.subdivision_modes import FILE_DEFAULT, SUBDIVISION_MODES
 from .errors import ExportError
 from .gather.scene import gather_scene
 from .usd.assets import asset_resolver
@@ -23,9 +24,8 @@ class ExportOptions:
     texture_dir: str | None = None  # where packed/generated images go for in-memory stages
     animation: bool = True          # sample the frame range (rigs, shape keys, moving objects)
     max_influences: int | None = None  # trim skin influences per vertex (None: keep all)
-    # "apply": Subdivision Surface applied on the CPU; "cage": a trailing Catmull-Clark
-    # modifier is written as its cage with subdivisionScheme = catmullClark.
-    subdivision: str = "apply"
+    # A last Subdivision Surface: "cage", "apply" or "ignore" (core/subdivision_modes.py).
+    subdivision: str = FILE_DEFAULT
 
 
 @dataclass
@@ -47,6 +47,9 @@ def _texture_dir(layer_path, options):
 
 def _export(depsgraph, stage, options, layer_path):
     start = time.perf_counter()
+    if options.subdivision not in SUBDIVISION_MODES:
+        raise ExportError(f"subdivision {options.subdivision!r}: expected one of "
+                          f"{', '.join(SUBDIVISION_MODES)}")
     warnings = []
 
     def warn(message):

@@ -172,7 +172,8 @@ def export_batch(options: ExportBatchOptions, jobs):
             rows[blend] = _ExportRow(blend, "skipped", 0.0, 0, "", 1, f"{output} (up to date)")
             continue
         tasks.append(ExportTask(os.path.abspath(blend), os.path.abspath(output),
-                                options.textures, options.max_influences, options.collect))
+                                options.textures, options.max_influences, options.collect,
+                                options.subdivision))
     retries, lost_outputs = [], []
     if tasks:
         runner = _open(options, EXPORT_NEEDS)

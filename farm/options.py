@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..core.subdivision_modes import FILE_DEFAULT
+
 
 @dataclass(frozen=True, kw_only=True)
 class FarmOptions:
@@ -22,6 +24,7 @@ class ExportBatchOptions(FarmOptions):
     """`lantern export` with a folder for -o."""
     textures: str = "reference"
     max_influences: int | None = None
+    subdivision: str = FILE_DEFAULT  # core/subdivision_modes.py
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -21,6 +21,7 @@ import threading
 import time
 from dataclasses import dataclass, field
 
+from ..core.subdivision_modes import FILE_DEFAULT
 from ..core.text import error_text, frame_path, one_line
 
 # Dask worker resources. A worker offers `bpy` when it can run Blender (a subprocess per
@@ -39,6 +40,7 @@ class ExportTask:
     textures: str = "reference"
     max_influences: int | None = None
     collect: bool = False           # return the files instead of writing `output`
+    subdivision: str = FILE_DEFAULT
     needs = EXPORT_NEEDS
 
     @property
@@ -152,7 +154,7 @@ def run_export(task: ExportTask) -> TaskResult:
     folder = tempfile.mkdtemp(prefix="lantern-export-") if task.collect else None
     target = os.path.join(folder, os.path.basename(task.output)) if folder else task.output
     command = [sys.executable, "-m", "lantern", "export", task.blend, "-o", target,
-               "--textures", task.textures]
+               "--textures", task.textures, "--subdivision", task.subdivision]
     if task.max_influences is not None:
         command += ["--max-influences", str(task.max_influences)]
     try:

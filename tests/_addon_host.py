@@ -3,8 +3,10 @@ uses it. Run by tests/test_addon_install.py, which checks what this writes:
 
     python tests/_addon_host.py EXTENSION.zip OUT_DIR CORPUS_DIR DEMO.blend
 
-- Blender's user resources (preferences, extensions, the extracted wheels) live in a
-  temporary folder, so nothing leaks into the machine.
+- The process has a home of its own, a temporary folder (HOME; no XDG_* folders and no
+  LANTERN_PROGRAM_CACHE_DIR), with Blender's user resources (preferences, extensions,
+  the extracted wheels) in it as a real user's are: nothing leaks into the machine,
+  and whatever Lantern leaves in the home is seen.
 - Every module a real Blender does not bundle is unimportable, in this process and in
   the engine host's child process (tests/blender_only/sitecustomize.py): whatever the
   venv's site-packages holds beyond bpy and the packages bpy itself requires (Blender
@@ -36,7 +38,12 @@ blender_only = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(blender_only)
 NOT_IN_BLENDER = blender_only.NOT_IN_BLENDER
 os.environ["PYTHONPATH"] = BLENDER_ONLY
-USER = tempfile.mkdtemp(prefix="blender-user-", dir=OUT)  # inside OUT even if this crashes
+HOME = tempfile.mkdtemp(prefix="home-", dir=OUT)  # inside OUT even if this crashes
+os.environ["HOME"] = HOME
+for _name in ("XDG_CACHE_HOME", "XDG_CONFIG_HOME", "XDG_DATA_HOME", "LANTERN_PROGRAM_CACHE_DIR"):
+    os.environ.pop(_name, None)
+USER = os.path.join(HOME, ".config", "blender")
+os.makedirs(USER)
 os.environ["BLENDER_USER_RESOURCES"] = USER
 
 import bpy  # noqa: E402  (after the hiding and the user folder)
@@ -356,18 +363,21 @@ def check_lifecycle():
     life["reinstalled_render"] = f12("reinstalled", scene).get("error")
     life["after_reinstall"] = lantern_threads()
     life["children_after_reinstall"] = child_processes()
+    life["files_before_uninstall"] = files_under(HOME)
     repo_index = [r.module for r in bpy.context.preferences.extensions.repos].index(REPO_ID)
     bpy.ops.extensions.package_uninstall(repo_index=repo_index, pkg_id="lantern")
     life["after_uninstall"] = {"python_threads": python_threads(),
                                "native_threads": native_threads(),
                                "child_processes": child_processes(),
                                "segments": shared_memory(),
-                               "files": files_under(USER),
+                               "files": files_under(HOME),
                                "enabled": MODULE in bpy.context.preferences.addons}
     return life
 
 
-report["baseline"] = {"files": files_under(USER), "python_threads": python_threads(),
+report["home"] = HOME
+report["user_dir"] = os.path.relpath(USER, HOME)
+report["baseline"] = {"files": files_under(HOME), "python_threads": python_threads(),
                       "native_threads": native_threads()}
 for name in ("hidden_modules", "install", "corpus", "engine_process", "view_layers",
              "film_border_resolution",
@@ -376,4 +386,4 @@ for name in ("hidden_modules", "install", "corpus", "engine_process", "view_laye
 
 with open(os.path.join(OUT, "report.json"), "w") as f:
     json.dump(report, f, indent=1)
-shutil.rmtree(USER, ignore_errors=True)
+shutil.rmtree(HOME, ignore_errors=True)

@@ -317,6 +317,13 @@ def test_disable_reenable_reinstall_uninstall_leave_nothing(installed):
     assert not [t for t in gone["python_threads"] if t.startswith("lantern")]
     assert gone["child_processes"] == [] and gone["segments"] == []
     assert _gl_driver_threads(gone["native_threads"]) == []
+    # Nothing of Lantern's is left anywhere in the home: the engine process's program
+    # cache lived in the extension's own user folder, which Blender removed with it.
     # Blender's own cache of repository compatibility is Blender's, rewritten on change.
-    left = [f for f in gone["files"] if not f.startswith(os.path.join("extensions", ".cache"))]
+    extensions = os.path.join(report["user_dir"], "extensions")
+    left = [f for f in gone["files"] if not f.startswith(os.path.join(extensions, ".cache"))]
     assert left == report["baseline"]["files"]
+    programs = [f for f in life["files_before_uninstall"]
+                if f.startswith(os.path.join(extensions, ".user", "user_default", "lantern",
+                                             "programs"))]
+    assert programs and all(f.endswith(".bin") for f in programs)

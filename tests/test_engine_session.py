@@ -421,6 +421,7 @@ def test_gl33_path_draws_the_same_pixels_as_multi_draw(monkeypatch):
     assert multi.stats["gl_path"] != single.stats["gl_path"]
     assert "3.3" in single.stats["gl_path"]
     assert multi.stats["draw_calls"] == single.stats["draw_calls"] == 4
+    assert multi.stats["shadow_draws"] == single.stats["shadow_draws"] > 0
     assert np.abs(multi.rgba - single.rgba).max() == 0.0
 
 

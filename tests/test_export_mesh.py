@@ -5,6 +5,7 @@ from mathutils import Matrix
 from pxr import Gf, UsdGeom, UsdShade
 
 from _export_helpers import cube_object, evaluated_mesh_data, export_current, vectors
+from lantern.exporters.api import ExportOptions
 
 
 def mesh_prim(stage, object_name):
@@ -20,7 +21,7 @@ def test_subsurf_exports_the_evaluated_points(empty_scene):
     mod.levels = mod.render_levels = 2
     expected = evaluated_mesh_data(ob, lambda m: len(m.vertices))
     assert expected > 8
-    stage, _ = export_current()
+    stage, _ = export_current(ExportOptions(subdivision="apply"))
     mesh = mesh_prim(stage, "Sub")
     assert len(mesh.GetPointsAttr().Get()) == expected
     assert mesh.GetSubdivisionSchemeAttr().Get() == "none"

@@ -41,8 +41,9 @@ def _f12_and_cli(tmp_path, rigged):
     bpy.ops.render.render(write_still=True)
     f12 = read_exr(str(tmp_path / "f12.exr"))
 
-    # The CLI side: export in one process, render in another that never imports bpy.
-    _lantern("export", str(blend), "-o", str(tmp_path / "demo.usda"))
+    # The CLI side: export in one process, render in another that never imports bpy;
+    # the demo's Suzanne subdivided as F12 does by default (Blender applies it).
+    _lantern("export", str(blend), "-o", str(tmp_path / "demo.usda"), "--subdivision", "apply")
     _lantern("render", str(tmp_path / "demo.usda"), "-o", str(tmp_path / "cli.exr"),
              "--frame", str(scene.frame_current), "--size", f"{WIDTH}x{HEIGHT}")
     cli = read_exr(str(tmp_path / "cli.exr"))

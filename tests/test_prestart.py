@@ -53,15 +53,17 @@ def test_no_host_for_a_file_that_renders_with_another_engine(addon, tmp_path):
 
 def test_the_warm_up_makes_every_program_of_the_textured_rigged_demo(tmp_path, monkeypatch):
     """Not only the default scene's: the demo (image textures, a normal map, a rig, a
-    sun, area and point lights) asks for no program the warm-up did not."""
+    sun, area and point lights), exported as F12 exports it (its Suzanne subdivided by
+    Blender, the render panel's default), asks for no program the warm-up did not."""
     import bpy
     from lantern.engine import RenderSettings, render_stage
     from lantern.engine.gpu import programs
     from lantern.engine.host.warmup import warm
-    from lantern.exporters import stage_from_depsgraph
+    from lantern.exporters import ExportOptions, stage_from_depsgraph
     from reference_scenes import build_demo
     build_demo(str(tmp_path))
-    stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+    stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get(),
+                                    ExportOptions(subdivision="apply"))
     asked = []
     get = programs.ProgramCache.get
 

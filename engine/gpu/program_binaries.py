@@ -20,8 +20,9 @@ renderer and version strings. It is written atomically (temp name, then rename).
 entry that is truncated, damaged, from another key, or rejected by the driver is
 ignored and rebuilt, logged only at debug level (`lantern --debug`); a folder that
 cannot be written costs the speed-up, never a render. LANTERN_NO_PROGRAM_CACHE=1
-turns the cache off; LANTERN_PROGRAM_CACHE_DIR moves it (the tests keep theirs in
-a temporary folder)."""
+turns the cache off; LANTERN_PROGRAM_CACHE_DIR moves it: the tests keep theirs in a
+temporary folder, and Blender's side (addon/host.py) gives the engine process the
+extension's own user folder, which Blender removes with the extension."""
 from __future__ import annotations
 
 import ctypes

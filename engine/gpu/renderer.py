@@ -133,8 +133,8 @@ class Renderer:
             self.geometry.set_culling(scene, cull_backfaces)
         self._cull_backfaces = cull_backfaces
         meshes = self.geometry.update(scene, changes, cull_backfaces)
-        self.geometry.set_see_through(name for name, m in scene.materials.items()
-                                      if m.alpha != "opaque")
+        self.geometry.commands.set_see_through(name for name, m in scene.materials.items()
+                                               if m.alpha != "opaque")
         self.lights.update(scene, changes.lights, self.preset.disk_sides)
         if changes.materials or changes.dropped_meshes:
             self.textures.prune(scene.materials.values())

@@ -87,11 +87,12 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False,
     modifier is switched off (that would be an edit inside a depsgraph update): a
     skinned mesh's rest shape is its mesh data, so one with other modifiers than its
     Armature modifier is baked instead.
-    `subdivision`: "apply" writes a Subdivision Surface modifier's result; "cage" writes
-    the cage of a mesh whose last modifier is Catmull-Clark subdivision, with its rules
-    (a rigged mesh's too, skinned at rest, when its subdivision follows its Armature
-    modifier directly). Live, where no modifier may be switched off, only a mesh whose
-    data is its cage (gather/subdivision.py data_cage) is written as one."""
+    `subdivision` (core/subdivision_modes.py): "apply" writes a Subdivision Surface
+    modifier's result; "cage" writes the cage of a mesh whose last modifier is
+    Catmull-Clark subdivision, with its rules (a rigged mesh's too, skinned at rest, when
+    its subdivision follows its Armature modifier directly); "ignore" writes that cage
+    as a polygon mesh, without the rules. Live, where no modifier may be switched off,
+    only a mesh whose data is its cage (gather/subdivision.py data_cage) is written as one."""
     scene = depsgraph.scene
     rec = SceneRecord(settings=_settings(scene, warn))
     visible = render_visible(depsgraph.view_layer)
@@ -113,7 +114,7 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False,
             shown[orig.name_full] = inst.show_self
     animate = animation and depsgraph.mode == "VIEWPORT" and _animated_scene(scene)
     cages = {}
-    if subdivision == "cage":
+    if subdivision in ("cage", "ignore"):
         find = data_cage if live else trailing_subdivision
         for key in sorted(originals):
             mod = find(originals[key], depsgraph)
@@ -147,7 +148,8 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False,
     with modifiers_disabled(off, depsgraph):
         evaluated = {k: ob.evaluated_get(depsgraph) for k, ob in originals.items()}
         groups = _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir,
-                                 instances, shown, materials, cages, live)
+                                 instances, shown, materials, cages, live,
+                                 rules=subdivision == "cage")
         if animate:
             sampler = Sampler(depsgraph, rec, originals, rigs, warn)
             sampler.build_skeletons()
@@ -166,7 +168,7 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False,
 
 
 def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir, instances, shown,
-                    material_keys, cages, live):
+                    material_keys, cages, live, rules):
     scene = depsgraph.scene
 
     def exported_parent(orig):
@@ -217,7 +219,7 @@ def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir, instance
             obj.camera = gather_camera(ob.data.original, scene.render, warn)
         elif ob.type in MESH_LIKE and shown[key]:
             gather_geometry(ob, obj, rec, shared, rigs.get(key), groups, warn, cages.get(key),
-                            cage_from_data=live)
+                            cage_from_data=live, rules=rules)
             for mat in obj.materials:
                 if mat is not None:
                     material_keys.setdefault(mat[0], mat[1])
@@ -253,9 +255,10 @@ def _gather_points(ob, obj, instances, world, warn):
 
 
 def gather_geometry(ob, obj, rec, shared, rig, groups, warn, subdivision=None,
-                    cage_from_data=False):
-    """`subdivision`: the trailing Subdivision Surface written as the cage's rules (the
-    mesh read with it switched off, or from the data when `cage_from_data`)."""
+                    cage_from_data=False, rules=True):
+    """`subdivision`: the trailing Subdivision Surface whose cage is written (the mesh
+    read with it switched off, or from the data when `cage_from_data`), with the
+    modifier's rules unless not `rules` (a polygon mesh)."""
     orig = ob.original
     is_shared = is_shareable(orig) and orig.data.name_full in shared
     mesh_key = ("proto:" + orig.data.name_full) if is_shared else ("object:" + orig.name_full)
@@ -292,7 +295,7 @@ def gather_geometry(ob, obj, rec, shared, rig, groups, warn, subdivision=None,
                 rec.meshes[mesh_key].points = co.reshape(-1, 3)
             if skinned and rig.armature is not None:
                 groups[orig.name_full] = group_entries(mesh)
-            if subdivision is not None:
+            if subdivision is not None and rules:
                 rec.meshes[mesh_key].subdivision = subdivision_record(subdivision, mesh)
         finally:
             if not from_data:

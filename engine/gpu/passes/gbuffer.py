@@ -2,7 +2,7 @@
 
 Objects outside the view's frustum are culled; the rest draw as state batches
 (material variant, culling, winding), front to back within a batch (see
-engine/gpu/geometry.py for the GL 4.3 and GL 3.3 paths). A material's shader variant
+engine/gpu/commands.py for the GL 4.3 and GL 3.3 paths). A material's shader variant
 has only the maps it uses (feature bits, as Filament's); its constants are uniforms
 and its images stay on the GPU for the session. Blended materials (Material.alpha)
 draw here only their opaque texels, and not at all without an opacity map: the
@@ -65,8 +65,8 @@ class GBufferPass(Pass):
     def program_args(self, mat, outputs, index):
         """ProgramCache.get's arguments for `mat`'s variant, with these optional
         outputs (OUTPUT_DEFINES' values) and the index render passes or not."""
-        defines = map_defines(mat) + self.geometry.object_defines() + list(outputs) + \
-            (["WRITE_INDEX"] if index else [])
+        defines = map_defines(mat) + self.geometry.commands.object_defines() + \
+            list(outputs) + (["WRITE_INDEX"] if index else [])
         return "gbuffer.vert", "gbuffer.frag", defines, (), False, material_variant(mat)
 
     def frame_program_args(self, frame, mat):
@@ -91,8 +91,8 @@ class GBufferPass(Pass):
         ctx.disable(ctx.BLEND)
         ctx.cull_face = "back"
         cam = view.camera
-        batches, culled = self.geometry.view_batches(view.boxes, cam.position, cam.forward,
-                                                     view.outside)
+        batches, culled = self.geometry.commands.view_batches(
+            view.boxes, cam.position, cam.forward, view.outside)
         frame.count("culled", culled)
         self.geometry.bind_objects(UNITS["u_objects"])
         materials = frame.scene.materials
@@ -113,7 +113,7 @@ class GBufferPass(Pass):
                 ctx.enable(ctx.CULL_FACE)
             else:
                 ctx.disable(ctx.CULL_FACE)
-            self.geometry.draw_batch(batch, prog)
+            self.geometry.commands.draw_batch(batch, prog)
             frame.count("draw_calls", batch.count)
             frame.count("instances_drawn", batch.instances)
         ctx.front_face = "ccw"

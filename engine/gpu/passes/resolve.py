@@ -91,12 +91,13 @@ class ResolvePass(Pass):
             ctx.depth_func = ">"
             ctx.disable(ctx.CULL_FACE | ctx.BLEND)
             self.depth.far_clip(True)
-            prog = self.programs.get("ids.vert", "ids.frag", self.geometry.object_defines())
+            prog = self.programs.get("ids.vert", "ids.frag",
+                                     self.geometry.commands.object_defines())
             self.geometry.bind_objects(UNITS["u_objects"])
             set_uniform(prog, "view_proj", view.view_proj)
             set_uniform(prog, "u_far", view.far_clip)
             view.set_origin(prog)
-            self.geometry.draw_casters(prog)
+            self.geometry.commands.draw_casters(prog)
             self.geometry.points.draw(self.programs, "id",
                                       lambda p, cloud: set_camera_facing(p, view))
             out = np.frombuffer(ids.read(), np.int32).reshape(h, w)[::-1].copy()

@@ -216,7 +216,8 @@ class ShadowPass(Pass):
         tw, th = sm.atlas
         fbo = self.pool.framebuffer(depth=sm.texture)
         ctx.disable(ctx.BLEND | ctx.CULL_FACE)   # single-sided planes cast too
-        prog = self.programs.get("shadow.vert", "shadow.frag", self.geometry.object_defines())
+        prog = self.programs.get("shadow.vert", "shadow.frag",
+                                 self.geometry.commands.object_defines())
         self.geometry.bind_objects(UNITS["u_objects"])
         _set_light(prog, sm, light)
         clip = ZERO_TO_ONE if self.depth.zero_to_one else np.eye(4)
@@ -230,7 +231,7 @@ class ShadowPass(Pass):
             ctx.enable(ctx.DEPTH_TEST)
             ctx.depth_func = "<"
             set_uniform(prog, "view_proj", clip @ sm.mats[i])
-            frame.count("shadow_draws", self.geometry.draw_casters(prog))
+            frame.count("shadow_draws", self.geometry.commands.draw_casters(prog))
             sm.stochastic |= self._draw_see_through(frame, sm, light, clip @ sm.mats[i])
             if self.geometry.points.clouds:
                 frame.count("shadow_draws", self._draw_points(sm, light, clip @ sm.mats[i],
@@ -242,7 +243,7 @@ class ShadowPass(Pass):
         """Ranges of cut-out and blended materials, each testing its opacity
         (shadow.frag ALPHA_TEST), one draw per range; returns whether any was blended."""
         blended = False
-        for store, name, first, count, oid, n in self.geometry.alpha_casters():
+        for store, name, first, count, oid, n in self.geometry.commands.alpha_casters():
             mat = frame.scene.materials[name]
             prog = self.programs.get("shadow.vert", "shadow.frag", ["ALPHA_TEST"] + (
                 ["HAS_OPACITY_MAP"] if "opacity" in mat.maps else []))
