@@ -142,8 +142,9 @@ class FrameGraph:
                     raise ValueError(f"pass {p.name} writes {aov} into {target}, not a target")
                 self.producers[aov] = p
 
-    def run(self, frame: Frame) -> dict:
-        board = {}
+    def _plan(self, frame: Frame):
+        """(the passes that run, what each writes, {target: index of the last pass
+        using it}; the AOV targets, kept to the end, have none)."""
         unknown = sorted(set(frame.aovs) - set(self.producers))
         if unknown:
             raise ValueError(f"no pass writes the render passes {unknown}")
@@ -159,6 +160,25 @@ class FrameGraph:
             for name in p.reads + p.optional + writes[p]:
                 if name in TARGETS and name not in kept:
                     last_use[name] = i
+        return live, writes, last_use
+
+    def held(self, frame: Frame) -> dict:
+        """{(size, format): the most targets of it the frame holds at once}: what `run`
+        takes from the pool (its targets' memory, engine/gpu/budget.py)."""
+        live, writes, last_use = self._plan(frame)
+        board, most = {}, {}
+        for i, p in enumerate(live):
+            board.update((n, TARGETS[n]) for n in writes[p] if n in TARGETS)
+            for fmt in set(board.values()):
+                count = sum(1 for f in board.values() if f == fmt)
+                most[fmt] = max(most.get(fmt, 0), count)
+            for name in [n for n, last in last_use.items() if last == i]:
+                board.pop(name, None)
+        return {(frame.size, fmt): count for fmt, count in most.items()}
+
+    def run(self, frame: Frame) -> dict:
+        board = {}
+        live, writes, last_use = self._plan(frame)
         frame.stats["passes"] = [p.name for p in live]
         stamps = frame.stamps = self.timer.begin()
         try:
