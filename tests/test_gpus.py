@@ -161,6 +161,27 @@ def test_a_frame_too_large_for_the_device_is_refused_before_any_drawing(cube, tm
     assert not out.exists()
 
 
+@pytest.mark.parametrize("preset, passes", [("medium", ()), ("high", ("Depth", "AO", "DiffDir")),
+                                            ("ultra", ())])
+def test_the_targets_estimate_is_what_the_pool_makes_less_scratch(cube, preset, passes):
+    """The bytes a frame's targets need, from the frame graph's TARGETS (at the drawn
+    size, and at the image size after supersampling's reduction), against what the
+    pool holds after the frame: a lower bound (passes' own scratch targets are not in
+    TARGETS), and close to it."""
+    from lantern.engine import RenderSettings, Session
+    from lantern.engine.gpu.context import run_gl
+    from lantern.engine.gpu.resources import TEXEL_BYTES
+    from lantern.engine.usd.opening import open_stage
+    settings = RenderSettings(width=64, height=36, preset=preset, passes=frozenset(passes))
+    with Session(open_stage(str(cube)), settings) as session:
+        estimate = session.render().stats["target_bytes_allocated"]
+        pool = session._renderer.pool
+        made = run_gl(lambda gl: sum(w * h * TEXEL_BYTES[fmt] * len(objects)
+                                     for ((w, h), fmt), objects in pool._free.items()
+                                     if w % 64 == 0 and h % 36 == 0 and w // 64 <= 3))
+    assert 0.8 * made <= estimate <= made, (estimate, made)
+
+
 def test_targets_past_the_free_memory_are_refused_with_their_size():
     from lantern.engine.gpu.budget import Memory, TooLarge, check
     free = Memory(total=8 << 30, free=1 << 30, source="GL_NVX_gpu_memory_info")

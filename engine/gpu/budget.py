@@ -58,13 +58,17 @@ def _integers(proc, name, count):
 
 def _host_memory():
     """(MemTotal, MemAvailable) in bytes from /proc/meminfo; (None, None) elsewhere."""
+    fields = {}
     try:
         with open("/proc/meminfo") as f:
-            fields = dict(line.split(":", 1) for line in f if ":" in line)
-        kib = lambda key: int(fields[key].split()[0]) * 1024   # noqa: E731
-        return kib("MemTotal"), kib("MemAvailable")
-    except (OSError, KeyError, ValueError, IndexError):
-        return None, None
+            for line in f:                  # both are among the first lines
+                key, _, value = line.partition(":")
+                fields[key] = int(value.split()[0]) * 1024
+                if "MemTotal" in fields and "MemAvailable" in fields:
+                    return fields["MemTotal"], fields["MemAvailable"]
+    except (OSError, ValueError, IndexError):
+        pass
+    return None, None
 
 
 def largest_side(ctx) -> int:

@@ -83,6 +83,7 @@ class Renderer:
         self.gl = gl
         self.gl_info = {**gl.describe(), "gl_path": _path_name(self.features)}
         self.largest_side = budget.largest_side(ctx)
+        self._memory = None         # the device's memory as last asked (budget.Memory)
         self.uploads = Uploads(ctx)
         self.stencil = Stencil(gl.proc)
         self.depth = DepthConvention(gl.proc, self.features.clip_control)
@@ -165,10 +166,11 @@ class Renderer:
         k = supersample_factor(frame)
         frame.supersample, frame.output_size = k, tuple(size)
         frame.size = (size[0] * k, size[1] * k)
-        self._check_fits(frame)
+        plan = self.graph.plan(frame)
+        self._check_fits(frame, plan)
         self.depth.begin()
         try:
-            board = self.graph.run(frame)
+            board = self.graph.run(frame, plan)
         finally:
             self.depth.end()
         self._drawn = dict(frame.scene.materials)
@@ -187,11 +189,15 @@ class Renderer:
         self._restore_state()
         return frame
 
-    def _check_fits(self, frame):
+    def _check_fits(self, frame, plan):
         """Refuses, before any drawing, a frame whose targets the device cannot hold
-        (budget.py); puts the device's memory and the targets' bytes in the stats."""
-        memory = self.gl.memory()
-        needed = self.pool.new_bytes(self.graph.held(frame))
+        (budget.py); puts the device's memory and the targets' bytes in the stats. The
+        memory is asked for when the frame needs new targets (a warm frame reuses the
+        pool's and reports the last figures)."""
+        needed = self.pool.new_bytes(self.graph.held(frame, plan))
+        if needed or self._memory is None:
+            self._memory = self.gl.memory()
+        memory = self._memory
         frame.stats.update(memory.stats(), target_bytes_allocated=needed)
         quality = frame.preset.name if frame.options.supersample is None else ""
         budget.check(frame.output_size, frame.supersample, quality, self.largest_side,
