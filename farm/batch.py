@@ -28,7 +28,7 @@ from ..core.text import frame_path
 from . import chunking
 from .options import ExportBatchOptions, SequenceOptions
 from .runners import FarmError, open_runner
-from .tasks import EXPORT_NEEDS, RENDER_NEEDS, ExportTask, RenderChunk
+from .tasks import EXPORT_NEEDS, GPU_RENDER_NEEDS, RENDER_NEEDS, ExportTask, RenderChunk
 
 FAILED = 1
 STALL_SECONDS = 5.0  # how often a waiting client checks that some worker can run its tasks
@@ -286,6 +286,7 @@ class _WorkerTally:
     seconds: float = 0.0
     cold: list = field(default_factory=list)    # seconds of each chunk that loaded the stage
     warm: list = field(default_factory=list)    # seconds of each warm render
+    device: str = ""                            # the GPU it drew on
 
 
 def render_frames(options: SequenceOptions, runner, stage_text=None, fps=24.0,
@@ -331,7 +332,11 @@ def _render_frames(options, runner, stage_text, fps, print_warnings):
                 since_ns=None if (options.collect or gif) else _folder_clock(folder))
 
     _open(options, RENDER_NEEDS, runner)
-    workers = max(1, runner.workers(RENDER_NEEDS))
+    # Chunks go to the workers' GPUs where the cluster offers them, else to any with GL.
+    gpu = runner.offers(GPU_RENDER_NEEDS)
+    needs = GPU_RENDER_NEEDS if gpu else RENDER_NEEDS
+    base["gpu"] = gpu
+    workers = max(1, runner.workers(needs))
     left = deque(frames)
     costs = _Costs()
     pixels, failed, per_worker, retries, lost_outputs = {}, {}, {}, [], []
@@ -378,6 +383,7 @@ def _render_frames(options, runner, stage_text, fps, print_warnings):
             if result.cold is not None:
                 tally.cold.append(result.cold)
             tally.warm += result.warm
+            tally.device = result.device or tally.device
             if result.written or result.skipped:
                 costs.add(done)
             _write_collected(result.files)
@@ -387,7 +393,7 @@ def _render_frames(options, runner, stage_text, fps, print_warnings):
             failed.update(result.failed)
             progress.advance(bar, len(task.frames))
 
-        _drive(runner, submit_more, on_done, RENDER_NEEDS, options.status)
+        _drive(runner, submit_more, on_done, needs, options.status)
     dashboard = runner.dashboard
     runner.close()
     if pattern and not options.collect:
@@ -398,10 +404,11 @@ def _render_frames(options, runner, stage_text, fps, print_warnings):
         write_animation(options.output, images, fps, **options.colour)
 
     table = _table(f"lantern render ({runner.name})",
-                   ("worker", "chunks", "frames", "seconds", "cold s", "warm ms/frame"))
+                   ("worker", "device", "chunks", "frames", "seconds", "cold s",
+                    "warm ms/frame"))
     for worker, tally in sorted(per_worker.items()):
-        table.add_row(worker, str(tally.chunks), str(tally.frames), f"{tally.seconds:.2f}",
-                      f"{max(tally.cold):.2f}" if tally.cold else "-",
+        table.add_row(worker, tally.device or "-", str(tally.chunks), str(tally.frames),
+                      f"{tally.seconds:.2f}", f"{max(tally.cold):.2f}" if tally.cold else "-",
                       f"{statistics.median(tally.warm) * 1000:.1f}" if tally.warm else "-")
     _print(table)
     if dashboard:

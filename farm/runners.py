@@ -6,10 +6,13 @@ Both runners take the same tasks (tasks.py) and hand back the same `Done` record
   better than a LocalCluster on one machine, see docs/status.md). Spawned, SIGINT ignored (the
   client alone answers Ctrl-C), one task at a time each, kept for the whole batch so a
   process keeps its Sessions. A process that dies mid-task is replaced and its task
-  runs again on another, up to RETRIES times.
+  runs again on another, up to RETRIES times. Process k draws on GPU k mod the
+  number of GPUs (engine/gpu/devices.py), its replacement on the same.
 - `DaskRunner`: a Dask cluster: an existing scheduler (`tcp://HOST:PORT`) or an
-  embedded LocalCluster (`local`). Tasks carry their worker resources (`bpy`, `gl`), so
-  a worker is only given what it offers. The scheduler itself reruns a task whose
+  embedded LocalCluster (`local`), whose workers spread over this machine's GPUs as
+  dask-cuda's LocalCUDACluster does (each its own LANTERN_GPU and a `GPU` resource).
+  Tasks carry their worker resources (`bpy`, `gl`, `GPU`), so a worker is only given
+  what it offers. The scheduler itself reruns a task whose
   worker died (up to its `distributed.scheduler.allowed-failures`, 3 by default); the
   runner hears of each loss through the scheduler's `remove-worker` events.
 """
@@ -52,15 +55,16 @@ def _key(task):
 
 # --- the local pool ---------------------------------------------------------------------
 
-def _serve(conn, preload):
-    """A pool process: run tasks until told to stop, then release the sessions."""
+def _serve(conn, preload, slot):
+    """A pool process, worker `slot` of the pool: run tasks until told to stop, then
+    release the sessions."""
     import signal
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     if hasattr(signal, "pthread_sigmask"):   # started with it blocked: see _Process
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     try:
         if preload:
-            farm_tasks.preload()
+            farm_tasks.preload(slot)
         while True:
             message = conn.recv()
             if message is None:
@@ -78,10 +82,12 @@ def _serve(conn, preload):
 
 
 class _Process:
-    def __init__(self, context, preload):
+    def __init__(self, context, preload, slot):
         import signal
+        self.slot = slot
         self.conn, child = context.Pipe()
-        self.process = context.Process(target=_serve, args=(child, preload), daemon=True)
+        self.process = context.Process(target=_serve, args=(child, preload, slot),
+                                       daemon=True)
         # Ctrl-C reaches the whole process group, and only the client answers it,
         # even while a new process is still importing: the worker starts with SIGINT
         # blocked (the mask is kept across exec) and ignores it before unblocking.
@@ -129,14 +135,20 @@ class PoolRunner:
         self._context = multiprocessing.get_context("spawn")
         self._queue: deque[_Job] = deque()
         self._render = render
-        self._processes = [_Process(self._context, render) for _ in range(self.size)] \
+        self._processes = [_Process(self._context, render, k) for k in range(self.size)] \
             if render else []
 
     def workers(self, needs=None):
-        return self.size
+        return self.size if self.offers(needs or {}) else 0
 
     def offers(self, needs):
-        return True  # this machine runs Blender and GL, as `lantern` always has
+        # This machine runs Blender and GL, as `lantern` always has; a GPU is no
+        # resource here (the processes spread over the GPUs there are).
+        return set(needs) <= {"bpy", "gl"}
+
+    def _new_process(self):
+        free = min(set(range(self.size)) - {p.slot for p in self._processes})
+        self._processes.append(_Process(self._context, self._render, free))
 
     @property
     def pending(self):
@@ -151,7 +163,7 @@ class PoolRunner:
         between chunks."""
         while self._queue:
             if len(self._processes) < self.size and all(p.jobs for p in self._processes):
-                self._processes.append(_Process(self._context, self._render))
+                self._new_process()
             proc = min(self._processes, key=lambda p: len(p.jobs))
             if len(proc.jobs) >= (PIPELINE if self._render else 1):
                 return
@@ -237,18 +249,46 @@ def _release_plugin():
     return ReleaseSessions()
 
 
+def local_cluster(workers, gpus=None, **options):
+    """An embedded Dask LocalCluster of `workers` processes offering `bpy` and `gl`.
+    `gpus` (default: this machine's GPUs, none when LANTERN_GPU already chose one):
+    worker k gets LANTERN_GPU = gpus[k mod len(gpus)] and a `GPU` resource, as
+    dask-cuda's LocalCUDACluster gives each worker its CUDA_VISIBLE_DEVICES."""
+    import copy
+    import os
+
+    from distributed import LocalCluster
+    if gpus is None and not os.environ.get("LANTERN_GPU"):
+        from ..engine.gpu.devices import egl_devices
+        gpus = [d.index for d in egl_devices() if not d.software]
+    options = dict(threads_per_worker=1, processes=True, dashboard_address=":0",
+                   silence_logs=logging.ERROR, **options)
+    if not gpus:
+        return LocalCluster(n_workers=workers, resources={"bpy": 1, "gl": 1}, **options)
+
+    class LocalGPUCluster(LocalCluster):
+        def new_worker_spec(self):
+            (name, spec), = super().new_worker_spec().items()
+            spec = copy.deepcopy(spec)
+            gpu = gpus[len(self.worker_spec) % len(gpus)]
+            spec["options"]["env"] = {**spec["options"].get("env", {}), "LANTERN_GPU": str(gpu)}
+            return {name: spec}
+
+    cluster = LocalGPUCluster(n_workers=0, resources={"bpy": 1, "gl": 1, "GPU": 1}, **options)
+    cluster.scale(workers)
+    return cluster
+
+
 class DaskRunner:
     def __init__(self, address, local_workers=2):
-        from distributed import Client, LocalCluster
+        from distributed import Client
         logging.getLogger("distributed").setLevel(logging.ERROR)
         self._cluster = None
         try:
             if address == "local":
-                self._cluster = LocalCluster(
-                    n_workers=local_workers, threads_per_worker=1, processes=True,
-                    resources={"bpy": 1, "gl": 1}, dashboard_address=":0",
-                    silence_logs=logging.ERROR)
+                self._cluster = local_cluster(local_workers)
                 self._client = Client(self._cluster)
+                self._client.wait_for_workers(local_workers)
             else:
                 self._client = Client(address, timeout="10s")
         except (OSError, TimeoutError) as error:

@@ -25,10 +25,12 @@ from ..core.subdivision_modes import FILE_DEFAULT
 from ..core.text import error_text, frame_path, one_line
 
 # Dask worker resources. A worker offers `bpy` when it can run Blender (a subprocess per
-# export) and `gl` when it can make an EGL context; a task is only ever given to a worker
-# that offers what it needs.
+# export), `gl` when it can make an EGL context, and `GPU` when it has a GPU of its own
+# (the one its LANTERN_GPU names); a task is only ever given to a worker that offers
+# what it needs. Render chunks ask for a GPU where the cluster offers one (`gpu`).
 EXPORT_NEEDS = {"bpy": 1}
 RENDER_NEEDS = {"gl": 1}
+GPU_RENDER_NEEDS = {**RENDER_NEEDS, "GPU": 1}
 
 INTERRUPTED = 130
 
@@ -69,7 +71,11 @@ class RenderChunk:
     # Blender's colour management for .png outputs (engine/color.py): view, look, exposure.
     colour: tuple = ("Standard", None, 0.0)
     overlays: object = None     # engine/overlays.py BurnIn: drawn on each .png
-    needs = RENDER_NEEDS
+    gpu: bool = False           # ask the cluster for a worker's GPU (GPU_RENDER_NEEDS)
+
+    @property
+    def needs(self):
+        return GPU_RENDER_NEEDS if self.gpu else RENDER_NEEDS
 
     @property
     def label(self):
@@ -99,6 +105,7 @@ class TaskResult:
     failed: dict = field(default_factory=dict)   # frame -> why it was not rendered
     cold: float | None = None       # stage load + first render, when this task loaded it
     warm: list = field(default_factory=list)     # seconds of each warm render
+    device: str = ""                # the GPU the frames were drawn on, from their stats
 
 
 def run(task, stage_text=None):
@@ -108,13 +115,28 @@ def run(task, stage_text=None):
     return run_chunk(task, stage_text)
 
 
-def preload():
+def preload(slot=None):
     """What every render worker needs, done before its first task: the engine's
-    imports, the image writers and the GL context."""
+    imports, the image writers and the GL context, on the GPU of worker `slot` of this
+    machine (engine/gpu/devices.py). A context that cannot be made is said by each
+    chunk, with its reason."""
+    from ..engine.gpu import devices
     from ..engine.gpu.context import run_gl
     from ..engine.image_io import write_image  # noqa: F401
     from . import sessions  # noqa: F401
-    run_gl(lambda gl: None)
+    if slot is not None:
+        devices.assign_worker(slot)
+    try:
+        run_gl(lambda gl: None)
+    except RuntimeError:
+        pass
+
+
+def device_text(stats) -> str:
+    """'EGL device 0: llvmpipe (...)' from a render's stats."""
+    index = stats.get("gpu_device")
+    where = "default GL context" if index is None else f"EGL device {index}"
+    return f"{where}: {stats.get('gl_renderer', '?')}"
 
 
 def worker_name():
@@ -246,6 +268,7 @@ def _render_frames(task, session, load, result):
         else:
             result.warm.append(seconds)
         result.warnings += [w for w in image.warnings if w not in result.warnings]
+        result.device = result.device or device_text(image.stats)
         _keep(task, frame, paths[frame], image.rgba, result)
         t0 = time.perf_counter()
 

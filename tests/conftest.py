@@ -26,6 +26,12 @@ PROGRAM_CACHE = tempfile.mkdtemp(prefix="lantern-test-programs-")
 os.environ["LANTERN_PROGRAM_CACHE_DIR"] = PROGRAM_CACHE
 atexit.register(shutil.rmtree, PROGRAM_CACHE, True)
 
+# This suite runs on machines without a GPU (Mesa's llvmpipe): it expects the CPU, so no
+# render here, in this process or in any it starts (the CLI, farm workers, the engine
+# host in Blender), warns about rendering on it (engine/gpu/devices.py). A run that
+# must use a GPU sets LANTERN_REQUIRE_GPU=1 itself.
+os.environ.setdefault("LANTERN_REQUIRE_GPU", "0")
+
 # Shared test modules (calibration scenes and closed forms) live beside the tests.
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 

@@ -37,6 +37,8 @@ def test_loading_a_file_that_renders_with_lantern_starts_the_warm_host(addon, tm
     assert frame is not None and engine_host.generation == generation
     assert frame.stats["programs_compiled"] == 0, frame.stats
     assert frame.stats["programs_loaded"] == 0, "the warm-up left programs to the first F12"
+    # The suite expects the CPU (conftest.py), and the host inherits that: no warning.
+    assert not any("rendering on the CPU" in w for w in frame.warnings), frame.warnings
 
 
 def test_no_host_for_a_file_that_renders_with_another_engine(addon, tmp_path):

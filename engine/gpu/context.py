@@ -12,18 +12,22 @@ hands to ModernGL. It asks for the highest core profile first and steps down
 gives exactly the version asked for, so asking for 3.3 would turn every 4.x path off
 on the most common artist GPU. The backend's `load` returns GL entry points on every platform,
 for the few calls ModernGL lacks (stencil state, engine/gpu/stencil.py). Compiled
-programs belong to this context object and live as long as it does."""
+programs belong to this context object and live as long as it does.
+
+On Linux the context is made on the EGL device engine/gpu/devices.py chooses
+(LANTERN_GPU, a farm worker's slot, else the first GPU); a software rasteriser is
+an error where a GPU was expected, else one warning per process."""
 from __future__ import annotations
 
 import os
 import queue
-import sys
 import threading
 from concurrent.futures import Future
 from dataclasses import dataclass
 
 import moderngl
 
+from . import budget, devices
 from .program_binaries import BinaryLoader
 from .programs import ProgramCache
 
@@ -67,11 +71,19 @@ def _version_cap():
 
 class GLContext:
     def __init__(self):
-        self.backend, self.requested = _backend()
+        self.device = devices.choose()      # EGL device index; None: the platform's default
+        self.backend, self.requested = _backend(self.device)
         # ModernGL loads its entry points through the program cache's loader, which
         # stands in for compiling and linking (engine/gpu/program_binaries.py).
         self.loader = BinaryLoader(self.backend)
         self.ctx = moderngl.create_context(standalone=True, context=self.loader, require=GL_FLOOR)
+        self.renderer = str(self.ctx.info.get("GL_RENDERER", ""))
+        self.software = devices.is_software(self.renderer)
+        try:
+            self._notices = devices.check_renderer(self.renderer, self.device)
+        except devices.NoGPU:
+            self.ctx.release()
+            raise
         self.programs = ProgramCache(self.ctx, self.loader)
         # A surfaceless context has no default framebuffer, and some draws (transform
         # feedback with rasterisation off) fail without one: keep a 1x1 one bound.
@@ -86,7 +98,18 @@ class GLContext:
         info = self.ctx.info
         return {"gl_renderer": str(info.get("GL_RENDERER", "")),
                 "gl_version": str(info.get("GL_VERSION", "")),
-                "gl_requested": self.requested}
+                "gl_requested": self.requested,
+                "gpu_device": self.device, "gpu_devices": len(devices.egl_devices()),
+                "gpu_software": self.software}
+
+    def memory(self) -> budget.Memory:
+        """The device's total and free memory, as far as its driver says."""
+        return budget.memory(self.ctx, self.proc, self.software)
+
+    def take_notices(self) -> list:
+        """What the context has to say once (a software rasteriser's warning)."""
+        notices, self._notices = self._notices, []
+        return notices
 
     def proc(self, name: str) -> int:
         """The address of a GL entry point (0 when missing)."""
@@ -98,21 +121,23 @@ class GLContext:
         self.ctx.release()
 
 
-def _backend():
+def _backend(device):
     """(a standalone glcontext backend, the version it was asked for): the highest
-    core profile of GL_VERSIONS that the platform creates. LANTERN_MAX_GL caps the
-    paths taken (Features), not the request: the process's one context serves
-    sessions with and without the cap."""
+    core profile of GL_VERSIONS that the platform creates, on EGL device `device`
+    where there is one. LANTERN_MAX_GL caps the paths taken (Features), not the
+    request: the process's one context serves sessions with and without the cap."""
     import glcontext
-    versions = GL_VERSIONS
-    makers = [glcontext.default_backend]
-    if sys.platform.startswith("linux"):     # EGL needs no display; GLX is the fallback
-        makers.insert(0, lambda: glcontext.get_backend_by_name("egl"))
+    makers = [lambda version: glcontext.default_backend()(glversion=version,
+                                                          mode="standalone")]
+    if device is not None:     # EGL needs no display; GLX is the fallback
+        makers.insert(0, lambda version: devices.make_backend(device, version))
+        if devices.asked() is not None:
+            makers = makers[:1]    # the device asked for, or an error: never another
     first_error = None
     for make in makers:
-        for version in versions:
+        for version in GL_VERSIONS:
             try:
-                return make()(glversion=version, mode="standalone"), version
+                return make(version), version
             except Exception as error:       # this version or this backend: try the next
                 first_error = first_error or error
     raise RuntimeError(f"no headless OpenGL 3.3 context: {first_error}") from first_error

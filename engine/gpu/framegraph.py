@@ -105,6 +105,9 @@ class Pass:
     writes: tuple = ()
     writes_optional: tuple = ()  # entries written only in the frames that need them
     aovs: dict = {}     # render pass name -> (target, first channel) this pass can write
+    # Hands its writes on at the frame's output size, at which the passes after it draw
+    # (supersampling's reduction sets frame.size to it).
+    resizes: bool = False
 
     def needed(self, frame: Frame) -> bool:
         return True
@@ -142,8 +145,9 @@ class FrameGraph:
                     raise ValueError(f"pass {p.name} writes {aov} into {target}, not a target")
                 self.producers.setdefault(aov, []).append(p)
 
-    def run(self, frame: Frame) -> dict:
-        board = {}
+    def _plan(self, frame: Frame):
+        """(the passes that run, what each writes, {target: index of the last pass
+        using it}; the AOV targets, kept to the end, have none)."""
         unknown = sorted(set(frame.aovs) - set(self.producers))
         if unknown:
             raise ValueError(f"no pass writes the render passes {unknown}")
@@ -165,6 +169,33 @@ class FrameGraph:
             for name in p.reads + p.optional + writes[p]:
                 if name in TARGETS and name not in kept:
                     last_use[name] = i
+        return live, writes, last_use
+
+    def plan(self, frame: Frame):
+        """What `run` will do for this frame, worked out once: pass it to `held` and
+        `run`."""
+        return self._plan(frame)
+
+    @staticmethod
+    def held(frame: Frame, plan) -> dict:
+        """{(size, format): the most targets of it the frame holds at once}: what `run`
+        takes from the pool (its targets' memory, engine/gpu/budget.py)."""
+        live, writes, last_use = plan
+        size, held, most = frame.size, {}, {}
+        for i, p in enumerate(live):
+            if p.resizes:
+                size = frame.output_size or size
+            for name in writes[p]:
+                if name in TARGETS and (name not in held or p.resizes):
+                    key = held[name] = (size, TARGETS[name])
+                    most[key] = max(most.get(key, 0), list(held.values()).count(key))
+            for name in [n for n, last in last_use.items() if last == i and n in held]:
+                del held[name]
+        return most
+
+    def run(self, frame: Frame, plan=None) -> dict:
+        board = {}
+        live, writes, last_use = plan or self._plan(frame)
         frame.stats["passes"] = [p.name for p in live]
         stamps = frame.stamps = self.timer.begin()
         try:

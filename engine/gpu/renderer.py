@@ -9,6 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from . import budget
 from .context import Features
 from .depth import DepthConvention
 from .environment import Environment
@@ -48,12 +49,11 @@ def shadow_ratio(sums: np.ndarray) -> np.ndarray:
     return np.repeat(np.clip(ratio, 0.0, 1.0)[..., None], 3, axis=2).astype(np.float32)
 
 
-def supersample_factor(frame, size, max_texture: int) -> int:
-    """The preset's (or the settings') supersampling, as far as GL's texture size
-    allows."""
+def supersample_factor(frame) -> int:
+    """The preset's (or the settings') supersampling. Never lowered to fit the driver:
+    a frame too large for it at this factor is refused (budget.check)."""
     o = frame.options.supersample
-    k = max(int(frame.preset.supersample if o is None else o), 1)
-    return max(1, min(k, int(max_texture) // max(max(size), 1)))
+    return max(int(frame.preset.supersample if o is None else o), 1)
 
 
 # Every counter a render reports, zero when nothing of the kind happened.
@@ -83,7 +83,10 @@ class Renderer:
         self.ctx = ctx
         self.preset = preset
         self.features = Features.of(gl.version)
+        self.gl = gl
         self.gl_info = {**gl.describe(), "gl_path": _path_name(self.features)}
+        self.largest_side = budget.largest_side(ctx)
+        self._memory = None         # the device's memory as last asked (budget.Memory)
         self.uploads = Uploads(ctx)
         self.stencil = Stencil(gl.proc)
         self.depth = DepthConvention(gl.proc, self.features.clip_control)
@@ -166,12 +169,14 @@ class Renderer:
         frame.stats["meshes_uploaded"] = self.update(scene, changes, cull_backfaces)
         frame.scene = self._drawable(frame)
         frame.timings["upload"] = time.perf_counter() - t0
-        k = supersample_factor(frame, size, self.ctx.info.get("GL_MAX_TEXTURE_SIZE", 16384))
+        k = supersample_factor(frame)
         frame.supersample, frame.output_size = k, tuple(size)
         frame.size = (size[0] * k, size[1] * k)
+        plan = self.graph.plan(frame)
+        self._check_fits(frame, plan)
         self.depth.begin()
         try:
-            board = self.graph.run(frame)
+            board = self.graph.run(frame, plan)
         finally:
             self.depth.end()
         self._drawn = dict(frame.scene.materials)
@@ -189,6 +194,20 @@ class Renderer:
         frame.board = board
         self._restore_state()
         return frame
+
+    def _check_fits(self, frame, plan):
+        """Refuses, before any drawing, a frame whose targets the device cannot hold
+        (budget.py); puts the device's memory and the targets' bytes in the stats. The
+        memory is asked for when the frame needs new targets (a warm frame reuses the
+        pool's and reports the last figures)."""
+        needed = self.pool.new_bytes(self.graph.held(frame, plan))
+        if needed or self._memory is None:
+            self._memory = self.gl.memory()
+        memory = self._memory
+        frame.stats.update(memory.stats(), target_bytes_allocated=needed)
+        quality = frame.preset.name if frame.options.supersample is None else ""
+        budget.check(frame.output_size, frame.supersample, quality, self.largest_side,
+                     needed, memory)
 
     def _forms(self, options) -> tuple:
         """(compute, lighting) of a frame with these settings on this context."""
@@ -268,8 +287,10 @@ class Renderer:
 
     def warnings(self) -> list:
         """What the GL side could not use (images it could not read) and the last
-        render's non-finite pixels, named by the prims they lie on."""
-        return list(self.textures.failed.values()) + self.resolve.warnings
+        render's non-finite pixels, named by the prims they lie on; and, once per
+        process, that it draws on the CPU (engine/gpu/devices.py)."""
+        return self.gl.take_notices() + list(self.textures.failed.values()) + \
+            self.resolve.warnings
 
     def skinned_points(self, scene, changes) -> dict:
         """{mesh path: (points, normals)} of every skinned mesh at this sync's time,

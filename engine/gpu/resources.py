@@ -92,6 +92,9 @@ def _bytes(data) -> bytes:
 # "depth_stencil" a DEPTH32F_STENCIL8 renderbuffer (light volumes).
 COLOR_FORMATS = {"rgba16f": (4, "f2"), "rgba32f": (4, "f4"),
                  "r32f": (1, "f4"), "rg32f": (2, "f4")}   # render passes (AOVs)
+# Bytes per texel of every format (depth_stencil: DEPTH32F_STENCIL8 is stored in 8).
+TEXEL_BYTES = {"depth": 4, "depth_stencil": 8,
+               **{fmt: n * int(dtype[1]) for fmt, (n, dtype) in COLOR_FORMATS.items()}}
 
 
 class TargetPool:
@@ -131,6 +134,16 @@ class TargetPool:
             tex = ctx.texture(size, components, dtype=dtype)
         tex.filter = (ctx.NEAREST, ctx.NEAREST)
         return tex
+
+    def new_bytes(self, held) -> int:
+        """The bytes the pool would allocate to hand out, at once, `held`: {(size,
+        format): count} (what it holds free of a key is used first)."""
+        total = 0
+        for (size, fmt), count in held.items():
+            key = (tuple(int(s) for s in size), fmt)
+            missing = max(0, count - len(self._free.get(key, ())))
+            total += missing * size[0] * size[1] * TEXEL_BYTES[fmt]
+        return total
 
     def framebuffer(self, colors=(), depth=None, depth_stencil=None):
         """The framebuffer of these attachments (made once, kept while they live)."""

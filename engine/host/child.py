@@ -77,6 +77,9 @@ class Host:
         self.scenes = {}
         self.inbox = queue.Queue()
         self.parent_gone = False
+        # The context's own warning (rendering on the CPU), taken before the warm-up's
+        # renders and handed to Blender with the first frame it asks for.
+        self.notices = []
 
     # --- messages ---------------------------------------------------------------------
     def _read(self):
@@ -223,7 +226,8 @@ class Host:
                    width=w, height=h, layout=frame_layout,
                    final=final and not scene.compiling, preset=preset,
                    stats=result.stats, timings=result.timings, gpu_timings=result.gpu_timings,
-                   warnings=result.warnings)
+                   warnings=self.notices + result.warnings)
+        self.notices = []
         return True
 
     def _warm(self, presets):
@@ -245,8 +249,10 @@ class Host:
         threading.Thread(target=self._read, name="lantern-host-reader", daemon=True).start()
         try:
             from ..gpu.context import run_gl
-            gl = run_gl(lambda gl: f"OpenGL {gl.ctx.info['GL_VERSION']}, "
-                                   f"{gl.ctx.info['GL_RENDERER']}")
+            gl, self.notices = run_gl(lambda gl: (
+                f"OpenGL {gl.ctx.info['GL_VERSION']}, {gl.renderer}"
+                + ("" if gl.device is None else f", EGL device {gl.device}"),
+                gl.take_notices()))
         except Exception as error:
             self._send(protocol.FATAL,
                        message=f"the engine could not get an OpenGL context: {error}")

@@ -88,6 +88,7 @@ class SupersamplePass(Pass):
     name = "supersample"
     reads = ("hdr",)
     writes = ("hdr",)
+    resizes = True      # hdr leaves at the image size, and later passes draw at it
 
     def __init__(self, ctx, pool, programs):
         self.ctx, self.pool, self.programs = ctx, pool, programs
