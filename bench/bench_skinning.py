@@ -1,29 +1,35 @@
-"""GPU skinning: frame time and per-frame CPU (Python) time against skinned vertex
-count and character count. Prints a table; asserts nothing.
+"""GPU skinning: frame time, per-frame CPU (Python) time and the skinning pass's GPU
+time against skinned vertex count and character count, in both of the pass's forms:
+compute (skin.comp, GL 4.3) and transform feedback (skin.vert, GL 3.3/4.1 and
+RenderSettings(compute=False)). Prints a table; asserts nothing.
 
-Each case is a sequence (render_sequence) of procedural characters: a grid mesh
-bound with 4 influences to a 64-joint skeleton with an animated rotation per joint.
-The first frame (upload, shader compile) is left out. "cpu" is the time spent in
-Python reading the frame (UsdSkel poses, blend weights, transforms) plus the
-renderer's Python work, i.e. the frame's wall time less the GPU-bound passes as
-timed after ctx.finish(); on llvmpipe the "GPU" is the CPU too, so frame time is
+Each case is a scene of procedural characters: a grid mesh bound with 4 influences to
+a 64-joint skeleton with an animated rotation per joint, rendered at 320x180 by one
+Session per form, frame changes taking turns between the forms (the first frame,
+upload and compile, left out); each figure is the fastest of 6, since other work on
+a shared machine only ever adds time. "cpu read" is the time spent in Python reading
+the frame (UsdSkel poses, blend weights, transforms). The skinning figures are the
+pass's GPU time (timer queries); on llvmpipe the "GPU" is the CPU too, so frame time is
 dominated by vertex shading at 1M vertices.
 
-Each case runs twice: with authored normals (skinned, as UsdSkel skins them), and
-without (the deformed surface's own, gathered per point on the GPU each frame, as the
-baked twin and Blender have them): the skinning pass's time (median) both ways, and
-the ratio of frame times."""
+Each case runs with authored normals (skinned, as UsdSkel skins them) and without
+(the deformed surface's own, gathered per point on the GPU each frame, as the baked
+twin and Blender have them), each in both forms: the skinning pass's GPU time, and
+compute's time over transform feedback's ("c/tf").
+
+    python bench/bench_skinning.py [--quick]     # --quick: no 1M-point character"""
+import sys
 import time
 
 import lantern.exporters  # noqa: F401  (Blender's pxr first)
 import numpy as np
 from pxr import Gf, Usd, UsdGeom, UsdSkel, Vt
 
-from lantern.engine import RenderSettings
-from lantern.engine.api import render_sequence
+from lantern.engine import RenderSettings, Session
 
 JOINTS = 64
 FRAMES = 4
+ROUNDS = 6
 
 
 def add_character(stage, k, n_verts, offset, normals=False):
@@ -69,35 +75,64 @@ def add_character(stage, k, n_verts, offset, normals=False):
     return len(quads) * 6       # soup vertices drawn (two triangles per quad)
 
 
-def case(n_chars, verts_per_char, normals):
+def stage_of(n_chars, verts_per_char, normals):
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     side = int(np.ceil(np.sqrt(n_chars)))
     drawn = sum(add_character(stage, k, verts_per_char, ((k % side) * 1.5, (k // side) * 1.5, 0),
                               normals) for k in range(n_chars))
-    frames, cpu, skinning = [], [], []
-    for i, (_, res) in enumerate(render_sequence(stage, 1, FRAMES, RenderSettings(width=320, height=180))):
-        if i == 0:
-            continue                       # upload and compile
-        t = res.timings
-        frames.append(t["total"])
-        cpu.append(t["load"])
-        skinning.append(t["skinning"])
-    return drawn, np.median(frames) * 1000, np.median(cpu) * 1000, np.median(skinning) * 1000
+    return stage, drawn
+
+
+def case(stage, rounds):
+    """{form: (frame ms, cpu read ms, skinning GPU ms)}, the fastest of `rounds` frame
+    changes per form (None: compute, False: transform feedback), the forms taking
+    turns so that load from other work on the machine falls on both alike."""
+    sessions = {form: Session(stage, RenderSettings(width=320, height=180, compute=form))
+                for form in (None, False)}
+    seen = {form: [] for form in sessions}
+    try:
+        for session in sessions.values():
+            session.render(frame=1)                 # upload and compile
+        for r in range(rounds):
+            frame = 2 + r % (FRAMES - 1)            # every render a new pose
+            for form, session in sessions.items():
+                res = session.render(frame=frame)
+                seen[form].append((res.timings["total"], res.timings["load"],
+                                   res.gpu_timings["skinning"]))
+    finally:
+        for session in sessions.values():
+            session.close()
+    return {form: tuple(1000 * min(v[i] for v in values) for i in range(3))
+            for form, values in seen.items()}
+
+
+CASES = [(1, 10_000), (1, 100_000), (1, 1_000_000), (10, 10_000), (100, 1_000), (100, 10_000)]
 
 
 def main():
+    quick = "--quick" in sys.argv[1:]
     print(f"{'chars':>6} {'points/char':>12} {'skinned verts':>14} {'frame ms':>10} "
-          f"{'cpu read ms':>12} {'skinning ms':>12} {'+surface normals':>17} "
-          f"{'frame x':>8}")
-    for n_chars, pts in [(1, 10_000), (1, 100_000), (1, 1_000_000), (10, 10_000), (100, 1_000),
-                         (100, 10_000)]:
+          f"{'cpu read ms':>12} | {'skinning GPU ms':>15} {'tf':>7} {'c/tf':>5} | "
+          f"{'+surface normals':>16} {'tf':>7} {'c/tf':>5} | {'frame x':>7}")
+    for n_chars, pts in CASES:
+        if quick and pts >= 1_000_000:
+            continue
         t0 = time.perf_counter()
-        drawn, frame_ms, cpu_ms, skin_ms = case(n_chars, pts, normals=True)
-        _, surface_ms, _, surface_skin_ms = case(n_chars, pts, normals=False)
-        print(f"{n_chars:>6} {pts:>12,} {drawn:>14,} {frame_ms:>10.1f} {cpu_ms:>12.2f} "
-              f"{skin_ms:>12.1f} {surface_skin_ms:>17.1f} {surface_ms / frame_ms:>8.2f}"
-              f"   (case {time.perf_counter() - t0:.0f} s)", flush=True)
+        row = {}
+        for normals in (True, False):
+            stage, drawn = stage_of(n_chars, pts, normals)
+            for form, figures in case(stage, ROUNDS).items():
+                row[normals, form] = figures
+        frame_ms, cpu_ms, skin_c = row[True, None]
+        skin_tf = row[True, False][2]
+        surf_frame, _, surf_c = row[False, None]
+        surf_tf = row[False, False][2]
+        print(f"{n_chars:>6} {pts:>12,} {drawn:>14,} {frame_ms:>10.1f} {cpu_ms:>12.2f} | "
+              f"{skin_c:>15.2f} {skin_tf:>7.2f} {skin_c / skin_tf:>5.2f} | "
+              f"{surf_c:>16.2f} {surf_tf:>7.2f} {surf_c / surf_tf:>5.2f} | "
+              f"{surf_frame / frame_ms:>7.2f}   (case {time.perf_counter() - t0:.0f} s)",
+              flush=True)
 
 
 if __name__ == "__main__":

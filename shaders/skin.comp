@@ -7,11 +7,11 @@
 // again on the deformed vertices in place, rewriting only normals and tangents (the
 // positions it reads from other vertices are not written by any invocation).
 layout(local_size_x = 64) in;
-layout(std430, binding = 0) buffer Deformed { float deformed[]; };
-layout(std430, binding = 1) readonly buffer Rest { float rest[]; };
+layout(std430, binding = 0) buffer Deformed { vec4 deformed[]; };
+layout(std430, binding = 1) readonly buffer Rest { vec4 rest[]; };
 layout(std430, binding = 2) readonly buffer Attributes { int attributes[]; };
 uniform int u_vertices;
-uniform int u_first;              // the mesh's first float in `deformed`
+uniform int u_first;              // the mesh's first texel (4 floats) in `deformed`
 uniform int u_attribute_stride;   // ints per vertex in `attributes`: its point, influences
 
 int vertex_index;                 // this invocation's vertex
@@ -26,10 +26,7 @@ void vertex_influences(int h, out ivec4 j, out vec4 w) {
 #endif
 
 #ifdef SKIN_SURFACE_NORMALS
-vec3 deformed_position(int v) {
-    int i = u_first + 12 * v;
-    return vec3(deformed[i], deformed[i + 1], deformed[i + 2]);
-}
+vec3 deformed_position(int v) { return deformed[u_first + 3 * v].xyz; }
 #endif
 
 void main() {
@@ -39,23 +36,22 @@ void main() {
     if (v >= u_vertices) return;
     vertex_index = v;
     int point = attributes[v * u_attribute_stride];
-    int o = u_first + 12 * v;
+    // A vertex is 3 texels: (position, normal.x), (normal.yz, uv), tangent.
+    int o = u_first + 3 * v;
 #ifdef SKIN_SURFACE_NORMALS
-    vec3 n;
-    vec3 t = vec3(deformed[o + 8], deformed[o + 9], deformed[o + 10]);
+    vec4 a = deformed[o], b = deformed[o + 1], c = deformed[o + 2];
+    vec3 n, t = c.xyz;
     surface_frame(point, n, t);
-    deformed[o + 3] = n.x; deformed[o + 4] = n.y; deformed[o + 5] = n.z;
-    deformed[o + 8] = t.x; deformed[o + 9] = t.y; deformed[o + 10] = t.z;
+    // Only this vertex's normal and tangent: positions are what the others read.
+    deformed[o].w = n.x;
+    deformed[o + 1].xy = n.yz;
+    deformed[o + 2].xyz = t;
 #else
-    int r = 12 * v;
-    vec3 p = vec3(rest[r], rest[r + 1], rest[r + 2]);
-    vec3 n = vec3(rest[r + 3], rest[r + 4], rest[r + 5]);
-    vec3 t = vec3(rest[r + 8], rest[r + 9], rest[r + 10]);
+    vec4 a = rest[3 * v], b = rest[3 * v + 1], c = rest[3 * v + 2];
+    vec3 p = a.xyz, n = vec3(a.w, b.xy), t = c.xyz;
     skin_vertex(point, p, n, t);
-    deformed[o] = p.x; deformed[o + 1] = p.y; deformed[o + 2] = p.z;
-    deformed[o + 3] = n.x; deformed[o + 4] = n.y; deformed[o + 5] = n.z;
-    deformed[o + 6] = rest[r + 6]; deformed[o + 7] = rest[r + 7];
-    deformed[o + 8] = t.x; deformed[o + 9] = t.y; deformed[o + 10] = t.z;
-    deformed[o + 11] = rest[r + 11];
+    deformed[o] = vec4(p, n.x);
+    deformed[o + 1] = vec4(n.yz, b.zw);
+    deformed[o + 2] = vec4(t, c.w);
 #endif
 }

@@ -264,7 +264,7 @@ class SkinningPass(Pass):
         base = offset - offset % self._align
         target.bind_to_storage_buffer(0, offset=base, size=offset + n * VERTEX_BYTES - base)
         inp.attributes.bind_to_storage_buffer(2)
-        set_uniform(prog, "u_first", (offset - base) // 4)
+        set_uniform(prog, "u_first", (offset - base) // 16)
         set_uniform(prog, "u_vertices", int(n))
         set_uniform(prog, "u_attribute_stride", int(inp.stride))
         groups = -(-n // GROUP)
