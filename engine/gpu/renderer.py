@@ -29,7 +29,7 @@ from .passes.skinning import SkinningPass
 from .passes.tessellation import TessellationPass
 from .passes.transparency import TransparencyPass
 from .passes.view import ViewPass
-from .readback import Readback, ReadbackRequest
+from .readback import Readback, ReadbackRequest, read_mode
 from .resources import TargetPool, Uploads
 from .stencil import Stencil
 from .textures import MaterialTextures
@@ -97,7 +97,9 @@ class Renderer:
                                              gl.proc, gl.scratch)
         self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights,
                                   self.depth, self.textures)
-        self.readback = Readback(ctx, programs, gl.proc, compute=self.features.multi_draw)
+        self.readback = Readback(ctx, programs, gl.proc, compute=self.features.multi_draw,
+                                 mode=read_mode(self.features.version))
+        self.gl_info["readback_mode"] = self.readback.mode
         self.resolve = ResolvePass(ctx, self.pool, programs, self.geometry, self.depth,
                                    self.readback)
         self.gbuffer = GBufferPass(ctx, self.pool, programs, self.geometry, self.textures,
