@@ -143,3 +143,20 @@ def test_compute_skinning_reads_no_memory_that_nothing_wrote(forms, junk, monkey
     assert set(forms) == {"compute"}
     for a, b in zip(clean, dirty):
         assert _worst(a, b) == 0.0
+
+
+def test_a_store_bound_from_an_aligned_texel_below_the_mesh(forms):
+    """Drivers may align storage bindings to as much as 256 bytes (llvmpipe: 16): the
+    store is then bound from below a mesh's first vertex and the shader starts that
+    many texels in. The crowd's second mesh starts mid-block at that alignment."""
+    stage = crowd_stage()
+    with Session(stage, RenderSettings(width=1, height=1)) as session:
+        skinning_pass = session._renderer.skinning
+        skinning_pass._align = 256
+        got = session.skinned_points(2.0)
+        geometry = session._renderer.geometry
+        offsets = run_gl(lambda gl: [geometry.deform_target(key)[1]
+                                     for key in skinning_pass.inputs])
+    assert any(offset % 256 for offset in offsets), offsets
+    assert set(forms) == {"compute"}
+    assert _worst(got, _deformed(stage, False, [2.0])[2.0]) <= BOUND

@@ -30,6 +30,7 @@ reads: nothing   writes: skinned (this frame's posed boxes, and a readback)"""
 from __future__ import annotations
 
 import ctypes
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -112,7 +113,9 @@ class SkinningPass(Pass):
             value = ctypes.c_int(0)
             entry_points(proc, _SIGS)["glGetIntegerv"](GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT,
                                                        ctypes.byref(value))
-            self._align = max(int(value.value), 4)
+            # Whole texels (16 bytes: skin.comp indexes the store by them) at or below a
+            # mesh's first vertex, on the binding alignment.
+            self._align = math.lcm(max(int(value.value), 1), 16)
             self._block = int(ctx.info["GL_MAX_SHADER_STORAGE_BLOCK_SIZE"])
 
     def needed(self, frame):
@@ -258,8 +261,8 @@ class SkinningPass(Pass):
         self._dispatch(prog, mesh, inp)
 
     def _dispatch(self, prog, mesh, inp):
-        """Runs skin.comp over a mesh's vertices: its target bound from the storage
-        alignment at or below its first vertex, the rest given as u_first."""
+        """Runs skin.comp over a mesh's vertices: its target bound from the aligned
+        texel at or below its first vertex, the texels between given as u_first."""
         target, offset, n = self.geometry.deform_target(mesh.key)
         base = offset - offset % self._align
         target.bind_to_storage_buffer(0, offset=base, size=offset + n * VERTEX_BYTES - base)
