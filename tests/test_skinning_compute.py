@@ -4,7 +4,8 @@ same deformed vertices, within 1e-6 of the bounding-box diagonal: linear blend a
 dual-quaternion skinning, blend shapes (with normal offsets), influences past 8 (the
 per-point texture), the crowd (two meshes on one skeleton, surface normals gathered
 on the GPU) and a skinned subdivision cage (its patches made from the skinned
-points, then tessellated). The compute form reads no memory that nothing wrote."""
+points, then tessellated). The compute form reads no memory that nothing wrote, and
+binds the store right on any storage-offset alignment."""
 import numpy as np
 import pytest
 from pxr import Sdf, Usd, UsdGeom
