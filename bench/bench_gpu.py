@@ -13,8 +13,11 @@ as on llvmpipe. A frame is `Session.render` until the image is in host memory, w
 (the scene read, programs compiled and meshes uploaded before). The readback is timed
 three ways: float32 blocking (F12), half floats blocking (a viewport), and queued
 behind a fence in a sequence (Session.render_frames), whose figure is the frame
-interval. `--images` saves each scene's medium image at 640x360 (`--image-sizes`) as a
-compressed .npz, to compare one machine's pixels with another's (`compare DIR_A DIR_B`)."""
+interval. The frame is printed both ways: into a caller's buffer, reused (the engine
+host's shared memory), and into a new array (Session.render() without out=); the read
+mode (engine/gpu/readback.py) is LANTERN_READBACK's. `--images` saves each scene's
+medium image at 640x360 (`--image-sizes`) as a compressed .npz, to compare one
+machine's pixels with another's (`compare DIR_A DIR_B`)."""
 from __future__ import annotations
 
 import argparse
@@ -98,6 +101,14 @@ def measure(name, stage, size, preset, images, image_sizes):
             results.append(_render(s, change))
             walls.append(time.perf_counter() - t0)
         last = results[-1]
+        # Into the caller's buffer, reused (as the engine host's shared memory is):
+        # no first touch of new pages per frame (the walls above read into new arrays).
+        buffer = np.zeros((size[1], size[0], 4), np.float32)
+        into = []
+        for change in changes[1:]:
+            t0 = time.perf_counter()
+            _render(s, change, out=buffer)
+            into.append(time.perf_counter() - t0)
         s.configure(readback="half")
         half = [_render(s, c).timings["readback"] for c in changes[1:]]
         s.configure(readback="float32")
@@ -113,6 +124,7 @@ def measure(name, stage, size, preset, images, image_sizes):
     return {
         "scene": name, "size": list(size), "preset": preset, "supersample": k,
         "frame_ms": med(walls) * 1e3,
+        "frame_into_buffer_ms": med(into) * 1e3,
         "readback_ms": med(r.timings["readback"] for r in results) * 1e3,
         "readback_half_ms": med(half) * 1e3,
         "sequence_frame_ms": None if queued is None else queued * 1e3,
@@ -122,7 +134,7 @@ def measure(name, stage, size, preset, images, image_sizes):
         "gpu_pass_ms": {p: v * 1e3 for p, v in last.gpu_timings.items()},
         "gpu_ms": sum(last.gpu_timings.values()) * 1e3,
         "gl": {key: last.stats[key] for key in
-               ("gl_renderer", "gl_version", "gl_requested", "gl_path")},
+               ("gl_renderer", "gl_version", "gl_requested", "gl_path", "readback_mode")},
     }
 
 
@@ -149,7 +161,7 @@ def run(folder, sizes, presets, json_path, images, everything, image_sizes=("640
                 _print(row)
     if gl:
         print(f"GL: {gl['gl_renderer']}, {gl['gl_version']} (asked {gl['gl_requested']}); "
-              f"{gl['gl_path']}")
+              f"{gl['gl_path']}; read-back {gl['readback_mode']}")
     if json_path:
         payload = {"date": time.strftime("%Y-%m-%d"), "gl": gl, "rows": rows}
         tmp = f"{json_path}.tmp"
@@ -163,7 +175,8 @@ def _print(row):
     heavy = sorted(row["gpu_pass_ms"].items(), key=lambda kv: -kv[1])[:3]
     seq = f", in a sequence {row['sequence_frame_ms']:.1f}" if row["sequence_frame_ms"] else ""
     print(f"  {row['scene']:<6} {row['size'][0]}x{row['size'][1]:<5} {row['preset']:<7}"
-          f" frame {row['frame_ms']:8.1f} ms{seq} | GPU {row['gpu_ms']:7.1f} | CPU "
+          f" frame {row['frame_into_buffer_ms']:8.1f} ms into a buffer, "
+          f"{row['frame_ms']:8.1f} into a new array{seq} | GPU {row['gpu_ms']:7.1f} | CPU "
           f"{row['cpu_ms']:6.1f} | readback f32 {row['readback_ms']:5.1f} "
           f"({100 * row['readback_ms'] / row['frame_ms']:4.1f}%), f16 "
           f"{row['readback_half_ms']:5.1f} | heaviest: "

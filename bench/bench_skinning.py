@@ -1,29 +1,40 @@
-"""GPU skinning: frame time and per-frame CPU (Python) time against skinned vertex
-count and character count. Prints a table; asserts nothing.
+"""GPU skinning: frame time, per-frame CPU (Python) time and the skinning pass's GPU
+time against skinned vertex count and character count, in both of the pass's forms:
+compute (skin.comp, GL 4.3) and transform feedback (skin.vert, GL 3.3/4.1 and
+RenderSettings(compute=False)). Prints a table; asserts nothing.
 
-Each case is a sequence (render_sequence) of procedural characters: a grid mesh
-bound with 4 influences to a 64-joint skeleton with an animated rotation per joint.
-The first frame (upload, shader compile) is left out. "cpu" is the time spent in
-Python reading the frame (UsdSkel poses, blend weights, transforms) plus the
-renderer's Python work, i.e. the frame's wall time less the GPU-bound passes as
-timed after ctx.finish(); on llvmpipe the "GPU" is the CPU too, so frame time is
-dominated by vertex shading at 1M vertices.
+Each case is a scene of procedural characters: a grid mesh bound with 4 influences to
+a 64-joint skeleton with an animated rotation per joint, rendered at 320x180 (frame
+changes, the form switched by Session.configure(compute=...), taking turns; the first
+frames, upload and compile, left out). Each figure is the fastest of 6, since other
+work on a shared machine only ever adds time. "frame" and "cpu read" (the time spent
+in Python reading the frame: UsdSkel poses, blend weights, transforms) are compute's.
+The skinning figures time the pass alone, both forms on the same meshes, between two
+glFinish (case()); on llvmpipe the "GPU" is the CPU too, so frame time is dominated by
+vertex shading at 1M vertices.
 
-Each case runs twice: with authored normals (skinned, as UsdSkel skins them), and
-without (the deformed surface's own, gathered per point on the GPU each frame, as the
-baked twin and Blender have them): the skinning pass's time (median) both ways, and
-the ratio of frame times."""
+Each case runs with authored normals (skinned, as UsdSkel skins them) and without
+(the deformed surface's own, gathered per point on the GPU each frame, as the baked
+twin and Blender have them), each in both forms: the skinning pass's GPU time, and
+compute's time over transform feedback's ("c/tf").
+
+    python bench/bench_skinning.py [--quick]     # --quick: no 1M-point character"""
+import sys
 import time
 
-import lantern.exporters  # noqa: F401  (Blender's pxr first)
+try:
+    import lantern.exporters  # noqa: F401  (where bpy is, Blender's pxr first)
+except ImportError:           # no bpy (the GPU machine): usd-core's pxr
+    pass
 import numpy as np
 from pxr import Gf, Usd, UsdGeom, UsdSkel, Vt
 
-from lantern.engine import RenderSettings
-from lantern.engine.api import render_sequence
+from lantern.engine import RenderSettings, Session
+from lantern.engine.gpu.context import run_gl
 
 JOINTS = 64
 FRAMES = 4
+ROUNDS = 6
 
 
 def add_character(stage, k, n_verts, offset, normals=False):
@@ -69,35 +80,75 @@ def add_character(stage, k, n_verts, offset, normals=False):
     return len(quads) * 6       # soup vertices drawn (two triangles per quad)
 
 
-def case(n_chars, verts_per_char, normals):
+def stage_of(n_chars, verts_per_char, normals):
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     side = int(np.ceil(np.sqrt(n_chars)))
     drawn = sum(add_character(stage, k, verts_per_char, ((k % side) * 1.5, (k // side) * 1.5, 0),
                               normals) for k in range(n_chars))
-    frames, cpu, skinning = [], [], []
-    for i, (_, res) in enumerate(render_sequence(stage, 1, FRAMES, RenderSettings(width=320, height=180))):
-        if i == 0:
-            continue                       # upload and compile
-        t = res.timings
-        frames.append(t["total"])
-        cpu.append(t["load"])
-        skinning.append(t["skinning"])
-    return drawn, np.median(frames) * 1000, np.median(cpu) * 1000, np.median(skinning) * 1000
+    return stage, drawn
+
+
+def case(stage, rounds):
+    """{form: (frame ms, cpu read ms, skinning ms)} per form (None: compute, False:
+    transform feedback), each the fastest of `rounds`, the forms taking turns so that
+    load from other work on the machine falls on both alike. The frame is a frame
+    change (every render a new pose); the skinning figure is the pass alone on the
+    same meshes, between two glFinish: GL timestamps cannot time it on llvmpipe,
+    whose timestamps are taken by its rasteriser threads, not where vertex and compute
+    work runs."""
+    frames = {form: [] for form in (None, False)}
+    passes = {form: [] for form in frames}
+    with Session(stage, RenderSettings(width=320, height=180)) as session:
+        renderer = session._renderer               # the pass alone: a bench may look in
+        for k in range(2 * (rounds + 1)):
+            form = (None, False)[k % 2]
+            session.configure(compute=form)
+            res = session.render(frame=1 + k % (FRAMES + 1))   # keyed 1..FRAMES + 1
+            if k >= 2:                              # the first of each: programs made
+                frames[form].append((res.timings["total"], res.timings["load"]))
+        meshes = [session.scene.meshes[key] for key in renderer.skinning.inputs]
+
+        def skin(gl, compute):
+            gl.ctx.finish()
+            t0 = time.perf_counter()
+            renderer.skinning._deform(meshes, compute)
+            gl.ctx.finish()
+            return time.perf_counter() - t0
+        for _ in range(rounds):
+            for form in passes:
+                passes[form].append(run_gl(lambda gl: skin(gl, form is None)))
+    return {form: (1000 * min(f[0] for f in frames[form]),
+                   1000 * min(f[1] for f in frames[form]), 1000 * min(passes[form]))
+            for form in frames}
+
+
+CASES = [(1, 10_000), (1, 100_000), (1, 1_000_000), (10, 10_000), (100, 1_000), (100, 10_000)]
 
 
 def main():
+    quick = "--quick" in sys.argv[1:]
     print(f"{'chars':>6} {'points/char':>12} {'skinned verts':>14} {'frame ms':>10} "
-          f"{'cpu read ms':>12} {'skinning ms':>12} {'+surface normals':>17} "
-          f"{'frame x':>8}")
-    for n_chars, pts in [(1, 10_000), (1, 100_000), (1, 1_000_000), (10, 10_000), (100, 1_000),
-                         (100, 10_000)]:
+          f"{'cpu read ms':>12} | {'skinning ms':>11} {'tf':>7} {'c/tf':>5} | "
+          f"{'+surface normals':>16} {'tf':>7} {'c/tf':>5} | {'frame x':>7}")
+    for n_chars, pts in CASES:
+        if quick and pts >= 1_000_000:
+            continue
         t0 = time.perf_counter()
-        drawn, frame_ms, cpu_ms, skin_ms = case(n_chars, pts, normals=True)
-        _, surface_ms, _, surface_skin_ms = case(n_chars, pts, normals=False)
-        print(f"{n_chars:>6} {pts:>12,} {drawn:>14,} {frame_ms:>10.1f} {cpu_ms:>12.2f} "
-              f"{skin_ms:>12.1f} {surface_skin_ms:>17.1f} {surface_ms / frame_ms:>8.2f}"
-              f"   (case {time.perf_counter() - t0:.0f} s)", flush=True)
+        row = {}
+        for normals in (True, False):
+            stage, drawn = stage_of(n_chars, pts, normals)
+            for form, figures in case(stage, ROUNDS).items():
+                row[normals, form] = figures
+        frame_ms, cpu_ms, skin_c = row[True, None]
+        skin_tf = row[True, False][2]
+        surf_frame, _, surf_c = row[False, None]
+        surf_tf = row[False, False][2]
+        print(f"{n_chars:>6} {pts:>12,} {drawn:>14,} {frame_ms:>10.1f} {cpu_ms:>12.2f} | "
+              f"{skin_c:>11.2f} {skin_tf:>7.2f} {skin_c / skin_tf:>5.2f} | "
+              f"{surf_c:>16.2f} {surf_tf:>7.2f} {surf_c / surf_tf:>5.2f} | "
+              f"{surf_frame / frame_ms:>7.2f}   (case {time.perf_counter() - t0:.0f} s)",
+              flush=True)
 
 
 if __name__ == "__main__":

@@ -187,11 +187,12 @@ class Session:
     def skinned_points(self, frame: float) -> dict:
         """GPU-deformed geometry read back: {mesh path: (points, normals)}, world space,
         one row per mesh point (normals as drawn), for every mesh with
-        a UsdSkel binding. For tests against UsdSkel."""
+        a UsdSkel binding, deformed as this session's frames are (settings.compute).
+        For tests against UsdSkel."""
         self._check_open()
         changes = self._reader.sync(float(frame))
         scene = self._reader.scene
-        return run_gl(lambda gl: self._renderer.skinned_points(scene, changes))
+        return run_gl(lambda gl: self._renderer.skinned_points(scene, changes, self.settings))
 
     def _frame(self, frame):
         if frame is not None:

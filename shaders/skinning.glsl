@@ -1,15 +1,21 @@
-// UsdSkel deformation, for the skinning pass (skin.vert) only: call skin_vertex(p, n, t)
-// on the mesh's own position, normal and tangent; the results are in skeleton space
-// (drawn with the skeleton's local-to-world).
+// UsdSkel deformation, the one body of both forms of the skinning pass: transform
+// feedback (skin.vert, GL 3.3) and compute (skin.comp, GL 4.3). Call
+// skin_vertex(point, p, n, t) on a vertex's own position, normal and tangent, `point`
+// the mesh point it is (per-point data); the results are in skeleton space (drawn with
+// the skeleton's local-to-world). The including shader reads the vertices and writes
+// the results, and provides what it alone can read:
+//   vertex_influences(h, j, w)  the h-th group of 4 joint influences of this vertex
+//                               (SKIN_JOINTS without SKIN_JOINTS_TEX)
+//   deformed_position(v)        vertex v of the mesh as already deformed
+//                               (SKIN_SURFACE_NORMALS)
 // Variant defines, only for what a mesh uses:
 //   SKIN_SHAPES   blend shapes, offsets texture indexed by (block * points + point)
 //   SKIN_JOINTS   joint influences (4 per vertex; SKIN_JOINTS8: 8; SKIN_JOINTS_TEX:
 //                 any number, read per point from the influence texture)
 //   SKIN_DQS      dual-quaternion skinning instead of linear blend
-//   SKIN_SURFACE_NORMALS  (skin.vert, on the already deformed vertices) normals are the
-//                 surface's own, gathered per point from its triangles
+//   SKIN_SURFACE_NORMALS  (on the already deformed vertices) normals are the
+//                 surface's own, gathered per point from its triangles: surface_frame
 // Joint texture: one row per joint, see engine/skin.py joint_texels.
-in int in_point;                // the mesh point this vertex is (per-point data)
 const int FLAT_TEX_W = 4096;   // engine/skin.py FLAT_TEX_W
 vec4 flat_texel(sampler2D tex, int i) { return texelFetch(tex, ivec2(i % FLAT_TEX_W, i / FLAT_TEX_W), 0); }
 
@@ -18,32 +24,23 @@ uniform sampler2D u_shape_offsets;
 uniform sampler2D u_shape_active;   // x: offsets block, y: normal-offsets block, z: weight
 uniform int u_shape_count;
 uniform int u_shape_points;
-vec3 shape_texel(int block) { return flat_texel(u_shape_offsets, block * u_shape_points + in_point).xyz; }
+vec3 shape_texel(int block, int point) {
+    return flat_texel(u_shape_offsets, block * u_shape_points + point).xyz;
+}
 #endif
 
 #ifdef SKIN_JOINTS
 #ifdef SKIN_JOINTS_TEX
 uniform sampler2D u_influences;
 uniform int u_influence_groups;
-void influence_group(int h, out ivec4 j, out vec4 w) {
-    int i = 2 * (in_point * u_influence_groups + h);
+void influence_group(int point, int h, out ivec4 j, out vec4 w) {
+    int i = 2 * (point * u_influence_groups + h);
     j = ivec4(flat_texel(u_influences, i));
     w = flat_texel(u_influences, i + 1);
 }
 #else
-in ivec4 in_joints0;
-in vec4 in_weights0;
-#ifdef SKIN_JOINTS8
-in ivec4 in_joints1;
-in vec4 in_weights1;
-#endif
-void influence_group(int h, out ivec4 j, out vec4 w) {
-#ifdef SKIN_JOINTS8
-    if (h == 1) { j = in_joints1; w = in_weights1; return; }
-#endif
-    j = in_joints0;
-    w = in_weights0;
-}
+void vertex_influences(int h, out ivec4 j, out vec4 w);
+void influence_group(int point, int h, out ivec4 j, out vec4 w) { vertex_influences(h, j, w); }
 #endif
 uniform sampler2D u_joint_xforms;
 uniform mat4 u_geom_bind;
@@ -57,12 +54,12 @@ vec4 qmul(vec4 a, vec4 b) {
 }
 #endif
 
-void skin_vertex(inout vec3 p, inout vec3 n, inout vec3 t) {
+void skin_vertex(int point, inout vec3 p, inout vec3 n, inout vec3 t) {
 #ifdef SKIN_SHAPES
     for (int s = 0; s < u_shape_count; ++s) {
         vec4 a = texelFetch(u_shape_active, ivec2(s, 0), 0);
-        if (a.x >= 0.0) p += a.z * shape_texel(int(a.x));
-        if (a.y >= 0.0) n += a.z * shape_texel(int(a.y));
+        if (a.x >= 0.0) p += a.z * shape_texel(int(a.x), point);
+        if (a.y >= 0.0) n += a.z * shape_texel(int(a.y), point);
     }
 #endif
 #ifdef SKIN_JOINTS
@@ -86,7 +83,7 @@ void skin_vertex(inout vec3 p, inout vec3 n, inout vec3 t) {
     for (int h = 0; h < H; ++h) {
         ivec4 Jh;
         vec4 Wh;
-        influence_group(h, Jh, Wh);
+        influence_group(point, h, Jh, Wh);
         for (int k = 0; k < 4; ++k) {
             float w = Wh[k];
             if (w == 0.0) continue;
@@ -131,3 +128,24 @@ void skin_vertex(inout vec3 p, inout vec3 n, inout vec3 t) {
     float n_len = length(n);
     if (n_len > 0.0) n /= n_len;
 }
+
+#ifdef SKIN_SURFACE_NORMALS
+// The deformed surface's own normal at `point`, as engine/usd/mesh.py's smooth
+// normals (area-weighted per point), and the tangent made orthogonal to it again.
+uniform sampler2D u_incidence;   // engine/skin.py incidence_texels
+uniform int u_points;
+vec3 deformed_position(int v);
+void surface_frame(int point, out vec3 n, inout vec3 t) {
+    vec4 range = flat_texel(u_incidence, point);
+    vec3 sum = vec3(0.0);
+    for (int i = 0; i < int(range.y); ++i) {
+        ivec3 tri = ivec3(flat_texel(u_incidence, u_points + int(range.x) + i).xyz);
+        vec3 a = deformed_position(tri.x);
+        sum += cross(deformed_position(tri.y) - a, deformed_position(tri.z) - a);
+    }
+    n = sum / max(length(sum), 1e-30);
+    vec3 tt = t - n * dot(n, t);
+    float t_len = length(tt);
+    if (t_len > 0.0) t = tt / t_len;
+}
+#endif

@@ -5,13 +5,13 @@ import os
 
 import numpy as np
 import pytest
-from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade, UsdSkel, Vt
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade, Vt
 
 import session_scenes as scenes
 import shadow_scenes
 from _export_helpers import skinned_stage
 from lantern.engine import RenderSettings, Session, render_sequence, render_stage
-from test_skinning import skel_stage
+from skel_scenes import crowd_stage, skel_stage
 
 W, H = 96, 64
 KB16 = 16 * 1024
@@ -230,39 +230,6 @@ def test_a_cube_map_redraws_only_the_faces_a_moving_caster_is_in():
 
 
 # --- time --------------------------------------------------------------------------------
-
-def crowd_stage():
-    """Two meshes skinned by one skeleton (the second also has an animated blend shape)
-    over a floor, a shadowed point and a shadowed spot light, a camera."""
-    stage = skel_stage(4, influences=2, grid=10, rot_deg=80)
-    src = stage.GetPrimAtPath("/root/mesh")
-    second = UsdGeom.Mesh.Define(stage, "/root/mesh2")
-    for name in ("points", "faceVertexCounts", "faceVertexIndices", "doubleSided"):
-        second.GetPrim().CreateAttribute(name, src.GetAttribute(name).GetTypeName()).Set(
-            src.GetAttribute(name).Get())
-    n = len(second.GetPointsAttr().Get())
-    b = UsdSkel.BindingAPI.Apply(second.GetPrim())
-    b.CreateJointIndicesPrimvar(True, 1).Set(Vt.IntArray([1]))
-    b.CreateJointWeightsPrimvar(True, 1).Set(Vt.FloatArray([1.0]))
-    b.CreateGeomBindTransformAttr(Gf.Matrix4d().SetTranslate(Gf.Vec3d(0, 1.5, 0)))
-    shape = UsdSkel.BlendShape.Define(stage, "/root/mesh2/bulge")
-    shape.CreateOffsetsAttr(Vt.Vec3fArray([Gf.Vec3f(0, 0, 0.4)] * n))
-    b.CreateBlendShapesAttr(["bulge"])
-    b.CreateBlendShapeTargetsRel().SetTargets([shape.GetPath()])
-    anim = UsdSkel.Animation(stage.GetPrimAtPath("/root/skel/anim"))
-    anim.CreateBlendShapesAttr(["bulge"])
-    for t, w in ((1, 0.0), (2, 0.7), (3, 1.0)):
-        anim.CreateBlendShapeWeightsAttr().Set(Vt.FloatArray([w]), t)
-    floor = UsdGeom.Mesh.Define(stage, "/floor")
-    floor.CreatePointsAttr([(-6, -6, -1.5), (10, -6, -1.5), (10, 6, -1.5), (-6, 6, -1.5)])
-    floor.CreateFaceVertexCountsAttr([4])
-    floor.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
-    for kind, kw in (("point", dict(pos=(1.0, -2.0, 4.0), power=3000.0)),
-                     ("spot", dict(pos=(4.0, 3.0, 5.0), aim=(2, 0, 0), power=6000.0, cone=45.0))):
-        shadow_scenes.add_light(stage, kind, **kw)
-    shadow_scenes.add_camera(stage, eye=(2, -9, 5), target=(2, 0, 0))
-    return stage
-
 
 def test_frame_change_on_a_rig_uploads_joints_and_weights_and_skins_once():
     stage = crowd_stage()

@@ -281,3 +281,45 @@ def test_each_preset_keeps_its_shadow_maps_until_the_scene_changes():
     assert edited.stats["shadow_maps_rendered"] > 0
     fresh = render_stage(stage, RenderSettings(width=W, height=H))
     assert np.array_equal(edited.rgba, fresh.rgba)
+
+
+@pytest.mark.parametrize("mode", ["direct", "mapped"])
+def test_both_read_modes_read_the_same_pixels_into_memory_the_caller_owns(mode, monkeypatch):
+    """LANTERN_READBACK: glReadPixels straight into the caller's memory, or through a
+    persistently mapped pixel buffer (GL 4.4) and one memcpy. Blocking into a new
+    array or a reused buffer, half floats, and queued, each mode gives the pixels of
+    the other; an array returned without `out=` is the caller's own (a later render
+    leaves it as it was), and the non-finite count and warning are the same."""
+    monkeypatch.setenv("LANTERN_READBACK", mode)
+    stage = session_scenes.time_sampled_mesh_stage(frames=3, grid=16)
+    with Session(stage, RenderSettings(width=W, height=H)) as session:
+        first = session.render(frame=1)
+        assert first.stats["readback_mode"] == mode
+        kept = first.rgba.copy()
+        buffer = np.empty((H, W, 4), np.float32)
+        into = [session.render(frame=f, out=buffer).rgba.copy() for f in (2, 3)]
+        assert np.shares_memory(session.render(frame=3, out=buffer).rgba, buffer)
+        second = session.render(frame=2)
+        assert np.array_equal(first.rgba, kept) and not np.shares_memory(first.rgba, second.rgba)
+        session.configure(readback="half")
+        half = session.render(frame=2).rgba
+        session.configure(readback="float32")
+        queued = [r.rgba for _, r in session.render_frames([1, 2, 3])]
+    with monkeypatch.context() as m:
+        m.setenv("LANTERN_READBACK", "direct")
+        with Session(stage, RenderSettings(width=W, height=H)) as session:
+            direct = [session.render(frame=f).rgba for f in (1, 2, 3)]
+            session.configure(readback="half")
+            direct_half = session.render(frame=2).rgba
+    assert np.array_equal(first.rgba, direct[0]) and np.array_equal(second.rgba, direct[1])
+    assert all(np.array_equal(a, b) for a, b in zip(into, direct[1:]))
+    assert all(np.array_equal(a, b) for a, b in zip(queued, direct))
+    assert half.dtype == np.float16 and np.array_equal(half, direct_half)
+    bad = shadow_scenes.new_stage(half=3.0)
+    shadow_scenes.add_light(bad, "point", pos=(0.0, 0.0, 0.3), power=3e38 * np.pi,
+                            radius=0.0, shadow=False)
+    shadow_scenes.add_camera(bad, eye=(3.0, -5.0, 3.0), target=(0, 0, 0))
+    result = render_stage(bad, RenderSettings(width=W, height=H, fxaa=False))
+    count = int((~np.isfinite(result.rgba).all(axis=-1)).sum())
+    assert result.stats["nonfinite_pixels"] == count > 0
+    assert any(f"{count} pixels" in w for w in result.warnings), result.warnings

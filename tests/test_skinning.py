@@ -8,6 +8,7 @@ from pxr import Gf, Usd, UsdGeom, UsdLux, UsdSkel, Vt
 from lantern.engine import RenderSettings, Session, render_stage, skinned_points
 from lantern.engine.usd.skel import SkelBindings
 from _export_helpers import skinned_stage  # UsdSkel.BakeSkinning on an in-memory copy
+from skel_scenes import skel_stage
 
 SKEL = "usdskel/usd/usdSkel/testenv/testUsdSkelBakeSkinning"
 
@@ -81,57 +82,6 @@ def test_gpu_skinning_matches_usdskel_cpu(corpus, rel):
 
 
 # --- procedural skeletons ------------------------------------------------------------
-
-def skel_stage(n_joints=3, method=None, scale=None, influences=2, grid=6, rot_deg=40.0):
-    """A Z-up SkelRoot: a flat chain of joints along X, an animated rotation about Y
-    per joint (frames 1..3), and a grid mesh bound to them."""
-    stage = Usd.Stage.CreateInMemory()
-    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
-    stage.SetStartTimeCode(1)
-    stage.SetEndTimeCode(3)
-    root = UsdSkel.Root.Define(stage, "/root")
-    skel = UsdSkel.Skeleton.Define(stage, "/root/skel")
-    names = [f"j{i}" for i in range(n_joints)]
-    length = 4.0
-    bind = [Gf.Matrix4d().SetTranslate(Gf.Vec3d(length * i / n_joints, 0, 0)) for i in range(n_joints)]
-    skel.CreateJointsAttr(names)
-    skel.CreateBindTransformsAttr(bind)
-    skel.CreateRestTransformsAttr(bind)
-    anim = UsdSkel.Animation.Define(stage, "/root/skel/anim")
-    anim.CreateJointsAttr(names)
-    anim.CreateTranslationsAttr([Gf.Vec3f(length * i / n_joints, 0, 0) for i in range(n_joints)])
-    sc = scale if scale is not None else (1, 1, 1)
-    anim.CreateScalesAttr([Gf.Vec3h(*sc)] * n_joints)
-    rot = anim.CreateRotationsAttr()
-    for t in (1, 2, 3):
-        a = np.radians(rot_deg * (t - 1) / 2)
-        q = Gf.Quatf(float(np.cos(a / 2)), Gf.Vec3f(0, float(np.sin(a / 2)), 0))
-        rot.Set([q] * n_joints, t)
-    UsdSkel.BindingAPI.Apply(skel.GetPrim()).CreateAnimationSourceRel().SetTargets([anim.GetPath()])
-    UsdSkel.BindingAPI.Apply(root.GetPrim()).CreateSkeletonRel().SetTargets([skel.GetPath()])
-
-    mesh = UsdGeom.Mesh.Define(stage, "/root/mesh")
-    xs, ys = np.linspace(0, length, grid), np.linspace(-0.5, 0.5, 3)
-    pts = np.array([(x, y, 0.2 * np.sin(x)) for y in ys for x in xs])
-    faces = [(r * grid + c, r * grid + c + 1, (r + 1) * grid + c + 1, (r + 1) * grid + c)
-             for r in range(2) for c in range(grid - 1)]
-    mesh.CreatePointsAttr([Gf.Vec3f(*p) for p in pts])
-    mesh.CreateFaceVertexCountsAttr([4] * len(faces))
-    mesh.CreateFaceVertexIndicesAttr([i for f in faces for i in f])
-    mesh.CreateDoubleSidedAttr(True)
-    rng = np.random.default_rng(7)
-    n = len(pts)
-    idx = rng.integers(0, n_joints, size=(n, influences))
-    w = rng.random((n, influences)) + 0.1
-    w /= w.sum(axis=1, keepdims=True)
-    binding = UsdSkel.BindingAPI.Apply(mesh.GetPrim())
-    binding.CreateJointIndicesPrimvar(False, influences).Set(Vt.IntArray(idx.reshape(-1).tolist()))
-    binding.CreateJointWeightsPrimvar(False, influences).Set(Vt.FloatArray(w.reshape(-1).tolist()))
-    binding.CreateGeomBindTransformAttr(Gf.Matrix4d().SetTranslate(Gf.Vec3d(0, 0, 0.1)))
-    if method:
-        binding.CreateSkinningMethodAttr(method)
-    return stage
-
 
 def cpu_skinned(stage, bindings, path, t):
     skel_query, sq = bindings.get(path)

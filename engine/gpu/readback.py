@@ -12,11 +12,23 @@ query on GL 3.3), so a finite image is never scanned in numpy. Then either:
                host memory happens when the caller asks for the frame, so frame N+1
                is prepared and drawn while frame N is copied (sequences).
 
+How the pixels cross (MODES, LANTERN_READBACK; docs/gpu.md has the figures):
+  direct       blocking reads go straight into the caller's memory; queued ones through
+               a pixel buffer, copied out with glGetBufferSubData.
+  mapped       (GL 4.4, ARB_buffer_storage) every read goes into a pixel buffer mapped
+               once, persistently and coherently, in host memory (client storage); after
+               its fence one memcpy takes it into the caller's memory. A driver that
+               stages a read into pageable memory through its own pinned buffer then
+               copies once, not twice.
+Into a caller's reused buffer either mode touches no new memory; without one, the
+caller gets a new array (which it owns) and its pages' first touch.
+
 A queued read uses one of SLOTS pixel buffers, counters and fences; the frame graph's
 timer queries come in as many sets, so a frame's GPU times are read with its pixels."""
 from __future__ import annotations
 
 import ctypes
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,15 +40,47 @@ from .stencil import entry_points
 # dtype, numpy dtype).
 FORMATS = {"float32": ("f4", np.float32), "half": ("f2", np.float16)}
 SLOTS = 2                       # frames in flight: one drawn while one is copied
+# How pixels cross into host memory (module docstring), and the default: on llvmpipe
+# (2026-11-27) "direct" measured faster into a reused buffer at every size (docs/gpu.md).
+MODES = ("direct", "mapped")
+DEFAULT_MODE = "direct"
 
 GL_SYNC_GPU_COMMANDS_COMPLETE, GL_SYNC_FLUSH_COMMANDS_BIT = 0x9117, 0x1
 GL_WAIT_FAILED = 0x911D
+GL_PIXEL_PACK_BUFFER, GL_READ_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 = 0x88EB, 0x8CA8, 0x8CE0
+GL_PACK_ALIGNMENT, GL_RGBA, GL_FLOAT, GL_HALF_FLOAT = 0x0D05, 0x1908, 0x1406, 0x140B
+GL_MAP_READ_BIT, GL_MAP_PERSISTENT_BIT, GL_MAP_COHERENT_BIT = 0x1, 0x40, 0x80
+GL_CLIENT_STORAGE_BIT = 0x200
+_MAP = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT
+_GL_TYPES = {"float32": GL_FLOAT, "half": GL_HALF_FLOAT}
 _FOREVER = 0xFFFFFFFFFFFFFFFF
+_u, _i, _p = ctypes.c_uint, ctypes.c_int, ctypes.c_ssize_t
 _SIGS = {
-    "glFenceSync": (ctypes.c_void_p, ctypes.c_uint, ctypes.c_uint),
-    "glClientWaitSync": (ctypes.c_uint, ctypes.c_void_p, ctypes.c_uint, ctypes.c_uint64),
+    "glFenceSync": (ctypes.c_void_p, _u, _u),
+    "glClientWaitSync": (_u, ctypes.c_void_p, _u, ctypes.c_uint64),
     "glDeleteSync": (None, ctypes.c_void_p),
 }
+_MAPPED_SIGS = {
+    "glGenBuffers": (None, _i, ctypes.POINTER(_u)),
+    "glDeleteBuffers": (None, _i, ctypes.POINTER(_u)),
+    "glBindBuffer": (None, _u, _u),
+    "glBufferStorage": (None, _u, _p, ctypes.c_void_p, _u),
+    "glMapBufferRange": (ctypes.c_void_p, _u, _p, _p, _u),
+    "glUnmapBuffer": (ctypes.c_ubyte, _u),
+    "glBindFramebuffer": (None, _u, _u),
+    "glReadBuffer": (None, _u),
+    "glPixelStorei": (None, _u, _i),
+    "glReadPixels": (None, _i, _i, _i, _i, _u, _u, ctypes.c_void_p),
+}
+
+
+def read_mode(version: int) -> str:
+    """The mode this context reads with: LANTERN_READBACK if set (mapped needs GL 4.4),
+    else DEFAULT_MODE where the context allows it."""
+    asked = os.environ.get("LANTERN_READBACK", "").strip() or DEFAULT_MODE
+    if asked not in MODES:
+        raise ValueError(f"LANTERN_READBACK must be one of {', '.join(MODES)}, not {asked!r}")
+    return asked if asked == "direct" or version >= 440 else "direct"
 
 
 @dataclass
@@ -53,9 +97,51 @@ class ReadbackRequest:
                              f"not {self.format!r}")
 
 
+class MappedPixels:
+    """A pixel buffer in host memory, mapped once for reading for its whole life
+    (glBufferStorage + glMapBufferRange, persistent and coherent): what the GPU packs
+    into it is read through `pointer` once a fence after the pack has signalled."""
+
+    def __init__(self, gl, size: int):
+        self._gl, self.size = gl, size
+        name = _u()
+        gl["glGenBuffers"](1, ctypes.byref(name))
+        self.glo = name.value
+        gl["glBindBuffer"](GL_PIXEL_PACK_BUFFER, self.glo)
+        gl["glBufferStorage"](GL_PIXEL_PACK_BUFFER, size, None, _MAP | GL_CLIENT_STORAGE_BIT)
+        self.pointer = gl["glMapBufferRange"](GL_PIXEL_PACK_BUFFER, 0, size, _MAP)
+        gl["glBindBuffer"](GL_PIXEL_PACK_BUFFER, 0)
+        if not self.pointer:
+            self.release()
+            raise RuntimeError(f"the GL driver could not map a {size}-byte pixel buffer")
+
+    def pack(self, fbo, size, format: str):
+        """glReadPixels of `fbo`'s first colour attachment into this buffer."""
+        gl, (w, h) = self._gl, size
+        fbo.use()                       # the read framebuffer, as ModernGL knows it
+        gl["glReadBuffer"](GL_COLOR_ATTACHMENT0)
+        gl["glPixelStorei"](GL_PACK_ALIGNMENT, 1)
+        gl["glBindBuffer"](GL_PIXEL_PACK_BUFFER, self.glo)
+        gl["glReadPixels"](0, 0, w, h, GL_RGBA, _GL_TYPES[format], None)
+        gl["glBindBuffer"](GL_PIXEL_PACK_BUFFER, 0)
+
+    def read_into(self, image: np.ndarray, size: int):
+        """The first `size` bytes into `image` (as ModernGL's Buffer.read_into)."""
+        ctypes.memmove(image.ctypes.data, self.pointer, size)
+
+    def release(self):
+        gl = self._gl
+        if self.pointer:
+            gl["glBindBuffer"](GL_PIXEL_PACK_BUFFER, self.glo)
+            gl["glUnmapBuffer"](GL_PIXEL_PACK_BUFFER)
+            gl["glBindBuffer"](GL_PIXEL_PACK_BUFFER, 0)
+            self.pointer = None
+        gl["glDeleteBuffers"](1, ctypes.byref(_u(self.glo)))
+
+
 class Slot:
     """The GPU objects of one frame in flight: its non-finite counter and, when
-    queued, its pixel buffer and fence."""
+    queued (or mapped), its pixel buffer and fence."""
 
     def __init__(self, ctx, compute: bool):
         self.counter = ctx.buffer(reserve=4) if compute else ctx.query(samples=True)
@@ -66,11 +152,12 @@ class Slot:
 
 
 class Readback:
-    """Counts the output's non-finite pixels and reads it, blocking or queued."""
+    """Counts the output's non-finite pixels and reads it, blocking or queued, in the
+    context's read mode (read_mode)."""
 
-    def __init__(self, ctx, programs, proc, compute: bool):
-        self.ctx, self.programs, self.compute = ctx, programs, compute
-        self._gl = entry_points(proc, _SIGS)
+    def __init__(self, ctx, programs, proc, compute: bool, mode: str = "direct"):
+        self.ctx, self.programs, self.compute, self.mode = ctx, programs, compute, mode
+        self._gl = entry_points(proc, {**_SIGS, **(_MAPPED_SIGS if mode == "mapped" else {})})
         self._slots = [Slot(ctx, compute) for _ in range(SLOTS)]
         self._next = 0
 
@@ -111,21 +198,26 @@ class Readback:
         w, h = size
         dtype, np_dtype = FORMATS[request.format]
         slot.request, slot.shape = request, (h, w, 4)
-        if request.queued:
+        if request.queued or self.mode == "mapped":
             nbytes = w * h * 4 * np.dtype(np_dtype).itemsize
             if slot.pixels is None or slot.pixels.size < nbytes:
                 if slot.pixels is not None:
                     slot.pixels.release()
-                slot.pixels = self.ctx.buffer(reserve=nbytes, dynamic=True)
-            fbo.read_into(slot.pixels, components=4, dtype=dtype)
+                slot.pixels = MappedPixels(self._gl, nbytes) if self.mode == "mapped" else \
+                    self.ctx.buffer(reserve=nbytes, dynamic=True)
+            if self.mode == "mapped":
+                slot.pixels.pack(fbo, size, request.format)
+            else:
+                fbo.read_into(slot.pixels, components=4, dtype=dtype)
             slot.fence = self._gl["glFenceSync"](GL_SYNC_GPU_COMMANDS_COMPLETE, 0)
-            return None
+            return None if request.queued else self.finish(slot)
         image = _target(request.out, slot.shape, np_dtype)
         fbo.read_into(image, components=4, dtype=dtype)
         return image
 
     def finish(self, slot: Slot) -> np.ndarray:
-        """A queued frame's image in host memory (waits for its fence)."""
+        """A frame's image from its pixel buffer into host memory (waits for its
+        fence)."""
         gl = self._gl
         if slot.fence is not None:
             status = gl["glClientWaitSync"](slot.fence, GL_SYNC_FLUSH_COMMANDS_BIT, _FOREVER)

@@ -32,7 +32,7 @@ from .passes.skinning import SkinningPass
 from .passes.tessellation import TessellationPass
 from .passes.transparency import TransparencyPass
 from .passes.view import ViewPass
-from .readback import Readback, ReadbackRequest
+from .readback import Readback, ReadbackRequest, read_mode
 from .resources import TargetPool, Uploads
 from .stencil import Stencil
 from .textures import MaterialTextures
@@ -97,12 +97,15 @@ class Renderer:
         self.lights = LightTable(self.uploads)
         self.textures = MaterialTextures(ctx, self.uploads, preset.anisotropy, srgb_filtering)
         self.environment = Environment(ctx, self.uploads, programs, gl.proc)
-        self.skinning = SkinningPass(ctx, self.uploads, programs, self.geometry, gl.scratch)
+        self.skinning = SkinningPass(ctx, self.uploads, programs, self.geometry, gl.scratch,
+                                     gl.proc, self.features.compute)
         self.tessellation = TessellationPass(ctx, self.uploads, programs, self.geometry,
                                              gl.proc, gl.scratch)
         self.shadows = ShadowPass(ctx, self.pool, programs, self.geometry, self.lights,
                                   self.depth, self.textures)
-        self.readback = Readback(ctx, programs, gl.proc, compute=self.features.multi_draw)
+        self.readback = Readback(ctx, programs, gl.proc, compute=self.features.multi_draw,
+                                 mode=read_mode(self.features.version))
+        self.gl_info["readback_mode"] = self.readback.mode
         self.resolve = ResolvePass(ctx, self.pool, programs, self.geometry, self.depth,
                                    self.readback)
         self.gbuffer = GBufferPass(ctx, self.pool, programs, self.geometry, self.textures,
@@ -292,11 +295,14 @@ class Renderer:
         return self.gl.take_notices() + list(self.textures.failed.values()) + \
             self.resolve.warnings
 
-    def skinned_points(self, scene, changes) -> dict:
+    def skinned_points(self, scene, changes, settings=None) -> dict:
         """{mesh path: (points, normals)} of every skinned mesh at this sync's time,
-        world space, one row per mesh point (normals as drawn)."""
+        world space, one row per mesh point (normals as drawn), deformed in the form
+        `settings` give a frame (compute or transform feedback)."""
         self.update(scene, changes, bool(self._cull_backfaces))
-        frame = Frame(scene=scene, changes=changes, size=(1, 1), preset=self.preset)
+        frame = Frame(scene=scene, changes=changes, size=(1, 1), preset=self.preset,
+                      options=settings or RenderSettings())
+        frame.compute, frame.lighting = self._forms(frame.options)
         board = {}
         if self.skinning.needed(frame):
             self.skinning.execute(frame, board)

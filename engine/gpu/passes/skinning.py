@@ -1,9 +1,16 @@
 """The skinning pass: each skinned mesh (joints and/or blend shapes) is deformed once
-per frame, by transform feedback (GL 3.3), into its place in the dynamic store. The
-G-buffer and every shadow face then draw that as plain geometry, so a crowd under
-three shadowed lights is skinned once a frame, not once per pass and cube face. A
-mesh is deformed again only when its pose or blend-shape weights changed (a view
-change deforms nothing).
+per frame into its place in the dynamic store. The G-buffer and every shadow face then
+draw that as plain geometry, so a crowd under three shadowed lights is skinned once a
+frame, not once per pass and cube face. A mesh is deformed again only when its pose or
+blend-shape weights changed (a view change deforms nothing).
+
+Two forms, one body (shaders/skinning.glsl): a compute shader writes the store
+directly (skin.comp; GL 4.3, Frame.compute: every shader core of a GPU runs compute,
+only a few of a datacenter GPU's run vertex work), and transform feedback (skin.vert)
+is the GL 3.3/4.1 form and RenderSettings(compute=False)'s. Both give the same
+vertices (tests/test_skinning_compute.py). A mesh too large for one shader storage
+block (GL_MAX_SHADER_STORAGE_BLOCK_SIZE: 128 MiB on llvmpipe, 2 GiB on NVIDIA) takes
+transform feedback.
 
 Static inputs go up once per mesh: rest vertices, influences (vertex attributes, or a
 per-point texture past 8), blend-shape offsets. Per frame only joint matrices (one
@@ -11,15 +18,19 @@ texture per skeleton, whatever number of meshes it drives) and the list of activ
 blend shapes (a few texels per mesh) go up.
 
 A deformed mesh without authored normals gets its surface's own, as its baked twin
-(and Blender) would: a second transform feedback, over a copy of the deformed
-vertices, gathers per point the area normals of its triangles (SKIN_SURFACE_NORMALS;
-the triangles per point are static, engine/skin.py incidence_texels). GL 3.3, no
-compute. Gathering, not scattering: one point per triangle corner added by blending
-cost llvmpipe 4-40x the skinning (point set-up), a geometry shader as much.
+(and Blender) would: a second run over the deformed vertices gathers per point the
+area normals of its triangles (SKIN_SURFACE_NORMALS; the triangles per point are
+static, engine/skin.py incidence_texels). The compute form reads the deformed vertices
+in place; transform feedback reads a copy of them (inside the GPU) as a texture, since
+a vertex shader cannot read the buffer it writes. Gathering, not scattering: one point
+per triangle corner added by blending cost llvmpipe 4-40x the skinning (point set-up),
+a geometry shader as much.
 
 reads: nothing   writes: skinned (this frame's posed boxes, and a readback)"""
 from __future__ import annotations
 
+import ctypes
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,11 +40,24 @@ from ...skin import (active_texels, defines, flat_texels, incidence_texels, join
                      local_bounds, shape_texels)
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
+from ..stencil import entry_points
 from ..stores import VERTEX_BYTES, VERTEX_FORMAT
 
 VARYINGS = ("out_pos", "out_normal", "out_uv", "out_tangent")
 TEXELS_PER_VERTEX = VERTEX_BYTES // 16   # the static layout as RGBA32F texels
 DEFORMED_TEX_W = 4095             # shaders/skin.vert: a multiple of 3
+GROUP, MAX_GROUPS = 64, 65535     # shaders/skin.comp's local size; groups per dimension
+
+GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT = 0x90DF
+# After the compute form's writes, before what reads them: the passes' vertex fetch,
+# compute reads of the store (the surface-normal run, a skinned cage's patch stencils),
+# buffer copies and reads (the store's growth, Posed and skinned_points), and transform
+# feedback that may write the same vertices later (a frame with compute off).
+VERTEX_ATTRIB_ARRAY_BARRIER_BIT, BUFFER_UPDATE_BARRIER_BIT = 0x1, 0x200
+TRANSFORM_FEEDBACK_BARRIER_BIT, SHADER_STORAGE_BARRIER_BIT = 0x800, 0x2000
+DEFORMED_BARRIERS = (VERTEX_ATTRIB_ARRAY_BARRIER_BIT | BUFFER_UPDATE_BARRIER_BIT |
+                     TRANSFORM_FEEDBACK_BARRIER_BIT | SHADER_STORAGE_BARRIER_BIT)
+_SIGS = {"glGetIntegerv": (None, ctypes.c_uint, ctypes.POINTER(ctypes.c_int))}
 
 
 @dataclass
@@ -42,6 +66,7 @@ class _Input:
     rest: object                 # vertex buffer in the static layout
     attributes: object           # in_point, joints, weights
     fmt: tuple                   # ModernGL format and names of `attributes`
+    stride: int                  # 4-byte words per vertex in `attributes`
     shapes: object = None        # blend-shape offsets texture
     influences: object = None    # per-point influences texture (past 8)
     active: object = None        # this frame's active blend shapes
@@ -76,13 +101,22 @@ class SkinningPass(Pass):
     name = "skinning"
     writes = ("skinned",)
 
-    def __init__(self, ctx, uploads, programs, geometry, scratch):
+    def __init__(self, ctx, uploads, programs, geometry, scratch, proc, compute: bool):
         self.ctx, self.uploads, self.programs = ctx, uploads, programs
         self.geometry, self.scratch = geometry, scratch
         self.inputs = {}               # mesh key -> _Input
         self.joints = {}               # skel key -> texture
         self._fresh = set()            # mesh keys whose output is stale
         self._scratch = None           # surface normals: (vertex copy, its texture)
+        self._align = self._block = None
+        if compute:                    # the shader storage binding limits of the context
+            value = ctypes.c_int(0)
+            entry_points(proc, _SIGS)["glGetIntegerv"](GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT,
+                                                       ctypes.byref(value))
+            # Whole texels (16 bytes: skin.comp indexes the store by them) at or below a
+            # mesh's first vertex, on the binding alignment.
+            self._align = math.lcm(max(int(value.value), 1), 16)
+            self._block = int(ctx.info["GL_MAX_SHADER_STORAGE_BLOCK_SIZE"])
 
     def needed(self, frame):
         return bool(self.inputs)
@@ -136,7 +170,7 @@ class SkinningPass(Pass):
         attributes = np.ascontiguousarray(np.concatenate(cols, axis=1), np.float32)
         inp = _Input(rest=self.uploads.buffer(mesh.vertices, kind="mesh"),
                      attributes=self.uploads.buffer(attributes, kind="mesh"),
-                     fmt=(" ".join(fmt), *names), vaos={})
+                     fmt=(" ".join(fmt), *names), stride=attributes.shape[1], vaos={})
         if skin.shape_offsets is not None:
             inp.shapes = self.uploads.float_texture(shape_texels(skin), kind="mesh")
         if skin.point_influences is not None:
@@ -151,7 +185,7 @@ class SkinningPass(Pass):
     def execute(self, frame, board):
         scene = frame.scene
         self.scratch.use()   # a surfaceless context draws nothing without a framebuffer
-        boxes = {}
+        boxes, deformed = {}, {}
         for path, inst in scene.instances.items():
             key = inst.mesh_key
             inp = self.inputs.get(key)
@@ -161,19 +195,39 @@ class SkinningPass(Pass):
             skin = mesh.skin
             pose = scene.skeletons.get(skin.skel_key) if skin.has_joints else None
             boxes[path] = local_bounds(skin, pose, inst.shapes, *mesh.bounds)
-            if key not in self._fresh:
+            if key not in self._fresh or key in deformed:
                 continue
-            self._deform(mesh, inp)
+            deformed[key] = mesh
             frame.count("meshes_skinned")
             draw = self.geometry.draws.get(path)
             if draw is not None:
                 lo, hi = boxes[path]
                 self.geometry.note_posed(draw, _world_box(lo, hi, inst.world))
+        self._deform(deformed.values(), frame.compute)
         board["skinned"] = Posed(boxes, self.read, frozenset(self._fresh))
         self._fresh.clear()
 
-    def _deform(self, mesh, inp):
-        skin = mesh.skin
+    def _deform(self, meshes, compute: bool):
+        """Deforms `meshes` into their targets: in compute where the frame runs it and
+        a mesh fits a storage block, else by transform feedback."""
+        dispatched = []
+        for mesh in meshes:
+            if compute and self._fits(mesh):
+                self._skin_compute(mesh)
+                dispatched.append(mesh)
+            else:
+                self._skin_feedback(mesh)
+        if not dispatched:
+            return
+        normals = [m for m in dispatched if m.surface_normals]
+        if normals:
+            self.ctx.memory_barrier(SHADER_STORAGE_BARRIER_BIT)
+            for mesh in normals:
+                self._surface_normals_compute(mesh)
+        self.ctx.memory_barrier(DEFORMED_BARRIERS)
+
+    def _skin_feedback(self, mesh):
+        skin, inp = mesh.skin, self.inputs[mesh.key]
         prog = self.programs.get("skin.vert", None, defines(skin), varyings=VARYINGS)
         self._bind(prog, skin, inp)
         target, offset, n = self.geometry.deform_target(mesh.key)
@@ -182,6 +236,43 @@ class SkinningPass(Pass):
         if mesh.surface_normals:
             store, slot = self.geometry.meshes[mesh.key]
             self._surface_normals(mesh, inp, store, slot)
+
+    def _fits(self, mesh) -> bool:
+        """Whether each buffer skin.comp binds for `mesh` fits one storage block."""
+        inp = self.inputs[mesh.key]
+        _, offset, n = self.geometry.deform_target(mesh.key)
+        return max(offset % self._align + n * VERTEX_BYTES, inp.rest.size,
+                   inp.attributes.size) <= self._block
+
+    def _skin_compute(self, mesh):
+        skin, inp = mesh.skin, self.inputs[mesh.key]
+        prog = self.programs.get("skin.comp", None, defines(skin), compute=True)
+        self._bind(prog, skin, inp)
+        inp.rest.bind_to_storage_buffer(1)
+        self._dispatch(prog, mesh, inp)
+
+    def _surface_normals_compute(self, mesh):
+        """The deformed vertices' normals made the surface's own, in place (after a
+        barrier: they read the positions the skinning run wrote)."""
+        inp = self.inputs[mesh.key]
+        prog = self.programs.get("skin.comp", None, ["SKIN_SURFACE_NORMALS"], compute=True)
+        inp.incidence.use(UNITS["u_incidence"])
+        set_uniform(prog, "u_points", int(mesh.skin.n_points))
+        self._dispatch(prog, mesh, inp)
+
+    def _dispatch(self, prog, mesh, inp):
+        """Runs skin.comp over a mesh's vertices: its target bound from the aligned
+        texel at or below its first vertex, the texels between given as u_first."""
+        target, offset, n = self.geometry.deform_target(mesh.key)
+        base = offset - offset % self._align
+        target.bind_to_storage_buffer(0, offset=base, size=offset + n * VERTEX_BYTES - base)
+        inp.attributes.bind_to_storage_buffer(2)
+        set_uniform(prog, "u_first", (offset - base) // 16)
+        set_uniform(prog, "u_vertices", int(n))
+        set_uniform(prog, "u_attribute_stride", int(inp.stride))
+        groups = -(-n // GROUP)
+        across = min(groups, MAX_GROUPS)
+        prog.run(across, -(-groups // across))
 
     def _surface_normals(self, mesh, inp, store, slot):
         """Replaces the deformed vertices' normals by the surface's own: the vertices
