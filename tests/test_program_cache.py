@@ -150,7 +150,7 @@ def test_the_compilers_helper_stores_a_binary_or_says_why_it_cannot(tmp_path, mo
     from lantern.engine.gpu.compiler import BackgroundCompiler
     from lantern.engine.gpu.context import run_gl
     monkeypatch.setenv("LANTERN_PROGRAM_CACHE_DIR", str(tmp_path))
-    key = ("fullscreen.vert", "post.frag", ("HELPER_TEST",), (), False, (), ())
+    key = ("fullscreen.vert", "depth_copy.frag", ("HELPER_TEST",), (), False, (), ())
 
     def driver(gl):
         info = gl.ctx.info

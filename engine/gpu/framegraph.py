@@ -143,7 +143,11 @@ class FrameGraph:
             for aov, (target, _) in p.aovs.items():
                 if target not in TARGETS:
                     raise ValueError(f"pass {p.name} writes {aov} into {target}, not a target")
-                self.producers.setdefault(aov, []).append(p)
+                others = self.producers.setdefault(aov, [])
+                if others and others[0].aovs[aov] != p.aovs[aov]:
+                    raise ValueError(f"pass {p.name} writes {aov} where {others[0].name} "
+                                     "does not")
+                others.append(p)
 
     def _plan(self, frame: Frame):
         """(the passes that run, what each writes, {target: index of the last pass
@@ -152,16 +156,13 @@ class FrameGraph:
         if unknown:
             raise ValueError(f"no pass writes the render passes {unknown}")
         live = [p for p in self.passes if p.needed(frame)]
-        # Each asked-for render pass comes from the last pass that runs and writes it
-        # (the lighting ones are started by the ambient pass and added to by the light
-        # pass of the frame's form).
-        producers = {}
+        # An asked-for render pass needs a pass that runs and writes it (the lighting
+        # ones are started by the ambient pass and added to by the light pass of the
+        # frame's form, into the same target).
         for aov in frame.aovs:
-            running = [p for p in self.producers[aov] if p in live]
-            if not running:
+            if not any(p in live for p in self.producers[aov]):
                 raise RuntimeError(f"the pass writing {aov} "
                                    f"({self.producers[aov][-1].name}) did not run")
-            producers[aov] = running[-1]
         writes = {p: p.writes + p.wanted(frame) + p.aov_targets(frame) for p in live}
         kept = {t for p in live for t in p.aov_targets(frame)}   # read back at the end
         last_use = {}
@@ -212,7 +213,7 @@ class FrameGraph:
                 frame.timings[p.name] = frame.timings.get(p.name, 0.0) + time.perf_counter() - t0
                 for name in [n for n, last in last_use.items() if last == i and n in board]:
                     self.pool.release(board.pop(name))
-            board["aovs"] = {aov: self._read_back(board, *producers[aov].aovs[aov], aov)
+            board["aovs"] = {aov: self._read_back(board, *self.producers[aov][0].aovs[aov], aov)
                              for aov in sorted(frame.aovs)}
         finally:
             for name in [n for n in board if n in TARGETS]:

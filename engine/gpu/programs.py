@@ -113,7 +113,7 @@ class ProgramCache:
         vert, frag, defines, varyings, compute, generated, tessellation = key
         if compute:
             # COMPUTE: the stage, for the includes that differ there (lib.glsl pixel_centre).
-            sources = (load_source(vert, defines + ("COMPUTE",)), None)
+            sources = (load_source(vert, defines + ("COMPUTE",), generated=generated), None)
         else:
             sources = (load_source(vert, defines), None if frag is None else
                        load_source(frag, defines, generated=generated))

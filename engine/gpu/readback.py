@@ -170,6 +170,12 @@ class Readback:
             raise RuntimeError("a queued frame was never finished")
         return slot
 
+    def counting(self, slot: Slot):
+        """Clears the slot's counter and binds it where a compute resolve counts the
+        non-finite pixels as it writes them (shaders/resolve.glsl; GL 4.3)."""
+        slot.counter.clear()
+        slot.counter.bind_to_storage_buffer(0)
+
     def count(self, slot: Slot, hdr, fbo, size, transparent: bool):
         """Queues the count of `hdr`'s resolved pixels that hold NaN or Inf."""
         w, h = size

@@ -25,9 +25,10 @@ import numpy as np
 
 from ..framegraph import TARGETS, Pass
 from ..programs import UNITS, set_uniform
+from ..screen import run_screen, screen_program
 
 FILTER_WIDTH = 1.5          # pixels, Cycles' default (Film > Pixel Filter > Width)
-MAX_TAPS = 64               # shaders/post.frag POST_DOWNSAMPLE
+MAX_TAPS = 64               # shaders/post.glsl POST_DOWNSAMPLE
 
 
 # Cycles looks a texture up at points (bilinear, no mips) and leaves all averaging to
@@ -102,7 +103,7 @@ class SupersamplePass(Pass):
         big_w, big_h = frame.size
         w, h = frame.output_size
         offsets, weights = downsample_taps(k)
-        prog = self.programs.get("fullscreen.vert", "post.frag", ["POST_DOWNSAMPLE"])
+        prog = screen_program(self.programs, "post", ["POST_DOWNSAMPLE"], frame.compute)
         set_uniform(prog, "factor", k)
         set_uniform(prog, "taps", len(offsets))
         taps = np.zeros((MAX_TAPS, 2), np.float32)
@@ -111,10 +112,9 @@ class SupersamplePass(Pass):
         source = board["hdr"]
         for axis, size in ((0, (w, big_h)), (1, (w, h))):
             target = self.pool.acquire(size, TARGETS["hdr"])
-            self.pool.framebuffer([target]).use()
             source.use(UNITS["post_src"])
             set_uniform(prog, "axis", axis)
-            self.programs.fullscreen(prog)
+            run_screen(ctx, self.programs, self.pool, prog, [target], frame.compute)
             self.pool.release(source)
             source = target
         board["hdr"] = source

@@ -1,7 +1,8 @@
 """The surface render-pass pass: Depth, Normal and Emit as float32 images, read from
 the G-buffer, for the render passes a frame asks for (core/passes.py). A frame that
-asks for none does not run it. Each asked-for pass is one full-screen draw of a
-one-output program variant into its own target.
+asks for none does not run it. Each asked-for pass is one screen pass (shaders/
+aovs.glsl, in either form: engine/gpu/screen.py) of a one-output variant into its own
+target.
 
 reads: g_depth, g_normal, g_emit, view
 render passes: Depth (aov_depth, R32F), Normal (aov_normal), Emit (aov_emit)"""
@@ -10,6 +11,7 @@ from __future__ import annotations
 from ....core.passes import BACKGROUND_DEPTH
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
+from ..screen import run_screen, screen_program
 
 VARIANT = {"Depth": "AOV_DEPTH", "Normal": "AOV_NORMAL", "Emit": "AOV_EMIT"}
 
@@ -33,8 +35,7 @@ class AovPass(Pass):
         for aov, (target, _) in self.aovs.items():
             if aov not in frame.aovs:
                 continue
-            self.pool.framebuffer([board[target]]).use()
-            prog = self.programs.get("fullscreen.vert", "aovs.frag", [VARIANT[aov]])
+            prog = screen_program(self.programs, "aovs", [VARIANT[aov]], frame.compute)
             view.set_camera(prog)
             set_uniform(prog, "background_depth", BACKGROUND_DEPTH)
-            self.programs.fullscreen(prog)
+            run_screen(ctx, self.programs, self.pool, prog, [board[target]], frame.compute)

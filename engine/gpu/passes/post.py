@@ -1,6 +1,6 @@
 """The post chain (docs/design.md, Framebuffers and post-processing): full-screen
-operations on the scene-linear image, each drawn from the current image into a fresh
-target of the same format that then becomes the image (ping-pong through the pool: two
+operations on the scene-linear image (shaders/post.glsl, a screen pass in either form:
+engine/gpu/screen.py), each drawn from the current image into a fresh target of the same format that then becomes the image (ping-pong through the pool: two
 targets alternate). In order, each only when asked for:
 
   fxaa       frames not supersampled whose preset asks for it (antialias.py),
@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from ..framegraph import TARGETS, Pass
 from ..programs import UNITS, set_uniform
+from ..screen import run_screen, screen_program
 
 MIRRORS = ("", "x", "y", "xy")
 
@@ -59,8 +60,7 @@ class PostPass(Pass):
         for variant, uniforms in stages(frame):
             source = board["hdr"]
             target = self.pool.acquire(frame.size, TARGETS["hdr"])
-            self.pool.framebuffer([target]).use()
-            prog = self.programs.get("fullscreen.vert", "post.frag", [variant])
+            prog = screen_program(self.programs, "post", [variant], frame.compute)
             source.use(UNITS["post_src"])
             if variant == "POST_FXAA":
                 board["g_depth"].use(UNITS["g_depth"])
@@ -68,6 +68,6 @@ class PostPass(Pass):
                 board["view"].set_camera(prog)
             for name, value in uniforms.items():
                 set_uniform(prog, name, value)
-            self.programs.fullscreen(prog)
+            run_screen(ctx, self.programs, self.pool, prog, [target], frame.compute)
             board["hdr"] = target
             self.pool.release(source)

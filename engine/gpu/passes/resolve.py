@@ -1,11 +1,13 @@
-"""The resolve pass: the HDR accumulation into the output image, read back in one copy
+"""The resolve pass: the HDR accumulation into the output image (shaders/resolve.glsl,
+a screen pass in either form: engine/gpu/screen.py), read back in one copy
 (engine/gpu/readback.py): in the caller's row order and format, into the caller's
 buffer, or queued behind a fence. Alpha is 1, or coverage when the render is
 transparent (the HDR target's alpha: 1 where a surface was drawn, filtered by
 anti-aliasing).
 
 Nothing masks a non-finite value: the GPU counts the pixels holding NaN or Inf
-(`stats["nonfinite_pixels"]`) and, only when there are some, the pass draws the
+(`stats["nonfinite_pixels"]`; the compute form as it writes them, the raster form in
+engine/gpu/readback.py after) and, only when there are some, the pass draws the
 scene's object ids (shaders/ids.vert, points.frag's POINTS_ID) to name the prims those
 pixels lie on, in one warning per render ("the background" where nothing is).
 
@@ -19,6 +21,7 @@ import numpy as np
 from ..framegraph import Pass
 from ..points import set_camera_facing
 from ..programs import UNITS, set_uniform
+from ..screen import run_screen, screen_program
 
 NAMED = 5                    # prims named in the warning, most pixels first
 
@@ -35,16 +38,19 @@ class ResolvePass(Pass):
 
     def execute(self, frame, board):
         (w, h), request = frame.size, frame.readback
-        fbo = self.pool.framebuffer([board["output"]])
-        fbo.use()
         self.ctx.disable(self.ctx.BLEND | self.ctx.DEPTH_TEST | self.ctx.CULL_FACE)
-        prog = self.programs.get("fullscreen.vert", "resolve.frag")
+        prog = screen_program(self.programs, "resolve", (), frame.compute)
         board["hdr"].use(UNITS["hdr"])
         set_uniform(prog, "transparent", bool(frame.transparent))
         set_uniform(prog, "top_down", bool(request.top_down))
-        self.programs.fullscreen(prog)
         slot = self.readback.slot()
-        self.readback.count(slot, board["hdr"], fbo, (w, h), frame.transparent)
+        fbo = self.pool.framebuffer([board["output"]])
+        if frame.compute:            # the compute form counts as it writes
+            self.readback.counting(slot)
+            run_screen(self.ctx, self.programs, self.pool, prog, [board["output"]], True)
+        else:
+            run_screen(self.ctx, self.programs, self.pool, prog, [board["output"]], False)
+            self.readback.count(slot, board["hdr"], fbo, (w, h), frame.transparent)
         t0 = time.perf_counter()
         board["rgba"] = self.readback.read(slot, fbo, (w, h), request)
         frame.timings["readback"] = time.perf_counter() - t0

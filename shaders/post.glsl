@@ -1,9 +1,8 @@
-#version 330 core
 #include "lib.glsl"
 // Full-screen image operations on the scene-linear HDR image (engine/gpu/passes/post.py
-// and antialias.py), one per variant, each from post_src into a new target (ping-pong).
+// and antialias.py), one per variant, each from post_src into a new target (ping-pong):
+// a screen pass's body (engine/gpu/screen.py).
 uniform sampler2D post_src;
-out vec4 frag;
 
 #ifdef POST_SCALE
 uniform float scale;          // colour: exposure 2^stops, or 1/n for an average of n
@@ -148,8 +147,9 @@ vec4 fxaa(ivec2 px) {
 }
 #endif
 
-void main() {
-    ivec2 px = ivec2(gl_FragCoord.xy);
+void screen_pixel(ivec2 px, out vec4 frag, out vec4 unused1, out vec4 unused2,
+                  out vec4 unused3) {
+    unused1 = unused2 = unused3 = vec4(0.0);
 #ifdef POST_SCALE
     vec4 c = texelFetch(post_src, px, 0);
     frag = vec4(c.rgb * scale, c.a * alpha_scale);

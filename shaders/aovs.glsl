@@ -1,6 +1,6 @@
-#version 330 core
 #include "lib.glsl"
-// Render passes from the G-buffer, one per variant (engine/gpu/passes/aovs.py):
+// Render passes from the G-buffer, one per variant (engine/gpu/passes/aovs.py; a screen
+// pass's body, engine/gpu/screen.py):
 // AOV_DEPTH   distance from the camera plane along the view axis (Blender's Depth)
 // AOV_NORMAL  world normal
 // AOV_EMIT    emitted radiance
@@ -10,10 +10,10 @@ uniform sampler2D g_emit;
 uniform mat4 inv_view_proj;
 uniform vec3 cam_forward;
 uniform float background_depth;
-out vec4 frag;
 
-void main() {
-    ivec2 px = ivec2(gl_FragCoord.xy);
+void screen_pixel(ivec2 px, out vec4 frag, out vec4 unused1, out vec4 unused2,
+                  out vec4 unused3) {
+    unused1 = unused2 = unused3 = vec4(0.0);
     float depth = texelFetch(g_depth, px, 0).r;
     bool background = is_background(depth);
 #ifdef AOV_DEPTH
