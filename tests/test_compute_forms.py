@@ -1,0 +1,98 @@
+"""The compute forms against the raster forms, on the scenes the other tests hold to
+Cycles and to closed forms: with the light tree's error bound at 0 (every light on its
+own, cut where its volume ends), the clustered light pass, the screen passes in compute
+(engine/gpu/screen.py) and compute skinning give the images that the light volumes,
+the full-screen fragment passes and transform feedback give, within float16 rounding
+(the G-buffer's targets are half floats). So every bound those tests hold on the
+default (compute) form holds on the raster form too."""
+import numpy as np
+import pytest
+
+import calibration
+import reference_scenes
+from lantern.core.passes import PASSES
+from lantern.engine import RenderSettings, render_stage
+
+RASTER = dict(compute=False, lighting="volumes")
+COMPUTE = dict(compute=True, lighting="clustered", light_error=0.0)
+HALF = 2.0 ** -10            # float16's relative rounding
+
+
+def both(stage, **settings):
+    """(raster, compute) results of one stage, after checking each ran in its form."""
+    raster = render_stage(stage, RenderSettings(**settings, **RASTER))
+    compute = render_stage(stage, RenderSettings(**settings, **COMPUTE))
+    assert "light_cull" not in raster.stats["passes"]
+    if stage_has_lights(compute):
+        assert "light_cull" in compute.stats["passes"]
+    return raster, compute
+
+
+def stage_has_lights(result) -> bool:
+    return "lights" in result.stats["passes"]
+
+
+def assert_same(a, b, what):
+    a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
+    assert np.isfinite(a).all() == np.isfinite(b).all(), what
+    worst = np.abs(a - b) / np.maximum(np.maximum(np.abs(a), np.abs(b)), 1e-6)
+    assert worst.max() <= HALF, f"{what}: {worst.max():.3g}"
+
+
+def assert_results_same(raster, compute, what):
+    assert_same(raster.rgba, compute.rgba, what)
+    assert set(raster.passes) == set(compute.passes)
+    for name in raster.passes:
+        assert_same(raster.passes[name], compute.passes[name], f"{what} {name}")
+    assert raster.stats["nonfinite_pixels"] == compute.stats["nonfinite_pixels"]
+
+
+@pytest.fixture(scope="module")
+def stage_of():
+    import test_looks
+    return test_looks.stage_of
+
+
+@pytest.mark.parametrize("name", sorted(reference_scenes.SCENES))
+def test_reference_scenes(name, stage_of):
+    import test_looks
+    w, h = reference_scenes.SCENES[name].size
+    raster, compute = both(stage_of(name), width=w // 2, height=h // 2,
+                           frame=test_looks.FRAMES.get(name))
+    assert_results_same(raster, compute, name)
+
+
+@pytest.mark.parametrize("preset", ["low", "ultra"])
+def test_every_render_pass_and_the_post_chain(preset, stage_of):
+    """Every render pass, supersampled or not, and each post stage."""
+    w, h = reference_scenes.SCENES["demo"].size
+    raster, compute = both(stage_of("demo"), width=w // 2, height=h // 2, frame=13.0,
+                           preset=preset, passes=frozenset(PASSES) - {"Combined"},
+                           exposure=0.5, blur=1.0, grayscale=True, mirror="x")
+    assert_results_same(raster, compute, f"demo {preset}")
+
+
+@pytest.mark.parametrize("kind", sorted(calibration.LIGHTS))
+def test_calibration_scenes(kind):
+    """Each light kind, with and without its shadow map."""
+    import bpy
+    from lantern.exporters import stage_from_depsgraph
+    calibration.build_scene(kind)
+    stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+    raster, compute = both(stage, width=calibration.SIZE, height=calibration.SIZE,
+                           passes=frozenset({"DiffDir", "GlossDir", "Shadow"}))
+    assert_results_same(raster, compute, kind)
+
+
+@pytest.mark.parametrize("name", ["transparency_planes", "cutout_shadow", "01_alpha_blend"])
+def test_transparency_scenes(name, stage_of):
+    w, h = reference_scenes.SCENES[name].size
+    raster, compute = both(stage_of(name), width=w, height=h, transparent=True)
+    assert_results_same(raster, compute, name)
+
+
+def test_skinned_crowd():
+    from skel_scenes import crowd_stage
+    raster, compute = both(crowd_stage(), width=96, height=64, frame=7.0)
+    assert raster.stats["meshes_skinned"] > 0
+    assert_results_same(raster, compute, "crowd")
