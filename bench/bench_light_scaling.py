@@ -1,11 +1,13 @@
 """Many lights: 1 to 16,384 small point lights over a plane at 640x360, each count in
-its own process, reporting render time and peak resident memory against one light.
+its own process, reporting render time and peak resident memory against one light, in
+both forms of the light pass: clustered (the light tree within its 1% bound: far
+lights in groups, none cut) and the light volumes (each light cut where it reflects
+1% of what the scene's brightest light reflects at 1 m: engine/lighting.py).
 
-Small lights (0.002 W each, radius 0.02 m) on a grid over a 24 m white plane, whose
-volumes (engine/lighting.py: where a white Lambert surface would reflect less than
-1e-4 W/(sr m2)) reach about 0.7 m: fragments outside a light's volume are not shaded,
-and shadowless point lights share one instanced draw, so time should grow far slower
-than the count. With shadows on, every light casts onto the plane: maps past the
+Small lights (0.002 W each, radius 0.02 m) on a grid over a 24 m white plane, 0.3 m
+above it: every pixel of the plane lies under the grid, among many lights within a
+metre, the hardest case for groups (tests/test_light_tree.py and bench_gpu.py --lights
+measure a patch, with the error against numpy's sum). With shadows on, every light casts onto the plane: maps past the
 shadow memory budget (engine/gpu/passes/shadows.py) are not made, those lights are lit
 without shadows, and memory stays bounded. The stage is authored as Sdf specs (fast)
 and read by the engine like any other; "load" is the engine's stage read, "render"
@@ -69,12 +71,15 @@ def lights(count):
     return [(float(g[i % side]), float(g[i // side]), 0.3) for i in range(count)], 0.002
 
 
-def measure(count, shadows, runs=3):
+FORMS = {"clustered": {}, "volumes": {"lighting": "volumes", "compute": False}}
+
+
+def measure(count, shadows, form="clustered", runs=3):
     """This process: one count's figures, as JSON on stdout."""
     from lantern.engine import RenderSettings, render_stage
     positions, power = lights(count)
     stage = stage_with_lights(positions, power, shadows)
-    settings = RenderSettings(width=WIDTH, height=HEIGHT)
+    settings = RenderSettings(width=WIDTH, height=HEIGHT, **FORMS[form])
     result = render_stage(stage, settings)  # warm: context, shaders
     loads, renders = [], []
     for _ in range(runs):
@@ -85,7 +90,8 @@ def measure(count, shadows, runs=3):
         renders.append(total - result.timings["load"])
     print(json.dumps({
         "load_ms": 1000 * float(np.median(loads)), "render_ms": 1000 * float(np.median(renders)),
-        "light_pass_ms": 1000 * result.gpu_timings.get("lights", 0.0),
+        "light_pass_ms": 1000 * (result.gpu_timings.get("lights", 0.0)
+                                 + result.gpu_timings.get("light_cull", 0.0)),
         "rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
         "shadow_maps": result.stats.get("shadow_maps", 0),
         "unshadowed": result.stats.get("unshadowed_lights", 0),
@@ -93,8 +99,8 @@ def measure(count, shadows, runs=3):
         "mean": float(result.rgba[..., :3].mean())}))
 
 
-def run(count, shadows):
-    proc = subprocess.run([sys.executable, __file__, "--one", str(count), str(int(shadows))],
+def run(count, shadows, form):
+    proc = subprocess.run([sys.executable, __file__, "--one", str(count), str(int(shadows)), form],
                           capture_output=True, text=True)
     if proc.returncode != 0:
         return {"error": (proc.stderr.strip().splitlines() or [f"exit {proc.returncode}"])[-1]}
@@ -103,26 +109,29 @@ def run(count, shadows):
 
 def main():
     print(f"light scaling at {WIDTH}x{HEIGHT} ({time.strftime('%Y-%m-%d')}, llvmpipe), "
-          "each count in its own process; ratios against 1 light of the same kind:")
-    print(f"  {'lights':>6} {'shadows':>7} {'load ms':>9} {'render ms':>10} {'x1':>6} "
-          f"{'light pass ms':>13} {'peak RSS MiB':>12} {'x1':>5} {'maps':>5} {'unshadowed':>10}")
-    for shadows in (False, True):
-        one = None
-        for count in COUNTS if not shadows else SHADOWED:
-            got = run(count, shadows)
-            if "error" in got:
-                print(f"  {count:>6} {'on' if shadows else 'off':>7} failed: {got['error']}")
-                continue
-            one = one or got
-            print(f"  {count:>6} {'on' if shadows else 'off':>7} {got['load_ms']:9.1f} "
-                  f"{got['render_ms']:10.1f} {got['render_ms'] / one['render_ms']:6.2f} "
-                  f"{got['light_pass_ms']:13.1f} {got['rss_mib']:12.0f} "
-                  f"{got['rss_mib'] / one['rss_mib']:5.2f} {got['shadow_maps']:>5} "
-                  f"{got['unshadowed']:>10}" + ("" if got["finite"] else "  NON-FINITE"))
+          "each count in its own process; ratios against 1 light of the same kind and form:")
+    print(f"  {'form':>9} {'lights':>6} {'shadows':>7} {'load ms':>9} {'render ms':>10} "
+          f"{'x1':>6} {'light pass ms':>13} {'peak RSS MiB':>12} {'x1':>5} {'maps':>5} "
+          f"{'unshadowed':>10}")
+    for form in FORMS:
+        for shadows in (False, True):
+            one = None
+            for count in COUNTS if not shadows else SHADOWED:
+                got = run(count, shadows, form)
+                label = f"  {form:>9} {count:>6} {'on' if shadows else 'off':>7}"
+                if "error" in got:
+                    print(f"{label} failed: {got['error']}")
+                    continue
+                one = one or got
+                print(f"{label} {got['load_ms']:9.1f} {got['render_ms']:10.1f} "
+                      f"{got['render_ms'] / one['render_ms']:6.2f} "
+                      f"{got['light_pass_ms']:13.1f} {got['rss_mib']:12.0f} "
+                      f"{got['rss_mib'] / one['rss_mib']:5.2f} {got['shadow_maps']:>5} "
+                      f"{got['unshadowed']:>10}" + ("" if got["finite"] else "  NON-FINITE"))
 
 
 if __name__ == "__main__":
     if sys.argv[1:2] == ["--one"]:
-        measure(int(sys.argv[2]), sys.argv[3] == "1")
+        measure(int(sys.argv[2]), sys.argv[3] == "1", *sys.argv[4:5])
     else:
         main()

@@ -2,14 +2,20 @@
 transform values and material bindings to prims that are not Materials."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from pxr import UsdGeom, UsdShade
 
 
 def finite_value(v) -> bool:
     """Whether an xform op's value (a number, vector, matrix or quaternion) is finite."""
+    if isinstance(v, (int, float)):
+        return math.isfinite(v)
     if hasattr(v, "GetReal"):
-        return np.isfinite([v.GetReal(), *v.GetImaginary()]).all()
+        return math.isfinite(v.GetReal()) and all(math.isfinite(x) for x in v.GetImaginary())
+    if len(v) <= 4 and not hasattr(v[0], "__len__"):         # a vector: no array made
+        return all(math.isfinite(x) for x in v)
     return bool(np.isfinite(np.asarray(v, np.float64)).all())
 
 

@@ -13,9 +13,11 @@ then shades per pixel.
 
 Lists go into one pool of items, each cluster taking its place with an atomic add.
 A cluster whose list does not fit is marked and walks every light when shaded (never
-dropped); the renderer reads how many items were asked for with the frame's pixels
-and grows the pool for the next frame (stats light_items, clusters_overflowed), so
-nothing waits on the GPU mid-frame.
+dropped). The first frame after the lights, the error bound or the grid changed reads
+how many items were asked for at once and culls again into a pool of that size (one
+wait on the GPU, then never again for them); later frames read it with their pixels
+and grow the pool for the next frame (stats light_items, clusters_overflowed), so a
+moving view never waits mid-frame.
 
 Lights whose shadows have a map this frame are not listed: the clustered pass shades
 each with its own map over its screen rectangle.
@@ -75,6 +77,7 @@ class LightCullPass(Pass):
         self._exact = None            # (rows, buffer) of the lights listed one by one
         self.capacity = 0             # items the pool holds
         self._grid = None
+        self._sized = None            # (lights version, error, grid) the pool was sized for
 
     def needed(self, frame):
         return frame.lighting == "clustered" and bool(frame.scene.lights)
@@ -116,6 +119,17 @@ class LightCullPass(Pass):
         self.table.texture.use(UNITS["u_lights"])
         prog.run(-(-n_clusters // 64))
         ctx.memory_barrier()
+        sized = (self.table.version, error, tiles)
+        if self._sized != sized:
+            self._sized = sized
+            asked = int(np.frombuffer(counts.read(), np.uint32)[0])
+            if asked > self.capacity:
+                self._grow(asked + asked // 4)
+                self.bind(tree_buffer, counts)
+                counts.clear()
+                set_uniform(prog, "items_capacity", self.capacity)
+                prog.run(-(-n_clusters // 64))
+                ctx.memory_barrier()
         board["clusters"] = Clusters(tiles, exact, mapped, tree, error, counts)
         frame.stats["light_clusters"] = n_clusters
 
