@@ -35,17 +35,27 @@ void add_light(Surface s, inout vec3 sum_d, inout vec3 sum_g) {
     sum_g += glossy;
 }
 
+// Whether the loaded light's volume reaches camera-relative p (a sun's always does):
+// tested before the pixel's surface is read from the G-buffer, which costs more.
+bool reaches(vec3 p) {
+    return is_distant || distance(p, light_pos) <= light_range;
+}
+
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy) + u_offset;
     if (any(greaterThanEqual(px, imageSize(hdr_image)))) return;
     shaded_pixel = vec2(px) + 0.5;
     float depth = texelFetch(g_depth, px, 0).r;
     if (is_background(depth)) return;
-    Surface s = gbuffer_surface(px, depth);
+    vec3 p = position_from_depth(shaded_pixel / vec2(textureSize(g_depth, 0)), depth,
+                                 inv_view_proj);
     vec3 sum_d = vec3(0.0), sum_g = vec3(0.0);
     float lit = 1.0;
+    Surface s;
 #ifdef SINGLE_LIGHT
     load_light(light_index, cam_forward);
+    if (!reaches(p)) return;
+    s = gbuffer_surface(px, depth);
     add_light(s, sum_d, sum_g);
     vec3 radiance = sum_d + sum_g;
     if (max(radiance.r, max(radiance.g, radiance.b)) <= 0.0) return;
@@ -53,26 +63,35 @@ void main() {
     lit = light_shadow(s.p, s.n, dot(s.p, cam_forward));
 #endif
 #else
-    uvec2 range = cluster_ranges[cluster_of(px, dot(s.p, cam_forward))];
+    uvec2 range = cluster_ranges[cluster_of(px, dot(p, cam_forward))];
+    if (range.y == 0u) return;
+    bool read = false;              // the surface, read once a light reaches the pixel
     if (range.y == OVERFLOW) {
         // Its list did not fit: every light, the tree from its root.
+        s = gbuffer_surface(px, depth);
+        read = true;
         if (tree_leaves > 0) shade_node(s, 0, cam_forward, sum_d, sum_g);
         for (int k = 0; k < n_exact; ++k) {
             load_light(exact_rows[k], cam_forward);
-            add_light(s, sum_d, sum_g);
+            if (reaches(p)) add_light(s, sum_d, sum_g);
         }
     } else {
-        if (range.y == 0u) return;
         for (uint k = 0u; k < range.y; ++k) {
             uint item = cluster_items[range.x + k];
-            if ((item & TREE_ITEM) != 0u) {
-                shade_node(s, int(item & ~TREE_ITEM), cam_forward, sum_d, sum_g);
-            } else {
+            bool tree = (item & TREE_ITEM) != 0u;
+            if (!tree) {
                 load_light(int(item), cam_forward);
-                add_light(s, sum_d, sum_g);
+                if (!reaches(p)) continue;
             }
+            if (!read) {
+                s = gbuffer_surface(px, depth);
+                read = true;
+            }
+            if (tree) shade_node(s, int(item & ~TREE_ITEM), cam_forward, sum_d, sum_g);
+            else add_light(s, sum_d, sum_g);
         }
     }
+    if (!read) return;
     vec3 radiance = sum_d + sum_g;
 #endif
     // NaN or Inf goes through: the resolve pass counts it.
