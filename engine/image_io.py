@@ -7,6 +7,11 @@
 - write_image: .exr is float32 RGBA, scene-linear; .png is 8-bit through a view
   transform (engine/color.py: Blender's Standard by default, or AgX, Filmic, Khronos PBR
   Neutral and their looks through OpenColorIO), alpha kept linear and straight.
+- write_layers: the image and its render passes as one multi-layer EXR, laid out as
+  Blender 5 writes its own: one part per pass, named `<view layer>.<pass>`, channels
+  `<view layer>.<pass>.<letter>` (core/passes.py `title`, `file_channels`), the
+  Combined part first and carrying the header metadata (Cryptomatte's manifests:
+  core/cryptomatte.py). Every part float32, ZIP-compressed.
 - write_animation: a looping .gif preview. Neither Blender's OpenImageIO nor PyPI's has
   a GIF writer, so the GIF is encoded here (median-cut palette, LZW): a small,
   dependency-free encoder rather than a second imaging library in the engine.
@@ -122,6 +127,54 @@ def write_image(path: str, rgba: np.ndarray, view: str = "Standard", look: str |
         raise ValueError(f"expected an (H, W, 4) image, got {rgba.shape}")
     atomic_write(path, lambda tmp: writers[ext](tmp, rgba, view=view, look=look,
                                                 exposure=exposure, overlay=overlay), suffix=ext)
+
+
+def write_layers(path: str, rgba: np.ndarray, passes: dict, layer: str = "ViewLayer",
+                 cryptomatte: dict | None = None) -> None:
+    """One multi-layer EXR of scene-linear RGBA (H, W, 4) and `passes` ({engine pass
+    name: float32 (H, W, C)}, core/passes.py), row 0 = top, under view layer `layer`;
+    `cryptomatte`: {matte: {name: id}} (RenderResult.cryptomatte)."""
+    from ..core.cryptomatte import metadata
+    from ..core.passes import COMBINED_TITLE, PASSES
+    if not path.lower().endswith(".exr"):
+        raise ValueError(f"{path}: render passes need an .exr")
+    rgba = np.asarray(rgba, dtype=np.float32)
+    h, w = rgba.shape[:2]
+    parts = [(COMBINED_TITLE, "RGBA", rgba)]
+    for name in sorted(passes, key=list(PASSES).index):
+        p, pixels = PASSES[name], np.asarray(passes[name], dtype=np.float32)
+        if pixels.shape != (h, w, p.channels):
+            raise ValueError(f"pass {name}: expected {(h, w, p.channels)}, got {pixels.shape}")
+        parts.append((p.title, p.file_channels, pixels))
+    header = {}
+    for matte, manifest in (cryptomatte or {}).items():
+        header.update(metadata(f"{layer}.{matte}", manifest))
+    atomic_write(path, lambda tmp: _write_parts(tmp, parts, layer, header), suffix=".exr")
+
+
+def _write_parts(path, parts, layer, header):
+    oiio = _oiio()
+    specs = []
+    for title, letters, pixels in parts:
+        h, w, c = pixels.shape
+        spec = oiio.ImageSpec(w, h, c, "float")
+        spec.channelnames = tuple(f"{layer}.{title}.{letter}" for letter in letters)
+        spec.attribute("name", f"{layer}.{title}")
+        spec.attribute("compression", "zip")
+        specs.append(spec)
+    for name, value in header.items():
+        specs[0].attribute(name, value)
+    out = oiio.ImageOutput.create(path)
+    if out is None:
+        raise ImageError(f"{path}: no image writer ({_last_error(oiio)})")
+    try:
+        for i, ((_, _, pixels), spec) in enumerate(zip(parts, specs)):
+            opened = out.open(path, specs) if i == 0 else \
+                out.open(path, spec, "AppendSubimage")
+            if not opened or not out.write_image(np.ascontiguousarray(pixels)):
+                raise ImageError(f"{path}: cannot write image ({out.geterror()})")
+    finally:
+        out.close()
 
 
 def write_animation(path: str, frames, fps: float, view: str = "Standard",

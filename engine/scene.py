@@ -297,6 +297,7 @@ class Instance:
     shapes: list = field(default_factory=list)
     worlds: np.ndarray | None = None   # (n, 4, 4): instanced, one world matrix per instance
     pass_index: int = 0            # lantern:passIndex of it or an ancestor: IndexOB
+    asset: str = ""                # the asset it belongs to (CryptoAsset): usd/read.py asset_path
 
 
 @dataclass
@@ -310,6 +311,7 @@ class PointCloud:
     colours: np.ndarray | None     # (n, 3) displayColor, or None: the material's
     material: str                  # Scene.materials key
     world: np.ndarray = field(default_factory=lambda: np.eye(4))
+    asset: str = ""                # as Instance.asset
 
     @property
     def bounds(self):

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..core import passes as render_passes
 from ..core.presets import preset as find_preset
+from .cryptomatte import manifests
 from .gpu.context import gl_thread, run_gl
 from .gpu.readback import ReadbackRequest
 from .gpu.renderer import Renderer
@@ -42,6 +43,9 @@ class RenderResult:
     timings: dict = field(default_factory=dict)
     gpu_timings: dict = field(default_factory=dict)  # per pass that ran: GPU seconds
     stats: dict = field(default_factory=dict)    # prims_read, bytes_uploaded, draw_calls, ...
+    # The Cryptomatte mattes among the passes: {matte: {name: id as 8 hex digits}}, the
+    # manifest an image's metadata carries (engine/cryptomatte.py).
+    cryptomatte: dict = field(default_factory=dict)
 
 
 class Session:
@@ -172,7 +176,8 @@ class Session:
         return RenderResult(rgba=rgba, passes=aovs,
                             warnings=self._reader.scene.warning_list() +
                             self._renderer.warnings(),
-                            timings=timings, gpu_timings=gpu, stats=stats)
+                            timings=timings, gpu_timings=gpu, stats=stats,
+                            cryptomatte=manifests(self._reader.scene, self._passes))
 
     def programs_pending(self) -> int:
         """Programs a viewport's frames wait for (settings.background_compile): render

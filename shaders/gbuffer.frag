@@ -31,10 +31,14 @@ layout(location = SHEEN_LOCATION) out vec4 rt_sheen;   // u_sheen (material.glsl
 #define INDEX_LOCATION SHEEN_LOCATION
 #endif
 #ifdef WRITE_INDEX
-// Render passes IndexOB and IndexMA (asked for only).
-layout(location = INDEX_LOCATION) out vec2 rt_index;
+// Render passes IndexOB and IndexMA, and the ids Cryptomatte ranks (asked for only):
+// the object's pass index, the material's, 1 + the object's id, the material's
+// Cryptomatte id (engine/gpu/passes/cryptomatte.py).
+layout(location = INDEX_LOCATION) out vec4 rt_index;
 flat in float v_object_index;
+flat in float v_object_id;
 uniform float u_material_index;
+uniform float u_material_id;
 #endif
 
 #include "material.glsl"
@@ -55,6 +59,6 @@ void main() {
     rt_sheen = m.sheen;
 #endif
 #ifdef WRITE_INDEX
-    rt_index = vec2(v_object_index, u_material_index);
+    rt_index = vec4(v_object_index, u_material_index, v_object_id, u_material_id);
 #endif
 }

@@ -26,6 +26,7 @@ out vec3 v_generated;
 #endif
 #ifdef WRITE_INDEX
 flat out float v_object_index;
+flat out float v_object_id;     // 1 + the object's id; 0 is the background
 #endif
 void main() {
     mat4 model = object_model();
@@ -46,5 +47,6 @@ void main() {
     v_tangent = vec4(mat3(model) * in_tangent.xyz, in_tangent.w);
 #ifdef WRITE_INDEX
     v_object_index = object_pass_index();
+    v_object_id = float(OBJECT_ID + 1);
 #endif
 }

@@ -33,6 +33,16 @@ layout(location = 4) out vec4 rt_smooth;     // as gbuffer.frag's: a sphere has 
 #ifdef WRITE_SHEEN
 layout(location = SHEEN_LOCATION) out vec4 rt_sheen;
 uniform vec4 u_sheen;
+#define INDEX_LOCATION (SHEEN_LOCATION + 1)
+#else
+#define INDEX_LOCATION SHEEN_LOCATION
+#endif
+#ifdef WRITE_INDEX
+// As gbuffer.frag's: a Points prim has no pass index of its own.
+layout(location = INDEX_LOCATION) out vec4 rt_index;
+uniform int u_object;
+uniform float u_material_index;
+uniform float u_material_id;
 #endif
 uniform vec3 u_diffuse;
 uniform float u_metallic;
@@ -77,6 +87,9 @@ void main() {
 #endif
 #ifdef WRITE_SHEEN
     rt_sheen = u_sheen;
+#endif
+#ifdef WRITE_INDEX
+    rt_index = vec4(0.0, u_material_index, float(u_object + 1), u_material_id);
 #endif
 #endif
 }

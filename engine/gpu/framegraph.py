@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...core.passes import PASSES
+from ...core.passes import MATTE_LEVELS, PASSES
 from ..settings import RenderSettings
 from .readback import SLOTS, ReadbackRequest
 from .timers import PassTimer
@@ -50,7 +50,7 @@ TARGETS = {
     "depth_stencil": "depth_stencil",  # scene depth copy and light-volume marks
     "output": "rgba32f",
     # Render passes (AOVs), only when asked for (core/passes.py).
-    "g_index": "rg32f",        # object and material pass indices (the G-buffer pass)
+    "g_index": "rgba32f",      # object and material pass indices and ids (the G-buffer pass)
     "aov_depth": "r32f",       # view-axis distance (the AOV pass)
     "aov_normal": "rgba32f",   # world normal
     "aov_emit": "rgba32f",     # emission
@@ -59,6 +59,9 @@ TARGETS = {
     "aov_glossy": "rgba32f",   # specular and coat light (the same)
     "aov_env": "rgba32f",      # the dome seen directly (the ambient pass)
     "aov_shadow": "rgba32f",   # light reaching surfaces: with, without shadows (lights)
+    # Cryptomatte's levels, two ranks each, at the image's size (passes/cryptomatte.py).
+    **{f"crypto_{matte}{level}": "rgba32f" for matte in ("object", "material", "asset")
+       for level in range(MATTE_LEVELS)},
 }
 
 

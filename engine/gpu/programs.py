@@ -48,6 +48,8 @@ UNITS.update(zip(("u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_infl
                   "u_deformed", "u_incidence"), range(UNITS["t_diffuse"], UNITS["t_diffuse"] + 6)))
 UNITS.update(t_pattern5=UNITS["radiance"], t_pattern6=UNITS["overlay_image"],
              t_pattern7=UNITS["overlay_atlas"])
+# The Cryptomatte pass samples nothing else (passes/cryptomatte.py).
+UNITS.update(crypto_ids=UNITS["g_base"], crypto_names=UNITS["g_normal"])
 
 
 class ShaderError(RuntimeError):

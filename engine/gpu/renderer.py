@@ -9,6 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ...core.passes import PASSES
 from . import budget
 from .context import Features
 from .depth import DepthConvention
@@ -21,6 +22,7 @@ from .passes.ambient import AmbientPass
 from .passes.antialias import SupersamplePass, centre_samples, downsample
 from .passes.ao import AoPass
 from .passes.aovs import AovPass
+from .passes.cryptomatte import CryptomattePass
 from .passes.gbuffer import GBufferPass
 from .passes.clustered import ClusteredLightPass
 from .passes.light_cull import LightCullPass
@@ -128,6 +130,7 @@ class Renderer:
             TransparencyPass(ctx, self.pool, programs, self.geometry, self.textures,
                              self.lights, self.environment, self.depth),
             SupersamplePass(ctx, self.pool, programs),
+            CryptomattePass(ctx, self.pool, programs, self.geometry, self.uploads),
             PostPass(ctx, self.pool, programs),
             self.resolve,
         ], gl.proc)
@@ -185,7 +188,9 @@ class Renderer:
         self._drawn = dict(frame.scene.materials)
         # Render passes were drawn at the supersampled size too: light is filtered as
         # the image is, data (depth, normals, indices) keeps the centre sub-pixel.
-        board["aovs"] = {name: (centre_samples(a, k) if name in DATA_PASSES else downsample(a, k))
+        # Cryptomatte's pass ranked its sub-pixels itself, at the image's size.
+        board["aovs"] = {name: (a if PASSES[name].matte else centre_samples(a, k)
+                                if name in DATA_PASSES else downsample(a, k))
                          for name, a in board["aovs"].items()}
         if "Shadow" in board["aovs"]:
             board["aovs"]["Shadow"] = shadow_ratio(board["aovs"]["Shadow"])

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from pxr import Usd, UsdGeom
+from pxr import Sdf, Usd, UsdGeom
 
 from ..scene import Changes, Instance
 from .camera import gf_to_np, is_camera
@@ -42,6 +42,23 @@ def pass_index(prim) -> int:
             return int(attr.Get())
         prim = prim.GetParent()
     return 0
+
+
+def asset_path(prim) -> str:
+    """The asset a drawn prim belongs to (the Cryptomatte asset matte): the component
+    model it is in (USD's kind), else its ancestor just below the stage's default prim
+    (a Blender export's top-level object, as Blender's asset matte takes the topmost
+    parent), else its top-level prim."""
+    path = prim.GetPath()
+    p = prim
+    while p and not p.IsPseudoRoot():
+        if p.IsComponent():
+            return str(p.GetPath())
+        p = p.GetParent()
+    default = prim.GetStage().GetDefaultPrim()
+    root = default.GetPath() if default and path.HasPrefix(default.GetPath()) and \
+        path != default.GetPath() else Sdf.Path.absoluteRootPath
+    return str(path.GetPrefixes()[root.pathElementCount])
 
 
 def strongest_spec(attr):
@@ -217,7 +234,7 @@ class FirstRead:
             old.pass_index = index
         else:
             self.scene.instances[path] = Instance(path, key, world, shapes=shapes,
-                                                  pass_index=index)
+                                                  pass_index=index, asset=asset_path(prim))
         for name in set(previous.materials if previous else ()) - set(dyn.materials):
             self._unuse_material(name, path)
         for name in dyn.materials:

@@ -8,6 +8,7 @@ import numpy as np
 
 from ..scene import Changes, Instance, PointCloud
 from .instancers import instance_matrices, points_data, prototype_meshes
+from .read import asset_path
 from .timeline import NOT_GEOMETRY, Dynamic, mesh_attributes_vary
 
 
@@ -89,7 +90,9 @@ class InstancerReading:
         for name in dyn.materials:
             self._material_users.setdefault(name, set()).add(batch)
         self._inst[batch] = dyn
-        self.scene.instances[batch] = Instance(batch, key, np.eye(4), worlds=worlds)
+        self.scene.instances[batch] = Instance(batch, key, np.eye(4), worlds=worlds,
+                                               asset=asset_path(self.stage.GetPrimAtPath(
+                                                   batch.split("{", 1)[0])))
         changes.instances.add(batch)
         return True
 
@@ -114,7 +117,8 @@ class InstancerReading:
         if old is not None and old.material != mats[0].name:
             self._unuse_material(old.material, path)
         self._material_users.setdefault(mats[0].name, set()).add(path)
-        self.scene.points[path] = PointCloud(path, points, radii, colours, mats[0].name, world)
+        self.scene.points[path] = PointCloud(path, points, radii, colours, mats[0].name, world,
+                                             asset=asset_path(prim))
         changes.points.add(path)
 
     def _drop_points(self, path, changes: Changes, keep_prim=False):

@@ -19,10 +19,13 @@ writes: g_base (base colour + alpha), g_normal (world normal, clearcoat roughnes
         core/sheen.MODES) only in frames with a sheen (shaders/lib.glsl apply_sheen)
 A material with a pattern graph (engine/gpu/pattern.py) draws with its shape's
 generated variant and its parameters (stats: pattern_bytes).
-render passes: IndexOB, IndexMA into g_index (RG32F), only when asked for (a
-        shader variant with a fifth output)"""
+render passes: IndexOB, IndexMA into g_index (RGBA32F: the object's and material's
+        pass indices, 1 + the object's id, the material's Cryptomatte id), only when
+        asked for, or when Cryptomatte is (a shader variant with one more output)"""
 from __future__ import annotations
 
+from ....core.cryptomatte import name_id
+from ....core.passes import wants_ids
 from ....core.sheen import MODES as SHEEN_MODES
 from ..framegraph import Pass
 from ..points import set_camera_facing
@@ -47,7 +50,7 @@ class GBufferPass(Pass):
     reads = ("skinned", "view")
     optional = ("tessellated",)
     writes = TARGETS
-    writes_optional = ("g_smooth", "g_sheen")
+    writes_optional = ("g_smooth", "g_sheen", "g_index")
     aovs = {"IndexOB": ("g_index", 0), "IndexMA": ("g_index", 1)}
 
     def __init__(self, ctx, pool, programs, geometry, textures, depth):
@@ -58,9 +61,11 @@ class GBufferPass(Pass):
         # The normal before the normal map, for Cycles' bump map correction (lib.glsl
         # bump_shadowing), only in frames that draw a normal-mapped material.
         # A sheen, only in frames that draw one.
+        # The ids, for Cryptomatte (passes/cryptomatte.py).
         materials = frame.scene.materials.values()
         return (("g_smooth",) if any(m.needs_smooth_normal for m in materials) else ()) + \
-            (("g_sheen",) if any(m.has_sheen for m in materials) else ())
+            (("g_sheen",) if any(m.has_sheen for m in materials) else ()) + \
+            (("g_index",) if wants_ids(frame.aovs) else ())
 
     def program_args(self, mat, outputs, index):
         """ProgramCache.get's arguments for `mat`'s variant, with these optional
@@ -73,11 +78,11 @@ class GBufferPass(Pass):
         """program_args as this frame will draw `mat` (its targets: wanted, aov_targets)."""
         wanted = self.wanted(frame)
         return self.program_args(mat, [d for n, d in OUTPUT_DEFINES.items() if n in wanted],
-                                 "g_index" in self.aov_targets(frame))
+                                 "g_index" in wanted + self.aov_targets(frame))
 
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]
-        index = "g_index" in self.aov_targets(frame)
+        index = "g_index" in board
         extra = [n for n in OUTPUT_DEFINES if n in board]
         colors = [board[n] for n in TARGETS[:4] + tuple(extra)] + \
             ([board["g_index"]] if index else [])
@@ -119,7 +124,7 @@ class GBufferPass(Pass):
         ctx.front_face = "ccw"
         ctx.disable(ctx.CULL_FACE)
         if self.geometry.points.clouds:
-            self._points(frame, view, materials, outputs)
+            self._points(frame, view, materials, outputs + (["WRITE_INDEX"] if index else []))
         ctx.disable(ctx.DEPTH_TEST)
         self.depth.far_clip(False)
 
@@ -157,6 +162,7 @@ def set_material(prog, mat, textures, threshold, footprint=1.0):
     set_uniform(prog, "u_base_occlusion", 1.0 if mat.base_occlusion else 0.0)
     set_uniform(prog, "u_sheen", sheen_texel(mat))
     set_uniform(prog, "u_material_index", float(mat.pass_index))
+    set_uniform(prog, "u_material_id", name_id(mat.name))
     set_uniform(prog, "u_bump_correction", bool(mat.bump_correction))
     pattern_bytes = set_parameters(prog, mat)
     for name, short, _ in MAP_SLOTS:
