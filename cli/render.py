@@ -12,6 +12,9 @@ from .common import (EXIT_STATUSES, FAILED, IMAGE_SUFFIXES, MAX_SIDE, RENDER_PRO
                      check_folder, check_output, check_preset, fail, internal_error,
                      make_folder, number, parse_frames, parse_size, print_warnings,
                      status_writer, usage, write_output)
+from .products import add_options as add_product_options
+from .products import check as check_product
+from .products import frame_pattern, parse_passes, plan
 from .timings import Phases
 
 
@@ -21,11 +24,11 @@ def add_parser(commands, parents):
                                  epilog=EXIT_STATUSES,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     render.add_argument("scenes", nargs="+", metavar="scene.usd|scene.blend")
-    render.add_argument("-o", "--output", required=True,
+    render.add_argument("-o", "--output", default=None,
                         help="an .exr (scene linear) or .png (sRGB); for --frames, a name "
-                             "with '####' (the frame) or a .gif; for several scenes, a "
-                             "folder (outputs named after the inputs; for one, end it "
-                             "with /)")
+                             "with '####' or $F4 (the frame) or a .gif; for several scenes, "
+                             "a folder (outputs named after the inputs; for one, end it "
+                             "with /). Default: the stage's RenderProducts")
     render.add_argument("--format", choices=("png", "exr"), default="png",
                         help="image format of the outputs written into a folder (default png)")
     render.add_argument("--timings", action="store_true",
@@ -65,15 +68,25 @@ def add_parser(commands, parents):
     add_subdivision_option(render, " of a .blend input")
     from .overlays import add_options as add_overlay_options
     add_overlay_options(render)
+    add_product_options(render)
 
 
 def run(args):
-    if len(args.scenes) > 1 or _is_folder(args.output):
+    args.passes = parse_passes(args.passes)
+    if args.output is not None:
+        args.output = frame_pattern(args.output)
+    elif len(args.scenes) > 1:
+        raise usage("several scenes need a folder for -o")
+    if len(args.scenes) > 1 or _is_folder(args.output or ""):
         return _render_files(args)
     args.scene = args.scenes[0]
     if args.frames is not None and args.frame is not None:
         raise usage("--frame and --frames cannot be used together")
-    if args.frames is None:
+    if args.passes and (args.output is None or not args.output.lower().endswith(".exr")):
+        raise usage(f"--passes: render passes need an .exr for -o, not {args.output}")
+    if args.output is None:
+        pass                            # the stage's RenderProducts: checked once read
+    elif args.frames is None:
         check_output(args.output, IMAGE_SUFFIXES)
     elif args.output.lower().endswith(".gif"):
         check_output(args.output, (".gif",))
@@ -106,6 +119,7 @@ def run(args):
     try:
         stage = _stage_from_blend(args.scene, args.subdivision) if is_blend else _open_usd(args.scene)
         _check_camera(stage, args)
+        args.sequence_outputs = _outputs(args, stage, sequence=True)
         args.colour = _colour(stage, args)
         from .overlays import from_args as overlays_from_args
         args.overlays = overlays_from_args(args, stage, CommandError)
@@ -191,6 +205,9 @@ def _render_files(args):
             raise usage(f"{scene}: expected a .usd, .usda, .usdc or .blend file")
     if args.output.lower().endswith(IMAGE_SUFFIXES + (".gif",)):
         raise usage(f"{args.output}: several scenes need a folder for -o")
+    if args.passes and args.format != "exr":
+        raise usage("--passes: render passes need --format exr")
+    args.products = False           # the folder names the outputs, not the stages
     if os.path.exists(args.output) and not os.path.isdir(args.output):
         raise usage(f"{args.output}: is a file, not a folder")
     jobs = [(scene, os.path.join(args.output, os.path.splitext(os.path.basename(scene))[0]
@@ -329,36 +346,68 @@ def _import_render_path():
 
 
 def _render_frame(args, is_blend, phases):
-    """args.scene, one frame, into args.output."""
-    from ..engine import render_stage
-    from ..engine.image_io import write_image
+    """args.scene, one frame, into each of its outputs (cli/products.py)."""
+    from ..engine import Session
+    from ..engine.usd.camera import default_time
+    from ..core.text import frame_path
+    from .products import write
     stage = _stage_from_blend(args.scene, args.subdivision) if is_blend else _open_usd(args.scene)
     _check_camera(stage, args)
+    outputs = _outputs(args, stage, sequence=False)
     phases.mark("stage open")
     # An .exr is scene linear: the scene's view transform (OpenColorIO) is for displays.
-    args.colour = {} if args.output.lower().endswith(".exr") else _colour(stage, args)
+    pngs = any(not o.output.lower().endswith(".exr") for o in outputs)
+    colour = _colour(stage, args) if pngs else {}
     from .overlays import from_args as overlays_from_args
     args.overlays = overlays_from_args(args, stage, CommandError)
     phases.mark("encode and write")
-    result = _rendered(args.scene, lambda: render_stage(stage, _settings(args, args.frame)))
-    phases.mark("render")
-    print_warnings(result.warnings, set())
+    frame = args.frame if args.frame is not None else default_time(stage)
     overlay = None
     if args.overlays is not None:
-        from ..engine.usd.camera import default_time
-        frame = args.frame if args.frame is not None else default_time(stage)
         overlay = functools.partial(args.overlays.apply, frame=frame)
-    write_output(args.output, lambda: write_image(args.output, result.rgba, **args.colour,
-                                            overlay=overlay))
-    phases.mark("encode and write")
-    height_px, width_px = result.rgba.shape[:2]
-    print(f"{args.scene} -> {args.output} ({width_px}x{height_px}, "
-          f"{result.timings.get('total', 0.0) * 1000:.1f} ms)")
+    first, seen = None, set()
+    session = _rendered(args.scene, lambda: Session(stage, _settings(args, args.frame)))
+    try:
+        for output in outputs:
+            width, height = output.size or (None, None)
+            session.configure(width=width, height=height, camera=output.camera,
+                              passes=frozenset(output.passes))
+            result = _rendered(args.scene, session.render)
+            phases.mark("render")
+            print_warnings(result.warnings, seen)
+            path = frame_path(output.output, 1.0 if frame is None else frame)
+            write_output(path, lambda: write(
+                output, path, result, {} if path.lower().endswith(".exr") else colour,
+                overlay))
+            phases.mark("encode and write")
+            height_px, width_px = result.rgba.shape[:2]
+            layers = f", {len(result.passes)} passes" if result.passes else ""
+            print(f"{args.scene} -> {path} ({width_px}x{height_px}{layers}, "
+                  f"{result.timings.get('total', 0.0) * 1000:.1f} ms)")
+            first = first or result
+    finally:
+        session.close()
     if args.debug:
-        print(_gl_line(result.stats))
+        print(_gl_line(first.stats))
     if args.timings:
-        phases.report(args.scene, result)
+        phases.report(args.scene, first)
     return 0
+
+
+def _outputs(args, stage, sequence):
+    """The render's outputs (cli/products.py), each checked before any render."""
+    seen = set()
+    outputs = plan(args, stage, lambda warnings: print_warnings(warnings, seen)) \
+        if getattr(args, "products", True) else [_plain_output(args)]
+    kinds = IMAGE_SUFFIXES + ((".gif",) if sequence and len(outputs) == 1 else ())
+    for i, output in enumerate(outputs):
+        check_product(output, sequence, i == 0 and args.output is not None, kinds)
+    return outputs
+
+
+def _plain_output(args):
+    from ..farm.options import Product
+    return Product(args.output, args.size, args.camera, args.passes or ())
 
 
 def _gl_line(stats) -> str:
@@ -380,22 +429,24 @@ def _render_sequence(stage, args, runner, stage_text):
     stage loaded, here or on a Dask cluster."""
     from ..farm.batch import FarmError, render_frames
     from ..farm.options import SequenceOptions
-    if not args.output.lower().endswith(".gif"):
-        make_folder(os.path.dirname(os.path.abspath(args.output)))
+    outputs = args.sequence_outputs
+    for output in outputs:
+        if not output.output.lower().endswith(".gif"):
+            make_folder(os.path.dirname(os.path.abspath(output.output)))
     seen = set()
     try:
         options = SequenceOptions(
             scheduler=args.scheduler, jobs=args.jobs, collect=args.collect, resume=args.resume,
             status=status_writer(args),
-            scene=args.scene, output=args.output, frames=tuple(args.frames), size=args.size,
-            preset=args.preset, camera=args.camera, chunk=args.chunk, **args.colour,
+            scene=args.scene, products=tuple(outputs), frames=tuple(args.frames),
+            preset=args.preset, chunk=args.chunk, **args.colour,
             overlays=args.overlays)
         status = render_frames(options, runner, stage_text, stage.GetFramesPerSecond() or 24.0,
                                lambda warnings: print_warnings(warnings, seen))
     except FarmError as error:
         raise CommandError(str(error))
     except OSError as error:
-        raise CommandError(f"{error.filename or args.output}: cannot be written: "
+        raise CommandError(f"{error.filename or outputs[0].output}: cannot be written: "
                            f"{error.strerror or error}")
     if status:
         raise CommandError(f"{args.scene}: some frames failed (see the summary above)")

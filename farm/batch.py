@@ -28,7 +28,7 @@ from ..core.text import frame_path
 from . import chunking
 from .options import ExportBatchOptions, SequenceOptions
 from .runners import FarmError, open_runner
-from .tasks import EXPORT_NEEDS, GPU_RENDER_NEEDS, RENDER_NEEDS, ExportTask, RenderChunk
+from .tasks import EXPORT_NEEDS, GPU_RENDER_NEEDS, RENDER_NEEDS, ChunkOutput, ExportTask, RenderChunk
 
 FAILED = 1
 STALL_SECONDS = 5.0  # how often a waiting client checks that some worker can run its tasks
@@ -291,22 +291,23 @@ class _WorkerTally:
 
 def render_frames(options: SequenceOptions, runner, stage_text=None, fps=24.0,
                   print_warnings=None):
-    """Renders options.frames of options.scene into options.output ('####' or a .gif)
-    as chunks on `runner` (open_render_runner), which it closes. stage_text: the stage
-    as USD text when the client exported it (a .blend)."""
+    """Renders options.frames of options.scene into each of options.products ('####',
+    or one .gif) as chunks on `runner` (open_render_runner), which it closes.
+    stage_text: the stage as USD text when the client exported it (a .blend)."""
     try:
         status = _render_frames(options, runner, stage_text, fps, print_warnings)
     except BaseException:
         runner.close(interrupted=True)
         if not options.output.lower().endswith(".gif"):
-            _sweep([os.path.abspath(options.output)])   # what the killed workers left
+            # What the killed workers left.
+            _sweep([os.path.abspath(p.output) for p in options.products])
         raise
     return status
 
 
 def _render_frames(options, runner, stage_text, fps, print_warnings):
     gif = options.output.lower().endswith(".gif")
-    pattern = None if gif else os.path.abspath(options.output)
+    patterns = [] if gif else [os.path.abspath(p.output) for p in options.products]
     scene = os.path.abspath(options.scene)
     input_mtime = os.stat(scene).st_mtime_ns
     frames = list(options.frames)
@@ -315,18 +316,23 @@ def _render_frames(options, runner, stage_text, fps, print_warnings):
         if gif:
             up_to_date = frames if _up_to_date(options.output, input_mtime) else []
         else:
-            up_to_date = [f for f in frames if _up_to_date(frame_path(pattern, f), input_mtime)]
+            up_to_date = [f for f in frames if all(_up_to_date(frame_path(p, f), input_mtime)
+                                                   for p in patterns)]
         frames = [f for f in frames if f not in set(up_to_date)]
     if not frames:
         runner.close()
         print(f"0 frames written, 0 failed, {len(up_to_date)} skipped (up to date)")
         return 0
-    folder = os.path.dirname(pattern or os.path.abspath(options.output))
-    os.makedirs(folder, exist_ok=True)
+    folder = os.path.dirname(os.path.abspath(options.output))
+    for product in options.products:
+        os.makedirs(os.path.dirname(os.path.abspath(product.output)), exist_ok=True)
     digest = hashlib.sha1(stage_text.encode()).hexdigest() if stage_text is not None else None
-    base = dict(scene=scene, pattern=pattern, width=options.size[0] if options.size else None,
-                height=options.size[1] if options.size else None, preset=options.preset,
-                camera=options.camera, stage_digest=digest, collect=options.collect,
+    targets = tuple(ChunkOutput(None if gif else os.path.abspath(p.output),
+                                *(p.size or (None, None)), p.camera, tuple(p.passes), p.layer,
+                                p.layered)
+                    for p in options.products)
+    base = dict(scene=scene, targets=targets, preset=options.preset,
+                stage_digest=digest, collect=options.collect,
                 colour=(options.view, options.look, options.exposure),
                 overlays=options.overlays,
                 since_ns=None if (options.collect or gif) else _folder_clock(folder))
@@ -396,7 +402,7 @@ def _render_frames(options, runner, stage_text, fps, print_warnings):
         _drive(runner, submit_more, on_done, needs, options.status)
     dashboard = runner.dashboard
     runner.close()
-    if pattern and not options.collect:
+    if patterns and not options.collect:
         _sweep(lost_outputs)
     if gif and not failed:
         from ..engine.image_io import write_animation

@@ -27,21 +27,40 @@ class ExportBatchOptions(FarmOptions):
     subdivision: str = FILE_DEFAULT  # core/subdivision_modes.py
 
 
+@dataclass(frozen=True)
+class Product:
+    """One file of every frame: `lantern render -o`, or a RenderProduct of the stage."""
+    output: str                     # a name with '####', or a .gif
+    size: tuple | None = None       # (width, height), or the stage's own
+    camera: str | None = None
+    passes: tuple = ()              # render passes (core/passes.py names)
+    layer: str = "ViewLayer"        # the view layer its layers are named after
+    multilayer: bool = False        # a multi-layer EXR even with no passes (a RenderProduct)
+
+    @property
+    def layered(self) -> bool:
+        """Written as a multi-layer EXR (engine/image_io.py write_layers)."""
+        return bool(self.passes) or self.multilayer
+
+
 @dataclass(frozen=True, kw_only=True)
 class SequenceOptions(FarmOptions):
     """`lantern render --frames`."""
     scene: str                      # the file the user named
-    output: str                     # a name with '####', or a .gif
+    products: tuple                 # Product, at least one; a .gif only alone
     frames: tuple                   # the frames, in order
-    size: tuple | None = None       # (width, height), or the stage's own
     preset: str = "medium"
-    camera: str | None = None
     chunk: int | None = None        # frames per task; None: from the measured costs
     # Blender's colour management for display outputs (engine/color.py).
     view: str = "Standard"
     look: str | None = None
     exposure: float = 0.0
     overlays: object = None         # engine/overlays.py BurnIn, drawn on each .png; or None
+
+    @property
+    def output(self):
+        """The first product's file: where messages point."""
+        return self.products[0].output
 
     @property
     def colour(self):

@@ -59,8 +59,9 @@ def _open(task, stage_text):
         stage = stage_from_text(stage_text, task.scene)
     else:
         stage = open_stage(task.scene)
-    settings = RenderSettings(width=task.width, height=task.height, preset=task.preset,
-                              camera=task.camera)
+    first = task.targets[0]
+    settings = RenderSettings(width=first.width, height=first.height, preset=task.preset,
+                              camera=first.camera)
     return Session(stage, settings)
 
 

@@ -55,14 +55,23 @@ class ExportTask:
 
 
 @dataclass(frozen=True)
-class RenderChunk:
-    scene: str                      # the file the user named: messages and the cache key
-    frames: tuple                   # frames to render, in order
+class ChunkOutput:
+    """One file per frame of a chunk (a product, farm/options.py)."""
     pattern: str | None             # output name ('####' = the frame); None: return pixels
     width: int | None = None
     height: int | None = None
-    preset: str = "medium"
     camera: str | None = None
+    passes: tuple = ()              # render passes
+    layer: str = "ViewLayer"
+    layered: bool = False           # a multi-layer EXR (engine/image_io.py write_layers)
+
+
+@dataclass(frozen=True)
+class RenderChunk:
+    scene: str                      # the file the user named: messages and the cache key
+    frames: tuple                   # frames to render, in order
+    targets: tuple                  # ChunkOutput, each written for every frame
+    preset: str = "medium"
     stage_digest: str | None = None  # set when the stage comes as text (a .blend's export)
     collect: bool = False
     # Outputs at least this new (the output folder's own clock) were written by this
@@ -84,11 +93,14 @@ class RenderChunk:
 
     @property
     def outputs(self):
-        return [frame_path(self.pattern, f) for f in self.frames] if self.pattern else []
+        return [frame_path(t.pattern, f) for t in self.targets if t.pattern
+                for f in self.frames]
 
     @property
     def settings_key(self):
-        return (self.width, self.height, self.preset, self.camera)
+        """A worker's session is reconfigured for each target (size, camera, passes):
+        only the preset sets it apart."""
+        return (self.preset,)
 
 
 @dataclass
@@ -248,45 +260,49 @@ def run_chunk(task: RenderChunk, stage_text=None) -> TaskResult:
 
 def _render_frames(task, session, load, result):
     """The chunk's frames into `result`: written, skipped (a lost attempt wrote them)
-    or failed. Frame N+1 is drawn while frame N is copied and written
-    (Session.render_frames)."""
-    paths, todo = {}, []
+    or failed; each target in turn, the session reconfigured for it. Frame N+1 is
+    drawn while frame N is copied and written (Session.render_frames)."""
+    todo = []
     for frame in task.frames:
-        path = paths[frame] = frame_path(task.pattern, frame) if task.pattern else None
-        if path and not task.collect and _written_since(path, task.since_ns):
+        paths = [frame_path(t.pattern, frame) for t in task.targets if t.pattern]
+        if paths and not task.collect and all(_written_since(p, task.since_ns) for p in paths):
             result.skipped.append(frame)
         else:
             todo.append(frame)
-    t0 = time.perf_counter()
-    for frame, image in session.render_frames(todo):
-        seconds, t0 = time.perf_counter() - t0, time.perf_counter()
-        if isinstance(image, Exception):      # the engine's input errors
-            result.failed[frame] = f"{task.scene}: frame {frame:g}: {one_line(error_text(image))}"
-            continue
-        if result.cold is None and load is not None:
-            result.cold = load + seconds        # the load counts in the first frame
-        else:
-            result.warm.append(seconds)
-        result.warnings += [w for w in image.warnings if w not in result.warnings]
-        result.device = result.device or device_text(image.stats)
-        _keep(task, frame, paths[frame], image.rgba, result)
+    for target in task.targets:
+        session.configure(width=target.width, height=target.height, camera=target.camera,
+                          passes=frozenset(target.passes))
         t0 = time.perf_counter()
+        for frame, image in session.render_frames(todo):
+            seconds, t0 = time.perf_counter() - t0, time.perf_counter()
+            if isinstance(image, Exception):      # the engine's input errors
+                result.failed.setdefault(
+                    frame, f"{task.scene}: frame {frame:g}: {one_line(error_text(image))}")
+                continue
+            if result.cold is None and load is not None:
+                result.cold = load + seconds        # the load counts in the first frame
+            else:
+                result.warm.append(seconds)
+            result.warnings += [w for w in image.warnings if w not in result.warnings]
+            result.device = result.device or device_text(image.stats)
+            path = frame_path(target.pattern, frame) if target.pattern else None
+            _keep(task, target, frame, path, image, result)
+            t0 = time.perf_counter()
+    result.written += [f for f in todo if f not in result.failed]
 
 
-def _keep(task, frame, path, rgba, result):
+def _keep(task, target, frame, path, image, result):
     """A rendered frame written, encoded (collect) or kept in memory."""
     try:
         if path is None:
-            result.pixels[frame] = rgba
+            result.pixels[frame] = image.rgba
         elif task.collect:
-            result.files[path] = _encoded(path, rgba, task.colour, _overlay(task, frame))
+            result.files[path] = _encoded(path, target, image, task.colour, _overlay(task, frame))
         else:
-            _write(path, rgba, task.colour, _overlay(task, frame))
+            _write(path, target, image, task.colour, _overlay(task, frame))
     except (OSError, ValueError) as error:
-        result.failed[frame] = f"{path}: cannot be written: " \
-                               f"{getattr(error, 'strerror', None) or error}"
-        return
-    result.written.append(frame)
+        result.failed.setdefault(frame, f"{path}: cannot be written: "
+                                        f"{getattr(error, 'strerror', None) or error}")
 
 
 def _written_since(path, since_ns):
@@ -308,17 +324,20 @@ def _overlay(task, frame):
                                                                  frame=frame)
 
 
-def _write(path, rgba, colour, overlay=None):
-    from ..engine.image_io import write_image
+def _write(path, target, image, colour, overlay=None):
+    """One frame's file: a multi-layer EXR of the target's passes, else the image."""
+    from ..engine.image_io import write_image, write_layers
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-    write_image(path, rgba, **_colour_settings(colour), overlay=overlay)
+    if target.layered:
+        write_layers(path, image.rgba, image.passes, target.layer, image.cryptomatte)
+    else:
+        write_image(path, image.rgba, **_colour_settings(colour), overlay=overlay)
 
 
-def _encoded(path, rgba, colour, overlay=None):
+def _encoded(path, target, image, colour, overlay=None):
     """The image file's bytes, encoded here (the worker) so only the file travels."""
-    from ..engine.image_io import write_image
     with tempfile.TemporaryDirectory(prefix="lantern-frame-") as folder:
         local = os.path.join(folder, "frame" + os.path.splitext(path)[1])
-        write_image(local, rgba, **_colour_settings(colour), overlay=overlay)
+        _write(local, target, image, colour, overlay)
         with open(local, "rb") as f:
             return f.read()

@@ -177,21 +177,24 @@ def test_chunk_sizes_follow_the_measured_costs():
 
 
 def test_a_worker_keeps_one_session_per_stage_and_settings(scene, tmp_path):
-    """Chunks after the first on a worker are warm; a changed file or other settings
-    load anew, and a stale session is released."""
+    """Chunks after the first on a worker are warm, at any size (the session is
+    reconfigured); a changed file or another preset load anew, and a stale session is
+    released."""
     from lantern.farm import sessions, tasks
     copy = tmp_path / "rig.usda"
     copy.write_bytes(scene.read_bytes())
-    chunk = tasks.RenderChunk(scene=str(copy), frames=(1.0, 2.0), pattern=None, width=32,
-                              height=18)
+    chunk = tasks.RenderChunk(scene=str(copy), frames=(1.0, 2.0),
+                              targets=(tasks.ChunkOutput(None, 32, 18),))
     try:
         first = tasks.run(chunk)
         assert first.ok and first.cold is not None and len(first.warm) == 1
         again = tasks.run(replace(chunk, frames=(3.0, 4.0)))
         assert again.ok and again.cold is None and len(again.warm) == 2
         assert sessions.cached() == 1
-        bigger = tasks.run(replace(chunk, width=48))
-        assert bigger.cold is not None and sessions.cached() == 2
+        bigger = tasks.run(replace(chunk, targets=(tasks.ChunkOutput(None, 48, 27),)))
+        assert bigger.cold is None and bigger.pixels[1.0].shape == (27, 48, 4)
+        low = tasks.run(replace(chunk, preset="low"))
+        assert low.cold is not None and sessions.cached() == 2
         stat = copy.stat()
         os.utime(copy, ns=(stat.st_atime_ns, stat.st_mtime_ns + 10**9))
         reloaded = tasks.run(chunk)
