@@ -74,6 +74,7 @@ class Frame:
     warnings: list
     number: int = 0           # this scene's frame count when it arrived
     gpu_timings: dict = field(default_factory=dict)   # per pass: GPU seconds
+    cryptomatte: dict = field(default_factory=dict)   # {matte: manifest}: RenderResult's
 
 
 @dataclass

@@ -101,14 +101,14 @@ class LANTERN_VIEWLAYER_PT_passes(LanternPanel, bpy.types.Panel):
     bl_context = "view_layer"
 
     def draw(self, context):
-        from ..core.passes import provided
+        from ..core.passes import switches
         layout = self.layout
         layout.use_property_split = True
         layout.use_property_decorate = False
         col = layout.column(heading="Include", align=True)
         col.prop(context.view_layer, "use_pass_combined")
-        for p in provided():
-            col.prop(context.view_layer, p.view_layer, text=p.name)
+        for prop, label in switches():
+            col.prop(context.view_layer, prop, text=label)
 
 
 class LANTERN_LIGHT_PT_shadow(LanternPanel, bpy.types.Panel):

@@ -9,7 +9,7 @@ import bpy
 
 from ..core.passes import COMBINED, PASSES
 from . import host as host_module
-from .scene_render import render_frame, requested_passes
+from .scene_render import blender_name, render_frame, requested_passes
 from .viewport import ViewportRender, region_border, view_request
 
 REDRAW_SECONDS = 1 / 60     # how often a viewport waiting for a frame looks for it
@@ -43,7 +43,8 @@ class LanternRenderEngine(bpy.types.RenderEngine):
         self.register_pass(scene, renderlayer, COMBINED, 4, "RGBA", 'COLOR')
         for name in requested_passes(renderlayer):
             p = PASSES[name]
-            self.register_pass(scene, renderlayer, p.name, p.channels, p.chan_id, p.kind)
+            self.register_pass(scene, renderlayer, blender_name(name), p.channels, p.chan_id,
+                               p.kind)
 
     # Viewport ----------------------------------------------------------------------------
     def view_update(self, context, depsgraph):

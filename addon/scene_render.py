@@ -15,7 +15,10 @@ from collections import OrderedDict
 
 import numpy as np
 
-from ..core.passes import COMBINED, provided
+import bpy
+
+from ..core.cryptomatte import metadata
+from ..core.passes import COMBINED, PASSES, asked_by
 from . import host as host_module
 from .live import StillScene
 
@@ -26,9 +29,23 @@ _stills = OrderedDict()  # scene name -> (host generation, StillScene)
 
 
 def requested_passes(view_layer) -> list:
-    """The render passes this view layer asks for that the engine computes, by their
-    Blender names (core/passes.py: one table)."""
-    return [p.name for p in provided() if getattr(view_layer, p.view_layer, False)]
+    """The render passes this view layer asks for that the engine computes, by the
+    engine's names (core/passes.py: one table)."""
+    return asked_by(view_layer)
+
+
+def blender_name(name: str) -> str:
+    """A pass's name in this Blender (5.0 renamed IndexOB to Object Index, ...)."""
+    return COMBINED if name == COMBINED else PASSES[name].blender_name(bpy.app.version)
+
+
+def stamp_cryptomatte(engine, layer: str, manifests: dict):
+    """The Cryptomatte metadata of the view layer's mattes on the render result, as
+    Cycles writes it: Blender's compositor and its EXRs read the manifests there."""
+    result = engine.get_result()
+    for matte, manifest in manifests.items():
+        for field, value in metadata(f"{layer}.{matte}", manifest).items():
+            result.stamp_data_add_field(field, value)
 
 
 def border_rect(render, width, height):
@@ -105,9 +122,11 @@ def render_frame(engine, depsgraph):
             for pass_name in [COMBINED] + passes:
                 # Both bottom row first: the slot is laid out as Blender's result.
                 pixels = np.ascontiguousarray(views[pass_name][y0:y1, x0:x1])
-                out.layers[0].passes[pass_name].rect.foreach_set(pixels.ravel())
+                out.layers[0].passes[blender_name(pass_name)].rect.foreach_set(pixels.ravel())
                 del pixels
             engine.end_result(out)
+            if frame.cryptomatte:
+                stamp_cryptomatte(engine, layer, frame.cryptomatte)
     except Exception as error:  # a failed frame is a report, never a crash of Blender
         message = f"Lantern: {error}"
         engine.report({'ERROR'}, message)

@@ -24,6 +24,11 @@ class StageSettings:
     view_transform: str = "Standard"
     look: str | None = None     # Blender's look identifier, e.g. "AgX - Punchy"
     exposure: float = 0.0       # stops
+    # The view layer's render passes (core/passes.py names): with any, a RenderProduct
+    # of them is written, named `output` (Blender's output path as a productName).
+    view_layer: str = "ViewLayer"
+    render_passes: tuple = ()
+    output: str = ""
 
 
 @dataclass

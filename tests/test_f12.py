@@ -132,10 +132,13 @@ def _passes_scene():
 
 def test_f12_writes_every_pass_the_view_layer_asks_for(addon, tmp_path):
     """Depth is the camera distance to the plane, Normal the plane's, IndexOB tells
-    the objects apart and IndexMA the materials; in a multilayer EXR Blender wrote."""
+    the objects apart and IndexMA the materials; in a multilayer EXR Blender wrote,
+    under Blender 5's pass names, with the Cryptomatte metadata."""
     import bpy
+    from lantern.addon.scene_render import blender_name
     from lantern.core.passes import provided
     from multilayer_exr import read_parts
+    import cryptomatte_reader
     scene = _passes_scene()
     scene.render.engine = 'LANTERN'
     scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
@@ -146,9 +149,9 @@ def test_f12_writes_every_pass_the_view_layer_asks_for(addon, tmp_path):
     parts = read_parts(tmp_path / "passes.exr")
     layer = bpy.context.view_layer.name
     for p in provided():
-        assert f"{layer}.{p.name}" in parts, (p.name, sorted(parts))
+        assert f"{layer}.{blender_name(p.name)}" in parts, (p.name, sorted(parts))
     depth, normal = parts[f"{layer}.Depth"], parts[f"{layer}.Normal"]
-    ob, ma = parts[f"{layer}.IndexOB"], parts[f"{layer}.IndexMA"]
+    ob, ma = parts[f"{layer}.Object Index"], parts[f"{layer}.Material Index"]
     depth, ob, ma = (a.reshape(a.shape[:2]) for a in (depth, ob, ma))
     plane = ob == 0
     size = calibration.SIZE
@@ -159,6 +162,42 @@ def test_f12_writes_every_pass_the_view_layer_asks_for(addon, tmp_path):
                                atol=1e-3)
     assert set(np.unique(ob)) == {0.0, 1.0, 2.0}
     assert set(np.unique(ma[ob == 2])) == {5.0} and set(np.unique(ma[ob != 2])) == {0.0}
+    header, _ = cryptomatte_reader.read(tmp_path / "passes.exr")
+    assert set(cryptomatte_reader.matte_types(header)) == {
+        f"{layer}.CryptoObject", f"{layer}.CryptoMaterial", f"{layer}.CryptoAsset"}
+
+
+def test_the_cli_on_the_exported_file_gives_what_f12_gives(addon, tmp_path):
+    """The view layer's passes make the exported stage's RenderProduct: `lantern
+    render scene.usda`, with no option, writes the file Blender's Render Animation
+    would, and each pass equals F12's within float16 rounding."""
+    import bpy
+    from lantern.addon.scene_render import blender_name
+    from lantern.core.passes import provided
+    from multilayer_exr import read_parts
+    scene = _passes_scene()
+    scene.render.engine = 'LANTERN'
+    scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
+    scene.render.image_settings.file_format = 'OPEN_EXR_MULTILAYER'
+    scene.render.image_settings.color_depth = '32'
+    scene.render.filepath = str(tmp_path / "f12.exr")
+    bpy.ops.render.render(write_still=True)
+    f12 = read_parts(tmp_path / "f12.exr")
+    scene.render.filepath = "//frames/shot_####"
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "scene.blend"))
+    _lantern("export", str(tmp_path / "scene.blend"), "-o", str(tmp_path / "scene.usda"))
+    proc = subprocess.run([sys.executable, "-m", "lantern", "render", "scene.usda"],
+                          capture_output=True, text=True, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    cli = read_parts(tmp_path / "frames" / f"shot_{scene.frame_current:04d}.exr")
+    layer = bpy.context.view_layer.name
+    names = ["Combined"] + [blender_name(p.name) for p in provided()]
+    assert sorted(cli) == sorted(f"{layer}.{n}" for n in names)
+    for name in names:
+        a, b = f12[f"{layer}.{name}"], cli[f"{layer}.{name}"]
+        worst = float(np.max(np.abs(a - b) / np.maximum(np.abs(a), 1e-3)))
+        print(f"{name}: worst difference {worst:.1e} of the value")
+        assert worst <= 2.0 ** -11, name          # float16's rounding: half its step
 
 
 # --- render_frame, the body of RenderEngine.render, driven by a recording engine ---------
@@ -179,7 +218,7 @@ class RecordingEngine:
     def __init__(self, width, height, test_break=lambda: False, is_preview=False):
         self.resolution_x, self.resolution_y, self.is_preview = width, height, is_preview
         self._test_break = test_break
-        self.calls, self.pixels = [], {}
+        self.calls, self.pixels, self.stamps = [], {}, {}
 
     def test_break(self):
         return self._test_break()
@@ -198,12 +237,19 @@ class RecordingEngine:
 
     def begin_result(self, x, y, w, h, layer=""):
         from types import SimpleNamespace
+        from lantern.addon.scene_render import blender_name
         from lantern.core.passes import PASSES
         self.calls.append(("begin_result", (x, y, w, h), layer))
         self.pixels = {name: _Pixels(w * h * (4 if name == "Combined" else PASSES[name].channels))
                        for name in ["Combined", *PASSES]}
         return SimpleNamespace(layers=[SimpleNamespace(passes={
-            name: SimpleNamespace(rect=pixels) for name, pixels in self.pixels.items()})])
+            blender_name(name): SimpleNamespace(rect=pixels)
+            for name, pixels in self.pixels.items()})])
+
+    def get_result(self):
+        from types import SimpleNamespace
+        return SimpleNamespace(stamp_data_add_field=lambda field, value:
+                               self.stamps.__setitem__(field, value))
 
     def end_result(self, result):
         self.calls.append(("end_result",))
@@ -240,10 +286,16 @@ def test_render_frame_fills_this_layers_result_with_progress(addon):
     assert progress == sorted(progress) and progress[-1] == 1.0
     stats = [c[1] for c in engine.calls if c[0] == "stats"]
     assert stats[:2] == ["Exporting the scene", "Rendering"] and stats[-1].startswith("Done in")
-    expected = _in_process(depsgraph, size, frozenset(["Depth", "IndexOB"]))
+    expected = _in_process(depsgraph, size, frozenset(["Depth", "IndexOB", "CryptoAsset00"]))
     np.testing.assert_allclose(engine.image(), expected.rgba, atol=1e-6)
-    for name in ("Depth", "IndexOB"):
+    for name in ("Depth", "IndexOB", "CryptoAsset00", "CryptoAsset02"):
         np.testing.assert_array_equal(engine.image(name), expected.passes[name])
+    # The mattes' metadata, on the render result as Cycles puts it.
+    layer = depsgraph.view_layer.name
+    assert {v for k, v in engine.stamps.items() if k.endswith("/name")} == {
+        f"{layer}.CryptoObject", f"{layer}.CryptoMaterial", f"{layer}.CryptoAsset"}
+    assert '"/root/Cube"' in next(v for k, v in engine.stamps.items()
+                                  if k.endswith("/manifest") and "/root/Cube" in v)
 
 
 def test_an_animation_reuses_one_session(addon):

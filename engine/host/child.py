@@ -226,7 +226,7 @@ class Host:
                    width=w, height=h, layout=frame_layout,
                    final=final and not scene.compiling, preset=preset,
                    stats=result.stats, timings=result.timings, gpu_timings=result.gpu_timings,
-                   warnings=self.notices + result.warnings)
+                   warnings=self.notices + result.warnings, cryptomatte=result.cryptomatte)
         self.notices = []
         return True
 

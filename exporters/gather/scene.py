@@ -1,5 +1,10 @@
 """The evaluated depsgraph -> SceneRecord."""
+import os
+import re
+
 import numpy as np
+
+from ...core.passes import asked_by
 
 from ..errors import require_finite
 from ..ir import ObjectRecord, SceneRecord, StageSettings
@@ -59,6 +64,28 @@ def _settings(scene, warn):
         view_transform=view_transform, look=look, exposure=exposure)
 
 
+def product_name(filepath: str) -> str:
+    """Blender's output path as a RenderProduct's productName, naming the files
+    Blender's Render Animation writes: `//` (the .blend's folder) becomes a path
+    relative to the working folder (husk's rule for a relative productName), a run of
+    '#' the $F token of its width, a name without '#' gets Blender's four digits, and
+    the file is a multi-layer .exr."""
+    path = filepath[2:] if filepath.startswith("//") else filepath
+    folder, name = os.path.split(path)
+    name = re.sub(r"\.exr$", "", name, flags=re.I)
+    name = re.sub(r"#+", lambda m: f"$F{len(m.group(0))}", name) if "#" in name \
+        else name + "$F4"
+    return os.path.join(folder, name + ".exr")
+
+
+def render_passes(depsgraph, settings):
+    """The view layer's render passes and output into the stage settings."""
+    layer = depsgraph.view_layer
+    settings.view_layer = layer.name
+    settings.render_passes = tuple(asked_by(layer))
+    settings.output = product_name(depsgraph.scene.render.filepath)
+
+
 def is_shareable(ob):
     """True when the evaluated mesh is exactly the mesh data, so objects can share it."""
     return ob.type == "MESH" and len(ob.modifiers) == 0 and ob.data.shape_keys is None
@@ -95,6 +122,7 @@ def gather_scene(depsgraph, warn, texture_dir=None, animation=True, live=False,
     only a mesh whose data is its cage (gather/subdivision.py data_cage) is written as one."""
     scene = depsgraph.scene
     rec = SceneRecord(settings=_settings(scene, warn))
+    render_passes(depsgraph, rec.settings)
     visible = render_visible(depsgraph.view_layer)
 
     originals, shown, materials = {}, {}, {}

@@ -1,7 +1,13 @@
-"""Stage metadata and /Render/Settings."""
-from pxr import Gf, Sdf, UsdGeom, UsdRender
+"""Stage metadata, /Render/Settings and the view layer's RenderProduct."""
+from pxr import Gf, Sdf, Tf, UsdGeom, UsdRender
+
+from ...core.passes import PASSES, options
 
 RENDER_SETTINGS = "/Render/Settings"
+PRODUCTS = "/Render/Products"
+VARS = "/Render/Vars"
+# A RenderVar's dataType by its pass's channels.
+DATA_TYPES = {1: "float", 3: "color3f", 4: "color4f"}
 
 
 def write_metadata(stage, settings, root_path):
@@ -30,5 +36,32 @@ def write_render_settings(stage, settings, camera_path):
                              custom=True).Set(settings.look)
     prim.CreateAttribute("lantern:exposure", Sdf.ValueTypeNames.Float,
                          custom=True).Set(settings.exposure)
+    if settings.render_passes:
+        write_render_product(stage, rs, settings)
     stage.SetMetadata("renderSettingsPrimPath", RENDER_SETTINGS)
     return rs
+
+
+def write_render_product(stage, rs, settings):
+    """One RenderProduct of the view layer's passes, as `lantern render` reads it: the
+    Combined image (Hydra's `color`) and a RenderVar per pass, by the command line's
+    names (core/passes.py options; a Cryptomatte's levels are one var)."""
+    UsdGeom.Scope.Define(stage, PRODUCTS)
+    UsdGeom.Scope.Define(stage, VARS)
+    product = UsdRender.Product.Define(
+        stage, f"{PRODUCTS}/{Tf.MakeValidIdentifier(settings.view_layer)}")
+    product.CreateProductNameAttr(settings.output)
+    product.GetPrim().CreateAttribute("lantern:viewLayer", Sdf.ValueTypeNames.String,
+                                      custom=True).Set(settings.view_layer)
+    wanted = set(settings.render_passes)
+    sources = [("color", 4)] + [(option, PASSES[names[0]].channels)
+                                for option, names in options().items() if wanted & set(names)]
+    targets = []
+    for source, channels in sources:
+        var = UsdRender.Var.Define(stage, f"{VARS}/{source}")
+        var.CreateSourceNameAttr(source)
+        var.CreateSourceTypeAttr(UsdRender.Tokens.raw)
+        var.CreateDataTypeAttr("normal3f" if source == "normal" else DATA_TYPES[channels])
+        targets.append(var.GetPath())
+    product.CreateOrderedVarsRel().SetTargets(targets)
+    rs.CreateProductsRel().SetTargets([product.GetPath()])
