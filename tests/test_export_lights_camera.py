@@ -121,3 +121,31 @@ def test_stage_metadata(empty_scene):
     assert stage.GetTimeCodesPerSecond() == pytest.approx(30 / 1.001)
     assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (5, 42)
     assert stage.GetDefaultPrim().GetPath() == "/root"
+
+
+def test_a_view_layers_passes_become_a_render_product(empty_scene):
+    """No passes: no product. Passes on: one RenderProduct named from Blender's output
+    path, a RenderVar for Combined and one per pass (a Cryptomatte matte is one)."""
+    add_camera()
+    stage, _ = export_current()
+    assert not UsdRender.Settings(stage.GetPrimAtPath("/Render/Settings")) \
+        .GetProductsRel().GetTargets()
+    layer = bpy.context.view_layer
+    layer.use_pass_z = layer.use_pass_cryptomatte_object = True
+    bpy.context.scene.render.filepath = "//renders/shot_###"
+    stage, _ = export_current()
+    settings = UsdRender.Settings(stage.GetPrimAtPath("/Render/Settings"))
+    (product_path,) = settings.GetProductsRel().GetTargets()
+    product = UsdRender.Product(stage.GetPrimAtPath(product_path))
+    assert product.GetProductNameAttr().Get() == "renders/shot_$F3.exr"
+    assert product.GetPrim().GetAttribute("lantern:viewLayer").Get() == layer.name
+    sources = [UsdRender.Var(stage.GetPrimAtPath(p)).GetSourceNameAttr().Get()
+               for p in product.GetOrderedVarsRel().GetTargets()]
+    assert sources == ["color", "depth", "crypto_object"]
+
+
+def test_product_names_follow_blenders_output_path():
+    from lantern.exporters.gather.scene import product_name
+    assert product_name("/tmp/") == "/tmp/$F4.exr"
+    assert product_name("//out/beauty_####.exr") == "out/beauty_$F4.exr"
+    assert product_name("/r/shot") == "/r/shot$F4.exr"
