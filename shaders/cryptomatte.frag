@@ -39,6 +39,13 @@ float matte_id(vec4 ids) {
 
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
+#ifdef ONE_SAMPLE
+    // One sample a pixel (low, medium): its id, coverage 1; nothing to rank.
+    vec4 one = texelFetch(crypto_ids, px, 0);
+    rank01 = one.z == 0.0 ? vec4(0.0) : vec4(matte_id(one), 1.0, 0.0, 0.0);
+    rank23 = vec4(0.0);
+    rank45 = vec4(0.0);
+#else
     ivec2 size = textureSize(crypto_ids, 0);
     // Most pixels see one surface, or one and the background: a single id over the
     // footprint needs no list (a list in registers costs llvmpipe dearly).
@@ -98,4 +105,5 @@ void main() {
     rank01 = vec4(out_id[0], out_w[0], out_id[1], out_w[1]);
     rank23 = vec4(out_id[2], out_w[2], out_id[3], out_w[3]);
     rank45 = vec4(out_id[4], out_w[4], out_id[5], out_w[5]);
+#endif
 }

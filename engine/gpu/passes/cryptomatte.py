@@ -72,7 +72,8 @@ class CryptomattePass(Pass):
             if levels[0] not in frame.aovs:
                 continue
             self.pool.framebuffer([board[self.aovs[n][0]] for n in levels]).use()
-            prog = self.programs.get("fullscreen.vert", "cryptomatte.frag", [variant])
+            prog = self.programs.get("fullscreen.vert", "cryptomatte.frag", [variant] + (
+                ["ONE_SAMPLE"] if frame.supersample == 1 else []))
             set_uniform(prog, "factor", frame.supersample)
             set_uniform(prog, "taps", len(offsets))
             set_uniform(prog, "tap", taps)
