@@ -64,9 +64,10 @@ def scene():
     return stage
 
 
-def _render(preset, size=(W, H), passes=MATTES, transparent=True):
+def _render(preset, size=(W, H), passes=MATTES, transparent=True, compute=None):
     with Session(scene(), RenderSettings(width=size[0], height=size[1], preset=preset,
-                                         passes=passes, transparent=transparent)) as s:
+                                         passes=passes, transparent=transparent,
+                                         compute=compute)) as s:
         return s.render()
 
 
@@ -158,6 +159,15 @@ def test_materials_and_assets(ultra):
         "CryptoMaterial": {n: cryptomatte.id_hex(n)
                            for n in ("/root/_materials/blue", "/root/_materials/red")},
         "CryptoAsset": {n: cryptomatte.id_hex(n) for n in ("/root/back", "/root/front")}}
+
+
+@pytest.mark.parametrize("preset", ["medium", "ultra"])
+def test_both_forms_rank_alike(preset):
+    """The pass's raster form (GL 3.3) and its compute form (GL 4.3) give the same
+    mattes."""
+    raster, compute = (_render(preset, compute=c) for c in (False, True))
+    for name in MATTES:
+        np.testing.assert_array_equal(raster.passes[name], compute.passes[name])
 
 
 @pytest.mark.parametrize("preset", ["low", "medium"])

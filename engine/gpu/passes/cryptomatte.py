@@ -15,9 +15,10 @@ test_cryptomatte.py prints it), where a box is exact; the matte's edge is the sh
 by the filter's spread. Nothing drawn adds no id and no coverage. Blended surfaces (the
 transparency pass) are not in the mattes, as in no other render pass.
 
-One full-screen draw per matte asked for, writing its three RGBA32F levels (six
-ranks) at the image's size; so the pass runs after the supersample pass, where the
-graph's size is the image's.
+One screen pass per matte asked for (shaders/cryptomatte.glsl, in either form:
+engine/gpu/screen.py), writing its three RGBA32F levels (six ranks) at the image's
+size; so the pass runs after the supersample pass, where the graph's size is the
+image's.
 
 reads: g_index (written by the G-buffer pass when a matte is asked for)
 render passes: CryptoObject00-02, CryptoMaterial00-02, CryptoAsset00-02"""
@@ -30,9 +31,10 @@ from ....core.passes import MATTE_LEVELS, MATTES
 from ...cryptomatte import object_name
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
+from ..screen import run_screen, screen_program
 from .antialias import MAX_TAPS
 
-NAMES_W = 4096          # shaders/cryptomatte.frag NAMES_W: texels per row of the name table
+NAMES_W = 4096          # shaders/cryptomatte.glsl NAMES_W: texels per row of the name table
 VARIANT = {"CryptoObject": "MATTE_OBJECT", "CryptoMaterial": "MATTE_MATERIAL",
            "CryptoAsset": "MATTE_ASSET"}
 
@@ -71,13 +73,14 @@ class CryptomattePass(Pass):
             levels = [f"{matte}{level:02d}" for level in range(MATTE_LEVELS)]
             if levels[0] not in frame.aovs:
                 continue
-            self.pool.framebuffer([board[self.aovs[n][0]] for n in levels]).use()
-            prog = self.programs.get("fullscreen.vert", "cryptomatte.frag", [variant] + (
-                ["ONE_SAMPLE"] if frame.supersample == 1 else []))
+            prog = screen_program(self.programs, "cryptomatte", [variant] + (
+                ["ONE_SAMPLE"] if frame.supersample == 1 else []), frame.compute,
+                outputs=MATTE_LEVELS)
             set_uniform(prog, "factor", frame.supersample)
             set_uniform(prog, "taps", len(offsets))
             set_uniform(prog, "tap", taps)
-            self.programs.fullscreen(prog)
+            run_screen(ctx, self.programs, self.pool, prog,
+                       [board[self.aovs[n][0]] for n in levels], frame.compute)
 
     def _update_names(self, scene):
         """The table from object id to (object matte id, asset matte id), uploaded

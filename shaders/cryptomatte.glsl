@@ -1,16 +1,13 @@
-#version 330 core
-// Cryptomatte's ranking filter (engine/gpu/passes/cryptomatte.py): the ids of the
-// samples (sub-pixels) a pixel's coverage counts, weighted by `tap`, summed per id; the
-// ids ranked by that coverage, two (id, coverage) pairs per output. One matte per
-// variant: MATTE_OBJECT, MATTE_MATERIAL or MATTE_ASSET.
+#include "lib.glsl"
+// Cryptomatte's ranking filter (engine/gpu/passes/cryptomatte.py; a screen pass's body,
+// engine/gpu/screen.py): the ids of the samples (sub-pixels) a pixel's coverage counts,
+// weighted by `tap`, summed per id; the ids ranked by that coverage, two (id, coverage)
+// pairs per output. One matte per variant: MATTE_OBJECT, MATTE_MATERIAL or MATTE_ASSET.
 uniform sampler2D crypto_ids;     // the G-buffer's g_index: .z 1 + object id, .w material id
 uniform sampler2D crypto_names;   // per object id: its object id, its asset id
 uniform int factor;               // supersampling: sub-pixels per pixel along an axis
 uniform int taps;
 uniform vec2 tap[64];             // (offset from the pixel's first sample, weight)
-layout(location = 0) out vec4 rank01;
-layout(location = 1) out vec4 rank23;
-layout(location = 2) out vec4 rank45;
 
 // Distinct ids a pixel's filter footprint keeps; a further one's weight is dropped (it
 // would rank below the 6 written unless 17 ids share a pixel nearly evenly).
@@ -37,8 +34,9 @@ float matte_id(vec4 ids) {
 #define RAW(ids) ids.z
 #endif
 
-void main() {
-    ivec2 px = ivec2(gl_FragCoord.xy);
+void screen_pixel(ivec2 px, out vec4 rank01, out vec4 rank23, out vec4 rank45,
+                  out vec4 unused) {
+    unused = vec4(0.0);
 #ifdef ONE_SAMPLE
     // One sample a pixel (low, medium): its id, coverage 1; nothing to rank.
     vec4 one = texelFetch(crypto_ids, px, 0);
