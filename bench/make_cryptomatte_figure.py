@@ -6,7 +6,7 @@ the compositor computes, headless: its Cryptomatte node (Image mode) on Lantern'
 left to right: the Combined image, the node's Pick output (each id its colour), the
 Matte of an object picked by name, and the Combined image keyed by that matte.
 
-    .venv/bin/python docs/figures/make_cryptomatte.py   # ~1 min on 2 cores
+    .venv/bin/python bench/make_cryptomatte_figure.py   # ~1 min on 2 cores
 """
 import os
 import subprocess
@@ -15,7 +15,8 @@ import tempfile
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+FIGURE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "docs", "figures",
+                      "cryptomatte.png")
 SIZE = (320, 180)
 PICKED = "/root/Suzanne/Suzanne"      # the object picked by name (a mesh prim's path)
 
@@ -56,8 +57,8 @@ def compositor(exr, output, folder):
 def main():
     import lantern.exporters  # noqa: F401  (Blender's pxr first)
     from lantern.demo.build_scene import build
+    import OpenImageIO as oiio
     from lantern.engine.color import to_display8
-    from lantern.engine.image_io import _oiio_write
     with tempfile.TemporaryDirectory() as folder:
         blend = os.path.join(folder, "demo.blend")
         build(blend)
@@ -76,7 +77,9 @@ def main():
         gap = np.full((SIZE[1], 4, 4), 255, np.uint8)
         row = np.concatenate(sum(([p, gap] for p in panels), [])[:-1], axis=1)
         row[..., 3] = 255
-        _oiio_write(os.path.join(HERE, "cryptomatte.png"), row, "uint8")
+        image = oiio.ImageBuf(oiio.ImageSpec(row.shape[1], row.shape[0], 4, "uint8"))
+        image.set_pixels(oiio.ROI(), row)
+        image.write(FIGURE)
 
 
 if __name__ == "__main__":
