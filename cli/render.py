@@ -400,6 +400,9 @@ def _outputs(args, stage, sequence):
     outputs = plan(args, stage, lambda warnings: print_warnings(warnings, seen)) \
         if getattr(args, "products", True) else [_plain_output(args)]
     kinds = IMAGE_SUFFIXES + ((".gif",) if sequence and len(outputs) == 1 else ())
+    if len(outputs) > 1 and outputs[0].output.lower().endswith(".gif"):
+        raise usage(f"{outputs[0].output}: a .gif is the only output; the stage names "
+                    f"{len(outputs)} RenderProducts (use --settings, or an image name)")
     for i, output in enumerate(outputs):
         check_product(output, sequence, i == 0 and args.output is not None, kinds)
     return outputs

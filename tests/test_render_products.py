@@ -163,6 +163,9 @@ def test_one_frame_and_o_wins(tmp_path):
     assert read_parts(tmp_path / "mine.exr")["ViewLayer.Combined"].shape == (H, W, 4)
     assert not (tmp_path / "beauty.0003.exr").exists()
     assert (tmp_path / "aux" / "data.0003.exr").exists()
+    # A .gif preview is one output: with two products it is refused before any render.
+    gif = lantern("render", stage, "--frames", "1:2", "-o", tmp_path / "a.gif", cwd=tmp_path)
+    assert gif.returncode == 2 and "RenderProducts" in gif.stderr
 
 
 def test_a_product_in_a_folder_that_cannot_be_written(tmp_path):
