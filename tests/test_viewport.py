@@ -476,7 +476,11 @@ def test_the_redraw_timer_and_pass_registration(viewport):
     engine = SimpleNamespace(register_pass=lambda *a: registered.append(a[2:]))
     layer = scene.view_layers[0]
     layer.use_pass_z, layer.use_pass_object_index = True, True
+    layer.use_pass_cryptomatte_asset = True
     render_engine.LanternRenderEngine.update_render_passes(engine, scene, layer)
+    # Under this Blender's names (5.0: Object Index), a matte's three levels.
     assert registered == [("Combined", 4, "RGBA", "COLOR"),
-                          ("Depth", 1, "Z", "VALUE"), ("IndexOB", 1, "X", "VALUE")]
-    assert all(PASSES[name].provided for name, *_ in registered[1:])
+                          ("Depth", 1, "Z", "VALUE"), ("Object Index", 1, "X", "VALUE"),
+                          *((f"CryptoAsset0{k}", 4, "RGBA", "COLOR") for k in range(3))]
+    titles = {p.title for p in PASSES.values() if p.provided}
+    assert all(name in titles for name, *_ in registered[1:])
