@@ -109,8 +109,10 @@ def plan(args, stage, warn) -> list:
         if args.output is None:
             raise usage(f"{args.scene}: no -o, and the stage names no RenderProducts "
                         f"({'RenderSettings ' + path if path else 'no RenderSettings'})")
-        return [Product(args.output, args.size or (record.resolution if record else None),
-                        args.camera or (record.camera if record else None))]
+        if not args.settings:       # the engine reads the stage's own settings
+            return [Product(args.output, args.size, args.camera)]
+        return [Product(args.output, args.size or record.resolution,
+                        args.camera or _camera(stage, record.camera, path, warn))]
     outputs = []
     for i, p in enumerate(products):
         name = args.output if i == 0 and args.output else os.path.abspath(frame_pattern(p.name))
@@ -127,10 +129,26 @@ def plan(args, stage, warn) -> list:
         if passes and not exr:
             warn([f"{name}: render passes need an .exr; it holds the Combined image only"])
             passes = []
-        outputs.append(Product(name, args.size or p.resolution, args.camera or p.camera,
+        outputs.append(Product(name, args.size or p.resolution,
+                               args.camera or _camera(stage, p.camera, p.path, warn),
                                tuple(sorted(set(passes), key=list(table.PASSES).index)),
                                p.view_layer, multilayer=exr))
     return outputs
+
+
+def _camera(stage, path, owner, warn):
+    """A RenderSettings' or RenderProduct's camera, when it is one; else a warning
+    naming it, and None (the engine's own choice: the first camera, or the default
+    view)."""
+    from ..engine.usd.camera import camera_path_problem
+    if path is None:
+        return None
+    problem = camera_path_problem(stage, path, "the stage")
+    if problem is None:
+        return path
+    warn([f"{owner}: its camera {path}: {problem}; using the first camera, or the "
+          "default view"])
+    return None
 
 
 def check(output: Product, sequence: bool, from_command_line: bool, kinds):
