@@ -126,7 +126,7 @@ class Host:
         self._blocks = itertools.count()
         self.proc = None
         self.conn = None
-        self.generation = 0        # increments with each child started
+        self.generation = 0        # the child's: unique in this Blender process (_children)
         self.channels = {}
         self.failure = None        # why the last child stopped, or could not start
         self.info = None           # the child's READY fields (pid, GL)
@@ -194,7 +194,9 @@ class Host:
                                      close_fds=True, **kwargs)
         child_end.close()
         self.conn = parent_end
-        self.generation += 1
+        # Unique across Host objects too: a Host made after a shutdown must not reuse
+        # an earlier child's number (prestart.py warms up each new child once by it).
+        self.generation = next(_children)
         self.failure, self.info = None, None
         self._ready.clear()
         self._started = time.monotonic()
@@ -439,6 +441,9 @@ def _bury(proc, conn, outbox, threads, quit_first):
 
 _host = None
 _host_lock = threading.Lock()
+
+
+_children = itertools.count(1)     # generations of the children this process starts
 
 
 def get() -> Host:
