@@ -19,6 +19,8 @@ from __future__ import annotations
 import numpy as np
 from pxr import Usd, UsdGeom
 
+from .gprims import kind_of
+
 
 def _array(attr, time, dtype=np.float64):
     if not attr or not attr.HasValue():
@@ -142,10 +144,11 @@ def points_data(prim, time):
 
 def prototype_meshes(stage, proto_path, time):
     """[(mesh prim, its placement in an instance, column-vector)] of the drawable
-    meshes in a prototype (instance proxies included; invisible, proxy and guide prims
-    skipped), and the nested PointInstancers found (not drawn). The placement is the
-    prototype root's own transform (IncludeProtoXform) times the mesh's transform
-    relative to the root."""
+    meshes in a prototype (Mesh prims, implicit surfaces, ribbons: gprims.kind_of
+    'mesh'; instance proxies included; invisible, proxy and guide prims skipped), and
+    what is found and not drawn: nested PointInstancers, Points and curves drawn as
+    tubes. The placement is the prototype root's own transform (IncludeProtoXform)
+    times the mesh's transform relative to the root."""
     root = stage.GetPrimAtPath(proto_path)
     if not root:
         return [], []
@@ -165,7 +168,9 @@ def prototype_meshes(stage, proto_path, time):
         if p.IsA(UsdGeom.PointInstancer) and p != root:
             nested.append(str(p.GetPath()))
             it.PruneChildren()
-        elif p.IsA(UsdGeom.Mesh):
+        elif kind_of(p) == "points":
+            nested.append(str(p.GetPath()))
+        elif kind_of(p) == "mesh":
             if img.ComputePurpose() in (UsdGeom.Tokens.proxy, UsdGeom.Tokens.guide):
                 continue
             if p == root:
