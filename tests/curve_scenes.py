@@ -2,7 +2,7 @@
 wrap, widths that vary (vertex and varying), and curves with and without normals, over
 a ground that takes their shadows. `write_stage` writes it as USD with plain pxr (what
 Lantern renders, tests/test_curves.py); `build_blender` makes the same curves as
-Blender Curves objects for Cycles (references/make_implicit_references.py --curves),
+Blender Curves objects for Cycles (references/make_prim_references.py --curves),
 each in Blender's own terms of the USD definition, not through Blender's USD importer,
 which reads nonperiodic Catmull-Rom curves as pinned ones, pinned B-splines as
 nonperiodic ones and drops normals:
@@ -14,6 +14,11 @@ nonperiodic ones and drops normals:
 - catmullRom: BEZIER segments with the Catmull-Rom tangents (b1 = P1 + (P2 - P0) / 6,
   b2 = P2 - (P3 - P1) / 6), phantom points added where pinned: Blender's own
   Catmull-Rom type differs from USD at the ends.
+Cycles renders a Curves object's control points as an open Catmull-Rom curve whatever
+its type and cyclic flag, so each curve goes to Cycles through Blender's own
+evaluation: a Resample Curve node (Evaluated, RESOLUTION points a segment) gives the
+points on the curve with their radii, and Cycles gets those as an open polyline
+(closed by repeating its first point), through which its Catmull-Rom passes.
 Cycles draws every curve as a round tube (its 3D curves); Lantern draws those with
 authored normals as ribbons facing them, so their bound is stated on its own."""
 import math
@@ -28,6 +33,7 @@ GROUND = -0.45                       # the ground plane's height
 BASE = (0.85, 0.55, 0.2)
 GROUND_BASE = (0.6, 0.6, 0.6)
 CELL = (2.6, 2.2)                    # a curve's cell in the grid, 4 across
+RESOLUTION = 32                      # Blender's evaluated points a segment
 
 _ZIG = [(-1.0, -0.6, 0.0), (-0.6, 0.6, 0.3), (-0.2, -0.5, 0.0), (0.2, 0.6, 0.2),
         (0.6, -0.5, 0.0), (1.0, 0.5, 0.1), (1.0, -0.6, 0.0)]
@@ -74,8 +80,8 @@ def write_stage(path):
     stage.SetDefaultPrim(root.GetPrim())
 
     def material(name, colour):
-        m = UsdShade.Material.Define(stage, f"/root/{name}")
-        s = UsdShade.Shader.Define(stage, f"/root/{name}/Surface")
+        m = UsdShade.Material.Define(stage, f"/root/Materials/{name}")
+        s = UsdShade.Shader.Define(stage, f"/root/Materials/{name}/Surface")
         s.CreateIdAttr("UsdPreviewSurface")
         s.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(*colour))
         s.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(1.0)
@@ -157,8 +163,55 @@ def _bezier_knots(segments, closed):
     return knots
 
 
-def build_blender():
-    """The same scene as Blender objects (Cycles renders them); returns the scene."""
+def _resample():
+    """A geometry-nodes group: each curve as the polyline of its evaluated points."""
+    import bpy
+    group = bpy.data.node_groups.get("Resample")
+    if group is not None:
+        return group
+    group = bpy.data.node_groups.new("Resample", "GeometryNodeTree")
+    group.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+    group.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+    source, sink = group.nodes.new("NodeGroupInput"), group.nodes.new("NodeGroupOutput")
+    resample = group.nodes.new("GeometryNodeResampleCurve")
+    resample.inputs["Mode"].default_value = "Evaluated"
+    group.links.new(source.outputs[0], resample.inputs["Curve"])
+    group.links.new(resample.outputs[0], sink.inputs[0])
+    return group
+
+
+def evaluated(ob):
+    """(points (n, 3), radii (n,), cyclic) of a Curves object as Blender evaluates it."""
+    import bpy
+    import numpy as np
+    data = ob.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
+    cyclic = data.attributes.get("cyclic")
+    return (np.array([p.position for p in data.points]), np.array([p.radius for p in data.points]),
+            bool(cyclic and cyclic.data[0].value))
+
+
+def _as_polylines(scene, material):
+    """Every curve object replaced by the open polyline of its evaluated points."""
+    import bpy
+    for name in CURVES:
+        ob = bpy.data.objects[name]
+        points, radii, cyclic = evaluated(ob)
+        if cyclic:
+            points, radii = list(points) + [points[0]], list(radii) + [radii[0]]
+        bpy.data.objects.remove(ob)
+        data = bpy.data.hair_curves.new(name + "_evaluated")
+        data.add_curves([len(points)])
+        data.set_types(type="POLY")
+        radius = data.attributes.new("radius", "FLOAT", "POINT")
+        for j, (p, r) in enumerate(zip(points, radii)):
+            data.points[j].position, radius.data[j].value = tuple(p), float(r)
+        data.materials.append(material)
+        scene.collection.objects.link(bpy.data.objects.new(name, data))
+
+
+def build_blender(evaluate=True):
+    """The same scene as Blender objects; returns the scene. `evaluate`: the curves as
+    the polylines Cycles gets (else as Blender's own curve types)."""
     import bpy
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
@@ -206,10 +259,14 @@ def build_blender():
             positions = [k[0] for k in knots]
             left = data.attributes.new("handle_left", "FLOAT_VECTOR", "POINT")
             right = data.attributes.new("handle_right", "FLOAT_VECTOR", "POINT")
+            for side in ("left", "right"):          # free handles: where they are put
+                data.attributes.new(f"handle_type_{side}", "INT8", "POINT")
             for j, (_, lh, rh) in enumerate(knots):
                 left.data[j].vector, right.data[j].vector = lh, rh
             if len(radii) == 1:
                 radii = radii * len(knots)
+            elif closed and basis == "bezier":
+                radii = radii[1:] + radii[:1]    # the first knot is now the last
         for j, p in enumerate(positions):
             data.points[j].position = p
         radius = data.attributes.new("radius", "FLOAT", "POINT")
@@ -217,9 +274,12 @@ def build_blender():
             radius.data[j].value = radii[j] if len(radii) > 1 else radii[0]
         if closed:
             data.attributes.new("cyclic", "BOOLEAN", "CURVE").data[0].value = True
-        data.materials.append(hair)
+        data.attributes.new("resolution", "INT", "CURVE").data[0].value = RESOLUTION
         ob = bpy.data.objects.new(name, data)
+        ob.modifiers.new("Resample", "NODES").node_group = _resample()
         scene.collection.objects.link(ob)
+    if evaluate:
+        _as_polylines(scene, hair)
     w, h = CELL[0] * 2.6, CELL[1] * 2.2
     mesh = bpy.data.meshes.new("Ground")
     mesh.from_pydata([(-w, -h, GROUND), (w, -h, GROUND), (w, h, GROUND), (-w, h, GROUND)],

@@ -1,6 +1,6 @@
 """The implicit-surface scenes (docs/stage_contract.md "Implicit surfaces"), one per
 UsdGeom type, written as USD with plain pxr: shared by the Cycles reference script
-(references/make_implicit_references.py, which renders each file through Blender's USD
+(references/make_prim_references.py, which renders each file through Blender's USD
 importer) and by tests/test_implicit.py, which renders the same file with Lantern.
 
 Each scene holds three of its type side by side, one per axis (X, Y, Z) where the

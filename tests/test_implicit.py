@@ -3,7 +3,7 @@ makes of Sphere, Cube, Cylinder, Cone, Capsule, Plane, Cylinder_1 and Capsule_1,
 reading (axis, sizes, sharing, time samples, edits, sidedness, displayColor and
 displayOpacity, materials, PointInstancer prototypes, render passes), and each type's
 scene (tests/implicit_scenes.py) against Cycles through Blender's USD importer
-(references/implicit/, made by references/make_implicit_references.py):
+(references/implicit/, made by references/make_prim_references.py):
 
 - the silhouette within one pixel of the importer's render of the same file;
 - HDR-FLIP against the exact shape's render (the matching mesh scene: the shapes as

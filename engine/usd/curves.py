@@ -22,6 +22,7 @@ not add up, too few points for the basis, a knot vector of the wrong length) is 
 ValueError naming it; the reader skips the prim with a warning."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -144,9 +145,10 @@ def _pad(values):
 
 
 def _per_curve(values, interp, counts, varying, what):
-    """[values of curve i] per curve for a primvar, or ValueError."""
+    """[values of curve i] per curve for a primvar, or ValueError. One value is
+    constant whatever its interpolation (as the Points prims' widths)."""
     n_curves = len(counts)
-    if interp == "constant" or len(values) == 1 and interp not in ("vertex", "varying"):
+    if interp == "constant" or len(values) == 1:
         return [np.repeat(values[:1], c, axis=0) for c in counts], "vertex"
     sizes = {"uniform": [1] * n_curves, "vertex": list(counts),
              "varying": varying, "faceVarying": varying}.get(interp)
@@ -406,34 +408,60 @@ def tangents(lines: Polylines) -> np.ndarray:
     return t / np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-30)
 
 
+SHARP_TURN = math.radians(20.0)    # a sample where a ribbon turns more is a corner
+
+
 def ribbon_surface(prim, time, warnings=None) -> Surface:
-    """Oriented ribbons: at each sample, across the curve, `widths` wide, in the plane
-    the authored normal faces (the normal made perpendicular to the curve); each
-    face carries that normal. MeshError naming a defect."""
+    """Oriented ribbons: each straight piece of a curve a quad, `widths` wide across
+    the curve in the plane the authored normal faces (the normal made perpendicular
+    to the curve), carrying that normal. Where a curve bends smoothly, neighbouring
+    pieces share their edge (across the mean direction); at a corner (a turn over
+    SHARP_TURN: a linear curve's vertices) each piece ends square to itself, so the
+    ribbon keeps its width. MeshError naming a defect."""
     try:
         lines = polylines(prim, time)
     except ValueError as exc:
         raise MeshError(str(exc)) from None
-    t = tangents(lines)
-    n = lines.normals - t * np.sum(lines.normals * t, axis=1, keepdims=True)
-    length = np.linalg.norm(n, axis=1, keepdims=True)
-    if (length == 0).any() and warnings is not None:
-        warnings.append(f"{prim.GetPath()}: {int((length == 0).sum())} curve normals along "
-                        f"their curve or zero; the ribbon turns to the nearest sample's there")
-    n = n / np.maximum(length, 1e-30)
-    side = np.cross(t, n) * (lines.widths[:, None] / 2)
-    m = len(lines.points)
-    points = np.empty((2 * m, 3))
-    points[0::2], points[1::2] = lines.points - side, lines.points + side
     seg = lines.segments()
     if not len(seg):
         raise MeshError("no curve has two samples")
     a, b = seg[:, 0], seg[:, 1]
-    # (a-, b-, b+, a+) winds counter-clockwise about the normal (side = t x n).
-    quads = np.stack([2 * a, 2 * b, 2 * b + 1, 2 * a + 1], axis=1)
-    return Surface(points=points, counts=np.full(len(seg), 4), indices=quads.reshape(-1),
-                   normals=np.repeat(n, 2, axis=0),
-                   point_source=np.repeat(lines.source, 2),
+    own = lines.points[b] - lines.points[a]
+    own /= np.maximum(np.linalg.norm(own, axis=1, keepdims=True), 1e-30)
+    mean = tangents(lines)
+    corner = np.zeros(len(lines.points), bool)
+    turn = np.einsum("ij,ij->i", own[:-1], own[1:])
+    joined = b[:-1] == a[1:]
+    corner[b[:-1][joined & (turn < math.cos(SHARP_TURN))]] = True
+    if lines.closed.any():                       # a closed curve's last piece meets its first
+        for i in np.flatnonzero(lines.closed):
+            first, last = int(lines.starts[i]), int(lines.starts[i + 1]) - 1
+            at = np.flatnonzero((a == first))
+            end = np.flatnonzero((b == first) & (a == last))
+            if len(at) and len(end) and own[at[0]] @ own[end[0]] < math.cos(SHARP_TURN):
+                corner[first] = True
+    ends, normals, sides = [], [], []
+    for sample, direction in ((a, own), (b, own)):
+        t = np.where(corner[sample][:, None], direction, mean[sample])
+        n = lines.normals[sample]
+        n = n - t * np.sum(n * t, axis=1, keepdims=True)
+        length = np.linalg.norm(n, axis=1, keepdims=True)
+        if (length == 0).any() and warnings is not None:
+            warnings.append(f"{prim.GetPath()}: {int((length == 0).sum())} curve normals lie "
+                            f"along their curve or are zero; the ribbon has no width there")
+        n = n / np.maximum(length, 1e-30)
+        ends.append(lines.points[sample])
+        normals.append(n)
+        sides.append(np.cross(t, n) * (lines.widths[sample][:, None] / 2))
+    s = len(seg)
+    # Per piece: a-, a+, b+, b- winds counter-clockwise about the normal (side = t x n).
+    points = np.stack([ends[0] - sides[0], ends[0] + sides[0], ends[1] + sides[1],
+                       ends[1] - sides[1]], axis=1).reshape(-1, 3)
+    return Surface(points=points, counts=np.full(s, 4), indices=np.arange(4 * s),
+                   normals=np.stack([normals[0], normals[0], normals[1], normals[1]],
+                                    axis=1).reshape(-1, 3),
+                   point_source=np.stack([lines.source[a]] * 2 + [lines.source[b]] * 2,
+                                         axis=1).reshape(-1),
                    face_source=lines.curve[a])
 
 

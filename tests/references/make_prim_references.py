@@ -1,4 +1,6 @@
-"""Renders the implicit-surface scenes (tests/implicit_scenes.py) with Cycles once,
+"""Renders the scenes of the prims Lantern makes surfaces of, with Cycles, once.
+
+Implicit surfaces: renders the implicit-surface scenes (tests/implicit_scenes.py) with Cycles once,
 each USD file through Blender's own USD importer (bpy.ops.wm.usd_import, lights
 left out: the scene's sun and world are made in Blender from the same constants; the
 importer drops implicit surfaces' material bindings, so the scene's material is bound
@@ -10,10 +12,15 @@ so alpha is coverage; half float, ZIP).
 sides, Lantern's triangles: implicit/<scene>_mesh<N>.exr); at N = 128 (within 0.03 %
 of the radius) the exact shape's reference.
 
+`--curves` renders the curves scene (tests/curve_scenes.py) as Blender Curves objects
+made in Blender's own terms (not through the importer: see that module), as
+curves/curves.exr (RGBA, half float, ZIP).
+
 Cycles as for references/looks/ (make_cycles_references.configure_cycles: CPU, seed
 0, no denoiser, direct light only, Blackman-Harris 1.5 px), implicit_scenes.SAMPLES
 spp at implicit_scenes.SIZE. Run from the repository root:
-    .venv/bin/python tests/references/make_implicit_references.py [--mesh N] [NAME ...]
+    .venv/bin/python tests/references/make_prim_references.py [--mesh N] [NAME ...]
+    .venv/bin/python tests/references/make_prim_references.py --curves
 """
 import math
 import pathlib
@@ -27,9 +34,11 @@ sys.path.insert(0, str(HERE))
 
 from make_cycles_references import configure_cycles, write_exr  # noqa: E402  (Blender's pxr)
 
+import curve_scenes  # noqa: E402
 import implicit_scenes  # noqa: E402
 
 OUT = HERE / "implicit"
+CURVES = HERE / "curves"
 
 
 def build(usd_path):
@@ -77,8 +86,21 @@ def render(name, mesh_sides=None):
     print(f"{name}{suffix}: {time.perf_counter() - start:.1f} s", flush=True)
 
 
+def render_curves():
+    scene = curve_scenes.build_blender()
+    configure_cycles(scene, curve_scenes.SAMPLES, point_filter=False)
+    scene.render.film_transparent = True
+    CURVES.mkdir(exist_ok=True)
+    start = time.perf_counter()
+    write_exr(scene, CURVES / "curves.exr", half=True)
+    print(f"curves: {time.perf_counter() - start:.1f} s", flush=True)
+
+
 if __name__ == "__main__":
     args = sys.argv[1:]
+    if args[:1] == ["--curves"]:
+        render_curves()
+        raise SystemExit(0)
     sides = None
     if args[:1] == ["--mesh"]:
         sides, args = int(args[1]), args[2:]
