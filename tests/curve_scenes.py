@@ -181,13 +181,19 @@ def _resample():
 
 
 def evaluated(ob):
-    """(points (n, 3), radii (n,), cyclic) of a Curves object as Blender evaluates it."""
+    """(points (n, 3), radii (n,), cyclic) of a Curves object as Blender evaluates it
+    (a Resample Curve node, Evaluated, read and taken off again)."""
     import bpy
     import numpy as np
-    data = ob.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
-    cyclic = data.attributes.get("cyclic")
-    return (np.array([p.position for p in data.points]), np.array([p.radius for p in data.points]),
-            bool(cyclic and cyclic.data[0].value))
+    modifier = ob.modifiers.new("Resample", "NODES")
+    modifier.node_group = _resample()
+    try:
+        data = ob.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
+        cyclic = data.attributes.get("cyclic")
+        return (np.array([p.position for p in data.points]),
+                np.array([p.radius for p in data.points]), bool(cyclic and cyclic.data[0].value))
+    finally:
+        ob.modifiers.remove(modifier)
 
 
 def _as_polylines(scene, material):
@@ -276,7 +282,6 @@ def build_blender(evaluate=True):
             data.attributes.new("cyclic", "BOOLEAN", "CURVE").data[0].value = True
         data.attributes.new("resolution", "INT", "CURVE").data[0].value = RESOLUTION
         ob = bpy.data.objects.new(name, data)
-        ob.modifiers.new("Resample", "NODES").node_group = _resample()
         scene.collection.objects.link(ob)
     if evaluate:
         _as_polylines(scene, hair)
@@ -299,6 +304,65 @@ def build_blender(evaluate=True):
     sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", 'SUN'))
     sun.data.energy, sun.data.angle = SUN, 0.0
     sun.rotation_euler = tuple(math.radians(a) for a in SUN_ROTATION)
+    scene.collection.objects.link(sun)
+    world = bpy.data.worlds.new("World")
+    world.node_tree.nodes["Background"].inputs["Color"].default_value = (*WORLD, 1.0)
+    scene.world = world
+    return scene
+
+
+# --- a Blender hair system ------------------------------------------------------------
+
+HAIR_SIZE = (160, 120)
+HAIR_STRANDS = 12                    # a side: strands in a square patch
+
+
+def build_hair(hidden=False):
+    """A patch of Catmull-Rom hair strands (Blender's hair type), thinning to the tips,
+    with a material, over a ground under a sun: a Blender scene, returned. `hidden`:
+    the hair is not rendered (the same scene without it)."""
+    import bpy
+    import numpy as np
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.resolution_x, scene.render.resolution_y = HAIR_SIZE
+    scene.render.resolution_percentage = 100
+    rng = np.random.default_rng(7)
+    n, k = HAIR_STRANDS * HAIR_STRANDS, 8
+    data = bpy.data.hair_curves.new("Hair")
+    data.add_curves([k] * n)
+    roots = np.stack(np.meshgrid(np.linspace(-0.8, 0.8, HAIR_STRANDS),
+                                 np.linspace(-0.8, 0.8, HAIR_STRANDS)), -1).reshape(-1, 2)
+    roots += rng.uniform(-0.04, 0.04, roots.shape)
+    t = np.linspace(0.0, 1.0, k)
+    phase = rng.uniform(0, 2 * np.pi, n)
+    x = roots[:, :1] + 0.12 * np.sin(5 * t[None] + phase[:, None]) * t[None]
+    y = roots[:, 1:] + 0.35 * t[None] ** 2
+    z = 0.9 * t[None] * np.ones((n, 1))
+    positions = np.stack([x, y, z], -1).astype(np.float32).reshape(-1, 3)
+    data.attributes["position"].data.foreach_set("vector", positions.ravel())
+    radius = data.attributes.new("radius", "FLOAT", "POINT")
+    radius.data.foreach_set("value", np.tile(np.linspace(0.018, 0.006, k), n).astype(np.float32))
+    hair = bpy.data.materials.new("HairMaterial")
+    bsdf = hair.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (0.75, 0.45, 0.15, 1.0)
+    bsdf.inputs["Roughness"].default_value = 0.6
+    data.materials.append(hair)
+    ob = bpy.data.objects.new("Hair", data)
+    ob.hide_render = hidden
+    scene.collection.objects.link(ob)
+    mesh = bpy.data.meshes.new("Ground")
+    mesh.from_pydata([(-3, -3, 0), (3, -3, 0), (3, 3, 0), (-3, 3, 0)], [], [(0, 1, 2, 3)])
+    scene.collection.objects.link(bpy.data.objects.new("Ground", mesh))
+    from mathutils import Vector
+    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    cam.location = (0.0, -4.0, 2.2)
+    cam.rotation_euler = (Vector((0, 0, 0.4)) - cam.location).to_track_quat('-Z', 'Y').to_euler()
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", 'SUN'))
+    sun.data.energy = SUN
+    sun.rotation_euler = tuple(math.radians(a) for a in (35.0, 0.0, 30.0))
     scene.collection.objects.link(sun)
     world = bpy.data.worlds.new("World")
     world.node_tree.nodes["Background"].inputs["Color"].default_value = (*WORLD, 1.0)

@@ -30,7 +30,7 @@ from pxr import UsdGeom
 
 from .mesh import MeshError, Surface
 
-TOLERANCE = 1e-3               # polyline to curve, over the prim's bounding-box diagonal
+TOLERANCE = 2.5e-4             # polyline to curve, over the prim's bounding-box diagonal
 MAX_PIECES = 64                # straight pieces per cubic span at most
 DEFAULT_WIDTH = 1.0            # unauthored widths, as Storm
 

@@ -14,13 +14,14 @@ of the radius) the exact shape's reference.
 
 `--curves` renders the curves scene (tests/curve_scenes.py) as Blender Curves objects
 made in Blender's own terms (not through the importer: see that module), as
-curves/curves.exr (RGBA, half float, ZIP).
+curves/curves.exr (RGBA, half float, ZIP); `--hair` a Blender hair system
+(curve_scenes.build_hair) as Cycles renders Blender's hair, as curves/hair.exr (RGB).
 
 Cycles as for references/looks/ (make_cycles_references.configure_cycles: CPU, seed
 0, no denoiser, direct light only, Blackman-Harris 1.5 px), implicit_scenes.SAMPLES
 spp at implicit_scenes.SIZE. Run from the repository root:
     .venv/bin/python tests/references/make_prim_references.py [--mesh N] [NAME ...]
-    .venv/bin/python tests/references/make_prim_references.py --curves
+    .venv/bin/python tests/references/make_prim_references.py --curves | --hair
 """
 import math
 import pathlib
@@ -96,10 +97,22 @@ def render_curves():
     print(f"curves: {time.perf_counter() - start:.1f} s", flush=True)
 
 
+def render_hair():
+    scene = curve_scenes.build_hair()
+    configure_cycles(scene, curve_scenes.SAMPLES, point_filter=False)
+    CURVES.mkdir(exist_ok=True)
+    start = time.perf_counter()
+    write_exr(scene, CURVES / "hair.exr", half=True, rgb=True)
+    print(f"hair: {time.perf_counter() - start:.1f} s", flush=True)
+
+
 if __name__ == "__main__":
     args = sys.argv[1:]
     if args[:1] == ["--curves"]:
         render_curves()
+        raise SystemExit(0)
+    if args[:1] == ["--hair"]:
+        render_hair()
         raise SystemExit(0)
     sides = None
     if args[:1] == ["--mesh"]:
