@@ -44,26 +44,22 @@ def is_curves(prim) -> bool:
     return prim.GetTypeName() in CURVES and prim.IsA(UsdGeom.Curves)
 
 
-class _Made:
-    """The faces the engine makes for a gprim that is not a Mesh (build_mesh's
-    `surface`), and the key under which prims that make the same ones share them."""
-
-    def __init__(self, key, surface):
-        self.key, self.surface = key, surface
-
-
-_IMPLICIT = _Made(lambda prim, t: parameters(prim, t),
-                  lambda prim, t, warnings: shape_surface(parameters(prim, t)))
-_RIBBONS = _Made(lambda prim, t: ("ribbons", strongest_spec(UsdGeom.Curves(prim).GetPointsAttr())),
-                 lambda prim, t, warnings: ribbon_surface(prim, t, warnings))
-
-
-def made_surface(prim):
-    """How build_mesh gets the faces of a 'mesh' kind prim that is not a Mesh, or None."""
+def source_key(prim, time):
+    """What 'mesh' kind prims share their MeshData by: an implicit surface's type and
+    sizes; a Mesh's (or ribbons') strongest `points` opinion."""
     if is_implicit(prim):
-        return _IMPLICIT
+        return parameters(prim, time)
+    spec = strongest_spec(UsdGeom.PointBased(prim).GetPointsAttr())
+    return ("ribbons", spec) if is_curves(prim) else spec
+
+
+def made_surface(prim, time, warnings):
+    """The faces the engine makes for a 'mesh' kind prim that is not a Mesh
+    (build_mesh's `surface`), or None for a Mesh."""
+    if is_implicit(prim):
+        return shape_surface(parameters(prim, time))
     if is_curves(prim):
-        return _RIBBONS
+        return ribbon_surface(prim, time, warnings)
     return None
 
 

@@ -10,7 +10,7 @@ from pxr import Sdf, Usd, UsdGeom
 
 from ..scene import Changes, Instance
 from .camera import gf_to_np, is_camera
-from .gprims import kind_of, made_surface, strongest_spec, undrawn_type
+from .gprims import kind_of, made_surface, source_key, undrawn_type
 from .lights import is_light
 from .mesh import MeshError, build_mesh
 from .paths import traversal_order, under
@@ -254,21 +254,18 @@ class FirstRead:
         (or `rebuild`); None (with a warning) for a malformed mesh."""
         try:
             mats, subsets = self._face_materials(prim, warnings)
-            made = made_surface(prim)
-            if made is not None:
+            if not prim.IsA(UsdGeom.Mesh):
                 subsets = []             # faces the engine makes have no subsets
             if binding is not None:
                 key = ("skinned", path)
             elif mesh_attributes_vary(prim):
                 key = ("varying", str(prim.GetPath()))
             else:
-                key = (made.key(prim, self._t) if made is not None else
-                       strongest_spec(UsdGeom.Mesh(prim).GetPointsAttr()),
-                       tuple(m.name for m in mats),
+                key = (source_key(prim, self._t), tuple(m.name for m in mats),
                        tuple((m, tuple(f.tolist())) for m, f in subsets))
             if key not in self.scene.meshes or key not in self._built and \
                     (rebuild or key[0] in ("skinned", "varying")):
-                surface = made.surface(prim, self._t, warnings) if made is not None else None
+                surface = made_surface(prim, self._t, warnings)
                 mesh = build_mesh(prim, self._t, mats, [(i + 1, f) for i, (_, f) in
                                                         enumerate(subsets)], key, warnings,
                                   tessellate=self.tessellate, surface=surface)
