@@ -228,6 +228,23 @@ def test_a_point_instancer_of_implicit_prototypes_draws_each_instance():
     assert result.stats["instances_drawn"] >= 3 and not result.warnings
 
 
+def test_prototypes_under_an_over_are_drawn_as_instances_only():
+    """OpenUSD's own instancing tests keep prototypes under an `over` (undefined, so
+    never drawn by themselves): the instancer draws them."""
+    from pxr import Gf, UsdGeom
+    stage = _stage()
+    pi = UsdGeom.PointInstancer.Define(stage, "/PI")
+    stage.OverridePrim("/PI/Protos")
+    UsdGeom.Sphere.Define(stage, "/PI/Protos/Ball")
+    pi.CreatePrototypesRel().SetTargets(["/PI/Protos/Ball"])
+    pi.CreateProtoIndicesAttr([0, 0])
+    pi.CreatePositionsAttr([Gf.Vec3f(0, 0, 0), Gf.Vec3f(3, 0, 0)])
+    with _session(stage) as session:
+        result = session.render()
+    assert [len(i.worlds) for p, i in session.scene.instances.items()] == [2]
+    assert not result.warnings, result.warnings
+
+
 def test_object_index_and_depth_passes_hold_implicit_surfaces():
     from pxr import Gf, UsdGeom
     stage = _stage()

@@ -156,11 +156,14 @@ def prototype_meshes(stage, proto_path, time):
     xf = UsdGeom.Xformable(root)
     proto_xform = np.array(xf.GetLocalTransformation(time), np.float64).T if xf else np.eye(4)
     meshes, nested = [], []
-    # Prototypes usually sit under a class prim: abstract, which the default
-    # predicate would skip.
-    predicate = Usd.TraverseInstanceProxies(Usd.PrimIsActive & Usd.PrimIsDefined & Usd.PrimIsLoaded)
+    # Prototypes usually sit under a class prim (abstract, which the default predicate
+    # would skip) or an `over` (undefined, so that they draw only as instances): each
+    # prim needs a defining specifier of its own, not its ancestors'.
+    predicate = Usd.TraverseInstanceProxies(Usd.PrimIsActive & Usd.PrimIsLoaded)
     it = iter(Usd.PrimRange(root, predicate))
     for p in it:
+        if not p.HasDefiningSpecifier():
+            continue
         img = UsdGeom.Imageable(p)
         if p != root and img and img.GetVisibilityAttr().Get() == UsdGeom.Tokens.invisible:
             it.PruneChildren()
