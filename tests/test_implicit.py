@@ -231,14 +231,18 @@ def test_a_point_instancer_of_implicit_prototypes_draws_each_instance():
 def test_prototypes_under_an_over_are_drawn_as_instances_only():
     """OpenUSD's own instancing tests keep prototypes under an `over` (undefined, so
     never drawn by themselves): the instancer draws them."""
-    from pxr import Gf, UsdGeom
-    stage = _stage()
-    pi = UsdGeom.PointInstancer.Define(stage, "/PI")
-    stage.OverridePrim("/PI/Protos")
-    UsdGeom.Sphere.Define(stage, "/PI/Protos/Ball")
-    pi.CreatePrototypesRel().SetTargets(["/PI/Protos/Ball"])
-    pi.CreateProtoIndicesAttr([0, 0])
-    pi.CreatePositionsAttr([Gf.Vec3f(0, 0, 0), Gf.Vec3f(3, 0, 0)])
+    from pxr import Usd
+    stage = Usd.Stage.CreateInMemory()
+    stage.GetRootLayer().ImportFromString("""#usda 1.0
+def PointInstancer "PI" {
+    point3f[] positions = [(0, 0, 0), (3, 0, 0)]
+    int[] protoIndices = [0, 0]
+    rel prototypes = [</PI/Protos/Ball>]
+    over "Protos" {
+        def Sphere "Ball" {}
+    }
+}""")
+    assert not stage.GetPrimAtPath("/PI/Protos/Ball").IsDefined()
     with _session(stage) as session:
         result = session.render()
     assert [len(i.worlds) for p, i in session.scene.instances.items()] == [2]
