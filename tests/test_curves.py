@@ -305,3 +305,27 @@ def test_curves_scene_against_cycles(workdir):
     print(f"whole image: FLIP {mean_flip(ours, cycles):.4f}")
     for name, flip in flips.items():
         assert flip <= (FLIP_RIBBONS if name in curve_scenes.WITH_NORMALS else FLIP_TUBES), name
+
+
+@pytest.mark.parametrize("projection", ["perspective", "orthographic"])
+def test_a_tube_is_as_wide_as_its_widths_under_either_projection(projection):
+    """A tube 0.5 wide (0.25 at one end) across the view of a camera 10 above it:
+    its coverage per column is its width in pixels, to a pixel."""
+    from pxr import Gf, UsdGeom
+    stage = _stage()
+    cam = UsdGeom.Camera.Define(stage, "/Cam")
+    cam.AddTranslateOp().Set(Gf.Vec3d(0, 0, 10))
+    cam.CreateHorizontalApertureAttr(40.0)
+    cam.CreateVerticalApertureAttr(40.0)
+    if projection == "orthographic":
+        cam.CreateProjectionAttr("orthographic")       # apertures in tenths of a unit: 4 wide
+    else:
+        cam.CreateFocalLengthAttr(100.0)               # 4 wide at the tube, 10 away
+    _curves(stage, "/Tube", [(-3, 0, 0), (3, 0, 0)], [2], kind="linear",
+            widths=[0.5, 0.25], interp="vertex")
+    rgba = _render(stage, transparent=True, width=128, height=128).rgba
+    cover = rgba[..., 3].sum(axis=0)                   # pixels covered per column
+    px = 128 / 4.0                                     # pixels a unit
+    x = (np.arange(128) + 0.5) / px - 2.0              # each column's centre
+    want = (0.5 + (0.25 - 0.5) * (x + 3) / 6) * px
+    assert np.abs(cover - want).max() < 1.0, np.abs(cover - want).max()
