@@ -329,3 +329,26 @@ def test_a_tube_is_as_wide_as_its_widths_under_either_projection(projection):
     x = (np.arange(128) + 0.5) / px - 2.0              # each column's centre
     want = (0.5 + (0.25 - 0.5) * (x + 3) / 6) * px
     assert np.abs(cover - want).max() < 1.0, np.abs(cover - want).max()
+
+
+def test_a_curve_with_too_few_vertices_is_left_out_and_the_rest_drawn():
+    """OpenUSD's pinnedCurves test: a batch whose last curve has one vertex draws the
+    others (their uniform colours kept) and says which it left out."""
+    from pxr import Gf, UsdGeom
+    from lantern.engine import RenderSettings, Session
+    stage = _stage()
+    pts = [(1, 0, 0), (0.7, 0.7, 0), (0, 1, 0), (-0.7, 0.7, 0), (-1, 0, 0),
+           (1, -3, 0), (2, -2, 0), (3, -3, 0), (1, -6, 0), (2, -6, 0), (1, -9, 0)]
+    prim = _curves(stage, "/C", pts, [5, 3, 2, 1], wrap="pinned",
+                   widths=[0.05] * 11, interp="vertex")
+    colours = UsdGeom.PrimvarsAPI(prim).CreatePrimvar("displayColor", __import__(
+        "pxr").Sdf.ValueTypeNames.Color3fArray, UsdGeom.Tokens.uniform)
+    colours.Set([Gf.Vec3f(1, 0, 0), Gf.Vec3f(0, 1, 0), Gf.Vec3f(0, 0, 1), Gf.Vec3f(1, 1, 0)])
+    with Session(stage, RenderSettings(width=32, height=32, preset="low")) as session:
+        result = session.render()
+    cloud = session.scene.points["/C"]
+    assert result.warnings == [
+        "/C: 1 of 4 curves are not drawn (a pinned bspline curve of 1 vertex)"]
+    assert {tuple(c) for c in cloud.colours} == {(1, 0, 0), (0, 1, 0), (0, 0, 1)}
+    assert np.allclose(cloud.points[0], pts[0]) and cloud.points[:, 1].min() == \
+        pytest.approx(-6.0)

@@ -48,6 +48,7 @@ class Polylines:
     closed: np.ndarray
     source: np.ndarray
     curve: np.ndarray
+    skipped: str | None = None     # curves left out (too few vertices for the basis)
 
     def segments(self) -> np.ndarray:
         """(s, 2) sample index pairs of the straight pieces."""
@@ -189,8 +190,15 @@ def basis_curves(prim, time) -> Polylines:
     if kind not in ("linear", "cubic") or basis not in _TO_BEZIER or \
             wrap not in ("nonperiodic", "periodic", "pinned"):
         raise ValueError(f"type {kind}, basis {basis}, wrap {wrap} is not one USD defines")
-    layouts = [_layout(int(c), kind, basis, wrap) for c in counts]
-    varying = [len(lay.controls) + (0 if lay.closed else 1) for lay in layouts]
+    layouts, bad = [], []
+    for c in counts:
+        try:
+            layouts.append(_layout(int(c), kind, basis, wrap))
+        except ValueError as exc:         # that curve alone is left out (as Storm does)
+            layouts.append(None)
+            bad.append(str(exc))
+    varying = [_nominal_varying(int(c), kind, basis, wrap) if lay is None else
+               len(lay.controls) + (0 if lay.closed else 1) for c, lay in zip(counts, layouts)]
     widths = _widths(curves, time, counts, varying)
     normals = _normals(curves, time, counts, varying)
     diagonal = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
@@ -198,11 +206,28 @@ def basis_curves(prim, time) -> Polylines:
     offsets = np.concatenate([[0], np.cumsum(counts)])
     out = []
     for i, lay in enumerate(layouts):
+        if lay is None:
+            continue
         p = pts[offsets[i]:offsets[i + 1]]
         w, n = widths[0][i], None if normals is None else normals[0][i]
         out.append(_sample(p, w, n, widths[1], None if normals is None else normals[1],
-                           lay, kind, basis, tol, int(offsets[i])))
-    return _join(out)
+                           lay, kind, basis, tol, int(offsets[i])) + (i,))
+    if not out:
+        raise ValueError(bad[0])
+    lines = _join(out)
+    if bad:
+        lines.skipped = f"{len(bad)} of {len(counts)} curves are not drawn ({bad[0]})"
+    return lines
+
+
+def _nominal_varying(n, kind, basis, wrap):
+    """Varying values a curve of n vertices has by USD's counting, where its basis and
+    wrap give it no segment (the primvar still holds its share)."""
+    if kind == "linear":
+        return n
+    if basis == "bezier":
+        return n // 3 if wrap == "periodic" else max((n - 4) // 3 + 2, 0)
+    return n if wrap in ("periodic", "pinned") else max(n - 2, 0)
 
 
 def _widths(curves, time, counts, varying):
@@ -285,6 +310,7 @@ def _sample(p, w, n, w_interp, n_interp, lay, kind, basis, tol, first):
 
 
 def _join(curves) -> Polylines:
+    """Polylines of [(points, widths, normals, source, closed, curve index)]."""
     sizes = [len(c[0]) for c in curves]
     normals = None if curves[0][2] is None else np.concatenate([c[2] for c in curves])
     return Polylines(points=np.concatenate([c[0] for c in curves]),
@@ -292,7 +318,7 @@ def _join(curves) -> Polylines:
                      starts=np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64),
                      closed=np.array([c[4] for c in curves], bool),
                      source=np.concatenate([c[3] for c in curves]).astype(np.int64),
-                     curve=np.repeat(np.arange(len(curves)), sizes))
+                     curve=np.repeat([c[5] for c in curves], sizes))
 
 
 def nurbs_curves(prim, time) -> Polylines:
@@ -357,7 +383,7 @@ def nurbs_curves(prim, time) -> Polylines:
                 [np.interp(np.linspace(0, 1, len(u)), np.linspace(0, 1, len(n)), n[:, j])
                  for j in range(3)], axis=1)
         source = at + np.argmax(basis, axis=1)
-        out.append((points, np.maximum(wv, 0.0), nv, source, False))
+        out.append((points, np.maximum(wv, 0.0), nv, source, False, i))
         at += c
         kat += c + o
     return _join(out)
@@ -422,6 +448,8 @@ def ribbon_surface(prim, time, warnings=None) -> Surface:
         lines = polylines(prim, time)
     except ValueError as exc:
         raise MeshError(str(exc)) from None
+    if lines.skipped and warnings is not None:
+        warnings.append(f"{prim.GetPath()}: {lines.skipped}")
     seg = lines.segments()
     if not len(seg):
         raise MeshError("no curve has two samples")
@@ -465,11 +493,13 @@ def ribbon_surface(prim, time, warnings=None) -> Surface:
                    face_source=lines.curve[a])
 
 
-def tubes(prim, time):
+def tubes(prim, time, warnings=None):
     """(points (m, 3), radii (m,), colours (m, 3) or None, segments (s, 2)) of the
     round tubes; ValueError naming a defect. Colours are displayColor's, per curve,
     vertex or constant."""
     lines = polylines(prim, time)
+    if lines.skipped and warnings is not None:
+        warnings.append(f"{prim.GetPath()}: {lines.skipped}")
     seg = lines.segments()
     if not len(seg):
         raise ValueError("no curve has two samples")
@@ -483,7 +513,7 @@ def tubes(prim, time):
             interp = str(pv.GetInterpolation())
             if len(c) == 1 or interp == "constant":
                 colours = np.repeat(c[:1], len(lines.points), axis=0)
-            elif interp == "uniform" and len(c) == len(lines.starts) - 1:
+            elif interp == "uniform" and len(c) > lines.curve.max():
                 colours = c[lines.curve]
             elif interp in ("vertex", "varying") and len(c) > lines.source.max():
                 colours = c[lines.source]

@@ -168,7 +168,7 @@ def prototype_meshes(stage, proto_path, time):
         if p != root and img and img.GetVisibilityAttr().Get() == UsdGeom.Tokens.invisible:
             it.PruneChildren()
             continue
-        if p.IsA(UsdGeom.PointInstancer) and p != root:
+        if p.IsA(UsdGeom.PointInstancer):                # the root itself, too
             nested.append(str(p.GetPath()))
             it.PruneChildren()
         elif kind_of(p) == "points":

@@ -111,7 +111,7 @@ class InstancerReading:
                 raise ValueError(f"its world transform is not finite ({self._bad_op(prim)})")
             segments = None
             if is_curves(prim):
-                points, radii, colours, segments = tubes(prim, self._t)
+                points, radii, colours, segments = tubes(prim, self._t, warnings)
             else:
                 points, radii, colours = points_data(prim, self._t)
         except ValueError as exc:
