@@ -307,11 +307,15 @@ def test_curves_scene_against_cycles(workdir):
         assert flip <= (FLIP_RIBBONS if name in curve_scenes.WITH_NORMALS else FLIP_TUBES), name
 
 
+@pytest.mark.parametrize("max_gl", ["45", "33"])
 @pytest.mark.parametrize("projection", ["perspective", "orthographic"])
-def test_a_tube_is_as_wide_as_its_widths_under_either_projection(projection):
+def test_a_tube_is_as_wide_as_its_widths_under_either_projection(projection, max_gl,
+                                                                  monkeypatch):
     """A tube 0.5 wide (0.25 at one end) across the view of a camera 10 above it:
-    its coverage per column is its width in pixels, to a pixel."""
+    its coverage per column is its width in pixels, to a pixel, on the GL 4.5 and
+    GL 3.3 paths."""
     from pxr import Gf, UsdGeom
+    monkeypatch.setenv("LANTERN_MAX_GL", max_gl)
     stage = _stage()
     cam = UsdGeom.Camera.Define(stage, "/Cam")
     cam.AddTranslateOp().Set(Gf.Vec3d(0, 0, 10))
