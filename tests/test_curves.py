@@ -179,13 +179,14 @@ def test_widths_by_every_interpolation_and_malformed_curves_warn():
     assert np.allclose(clouds["/Default"].radii, 0.5)         # unauthored: 1 wide, as Storm
     warned = sorted(w for w in result.warnings if w.startswith(("/Short", "/Widths")))
     assert warned == [
-        "/Short: malformed curves (a bezier curve of 3 vertices (4, 7, 10, ...)); skipped",
+        "/Short: malformed curves (a nonperiodic bezier curve of 3 vertices (4, 7, 10, ...)); "
+        "skipped",
         "/Widths: malformed curves (widths has 2 vertex values for 4); skipped"]
 
 
 def test_ribbons_face_their_normals_and_keep_their_width_at_corners():
     from pxr import Gf, Usd, UsdGeom
-    from lantern.engine.usd.curves import ribbon_surface
+    from lantern.engine.usd.curve_shapes import ribbon_surface
     stage = _stage()
     prim = _curves(stage, "/R", [(0, 0, 0), (1, 0, 0), (1, 1, 0)], [3], kind="linear",
                    widths=[0.2], interp="constant")
@@ -352,7 +353,7 @@ def test_a_curve_with_too_few_vertices_is_left_out_and_the_rest_drawn():
         result = session.render()
     cloud = session.scene.points["/C"]
     assert result.warnings == [
-        "/C: 1 of 4 curves are not drawn (a pinned bspline curve of 1 vertex)"]
+        "/C: 1 of 4 curves are not drawn (a pinned bspline curve of 1 vertex (2 at least))"]
     assert {tuple(c) for c in cloud.colours} == {(1, 0, 0), (0, 1, 0), (0, 0, 1)}
     assert np.allclose(cloud.points[0], pts[0]) and cloud.points[:, 1].min() == \
         pytest.approx(-6.0)

@@ -1,34 +1,28 @@
 """UsdGeom.BasisCurves and NurbsCurves -> polylines of the curves' own shape (no
-records, no GL), and what the engine draws of them.
+records, no GL); curve_shapes.py makes what the engine draws of them.
 
-Every basis is evaluated on the CPU: linear; cubic bezier, bspline and catmullRom
-(each segment as its Bezier control points), with the nonperiodic, periodic and
-pinned wraps (pinned adds UsdGeomBasisCurves' phantom points, 2 P0 - P1 and
-2 Pn-1 - Pn-2, so the curve starts and ends on its end points); NurbsCurves of any
-order by de Boor's algorithm over their knots, rational where pointWeights are
-authored, each curve over its `ranges`. Each cubic span is cut into straight pieces
-until the polyline is within TOLERANCE of the prim's size from the curve (at most
-MAX_PIECES a span). Widths (constant, uniform, vertex, varying) and normals are
-interpolated as USD says: vertex values by the curve's basis, varying ones linearly
-over each segment.
+Every basis is evaluated on the CPU, all of a prim's curves at once in numpy: linear;
+cubic bezier, bspline and catmullRom (each segment as its Bezier control points), with
+the nonperiodic, periodic and pinned wraps (pinned adds UsdGeomBasisCurves' phantom
+points, 2 P0 - P1 and 2 Pn-1 - Pn-2, so the curve starts and ends on its end points);
+NurbsCurves of any order by Cox-de Boor over their knots, rational where pointWeights
+are authored, each curve over its `ranges`. Each cubic span is cut into straight
+pieces until the polyline is within TOLERANCE of the prim's size from the curve (at
+most MAX_PIECES a span). Widths (constant, uniform, vertex, varying; one value is
+constant whatever its interpolation) and normals are interpolated as USD says: vertex
+values by the curve's basis, varying ones linearly over each segment. Primvars reach
+the samples from their nearest control vertex (`Polylines.source`) or their curve.
 
-Drawn as Storm and Cycles draw curves: where normals are authored, as ribbons facing
-them (`ribbon_surface`: meshes, build_mesh's `surface`); otherwise as round tubes
-(`tube_data`: the Points prims' ray-cast primitive, a sphere swept along each
-straight piece, its radius varying linearly: Cycles' 3D curves), which cast and
-receive shadows like any surface. Primvars reach the samples from their nearest
-control vertex (vertex, varying) or their curve (uniform). A defect (counts that do
-not add up, too few points for the basis, a knot vector of the wrong length) is a
-ValueError naming it; the reader skips the prim with a warning."""
+A curve with too few vertices for its basis and wrap is left out (`Polylines.skipped`
+says so) and the others are kept, as Storm does; any other defect (counts that do not
+add up, a primvar whose count fits no interpolation, a knot vector of the wrong
+length) is a ValueError naming it, and the reader skips the prim with a warning."""
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 from pxr import UsdGeom
-
-from .mesh import MeshError, Surface
 
 TOLERANCE = 2.5e-4             # polyline to curve, over the prim's bounding-box diagonal
 MAX_PIECES = 64                # straight pieces per cubic span at most
@@ -38,9 +32,9 @@ DEFAULT_WIDTH = 1.0            # unauthored widths, as Storm
 @dataclass
 class Polylines:
     """The curves of a prim sampled: `points` (m, 3) with their `widths` (m,) and
-    `normals` (m, 3) or None; curve i is samples starts[i]:starts[i+1], closed
+    `normals` (m, 3) or None; drawn curve i is samples starts[i]:starts[i+1], closed
     (its last sample joins its first) where `closed[i]`. `source`: the control vertex
-    nearest each sample; `curve`: each sample's curve."""
+    nearest each sample; `curve`: each sample's curve (its index in the prim)."""
     points: np.ndarray
     widths: np.ndarray
     normals: np.ndarray | None
@@ -51,16 +45,30 @@ class Polylines:
     skipped: str | None = None     # curves left out (too few vertices for the basis)
 
     def segments(self) -> np.ndarray:
-        """(s, 2) sample index pairs of the straight pieces."""
-        pairs = []
-        for i in range(len(self.starts) - 1):
-            a, b = int(self.starts[i]), int(self.starts[i + 1])
-            idx = np.arange(a, b)
-            if self.closed[i] and b - a > 2:
-                pairs.append(np.stack([idx, np.roll(idx, -1)], axis=1))
-            elif b - a > 1:
-                pairs.append(np.stack([idx[:-1], idx[1:]], axis=1))
-        return np.concatenate(pairs) if pairs else np.zeros((0, 2), np.int64)
+        """(s, 2) sample index pairs of the straight pieces, each curve's in order,
+        closed curves' closing pieces last."""
+        sizes = np.diff(self.starts)
+        last = np.zeros(len(self.points), bool)
+        last[self.starts[1:] - 1] = True
+        inner = np.flatnonzero(~last)
+        pairs = [np.stack([inner, inner + 1], axis=1)]
+        closing = self.closed & (sizes > 2)
+        pairs.append(np.stack([self.starts[1:][closing] - 1, self.starts[:-1][closing]], axis=1))
+        return np.concatenate(pairs).astype(np.int64)
+
+    def neighbours(self):
+        """(previous, next) sample of each sample along its curve (itself at an open
+        curve's ends)."""
+        i = np.arange(len(self.points))
+        first = np.zeros(len(i), bool)
+        first[self.starts[:-1]] = True
+        last = np.zeros(len(i), bool)
+        last[self.starts[1:] - 1] = True
+        curve_of = np.repeat(np.arange(len(self.closed)), np.diff(self.starts))
+        closed = self.closed[curve_of]
+        prev = np.where(first, np.where(closed, self.starts[1:][curve_of] - 1, i), i - 1)
+        nxt = np.where(last, np.where(closed, self.starts[:-1][curve_of], i), i + 1)
+        return prev, nxt
 
 
 def has_normals(prim) -> bool:
@@ -75,7 +83,8 @@ def _array(attr, time, dtype=np.float64):
     return None if v is None else np.asarray(v, dtype)
 
 
-def _finite(values, what):
+def finite(values, what):
+    """ValueError naming how many values are NaN or Inf."""
     bad = ~np.isfinite(values)
     if bad.ndim > 1:
         bad = bad.any(axis=1)
@@ -83,12 +92,16 @@ def _finite(values, what):
         raise ValueError(f"{int(bad.sum())} of {len(bad)} {what} are not finite")
 
 
-# Cubic bases as Bezier control points of the segment on P0..P3 (rows: b0..b3).
+# Cubic bases as Bezier control points of the segment on P0..P3 (rows: b0..b3); a
+# linear segment on P0, P1 as a straight Bezier.
 _TO_BEZIER = {
     "bezier": np.eye(4),
     "bspline": np.array([[1, 4, 1, 0], [0, 4, 2, 0], [0, 2, 4, 0], [0, 1, 4, 1]]) / 6.0,
     "catmullRom": np.array([[0, 6, 0, 0], [-1, 6, 1, 0], [0, 1, 6, -1], [0, 0, 6, 0]]) / 6.0,
+    "linear": np.array([[1.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.0, 1.0]]),
 }
+# The control vertices a segment runs between (for each sample's nearest one).
+_ENDS = {"bezier": (0, 3), "bspline": (1, 2), "catmullRom": (1, 2), "linear": (0, 1)}
 
 
 def _bernstein(u):
@@ -96,138 +109,44 @@ def _bernstein(u):
     return np.stack([v * v * v, 3 * v * v * u, 3 * v * u * u, u * u * u], axis=-1)
 
 
-@dataclass
-class _Layout:
-    """One curve's segments: control vertex indices (nseg, 4) (cubic) or (nseg, 2)
-    (linear) into the (pinned: padded) points, and whether it closes."""
-    controls: np.ndarray
-    closed: bool
-    padded: bool            # pinned phantom points added: index 0 and n+1 are phantoms
-
-
-def _layout(n, kind, basis, wrap) -> _Layout:
+def _spans(n, kind, basis, wrap):
+    """Per curve of n vertices: (segments, closed, padded with phantom points, drawable,
+    varying values), by USD's counting (varying: the nominal count where a curve has
+    too few vertices)."""
+    periodic = wrap == "periodic"
     if kind == "linear":
-        if n < 2:
-            raise ValueError(f"a linear curve of {n} vertex")
-        closed = wrap == "periodic" and n > 2
-        i = np.arange(n if closed else n - 1)
-        return _Layout(np.stack([i, (i + 1) % n], axis=1), closed, False)
+        closed = periodic & (n > 2)
+        return np.where(closed, n, n - 1), closed, np.zeros_like(closed), n >= 2, n
     if basis == "bezier":
-        if wrap == "periodic":
-            if n < 3 or n % 3:
-                raise ValueError(f"a periodic bezier curve of {n} vertices (3 a segment)")
-            i = np.arange(0, n, 3)
-            return _Layout((i[:, None] + np.arange(4)) % n, True, False)
-        if n < 4 or (n - 4) % 3:
-            raise ValueError(f"a bezier curve of {n} vertices (4, 7, 10, ...)")
-        i = np.arange(0, n - 3, 3)
-        return _Layout(i[:, None] + np.arange(4), False, False)
-    if wrap == "periodic":
-        if n < 3:
-            raise ValueError(f"a periodic {basis} curve of {n} vertices")
-        i = np.arange(n)
-        return _Layout((i[:, None] + np.arange(4)) % n, True, False)
+        if periodic:
+            ok = (n >= 3) & (n % 3 == 0)
+            return n // 3, ok, np.zeros_like(ok), ok, n // 3
+        ok = (n >= 4) & ((n - 4) % 3 == 0)
+        segments = np.maximum((n - 4) // 3 + 1, 0)
+        return segments, np.zeros_like(ok), np.zeros_like(ok), ok, segments + 1
+    if periodic:
+        return n, n >= 3, np.zeros(len(n), bool), n >= 3, n
     if wrap == "pinned":
-        if n < 2:
-            raise ValueError(f"a pinned {basis} curve of {n} vertex")
-        i = np.arange(n - 1)
-        return _Layout(i[:, None] + np.arange(4), False, True)
-    if n < 4:
-        raise ValueError(f"a {basis} curve of {n} vertices (4 at least)")
-    i = np.arange(n - 3)
-    return _Layout(i[:, None] + np.arange(4), False, False)
+        return n - 1, np.zeros(len(n), bool), np.ones(len(n), bool), n >= 2, n
+    return np.maximum(n - 3, 0), np.zeros(len(n), bool), np.zeros(len(n), bool), n >= 4, \
+        np.maximum(n - 2, 0)
 
 
-def _pad(values):
-    """Pinned curves' phantom values: 2 v0 - v1 before, 2 vn-1 - vn-2 after."""
-    if len(values) < 2:
-        return np.concatenate([values, values, values])
-    return np.concatenate([2 * values[:1] - values[1:2], values, 2 * values[-1:] - values[-2:-1]])
-
-
-def _per_curve(values, interp, counts, varying, what):
-    """[values of curve i] per curve for a primvar, or ValueError. One value is
-    constant whatever its interpolation (as the Points prims' widths)."""
-    n_curves = len(counts)
+def _flat(values, interp, counts, varying, what):
+    """(values per vertex, 'vertex') or (values per varying slot, 'varying') of a
+    primvar, or ValueError."""
     if interp == "constant" or len(values) == 1:
-        return [np.repeat(values[:1], c, axis=0) for c in counts], "vertex"
-    sizes = {"uniform": [1] * n_curves, "vertex": list(counts),
-             "varying": varying, "faceVarying": varying}.get(interp)
-    if sizes is None:
+        return np.repeat(values[:1], int(counts.sum()), axis=0), "vertex"
+    if interp == "uniform" and len(values) == len(counts):
+        return np.repeat(values, counts, axis=0), "vertex"
+    if interp == "vertex" and len(values) == counts.sum():
+        return values, "vertex"
+    if interp in ("varying", "faceVarying") and len(values) == varying.sum():
+        return values, "varying"
+    if interp not in ("uniform", "vertex", "varying", "faceVarying"):
         raise ValueError(f"{what} has interpolation {interp}")
-    if len(values) != sum(sizes):
-        raise ValueError(f"{what} has {len(values)} {interp} values for {sum(sizes)}")
-    offsets = np.concatenate([[0], np.cumsum(sizes)])
-    parts = [values[offsets[i]:offsets[i + 1]] for i in range(n_curves)]
-    if interp == "uniform":
-        return [np.repeat(p, c, axis=0) for p, c in zip(parts, counts)], "vertex"
-    return parts, "varying" if interp in ("varying", "faceVarying") else "vertex"
-
-
-def _pieces(bez, tol):
-    """Straight pieces per cubic span (Bezier control points (s, 4, 3)): the polyline
-    of k pieces is within max|B''| / (8 k^2) of the curve."""
-    second = np.maximum(np.linalg.norm(bez[:, 0] - 2 * bez[:, 1] + bez[:, 2], axis=1),
-                        np.linalg.norm(bez[:, 1] - 2 * bez[:, 2] + bez[:, 3], axis=1))
-    k = np.ceil(np.sqrt(6.0 * second / (8.0 * max(tol, 1e-30))))
-    return np.clip(k, 1, MAX_PIECES).astype(np.int64)
-
-
-def basis_curves(prim, time) -> Polylines:
-    """The samples of a BasisCurves prim; ValueError naming a defect."""
-    curves = UsdGeom.BasisCurves(prim)
-    pts = _array(curves.GetPointsAttr(), time)
-    counts = _array(curves.GetCurveVertexCountsAttr(), time, np.int64)
-    if pts is None or counts is None or not len(pts) or not len(counts):
-        raise ValueError("no points or curveVertexCounts")
-    pts = pts.reshape(-1, 3)
-    if (counts < 1).any() or counts.sum() != len(pts):
-        raise ValueError(f"curveVertexCounts add up to {counts.sum()} for {len(pts)} points")
-    _finite(pts, "points")
-    kind = curves.GetTypeAttr().Get(time) or "cubic"
-    basis = curves.GetBasisAttr().Get(time) or "bezier"
-    wrap = curves.GetWrapAttr().Get(time) or "nonperiodic"
-    if kind not in ("linear", "cubic") or basis not in _TO_BEZIER or \
-            wrap not in ("nonperiodic", "periodic", "pinned"):
-        raise ValueError(f"type {kind}, basis {basis}, wrap {wrap} is not one USD defines")
-    layouts, bad = [], []
-    for c in counts:
-        try:
-            layouts.append(_layout(int(c), kind, basis, wrap))
-        except ValueError as exc:         # that curve alone is left out (as Storm does)
-            layouts.append(None)
-            bad.append(str(exc))
-    varying = [_nominal_varying(int(c), kind, basis, wrap) if lay is None else
-               len(lay.controls) + (0 if lay.closed else 1) for c, lay in zip(counts, layouts)]
-    widths = _widths(curves, time, counts, varying)
-    normals = _normals(curves, time, counts, varying)
-    diagonal = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
-    tol = TOLERANCE * max(diagonal, 1e-30)
-    offsets = np.concatenate([[0], np.cumsum(counts)])
-    out = []
-    for i, lay in enumerate(layouts):
-        if lay is None:
-            continue
-        p = pts[offsets[i]:offsets[i + 1]]
-        w, n = widths[0][i], None if normals is None else normals[0][i]
-        out.append(_sample(p, w, n, widths[1], None if normals is None else normals[1],
-                           lay, kind, basis, tol, int(offsets[i])) + (i,))
-    if not out:
-        raise ValueError(bad[0])
-    lines = _join(out)
-    if bad:
-        lines.skipped = f"{len(bad)} of {len(counts)} curves are not drawn ({bad[0]})"
-    return lines
-
-
-def _nominal_varying(n, kind, basis, wrap):
-    """Varying values a curve of n vertices has by USD's counting, where its basis and
-    wrap give it no segment (the primvar still holds its share)."""
-    if kind == "linear":
-        return n
-    if basis == "bezier":
-        return n // 3 if wrap == "periodic" else max((n - 4) // 3 + 2, 0)
-    return n if wrap in ("periodic", "pinned") else max(n - 2, 0)
+    wanted = {"uniform": len(counts), "vertex": counts.sum()}.get(interp, varying.sum())
+    raise ValueError(f"{what} has {len(values)} {interp} values for {int(wanted)}")
 
 
 def _widths(curves, time, counts, varying):
@@ -244,69 +163,136 @@ def _widths(curves, time, counts, varying):
             values, interp = np.asarray(v, np.float64).reshape(-1), str(curves.GetWidthsInterpolation())
     if values is None:
         values, interp = np.array([DEFAULT_WIDTH]), "constant"
-    _finite(values, "widths")
+    finite(values, "widths")
     if (values < 0).any():
         raise ValueError("negative widths")
-    return _per_curve(values, interp, counts, varying, "widths")
+    return _flat(values, interp, counts, varying, "widths")
 
 
 def _normals(curves, time, counts, varying):
     a = curves.GetNormalsAttr()
     v = a.Get(time) if a and a.HasAuthoredValue() else None
     if v is None or not len(v):
-        return None
+        return None, None
     values = np.asarray(v, np.float64).reshape(-1, 3)
-    _finite(values, "normals")
-    return _per_curve(values, str(curves.GetNormalsInterpolation()), counts, varying, "normals")
+    finite(values, "normals")
+    return _flat(values, str(curves.GetNormalsInterpolation()), counts, varying, "normals")
 
 
-def _sample(p, w, n, w_interp, n_interp, lay, kind, basis, tol, first):
-    """One curve's samples: (points, widths, normals or None, source vertex, closed)."""
-    src = np.arange(len(p)) + first
-    if lay.padded:
-        p = _pad(p)
-        src = np.concatenate([src[:1], src, src[-1:]])
-        if w_interp == "vertex":
-            w = np.maximum(_pad(w), 0.0)
-        if n is not None and n_interp == "vertex":
-            n = _pad(n)
-    ctrl = lay.controls
-    nseg = len(ctrl)
+def _pieces(bez, tol):
+    """Straight pieces per cubic span (Bezier control points (s, 4, 3)): the polyline
+    of k pieces is within max|B''| / (8 k^2) of the curve."""
+    second = np.maximum(np.linalg.norm(bez[:, 0] - 2 * bez[:, 1] + bez[:, 2], axis=1),
+                        np.linalg.norm(bez[:, 1] - 2 * bez[:, 2] + bez[:, 3], axis=1))
+    k = np.ceil(np.sqrt(6.0 * second / (8.0 * max(tol, 1e-30))))
+    return np.clip(k, 1, MAX_PIECES).astype(np.int64)
+
+
+def _pad(values, offsets, n, padded):
+    """Per-vertex values with pinned curves' phantom values around each of them
+    (2 v0 - v1 before, 2 vn-1 - vn-2 after; a curve of one vertex repeats it), and
+    each control slot's offset per curve."""
+    size = n + 2 * padded
+    at = np.concatenate([[0], np.cumsum(size)])
+    out = np.empty((int(at[-1]),) + values.shape[1:], values.dtype)
+    real = np.arange(len(values)) + np.repeat(at[:-1] - offsets[:-1] + padded, n)
+    out[real] = values
+    first, last = offsets[:-1][padded], offsets[1:][padded] - 1
+    second = np.minimum(first + 1, last)
+    before = np.maximum(last - 1, first)
+    out[at[:-1][padded]] = 2 * values[first] - values[second]
+    out[at[1:][padded] - 1] = 2 * values[last] - values[before]
+    return out, at
+
+
+def basis_curves(prim, time) -> Polylines:
+    """The samples of a BasisCurves prim; ValueError naming a defect."""
+    curves = UsdGeom.BasisCurves(prim)
+    pts = _array(curves.GetPointsAttr(), time)
+    counts = _array(curves.GetCurveVertexCountsAttr(), time, np.int64)
+    if pts is None or counts is None or not len(pts) or not len(counts):
+        raise ValueError("no points or curveVertexCounts")
+    pts = pts.reshape(-1, 3)
+    if (counts < 1).any() or counts.sum() != len(pts):
+        raise ValueError(f"curveVertexCounts add up to {counts.sum()} for {len(pts)} points")
+    finite(pts, "points")
+    kind = curves.GetTypeAttr().Get(time) or "cubic"
+    basis = curves.GetBasisAttr().Get(time) or "bezier"
+    wrap = curves.GetWrapAttr().Get(time) or "nonperiodic"
+    if kind not in ("linear", "cubic") or basis not in _TO_BEZIER or basis == "linear" or \
+            wrap not in ("nonperiodic", "periodic", "pinned"):
+        raise ValueError(f"type {kind}, basis {basis}, wrap {wrap} is not one USD defines")
     if kind == "linear":
-        bez = np.stack([p[ctrl[:, 0]], p[ctrl[:, 0]], p[ctrl[:, 1]], p[ctrl[:, 1]]], axis=1)
-        k = np.ones(nseg, np.int64)
-        m = np.array([[1, 0], [1, 0], [0, 1], [0, 1]], np.float64)   # as Bezier, straight
-        ends = ctrl
-    else:
-        m = _TO_BEZIER[basis]
-        bez = np.einsum("ij,sjk->sik", m, p[ctrl])
-        k = _pieces(bez, tol)
-        ends = ctrl[:, [0, 3]] if basis == "bezier" else ctrl[:, [1, 2]]
-    seg = np.repeat(np.arange(nseg), k)
-    u = np.concatenate([np.arange(kk) / kk for kk in k])
-    if not lay.closed:                   # the curve's end point
-        seg, u = np.append(seg, nseg - 1), np.append(u, 1.0)
-    b = _bernstein(u)
-    points = np.einsum("mj,mjk->mk", b, bez[seg])
+        basis = "linear"
+    nseg, closed, padded, drawn, varying = _spans(counts, kind, basis, wrap)
+    widths, w_interp = _widths(curves, time, counts, varying)
+    normals, n_interp = _normals(curves, time, counts, varying)
+    if not drawn.any():
+        raise ValueError(_too_few(counts[0], kind, basis, wrap))
+    offsets = np.concatenate([[0], np.cumsum(counts)])
+    padded = padded & drawn
+    control, at = _pad(pts, offsets, counts, padded)
+    source, _ = _pad(np.arange(len(pts)), offsets, counts, padded)
+    source = np.clip(source, offsets[:-1].repeat(counts + 2 * padded),
+                     (offsets[1:] - 1).repeat(counts + 2 * padded))   # phantoms: their end
+
+    # Every drawn curve's segments, and the control slots each reads.
+    curve_of = np.repeat(np.flatnonzero(drawn), nseg[drawn])
+    first_seg = np.concatenate([[0], np.cumsum(nseg[drawn])])[:-1]
+    j = np.arange(len(curve_of)) - np.repeat(first_seg, nseg[drawn])
+    step, width = (3, 4) if basis == "bezier" else (1, 2 if basis == "linear" else 4)
+    local = j[:, None] * step + np.arange(width)[None]
+    size = (counts + 2 * padded)[curve_of][:, None]
+    local = np.where(closed[curve_of][:, None], local % size, local)
+    slots = at[curve_of][:, None] + local
+    m = _TO_BEZIER[basis]
+    bez = np.einsum("ij,sjk->sik", m, control[slots])
+    diagonal = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
+    k = np.ones(len(slots), np.int64) if basis == "linear" else \
+        _pieces(bez, TOLERANCE * max(diagonal, 1e-30))
+
+    # Samples: k a segment at u = i / k, and each open curve's end point.
+    ends_open = (j == nseg[curve_of] - 1) & ~closed[curve_of]
+    per_seg = k + ends_open
+    seg = np.repeat(np.arange(len(slots)), per_seg)
+    u = (np.arange(len(seg)) - np.repeat(np.cumsum(per_seg) - per_seg, per_seg)) / k[seg]
+    points = np.einsum("mj,mjk->mk", _bernstein(u), bez[seg])
 
     def along(values, interp):
         if interp == "varying":
-            nxt = (np.arange(nseg) + 1) % len(values)
-            a, c = values[np.arange(nseg)][seg], values[nxt][seg]
+            var_at = np.concatenate([[0], np.cumsum(varying)])
+            start = var_at[curve_of] + j
+            end = var_at[curve_of] + (j + 1) % varying[curve_of]
             t = u.reshape((-1,) + (1,) * (values.ndim - 1))
-            return a * (1 - t) + c * t
-        cv = values[ctrl]                                  # (nseg, 4|2, ...)
-        if kind == "linear":
-            t = u.reshape((-1,) + (1,) * (values.ndim - 1))
-            return cv[seg, 0] * (1 - t) + cv[seg, 1] * t
-        cb = np.einsum("ij,sj...->si...", m, cv)
-        return np.einsum("mj,mj...->m...", b, cb[seg])
+            return values[start][seg] * (1 - t) + values[end][seg] * t
+        v, _ = _pad(values, offsets, counts, padded)
+        return np.einsum("mj,mj...->m...", _bernstein(u),
+                         np.einsum("ij,sj...->si...", m, v[slots])[seg])
 
-    widths = np.maximum(along(w, w_interp), 0.0)
-    normals = None if n is None else along(n, n_interp)
-    # Each sample's nearest control vertex: its segment's start or end.
-    source = np.where(u < 0.5, src[ends[seg, 0]], src[ends[seg, 1]])
-    return points, widths, normals, source, lay.closed
+    a, b = _ENDS[basis]
+    nearest = np.where(u < 0.5, slots[seg, a], slots[seg, b])
+    lines = Polylines(points=points, widths=np.maximum(along(widths, w_interp), 0.0),
+                      normals=None if normals is None else along(normals, n_interp),
+                      starts=np.concatenate([[0], np.cumsum(np.bincount(
+                          curve_of[seg], minlength=len(counts))[drawn])]).astype(np.int64),
+                      closed=closed[drawn], source=source[nearest], curve=curve_of[seg])
+    if not drawn.all():
+        lines.skipped = (f"{int((~drawn).sum())} of {len(counts)} curves are not drawn "
+                         f"({_too_few(counts[~drawn][0], kind, basis, wrap)})")
+    return lines
+
+
+def _too_few(n, kind, basis, wrap) -> str:
+    """Why a curve of n vertices has no segment."""
+    n = int(n)
+    vertices = f"{n} vertex" if n == 1 else f"{n} vertices"
+    if kind == "linear":
+        return f"a linear curve of {vertices} (2 at least)"
+    if basis == "bezier":
+        need = "3 a segment" if wrap == "periodic" else "4, 7, 10, ..."
+        return f"a {wrap} bezier curve of {vertices} ({need})"
+    least = {"periodic": 3, "pinned": 2}.get(wrap, 4)
+    return f"a {wrap} {basis} curve of {vertices} ({least} at least)"
 
 
 def _join(curves) -> Polylines:
@@ -338,15 +324,17 @@ def nurbs_curves(prim, time) -> Polylines:
         raise ValueError("an order per curve, from 2 to its vertex count, is needed")
     if len(knots) != int((counts + order).sum()):
         raise ValueError(f"{len(knots)} knots for {int((counts + order).sum())}")
-    _finite(pts, "points")
-    _finite(knots, "knots")
+    finite(pts, "points")
+    finite(knots, "knots")
     weights = _array(curves.GetPointWeightsAttr(), time)
     if weights is not None and len(weights) != len(pts):
         weights = None
     ranges = _array(curves.GetRangesAttr(), time)
-    varying = [int(c - o + 2) for c, o in zip(counts, order)]
-    widths = _widths(curves, time, counts, varying)
-    normals = _normals(curves, time, counts, varying)
+    varying = counts - order + 2
+    widths, w_interp = _widths(curves, time, counts, varying)
+    normals, n_interp = _normals(curves, time, counts, varying)
+    w_at = np.concatenate([[0], np.cumsum(counts if w_interp == "vertex" else varying)])
+    n_at = np.concatenate([[0], np.cumsum(counts if n_interp == "vertex" else varying)])
     diagonal = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
     tol = TOLERANCE * max(diagonal, 1e-30)
     out, at, kat = [], 0, 0
@@ -373,15 +361,16 @@ def nurbs_curves(prim, time) -> Polylines:
         rational = basis * wt
         denom = rational.sum(axis=1, keepdims=True)
         points = rational @ p / np.where(denom == 0, 1, denom)
-        w, w_interp = widths[0][i], widths[1]
-        wv = basis @ w if w_interp == "vertex" else np.interp(
-            np.linspace(0, 1, len(u)), np.linspace(0, 1, len(w)), w)
-        nv = None
-        if normals is not None:
-            n = normals[0][i]
-            nv = basis @ n if normals[1] == "vertex" else np.stack(
-                [np.interp(np.linspace(0, 1, len(u)), np.linspace(0, 1, len(n)), n[:, j])
-                 for j in range(3)], axis=1)
+        def along(values, interp, starts):
+            v = values[starts[i]:starts[i + 1]]
+            if interp == "vertex":
+                return basis @ v
+            grid = np.linspace(lo, hi, len(v))          # varying: linear between span ends
+            if v.ndim == 1:
+                return np.interp(u, grid, v)
+            return np.stack([np.interp(u, grid, v[:, d]) for d in range(v.shape[1])], axis=1)
+        wv = along(widths, w_interp, w_at)
+        nv = None if normals is None else along(normals, n_interp, n_at)
         source = at + np.argmax(basis, axis=1)
         out.append((points, np.maximum(wv, 0.0), nv, source, False, i))
         at += c
@@ -409,112 +398,27 @@ def _bspline_basis(t, order, n, u):
     return basis[:, :n]
 
 
+def _bspline_basis(t, order, n, u):
+    """(m, n) B-spline basis functions of `order` over knots `t` at parameters u
+    (Cox-de Boor), u = t[n] taken from the left."""
+    u = np.asarray(u, np.float64)
+    span = np.clip(np.searchsorted(t, u, side="right") - 1, order - 1, n - 1)
+    m = len(u)
+    basis = np.zeros((m, len(t) - 1))
+    basis[np.arange(m), span] = 1.0
+    for d in range(1, order):
+        nxt = np.zeros((m, len(t) - 1 - d))
+        for j in range(len(t) - 1 - d):
+            left = t[j + d] - t[j]
+            right = t[j + d + 1] - t[j + 1]
+            a = (u - t[j]) / left * basis[:, j] if left > 0 else 0.0
+            b = (t[j + d + 1] - u) / right * basis[:, j + 1] if right > 0 else 0.0
+            nxt[:, j] = a + b
+        basis = nxt
+    return basis[:, :n]
+
+
 def polylines(prim, time) -> Polylines:
     if prim.IsA(UsdGeom.NurbsCurves):
         return nurbs_curves(prim, time)
     return basis_curves(prim, time)
-
-
-def tangents(lines: Polylines) -> np.ndarray:
-    """Unit tangents at the samples (central differences along each curve)."""
-    p = lines.points
-    t = np.zeros_like(p)
-    for i in range(len(lines.starts) - 1):
-        a, b = int(lines.starts[i]), int(lines.starts[i + 1])
-        q = p[a:b]
-        if len(q) < 2:
-            continue
-        if lines.closed[i]:
-            d = np.roll(q, -1, axis=0) - np.roll(q, 1, axis=0)
-        else:
-            d = np.empty_like(q)
-            d[1:-1] = q[2:] - q[:-2]
-            d[0], d[-1] = q[1] - q[0], q[-1] - q[-2]
-        t[a:b] = d
-    return t / np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-30)
-
-
-SHARP_TURN = math.radians(20.0)    # a sample where a ribbon turns more is a corner
-
-
-def ribbon_surface(prim, time, warnings=None) -> Surface:
-    """Oriented ribbons: each straight piece of a curve a quad, `widths` wide across
-    the curve in the plane the authored normal faces (the normal made perpendicular
-    to the curve), carrying that normal. Where a curve bends smoothly, neighbouring
-    pieces share their edge (across the mean direction); at a corner (a turn over
-    SHARP_TURN: a linear curve's vertices) each piece ends square to itself, so the
-    ribbon keeps its width. MeshError naming a defect."""
-    try:
-        lines = polylines(prim, time)
-    except ValueError as exc:
-        raise MeshError(str(exc)) from None
-    if lines.skipped and warnings is not None:
-        warnings.append(f"{prim.GetPath()}: {lines.skipped}")
-    seg = lines.segments()
-    if not len(seg):
-        raise MeshError("no curve has two samples")
-    a, b = seg[:, 0], seg[:, 1]
-    own = lines.points[b] - lines.points[a]
-    own /= np.maximum(np.linalg.norm(own, axis=1, keepdims=True), 1e-30)
-    mean = tangents(lines)
-    corner = np.zeros(len(lines.points), bool)
-    turn = np.einsum("ij,ij->i", own[:-1], own[1:])
-    joined = b[:-1] == a[1:]
-    corner[b[:-1][joined & (turn < math.cos(SHARP_TURN))]] = True
-    if lines.closed.any():                       # a closed curve's last piece meets its first
-        for i in np.flatnonzero(lines.closed):
-            first, last = int(lines.starts[i]), int(lines.starts[i + 1]) - 1
-            at = np.flatnonzero((a == first))
-            end = np.flatnonzero((b == first) & (a == last))
-            if len(at) and len(end) and own[at[0]] @ own[end[0]] < math.cos(SHARP_TURN):
-                corner[first] = True
-    ends, normals, sides = [], [], []
-    for sample, direction in ((a, own), (b, own)):
-        t = np.where(corner[sample][:, None], direction, mean[sample])
-        n = lines.normals[sample]
-        n = n - t * np.sum(n * t, axis=1, keepdims=True)
-        length = np.linalg.norm(n, axis=1, keepdims=True)
-        if (length == 0).any() and warnings is not None:
-            warnings.append(f"{prim.GetPath()}: {int((length == 0).sum())} curve normals lie "
-                            f"along their curve or are zero; the ribbon has no width there")
-        n = n / np.maximum(length, 1e-30)
-        ends.append(lines.points[sample])
-        normals.append(n)
-        sides.append(np.cross(t, n) * (lines.widths[sample][:, None] / 2))
-    s = len(seg)
-    # Per piece: a-, a+, b+, b- winds counter-clockwise about the normal (side = t x n).
-    points = np.stack([ends[0] - sides[0], ends[0] + sides[0], ends[1] + sides[1],
-                       ends[1] - sides[1]], axis=1).reshape(-1, 3)
-    return Surface(points=points, counts=np.full(s, 4), indices=np.arange(4 * s),
-                   normals=np.stack([normals[0], normals[0], normals[1], normals[1]],
-                                    axis=1).reshape(-1, 3),
-                   point_source=np.stack([lines.source[a]] * 2 + [lines.source[b]] * 2,
-                                         axis=1).reshape(-1),
-                   face_source=lines.curve[a])
-
-
-def tubes(prim, time, warnings=None):
-    """(points (m, 3), radii (m,), colours (m, 3) or None, segments (s, 2)) of the
-    round tubes; ValueError naming a defect. Colours are displayColor's, per curve,
-    vertex or constant."""
-    lines = polylines(prim, time)
-    if lines.skipped and warnings is not None:
-        warnings.append(f"{prim.GetPath()}: {lines.skipped}")
-    seg = lines.segments()
-    if not len(seg):
-        raise ValueError("no curve has two samples")
-    colours = None
-    pv = UsdGeom.PrimvarsAPI(prim).GetPrimvar("displayColor")
-    if pv and pv.HasValue():
-        c = pv.ComputeFlattened(time)
-        if c is not None and len(c):
-            c = np.asarray(c, np.float64).reshape(-1, 3)
-            _finite(c, "displayColor values")
-            interp = str(pv.GetInterpolation())
-            if len(c) == 1 or interp == "constant":
-                colours = np.repeat(c[:1], len(lines.points), axis=0)
-            elif interp == "uniform" and len(c) > lines.curve.max():
-                colours = c[lines.curve]
-            elif interp in ("vertex", "varying") and len(c) > lines.source.max():
-                colours = c[lines.source]
-    return lines.points, lines.widths / 2.0, colours, seg

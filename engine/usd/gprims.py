@@ -11,7 +11,8 @@ from __future__ import annotations
 
 from pxr import Usd, UsdGeom
 
-from .curves import has_normals, ribbon_surface
+from .curve_shapes import ribbon_surface
+from .curves import has_normals
 from .shapes import is_implicit, parameters
 from .shapes import surface as shape_surface
 

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..scene import Changes, Instance, PointCloud
-from .curves import tubes
+from .curve_shapes import tubes
 from .gprims import is_curves
 from .instancers import instance_matrices, points_data, prototype_meshes
 from .read import asset_path
