@@ -95,13 +95,7 @@ def _mesh(stage, path, type_name, attrs, segments):
     from pxr import UsdGeom, Vt
     from lantern.engine.usd import shapes
     params = (type_name,) + tuple(attrs[k] for k in shapes.SHAPES[type_name])
-    saved = shapes.SEGMENTS, shapes.RINGS
-    if segments is not None:
-        shapes.SEGMENTS, shapes.RINGS = segments, max(segments // 2, 2)
-    try:
-        surface = shapes.surface(params)
-    finally:
-        shapes.SEGMENTS, shapes.RINGS = saved
+    surface = shapes.surface(params, segments)
     mesh = UsdGeom.Mesh.Define(stage, path)
     mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(surface.points.astype("float32")))
     mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(surface.counts.astype("int32")))

@@ -228,6 +228,26 @@ def test_a_point_instancer_of_implicit_prototypes_draws_each_instance():
     assert result.stats["instances_drawn"] >= 3 and not result.warnings
 
 
+def test_a_prototype_drawn_many_times_has_fewer_sides():
+    """A sphere alone has 48 sides (2,208 triangles); a prototype drawn 2,000 times
+    16 (224 triangles), within the triangle budget of a prototype."""
+    from pxr import Gf, UsdGeom
+    from lantern.engine.usd import shapes
+    stage = _stage()
+    UsdGeom.Sphere.Define(stage, "/Alone")
+    pi = UsdGeom.PointInstancer.Define(stage, "/PI")
+    UsdGeom.Sphere.Define(stage, "/PI/Protos/Ball")
+    pi.CreatePrototypesRel().SetTargets(["/PI/Protos/Ball"])
+    pi.CreateProtoIndicesAttr([0] * 2000)
+    pi.CreatePositionsAttr([Gf.Vec3f(3 * (i % 50), 3 * (i // 50), 0) for i in range(2000)])
+    with _session(stage) as session:
+        session.render()
+    triangles = {path: session.scene.meshes[inst.mesh_key].index_count // 3
+                 for path, inst in session.scene.instances.items()}
+    assert triangles == {"/Alone": 2208, "/PI{/PI/Protos/Ball}": 224}
+    assert shapes.segments_for(2000) == 16 and 2000 * 224 <= shapes.TRIANGLES_PER_PROTOTYPE
+
+
 def test_prototypes_under_an_over_are_drawn_as_instances_only():
     """OpenUSD's own instancing tests keep prototypes under an `over` (undefined, so
     never drawn by themselves): the instancer draws them."""

@@ -13,7 +13,7 @@ from pxr import Usd, UsdGeom
 
 from .curve_shapes import ribbon_surface
 from .curves import has_normals
-from .shapes import is_implicit, parameters
+from .shapes import is_implicit, parameters, segments_for
 from .shapes import surface as shape_surface
 
 CURVES = ("BasisCurves", "NurbsCurves")
@@ -45,20 +45,21 @@ def is_curves(prim) -> bool:
     return prim.GetTypeName() in CURVES and prim.IsA(UsdGeom.Curves)
 
 
-def source_key(prim, time):
+def source_key(prim, time, instances=1):
     """What 'mesh' kind prims share their MeshData by: an implicit surface's type and
-    sizes; a Mesh's (or ribbons') strongest `points` opinion."""
+    sizes and its sides around (fewer when a PointInstancer draws it `instances`
+    times); a Mesh's (or ribbons') strongest `points` opinion."""
     if is_implicit(prim):
-        return parameters(prim, time)
+        return parameters(prim, time) + (segments_for(instances),)
     spec = strongest_spec(UsdGeom.PointBased(prim).GetPointsAttr())
     return ("ribbons", spec) if is_curves(prim) else spec
 
 
-def made_surface(prim, time, warnings):
+def made_surface(prim, time, warnings, instances=1):
     """The faces the engine makes for a 'mesh' kind prim that is not a Mesh
     (build_mesh's `surface`), or None for a Mesh."""
     if is_implicit(prim):
-        return shape_surface(parameters(prim, time))
+        return shape_surface(parameters(prim, time), segments_for(instances))
     if is_curves(prim):
         return ribbon_surface(prim, time, warnings)
     return None

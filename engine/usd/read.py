@@ -249,9 +249,10 @@ class FirstRead:
         if not finite:
             self._non_finite_world(path, dyn, changes)
 
-    def _mesh_key(self, prim, path, binding, rebuild, warnings, changes):
+    def _mesh_key(self, prim, path, binding, rebuild, warnings, changes, instances=1):
         """The key of the prim's MeshData, built unless shared data was built already
-        (or `rebuild`); None (with a warning) for a malformed mesh."""
+        (or `rebuild`); None (with a warning) for a malformed mesh. `instances`: how
+        many times a PointInstancer draws it (an implicit surface's detail)."""
         try:
             mats, subsets = self._face_materials(prim, warnings)
             if not prim.IsA(UsdGeom.Mesh):
@@ -261,11 +262,11 @@ class FirstRead:
             elif mesh_attributes_vary(prim):
                 key = ("varying", str(prim.GetPath()))
             else:
-                key = (source_key(prim, self._t), tuple(m.name for m in mats),
+                key = (source_key(prim, self._t, instances), tuple(m.name for m in mats),
                        tuple((m, tuple(f.tolist())) for m, f in subsets))
             if key not in self.scene.meshes or key not in self._built and \
                     (rebuild or key[0] in ("skinned", "varying")):
-                surface = made_surface(prim, self._t, warnings)
+                surface = made_surface(prim, self._t, warnings, instances)
                 mesh = build_mesh(prim, self._t, mats, [(i + 1, f) for i, (_, f) in
                                                         enumerate(subsets)], key, warnings,
                                   tessellate=self.tessellate, surface=surface)

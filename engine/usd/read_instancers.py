@@ -77,7 +77,8 @@ class InstancerReading:
         self._instancers[path] = state
 
     def _read_batch(self, batch, mesh_prim, worlds, warnings, changes, rebuild=False) -> bool:
-        key = self._mesh_key(mesh_prim, batch, None, rebuild, warnings, changes)
+        key = self._mesh_key(mesh_prim, batch, None, rebuild, warnings, changes,
+                             instances=len(worlds))
         if key is None:
             return False
         mesh = self.scene.meshes[key]

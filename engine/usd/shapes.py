@@ -12,8 +12,8 @@ Capsule_1 whose radii differ is a cone of those end radii capped by the spheres
 tangent to it. Normals are the exact surface's at every vertex, so
 shading is the true shape's; the silhouette is a polygon of SEGMENTS sides, within
 1 - cos(pi / SEGMENTS) = 0.2 % of the radius (under a pixel until a shape is 470
-pixels in radius; docs/stage_contract.md "Implicit surfaces" has the measured error
-against Cycles). GeomUtil's own default is 10 sides (5 % of the radius), which is what
+pixels in radius; docs/status.md has the measured error against Cycles), fewer for a
+prototype instanced many times (segments_for). GeomUtil's own default is 10 sides (5 % of the radius), which is what
 Storm draws and Blender's USD importer makes."""
 from __future__ import annotations
 
@@ -24,8 +24,13 @@ from pxr import UsdGeom
 
 from .mesh import MeshError, Surface
 
-SEGMENTS = 48                  # around the axis
-RINGS = 24                     # pole to pole on a sphere (a capsule's caps share them)
+SEGMENTS = 48                  # around the axis (spheres: half as many rings), drawn once
+# A PointInstancer's prototype drawn N times gets the most of these sides whose sphere
+# (about sides^2 triangles) over all N stays within TRIANGLES_PER_PROTOTYPE: 4,096
+# instanced spheres at 48 sides were 9 M triangles, 4.4 s a frame on llvmpipe, ten
+# times GeomUtil's 10 sides (docs/status.md, "Implicit surfaces, curves and hair").
+LEVELS = (48, 32, 24, 16, 12)
+TRIANGLES_PER_PROTOTYPE = 1 << 20
 
 # Type name -> the schema attributes that shape it, in the order `parameters` reads them.
 SHAPES = {
@@ -63,21 +68,31 @@ def parameters(prim, time) -> tuple:
     return (kind, *values)
 
 
-def surface(params) -> Surface:
-    """The triangles of a shape given by `parameters`."""
+def segments_for(instances: int) -> int:
+    """Sides around for a shape drawn `instances` times (LEVELS)."""
+    for sides in LEVELS:
+        if instances * sides * sides <= TRIANGLES_PER_PROTOTYPE:
+            return sides
+    return LEVELS[-1]
+
+
+def surface(params, segments=None) -> Surface:
+    """The triangles of a shape given by `parameters`, `segments` sides around
+    (SEGMENTS unless given)."""
+    n = segments or SEGMENTS
     kind, *values = params
     if kind == "Cube":
         return _cube(values[0])
     if kind == "Plane":
         return _plane(*values)
     if kind == "Sphere":
-        strips, axis = [_sphere_arc(values[0], 0.0, -math.pi / 2, math.pi / 2, RINGS)], "Z"
+        strips, axis = [_sphere_arc(values[0], 0.0, -math.pi / 2, math.pi / 2, n // 2)], "Z"
     elif kind == "Capsule":
         r, h, axis = values
-        strips = [_capsule(r, r, h)]
+        strips = [_capsule(r, r, h, n // 2)]
     elif kind == "Capsule_1":
         top, bottom, h, axis = values
-        strips = [_capsule(top, bottom, h)]
+        strips = [_capsule(top, bottom, h, n // 2)]
     elif kind == "Cone":
         r, h, axis = values
         strips = _frustum(0.0, r, h)
@@ -88,7 +103,7 @@ def surface(params) -> Surface:
         else:
             top, bottom, h, axis = values
         strips = _frustum(top, bottom, h)
-    return _sweep(strips, axis)
+    return _sweep(strips, axis, n)
 
 
 # A profile point: (radius, height, normal's radial part, normal's axial part).
@@ -96,10 +111,11 @@ def surface(params) -> Surface:
 def _sphere_arc(r, centre, lat0, lat1, steps):
     lat = np.linspace(lat0, lat1, max(int(steps), 1) + 1)
     c, s = np.cos(lat), np.sin(lat)
+    c[np.abs(np.abs(lat) - math.pi / 2) < 1e-12] = 0.0    # poles: exactly on the axis
     return np.stack([r * c, centre + r * s, c, s], axis=1)
 
 
-def _capsule(top, bottom, h):
+def _capsule(top, bottom, h, rings):
     """End spheres joined by the cone (a cylinder when the radii are equal) whose ends,
     `h` apart, have the two radii: one smooth strip from the bottom pole to the top
     one. Each sphere touches the cone along that end's circle, so its radius is the
@@ -107,10 +123,10 @@ def _capsule(top, bottom, h):
     R sin(alpha) beyond the end (as Hydra's GeomUtil capsule generator in USD 25.08
     makes Capsule_1, and Blender's importer with it). No length: the larger sphere."""
     if h <= 0.0:
-        return _sphere_arc(max(top, bottom), 0.0, -math.pi / 2, math.pi / 2, RINGS)
+        return _sphere_arc(max(top, bottom), 0.0, -math.pi / 2, math.pi / 2, rings)
     lean = math.atan2(bottom - top, h)
     rb, rt = bottom / math.cos(lean), top / math.cos(lean)
-    steps = RINGS // 2
+    steps = max(rings // 2, 1)
     low = _sphere_arc(rb, -h / 2 - rb * math.sin(lean), -math.pi / 2, lean, steps)
     high = _sphere_arc(rt, h / 2 - rt * math.sin(lean), lean, math.pi / 2, steps)
     return np.concatenate([low, high])
@@ -136,13 +152,12 @@ _BASES = {"X": ((0, 1, 0), (0, 0, 1), (1, 0, 0)),
           "Z": ((1, 0, 0), (0, 1, 0), (0, 0, 1))}
 
 
-def _sweep(strips, axis) -> Surface:
-    """Profiles swept SEGMENTS times around the axis, each strip's consecutive rings
+def _sweep(strips, axis, n) -> Surface:
+    """Profiles swept n times around the axis, each strip's consecutive rings
     joined by quads (triangles at a pole). A pole's point is repeated for every
     segment with the normal at that segment's middle, so a cone's apex shades as
     the cone does there. Faces wind counter-clockwise seen from outside (profiles run
     from the bottom up along the outside)."""
-    n = SEGMENTS
     phi = 2.0 * math.pi * np.arange(n) / n
     mid = phi + math.pi / n
     points, normals, counts, indices = [], [], [], []
