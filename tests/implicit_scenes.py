@@ -11,8 +11,6 @@ WORLD; the reference script makes those in Blender (the importer's light convers
 is not under test). `as_mesh` writes every shape as a Mesh prim of the triangles
 Lantern makes for it (engine/usd/shapes.py), or of `segments` sides: the matching
 mesh scene."""
-import math
-
 SIZE = (192, 72)
 SAMPLES = 512
 SUN = 3.0                                    # W/m2, straight from the sun's rotation
@@ -105,13 +103,3 @@ def _mesh(stage, path, type_name, attrs, segments):
     mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
     return mesh.GetPrim()
 
-
-def sun_direction():
-    """The sun's travel direction (Blender: its local -Z turned by SUN_ROTATION)."""
-    rx, ry, rz = (math.radians(a) for a in SUN_ROTATION)
-    v = (0.0, 0.0, -1.0)
-    x, y, z = v
-    y, z = y * math.cos(rx) - z * math.sin(rx), y * math.sin(rx) + z * math.cos(rx)
-    x, z = x * math.cos(ry) + z * math.sin(ry), -x * math.sin(ry) + z * math.cos(ry)
-    x, y = x * math.cos(rz) - y * math.sin(rz), x * math.sin(rz) + y * math.cos(rz)
-    return (x, y, z)
