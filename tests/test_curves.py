@@ -357,3 +357,55 @@ def test_a_curve_with_too_few_vertices_is_left_out_and_the_rest_drawn():
     assert {tuple(c) for c in cloud.colours} == {(1, 0, 0), (0, 1, 0), (0, 0, 1)}
     assert np.allclose(cloud.points[0], pts[0]) and cloud.points[:, 1].min() == \
         pytest.approx(-6.0)
+
+
+@pytest.mark.parametrize("ribbons", [False, True], ids=["tubes", "ribbons"])
+def test_skinned_curves_and_implicit_surfaces_render_as_their_baked_twin(corpus, ribbons):
+    """OpenUSD's UsdSkel bake test rig (lbs.usda) with only its BasisCurves and its
+    rigidly skinned Sphere, Cube and Cylinder: UsdSkel skins the curves' points on the
+    CPU; as tubes, the same pixels as UsdSkel's
+    own BakeSkinning of the stage, to 1e-4), the implicit surfaces on the GPU as
+    meshes are skinned. The cube, bound to two joints at half weight each, is up to
+    7.7e-3 off the bake: its normals are skinned by the blended matrix, as a mesh's
+    are, where the baked transform's inverse transpose turns them slightly otherwise."""
+    from pxr import Gf, Usd, UsdGeom, UsdSkel
+    from lantern.engine import RenderSettings, render_stage
+    path = corpus / "usdskel" / "usd" / "usdSkel" / "testenv" / "testUsdSkelBakeSkinning" / \
+        "lbs.usda"
+
+    def stage(bake, implicit):
+        s = Usd.Stage.CreateInMemory()
+        s.GetRootLayer().TransferContent(Usd.Stage.Open(str(path)).Flatten())
+        for prim in list(s.Traverse()):
+            if prim.IsA(UsdGeom.Mesh) or prim.GetName() == "GroundTruth" or \
+                    not implicit and prim.GetName() in ("Sphere", "Cube", "Cylinder"):
+                prim.SetActive(False)
+        curves = UsdGeom.BasisCurves(s.GetPrimAtPath("/Root/Curves"))
+        curves.CreateWidthsAttr([0.05])
+        cam = UsdGeom.Camera.Define(s, "/Cam")       # one view for both (not framed)
+        cam.AddTransformOp().Set(Gf.Matrix4d().SetLookAt(
+            Gf.Vec3d(5, -6, 6), Gf.Vec3d(1, 0.5, 0.5), Gf.Vec3d(0, 0, 1)).GetInverse())
+        if ribbons:
+            curves.CreateNormalsAttr([Gf.Vec3f(0, 0, 1)] * 40)
+        if bake:
+            assert UsdSkel.BakeSkinning(s.Traverse(), Gf.Interval(s.GetStartTimeCode(),
+                                                                  s.GetEndTimeCode()))
+        return s
+
+    if ribbons:
+        settings = RenderSettings(width=48, height=48, frame=16.0, preset="low",
+                                  camera="/Cam")
+        warnings = render_stage(stage(False, False), settings).warnings
+        assert [w for w in warnings if "skinned" in w] == [
+            "/Root/Curves: skinned curves with normals: the ribbons face their rest-pose "
+            "normals (normals are not skinned)"]
+        return
+    for implicit, bound in ((False, 1e-4), (True, 1e-2)):
+        skinned, baked = stage(False, implicit), stage(True, implicit)
+        for frame in (5.0, 16.0, 25.0):
+            settings = RenderSettings(width=48, height=48, frame=frame, preset="low",
+                                      ambient_occlusion=False, fxaa=False, camera="/Cam")
+            a, b = render_stage(skinned, settings), render_stage(baked, settings)
+            assert not [w for w in a.warnings if "skel" in w], a.warnings
+            assert (np.abs(a.rgba - a.rgba.mean()) > 1e-3).sum() > 100
+            assert np.abs(a.rgba - b.rgba).max() <= bound, (implicit, frame)

@@ -29,15 +29,16 @@ def _report(prim, lines, warnings):
         warnings.append(f"{prim.GetPath()}: {lines.skipped}")
 
 
-def ribbon_surface(prim, time, warnings=None) -> Surface:
+def ribbon_surface(prim, time, warnings=None, points=None) -> Surface:
     """Oriented ribbons: each straight piece of a curve a quad, `widths` wide across
     the curve in the plane the authored normal faces (the normal made perpendicular
     to the curve), carrying that normal. Where a curve bends smoothly, neighbouring
     pieces share their edge (across the mean direction); at a corner (a turn over
     SHARP_TURN: a linear curve's vertices) each piece ends square to itself, so the
-    ribbon keeps its width. MeshError naming a defect."""
+    ribbon keeps its width. `points`: skinned ones in place of the prim's. MeshError
+    naming a defect."""
     try:
-        lines = polylines(prim, time)
+        lines = polylines(prim, time, points)
     except ValueError as exc:
         raise MeshError(str(exc)) from None
     _report(prim, lines, warnings)
@@ -81,11 +82,11 @@ def ribbon_surface(prim, time, warnings=None) -> Surface:
                    face_source=lines.curve[a])
 
 
-def tubes(prim, time, warnings=None):
+def tubes(prim, time, warnings=None, points=None):
     """(points (m, 3), radii (m,), colours (m, 3) or None, segments (s, 2)) of the
     round tubes; ValueError naming a defect. Colours are displayColor's, per curve,
-    vertex or constant."""
-    lines = polylines(prim, time)
+    vertex or constant. `points`: skinned ones in place of the prim's."""
+    lines = polylines(prim, time, points)
     _report(prim, lines, warnings)
     seg = lines.segments()
     if not len(seg):

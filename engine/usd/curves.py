@@ -205,10 +205,11 @@ def _pad(values, offsets, n, padded):
     return out, at
 
 
-def basis_curves(prim, time) -> Polylines:
-    """The samples of a BasisCurves prim; ValueError naming a defect."""
+def basis_curves(prim, time, points=None) -> Polylines:
+    """The samples of a BasisCurves prim (of `points` in place of its own: skinned
+    ones); ValueError naming a defect."""
     curves = UsdGeom.BasisCurves(prim)
-    pts = _array(curves.GetPointsAttr(), time)
+    pts = _array(curves.GetPointsAttr(), time) if points is None else points
     counts = _array(curves.GetCurveVertexCountsAttr(), time, np.int64)
     if pts is None or counts is None or not len(pts) or not len(counts):
         raise ValueError("no points or curveVertexCounts")
@@ -307,11 +308,11 @@ def _join(curves) -> Polylines:
                      curve=np.repeat([c[5] for c in curves], sizes))
 
 
-def nurbs_curves(prim, time) -> Polylines:
+def nurbs_curves(prim, time, points=None) -> Polylines:
     """The samples of a NurbsCurves prim (order, knots, ranges, pointWeights); widths
     and normals by vertex are weighted by the same basis functions."""
     curves = UsdGeom.NurbsCurves(prim)
-    pts = _array(curves.GetPointsAttr(), time)
+    pts = _array(curves.GetPointsAttr(), time) if points is None else points
     counts = _array(curves.GetCurveVertexCountsAttr(), time, np.int64)
     order = _array(curves.GetOrderAttr(), time, np.int64)
     knots = _array(curves.GetKnotsAttr(), time)
@@ -418,7 +419,8 @@ def _bspline_basis(t, order, n, u):
     return basis[:, :n]
 
 
-def polylines(prim, time) -> Polylines:
+def polylines(prim, time, points=None) -> Polylines:
+    """The samples of a curves prim, of `points` (skinned) in place of its own."""
     if prim.IsA(UsdGeom.NurbsCurves):
-        return nurbs_curves(prim, time)
-    return basis_curves(prim, time)
+        return nurbs_curves(prim, time, points)
+    return basis_curves(prim, time, points)

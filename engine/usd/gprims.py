@@ -55,13 +55,13 @@ def source_key(prim, time, instances=1):
     return ("ribbons", spec) if is_curves(prim) else spec
 
 
-def made_surface(prim, time, warnings, instances=1):
+def made_surface(prim, time, warnings, instances=1, points=None):
     """The faces the engine makes for a 'mesh' kind prim that is not a Mesh
-    (build_mesh's `surface`), or None for a Mesh."""
+    (build_mesh's `surface`), or None for a Mesh. `points`: curves' skinned points."""
     if is_implicit(prim):
         return shape_surface(parameters(prim, time), segments_for(instances))
     if is_curves(prim):
-        return ribbon_surface(prim, time, warnings)
+        return ribbon_surface(prim, time, warnings, points)
     return None
 
 

@@ -10,12 +10,12 @@ from pxr import Sdf, Usd, UsdGeom
 
 from ..scene import Changes, Instance
 from .camera import gf_to_np, is_camera
-from .gprims import kind_of, made_surface, source_key, undrawn_type
+from .gprims import is_curves, kind_of, made_surface, source_key, undrawn_type
 from .lights import is_light
 from .mesh import MeshError, build_mesh
 from .paths import traversal_order, under
 from .skel import (SkelBindings, attach_skin, blend_weights, check_unbound, pose_might_vary,
-                   skel_key, skeleton_warnings, weights_might_vary)
+                   skel_key, skeleton_warnings, skinned_points, weights_might_vary)
 from .skel import pose as skeleton_pose
 from .timeline import Dynamic, mesh_attributes_vary
 from .validate import first_bad_op
@@ -208,6 +208,12 @@ class FirstRead:
         skin = mesh.skin
         dyn = Dynamic(world_prim=path, mesh=key[0] == "varying",
                        materials=tuple(mesh.materials))
+        if binding is not None and is_curves(prim):
+            # Ribbons are made from points UsdSkel skinned on the CPU (skel space):
+            # made again whenever the pose may change.
+            skel_query = binding[0]
+            dyn.mesh = pose_might_vary(skel_query)
+            dyn.world_prim = str(skel_query.GetPrim().GetPath())
         previous = self._inst.get(path)
         if previous is not None and previous.skel is not None and \
                 (skin is None or previous.skel != skin.skel_key):
@@ -266,12 +272,18 @@ class FirstRead:
                        tuple((m, tuple(f.tolist())) for m, f in subsets))
             if key not in self.scene.meshes or key not in self._built and \
                     (rebuild or key[0] in ("skinned", "varying")):
-                surface = made_surface(prim, self._t, warnings, instances)
+                skinned = None
+                if binding is not None and is_curves(prim):
+                    skinned = skinned_points(prim, binding, self._t, warnings)
+                    warnings.append(f"{path}: skinned curves with normals: the ribbons face "
+                                    f"their rest-pose normals (normals are not skinned)")
+                surface = made_surface(prim, self._t, warnings, instances, skinned)
                 mesh = build_mesh(prim, self._t, mats, [(i + 1, f) for i, (_, f) in
                                                         enumerate(subsets)], key, warnings,
                                   tessellate=self.tessellate, surface=surface)
-                if binding is not None:
-                    attach_skin(mesh, prim, binding, self._t, warnings)
+                if binding is not None and not is_curves(prim):
+                    attach_skin(mesh, prim, binding, self._t, warnings,
+                                None if surface is None else surface.points)
                 self.scene.meshes[key] = mesh
                 self._built.add(key)
                 changes.meshes.add(key)

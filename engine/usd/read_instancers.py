@@ -11,6 +11,7 @@ from .curve_shapes import tubes
 from .gprims import is_curves
 from .instancers import instance_matrices, points_data, prototype_meshes
 from .read import asset_path
+from .skel import pose_might_vary, skinned_points
 from .timeline import NOT_GEOMETRY, Dynamic, mesh_attributes_vary
 
 
@@ -106,13 +107,22 @@ class InstancerReading:
         self._points[path] = self._xform_varies(prim) or any(
             a.ValueMightBeTimeVarying() for a in prim.GetAuthoredAttributes()
             if not a.GetName().startswith(NOT_GEOMETRY))
-        world = self._world(path)
+        placed_by, skinned = path, None
+        binding = self.skel.get(path) if is_curves(prim) else None
+        if binding is not None:
+            # Skinned tubes: points UsdSkel skinned on the CPU, in the skeleton's space.
+            skinned = skinned_points(prim, binding, self._t, warnings)
+            if skinned is not None:
+                placed_by = str(binding[0].GetPrim().GetPath())
+                self._points[path] = self._points[path] or pose_might_vary(binding[0]) or \
+                    self._xform_varies(binding[0].GetPrim())
+        world = self._world(placed_by)
         try:
             if not np.isfinite(world).all():
                 raise ValueError(f"its world transform is not finite ({self._bad_op(prim)})")
             segments = None
             if is_curves(prim):
-                points, radii, colours, segments = tubes(prim, self._t, warnings)
+                points, radii, colours, segments = tubes(prim, self._t, warnings, skinned)
             else:
                 points, radii, colours = points_data(prim, self._t)
         except ValueError as exc:
