@@ -165,8 +165,8 @@ class LiveScene:
                 if not (frame_changed or rig in posed or rig == key):
                     raise NeedsFullExport(f"skinned mesh {key} changed")
                 posed.add(rig)
-            elif obj.kind == "mesh":
-                reshaped.add(key)
+            elif obj.kind == "mesh" or obj.curves or obj.points is not None:
+                reshaped.add(key)      # hair and point clouds: a full export (export_geometry)
         for key in sorted(moved - data):
             if export_object(depsgraph, stage, index, key):
                 self._did("object", key)

@@ -304,7 +304,9 @@ class Instance:
 class PointCloud:
     """A UsdGeom.Points prim: spheres of the given radii at its points (its own space,
     placed by `world`), lit like meshes with its material's constants, or per-point
-    displayColor."""
+    displayColor. With `segments`, curves as round tubes: each pair of points joined
+    by the spheres swept between them (radius varying linearly), coloured by the
+    pair's first point."""
     path: str
     points: np.ndarray             # (n, 3) float64
     radii: np.ndarray              # (n,)
@@ -312,6 +314,7 @@ class PointCloud:
     material: str                  # Scene.materials key
     world: np.ndarray = field(default_factory=lambda: np.eye(4))
     asset: str = ""                # as Instance.asset
+    segments: np.ndarray | None = None   # (s, 2) point index pairs: tubes, not spheres
 
     @property
     def bounds(self):

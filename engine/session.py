@@ -166,6 +166,7 @@ class Session:
         return submitted
 
     def _finish(self, submitted, t0) -> RenderResult:
+        view = (submitted.board or {}).get("view")
         rgba, aovs, stats, timings, gpu = run_gl(lambda gl: self._renderer.finish(submitted))
         timings["total"] = time.perf_counter() - t0
         # CPU work of the frame, outside the wait for the GPU's pixels.
@@ -173,9 +174,10 @@ class Session:
         if self._opening:
             timings.update(self._opening)
             self._opening = None
+        blank = nothing_on_screen(self._reader.gprims(), stats, view)
         return RenderResult(rgba=rgba, passes=aovs,
                             warnings=self._reader.scene.warning_list() +
-                            self._renderer.warnings(),
+                            self._renderer.warnings() + ([blank] if blank else []),
                             timings=timings, gpu_timings=gpu, stats=stats,
                             cryptomatte=manifests(self._reader.scene, self._passes))
 
@@ -252,6 +254,31 @@ class Session:
 
     def __exit__(self, *exc):
         self.close()
+
+
+def nothing_on_screen(gprims: dict, stats: dict, view) -> str | None:
+    """The one line a render says when the stage has gprims and none of them put a
+    fragment on screen: what was there, what of it is drawn and where, and where the
+    camera looked. None when something is on screen, or the stage has no gprim."""
+    if not gprims or stats.get("fragments_drawn") or stats.get("transparent_draws"):
+        return None
+    total = sum(gprims.values())
+    kinds = ", ".join(f"{name} {n}" for name, n in gprims.items())
+    where = "nothing of them is drawn"
+    if view is not None and view.bounds is not None:
+        lo, hi = view.bounds
+        where = f"what is drawn lies within {_xyz(lo)}..{_xyz(hi)}"
+    looked = ""
+    if view is not None:
+        cam = view.camera
+        name = f" {cam.name}" if cam.name else ""
+        looked = f"; the camera{name} at {_xyz(cam.position)} looks along {_xyz(cam.forward)}"
+    return (f"nothing is on screen: the stage has {total} gprim{'s' * (total != 1)} "
+            f"({kinds}); {where}{looked}")
+
+
+def _xyz(v) -> str:
+    return "(" + ", ".join(f"{float(c) + 0.0:.3g}" for c in v) + ")"    # no -0
 
 
 def _release(renderer, reader):

@@ -240,6 +240,22 @@ class PointsRecord:
 
 
 @dataclass
+class CurvesRecord:
+    """Curves of one type and wrap (hair), in the object's space (contract: Curves)."""
+    name: str
+    points: np.ndarray            # (N, 3) float32: control points (Bezier: knots and handles)
+    counts: np.ndarray            # (C,) int32 points a curve
+    widths: np.ndarray            # float32 diameters, by widths_interpolation
+    kind: str                     # linear / cubic (BasisCurves) / nurbs (NurbsCurves)
+    basis: str | None = None      # catmullRom / bezier (cubic)
+    wrap: str = "nonperiodic"     # nonperiodic / periodic / pinned
+    widths_interpolation: str = "vertex"   # vertex, or varying (one a Bezier knot)
+    orders: np.ndarray | None = None       # nurbs: (C,) int32
+    knots: np.ndarray | None = None        # nurbs: (sum(counts + orders),) float64
+    weights: np.ndarray | None = None      # nurbs: (N,) float32
+
+
+@dataclass
 class PrototypeRecord:
     """What one instance draws: an object's evaluated geometry in its own space."""
     key: str
@@ -276,6 +292,7 @@ class ObjectRecord:
     matrix_samples: np.ndarray | None = None  # (T, 4, 4) local matrices at settings.times
     trs: TRS | None = None       # the matrix (or its samples) as TRS, None when sheared
     points: PointsRecord | None = None        # particles or a point cloud it shows
+    curves: list = field(default_factory=list)  # CurvesRecord: its hair curves
     instances: InstancesRecord | None = None  # instances it generates
     pass_index: int = 0          # Blender's object pass index (render pass IndexOB)
 

@@ -1,12 +1,13 @@
 #version 330 core
 #include "lib.glsl"
-// A Points prim's sphere (points.vert): the ray from the viewer through this fragment
-// hits it at p, whose normal and depth are the sphere's own, so points intersect
-// surfaces and one another correctly and are lit (and, POINTS_SHADOW, cast shadows)
-// like meshes. G-buffer outputs as gbuffer.frag; a material's constants (no maps).
+// A Points prim's sphere, or a round tube's piece (points.vert): the ray from the
+// viewer through this fragment hits it at p, whose normal and depth are the
+// surface's own, so points and curves intersect surfaces and one another correctly
+// and are lit (and, POINTS_SHADOW, cast shadows) like meshes. G-buffer outputs as
+// gbuffer.frag; a material's constants (no maps).
 in vec3 v_pos;
-flat in vec3 v_center;
-flat in float v_radius;
+flat in vec4 v_a;
+flat in vec4 v_b;
 uniform bool u_face_axis;
 uniform vec3 u_axis;
 uniform mat4 u_window;        // origin-relative -> (x, y, window depth, w)
@@ -54,15 +55,66 @@ uniform float u_clearcoat;
 uniform float u_clearcoat_roughness;
 #endif
 
+const float NO_HIT = 3.4e38;
+
+// The first root of the ray o + t d (|d| = 1) on the sphere (c, r), or NO_HIT.
+float sphere_hit(vec3 o, vec3 d, vec3 c, float r) {
+    vec3 oc = o - c;
+    float b = dot(d, oc);
+    float disc = b * b - (dot(oc, oc) - r * r);
+    return disc < 0.0 ? NO_HIT : -b - sqrt(disc);
+}
+
+// The first hit of the ray o + t d (|d| = 1) on the hull of the spheres (a, ra) and
+// (b, rb): the spheres, and the cone tangent to both between the circles where it
+// touches them. The hull is convex, so its first hit is the first of the spheres'
+// and the cone band's. In the (s along the axis u, q from it) plane the cone is
+// s sin(beta) + q cos(beta) = ra, sin(beta) = (ra - rb) / L; it touches the spheres
+// at s = ra sin(beta) and L + rb sin(beta). Returns t (NO_HIT: a miss) and the
+// outward normal.
+float hull_hit(vec3 o, vec3 d, vec3 a, float ra, vec3 b, float rb, out vec3 n) {
+    // Solve near the primitive: o far from it would cancel digits (|o|^2 - r^2).
+    float t0 = dot(0.5 * (a + b) - o, d);
+    o += d * t0;
+    float ta = sphere_hit(o, d, a, ra), tb = sphere_hit(o, d, b, rb);
+    float t = min(ta, tb);
+    n = t == ta ? (o + d * t - a) / ra : (o + d * t - b) / rb;
+    vec3 ab = b - a;
+    float len = length(ab);
+    if (len > abs(ra - rb) * (1.0 + 1e-5)) {        // else one sphere holds the other
+        vec3 u = ab / len;
+        float sn = (ra - rb) / len, c2 = 1.0 - sn * sn;
+        vec3 w = o - a;
+        float s0 = dot(w, u), sd = dot(d, u);
+        float e0 = ra - sn * s0;
+        float qa = c2 - sd * sd;
+        float qb = c2 * (dot(w, d) - s0 * sd) + e0 * sn * sd;
+        float qc = c2 * (dot(w, w) - s0 * s0) - e0 * e0;
+        float disc = qb * qb - qa * qc;
+        if (disc >= 0.0 && abs(qa) > 1e-12) {
+            float root = sqrt(disc);
+            for (int i = 0; i < 2; ++i) {
+                float tc = (-qb + (i == 0 ? -root : root)) / qa;
+                float s = s0 + tc * sd;
+                if (tc < t && s >= ra * sn && s <= len + rb * sn) {
+                    t = tc;
+                    vec3 radial = w + d * tc - u * s;
+                    n = sn * u + sqrt(c2) * radial / max(length(radial), 1e-30);
+                }
+            }
+        }
+    }
+    return t == NO_HIT ? NO_HIT : t0 + t;
+}
+
 void main() {
     vec3 d = u_face_axis ? u_axis : normalize(v_pos);
-    vec3 o = u_face_axis ? v_pos - d * (2.0 * v_radius) : vec3(0.0);
-    vec3 oc = o - v_center;
-    float b = dot(d, oc);
-    float disc = b * b - (dot(oc, oc) - v_radius * v_radius);
-    if (disc < 0.0) discard;
-    float t = -b - sqrt(disc);
-    if (t < 0.0) discard;                      // the viewer is inside the sphere
+    float reach = distance(v_a.xyz, v_b.xyz) + 2.0 * max(v_a.w, v_b.w);
+    vec3 o = u_face_axis ? v_pos - d * reach : vec3(0.0);
+    vec3 normal;
+    float t = hull_hit(o, d, v_a.xyz, v_a.w, v_b.xyz, v_b.w, normal);
+    if (t == NO_HIT) discard;
+    if (t < 0.0) discard;                      // the viewer is inside the surface
     vec3 p = o + d * t;
     vec4 w = u_window * vec4(p, 1.0);
 #if defined(POINTS_SHADOW)
@@ -78,7 +130,7 @@ void main() {
 #endif
     float f = (u_ior - 1.0) / (u_ior + 1.0);
     rt_base = vec4(clamp(base, 0.0, 1.0), u_opacity);
-    rt_normal = vec4((p - v_center) / v_radius, clamp(u_clearcoat_roughness, 0.0, 1.0));
+    rt_normal = vec4(normal, clamp(u_clearcoat_roughness, 0.0, 1.0));
     rt_mat = vec4(clamp(u_metallic, 0.0, 1.0), clamp(u_roughness, 0.0, 1.0), f * f,
                   clamp(u_clearcoat, 0.0, 1.0));
     rt_emit = vec4(clamp(u_emissive, 0.0, 60000.0), 0.0);   // .a: no base occlusion

@@ -37,6 +37,8 @@ def test_gpu_skinning_matches_usd_baked_baseline(corpus, name):
         got = session.skinned_points(t)
         assert got, "no skinned mesh read"
         for path, (pts, nrm) in got.items():
+            if not base.GetPrimAtPath(path).IsA(UsdGeom.Mesh):
+                continue          # rigidly skinned implicit surfaces (test_curves.py)
             ref = world_points(base, path, t)
             diag = np.linalg.norm(ref.max(0) - ref.min(0))
             err = np.abs(pts - ref).max() / diag

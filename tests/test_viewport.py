@@ -305,6 +305,39 @@ def test_a_graph_edit_draws_the_old_variant_until_the_new_one_is_made(viewport):
     np.testing.assert_allclose(valued, _fresh(scene, view), atol=2e-3)
 
 
+def test_hair_added_and_combed_in_the_viewport_is_drawn(viewport):
+    """A Curves object (hair) added to the scene appears in the live viewport, and an
+    edit of its strands shows: the image equals a fresh export's each time."""
+    import bpy
+    scene, vp = viewport
+    view = _camera_view(scene, bpy.context.evaluated_depsgraph_get())
+    before, _ = vp.frame(view)
+
+    def add():
+        data = bpy.data.hair_curves.new("Hair")
+        data.add_curves([6] * 40)
+        for i, point in enumerate(data.points):
+            strand, k = divmod(i, 6)
+            point.position = (-1.0 + 0.05 * strand, -1.0, 0.25 * k)
+            point.radius = 0.02
+        scene.collection.objects.link(bpy.data.objects.new("Hair", data))
+    _edit(vp, add)
+    with_hair, _ = vp.frame(view)
+    assert _changed(before, with_hair).sum() > 20
+    np.testing.assert_allclose(with_hair, _fresh(scene, view), atol=2e-3)
+
+    def comb():
+        data = bpy.data.objects["Hair"].data
+        for point in data.points:
+            x, y, z = point.position
+            point.position = (x + 0.3 * z, y, z)
+        data.update_tag()
+    _edit(vp, comb)
+    combed, _ = vp.frame(view)
+    assert _changed(with_hair, combed).any()
+    np.testing.assert_allclose(combed, _fresh(scene, view), atol=2e-3)
+
+
 def test_views_are_progressive_and_send_no_edit(viewport):
     import bpy
     scene, vp = viewport

@@ -1,9 +1,10 @@
-"""Points prims on the GPU: each cloud one instanced draw of camera-facing quads, one
-per point, ray-cast into spheres in the fragment shader (shaders/points.vert and
-points.frag), into the G-buffer and into shadow maps, so particles and point clouds
-are lit and shadowed like meshes. A cloud's points go up once (16 bytes a point,
-plus 12 for per-point colour); its placement is an object of the object table, like
-a mesh's."""
+"""Points prims and round curve tubes on the GPU: each cloud one instanced draw of
+camera-facing quads, one per point (or per straight piece of a curve), ray-cast into
+spheres (or the spheres swept along the piece) in the fragment shader
+(shaders/points.vert and points.frag), into the G-buffer and into shadow maps, so
+particles, point clouds and curves are lit and shadowed like meshes. A cloud's
+primitives go up once (16 bytes a point, 32 a piece, plus 12 for colour); its
+placement is an object of the object table, like a mesh's."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -18,12 +19,13 @@ from .programs import set_uniform
 class Cloud:
     oid: int
     n: int
-    points: object               # buffer: (x, y, z, radius) float32 per point
-    colours: object | None       # buffer: rgb float32 per point, or None
+    points: object               # buffer: (x, y, z, radius) float32 per point, two per piece
+    colours: object | None       # buffer: rgb float32 per point or piece, or None
     material: str
     local: tuple                 # (lo, hi) in the prim's space
     world: np.ndarray
     vaos: dict
+    segments: bool = False       # curve pieces (two ends each), not spheres
 
     def release(self):
         for obj in [self.points, self.colours] + list(self.vaos.values()):
@@ -61,11 +63,16 @@ class PointClouds:
             if rec is None:
                 continue
             data = np.concatenate([rec.points, rec.radii[:, None]], axis=1).astype(np.float32)
-            colours = None if rec.colours is None else \
-                self.uploads.buffer(rec.colours.astype(np.float32), kind="mesh")
+            colours = rec.colours
+            if rec.segments is not None:
+                data = data[rec.segments].reshape(-1, 8)
+                colours = None if colours is None else colours[rec.segments[:, 0]]
+            colours = None if colours is None else \
+                self.uploads.buffer(colours.astype(np.float32), kind="mesh")
             cloud = Cloud(self.objects.new_ids(1), len(data),
-                          self.uploads.buffer(data, kind="mesh"), colours, rec.material,
-                          rec.bounds, rec.world, {})
+                          self.uploads.buffer(np.ascontiguousarray(data), kind="mesh"),
+                          colours, rec.material, rec.bounds, rec.world, {},
+                          segments=rec.segments is not None)
             self.objects.set(cloud.oid, rec.world)
             self.clouds[path] = cloud
             moved.append(self._box(cloud))
@@ -84,7 +91,8 @@ class PointClouds:
     def _vao(self, cloud, prog):
         vao = cloud.vaos.get(prog.extra)
         if vao is None:
-            content = [(cloud.points, "4f/i", "in_point")]
+            content = [(cloud.points, "4f 4f/i", "in_point", "in_point_b") if cloud.segments
+                       else (cloud.points, "4f/i", "in_point")]
             if cloud.colours is not None:
                 content.append((cloud.colours, "3f/i", "in_colour"))
             vao = cloud.vaos[prog.extra] = self.ctx.vertex_array(prog, content, skip_errors=True)
@@ -95,13 +103,14 @@ class PointClouds:
     def draw(self, programs, variant: str, setup, visible=None, defines=()) -> tuple:
         """Draws every cloud (those `visible(lo, hi)` allows) with the points program
         (variant: gbuffer, shadow or id, with the pass's own `defines`); setup(prog,
-        cloud) sets the pass's uniforms. Returns (draws, points)."""
+        cloud) sets the pass's uniforms. Returns (draws, points and pieces)."""
         draws = points = 0
         for path, cloud in self.clouds.items():
             if visible is not None and not visible(*self._box(cloud)):
                 continue
             variant_defines = self.VARIANTS[variant] + list(defines) + \
-                (["POINTS_COLOUR"] if cloud.colours is not None and variant == "gbuffer" else [])
+                (["POINTS_COLOUR"] if cloud.colours is not None and variant == "gbuffer" else []) + \
+                (["POINTS_SEGMENT"] if cloud.segments else [])
             prog = programs.get("points.vert", "points.frag", variant_defines)
             set_uniform(prog, "u_object", cloud.oid)
             setup(prog, cloud)

@@ -262,6 +262,8 @@ class Renderer:
         host memory. For a queued frame this waits for its fence, then copies."""
         board = frame.board
         rgba = board["rgba"]
+        coverage = board.get("coverage")
+        frame.stats["fragments_drawn"] = 0 if coverage is None else int(coverage.samples)
         if rgba is None:
             t0 = time.perf_counter()
             rgba = self.readback.finish(frame.slot)

@@ -9,5 +9,7 @@ re-read at each new time only where the stage varies in time.
   timeline.py (what varies in time, and the re-read at a new time), validate.py
   (checks that name the prim at fault), paths.py (prim-path relations);
 - mesh.py, skel.py, materials.py, lights.py, camera.py, instancers.py: one USD schema
-  each into records or arrays;
+  each into records or arrays; shapes.py (implicit surfaces) and curves.py
+  (BasisCurves, NurbsCurves) make the surfaces other gprims are drawn as, and
+  gprims.py holds what the engine does with each gprim type;
 - fragments.py: stage edits as messages between processes (the engine host)."""

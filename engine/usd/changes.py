@@ -17,6 +17,7 @@ from pxr import Tf, Usd, UsdGeom, UsdShade
 
 from ..scene import Changes
 from .camera import is_camera
+from .gprims import is_curves, kind_of
 from .lights import is_light
 from .paths import map_prototypes, under
 from .read import PASS_INDEX
@@ -154,9 +155,9 @@ class EditTracking:
                 out.append(("pose", path))           # values only: pose again, no resync
             elif name.startswith(("skel:", "primvars:skel:")) or is_skel(prim):
                 roots.add(self.skel.root_of(path) or path)
-            elif prim.IsA(UsdGeom.Points):
-                roots.add(path)
-            elif prim.IsA(UsdGeom.Mesh):
+            elif is_curves(prim) or kind_of(prim) == "points":
+                roots.add(path)              # curves: normals authored or not change the kind
+            elif kind_of(prim) == "mesh":
                 out.append(("mesh", path))
             elif prim.IsA(UsdGeom.Subset) and prim.GetParent().IsA(UsdGeom.Mesh):
                 out.append(("mesh", str(prim.GetParent().GetPath())))

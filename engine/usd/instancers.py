@@ -19,6 +19,8 @@ from __future__ import annotations
 import numpy as np
 from pxr import Usd, UsdGeom
 
+from .gprims import kind_of
+
 
 def _array(attr, time, dtype=np.float64):
     if not attr or not attr.HasValue():
@@ -142,10 +144,11 @@ def points_data(prim, time):
 
 def prototype_meshes(stage, proto_path, time):
     """[(mesh prim, its placement in an instance, column-vector)] of the drawable
-    meshes in a prototype (instance proxies included; invisible, proxy and guide prims
-    skipped), and the nested PointInstancers found (not drawn). The placement is the
-    prototype root's own transform (IncludeProtoXform) times the mesh's transform
-    relative to the root."""
+    meshes in a prototype (Mesh prims, implicit surfaces, ribbons: gprims.kind_of
+    'mesh'; instance proxies included; invisible, proxy and guide prims skipped), and
+    what is found and not drawn: nested PointInstancers, Points and curves drawn as
+    tubes. The placement is the prototype root's own transform (IncludeProtoXform)
+    times the mesh's transform relative to the root."""
     root = stage.GetPrimAtPath(proto_path)
     if not root:
         return [], []
@@ -153,19 +156,24 @@ def prototype_meshes(stage, proto_path, time):
     xf = UsdGeom.Xformable(root)
     proto_xform = np.array(xf.GetLocalTransformation(time), np.float64).T if xf else np.eye(4)
     meshes, nested = [], []
-    # Prototypes usually sit under a class prim: abstract, which the default
-    # predicate would skip.
-    predicate = Usd.TraverseInstanceProxies(Usd.PrimIsActive & Usd.PrimIsDefined & Usd.PrimIsLoaded)
+    # Prototypes usually sit under a class prim (abstract, which the default predicate
+    # would skip) or an `over` (undefined, so that they draw only as instances): each
+    # prim needs a defining specifier of its own, not its ancestors'.
+    predicate = Usd.TraverseInstanceProxies(Usd.PrimIsActive & Usd.PrimIsLoaded)
     it = iter(Usd.PrimRange(root, predicate))
     for p in it:
+        if not p.HasDefiningSpecifier():
+            continue
         img = UsdGeom.Imageable(p)
         if p != root and img and img.GetVisibilityAttr().Get() == UsdGeom.Tokens.invisible:
             it.PruneChildren()
             continue
-        if p.IsA(UsdGeom.PointInstancer) and p != root:
+        if p.IsA(UsdGeom.PointInstancer):                # the root itself, too
             nested.append(str(p.GetPath()))
             it.PruneChildren()
-        elif p.IsA(UsdGeom.Mesh):
+        elif kind_of(p) == "points":
+            nested.append(str(p.GetPath()))
+        elif kind_of(p) == "mesh":
             if img.ComputePurpose() in (UsdGeom.Tokens.proxy, UsdGeom.Tokens.guide):
                 continue
             if p == root:

@@ -29,13 +29,21 @@ FIELDS = {"diffuseColor": "diffuse", "metallic": "metallic", "roughness": "rough
 MAPPABLE = ("diffuseColor", "metallic", "roughness", "emissiveColor", "opacity", "normal")
 
 
-def default_material(display_color=None) -> Material:
-    """A mesh without a bound material: UsdPreviewSurface's defaults, in the mesh's
-    displayColor when it has one (named by it, so equal colours share a record)."""
-    if display_color is None:
+def default_material(display_color=None, display_opacity=None) -> Material:
+    """A gprim without a bound material: UsdPreviewSurface's defaults, in the gprim's
+    displayColor and displayOpacity (their first values) when it has them (named by
+    them, so equal ones share a record), as Storm's fallback surface draws it."""
+    opacity = 1.0 if display_opacity is None else float(display_opacity)
+    if not math.isfinite(opacity):
+        opacity = 1.0
+    if display_color is None and opacity == 1.0:
         return Material(name="<default>")
-    diffuse = tuple(float(c) for c in display_color)
-    return Material(name="<displayColor %r %r %r>" % diffuse, diffuse=diffuse)
+    diffuse = Material().diffuse if display_color is None else \
+        tuple(float(c) for c in display_color)
+    name = "<displayColor %r %r %r>" % diffuse
+    if opacity != 1.0:
+        name = name[:-1] + " opacity %r>" % opacity
+    return Material(name=name, diffuse=diffuse, opacity=min(max(opacity, 0.0), 1.0))
 
 
 def _shader_id(shader: UsdShade.Shader) -> str:

@@ -8,6 +8,8 @@ changes how many vertices are shaded, never their values. A malformed mesh raise
 MeshError naming the defect."""
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from pxr import Sdf, Usd, UsdGeom
 
@@ -20,6 +22,35 @@ from .subdivision import RefinedCage, limit_surface, skinned_cage_unrefined, sub
 
 class MeshError(ValueError):
     pass
+
+
+@dataclass
+class Surface:
+    """What build_mesh reads of a gprim that is not a Mesh: the faces an implicit
+    surface (shapes.py) or an oriented ribbon (curves.py) makes, with their normals
+    per point. `point_source` and `face_source` say which of the prim's own vertices
+    and uniform elements (a curve) each point and face comes from, so the prim's
+    vertex and uniform primvars carry over; without them only constant primvars do."""
+    points: np.ndarray
+    counts: np.ndarray
+    indices: np.ndarray
+    normals: np.ndarray
+    point_source: np.ndarray | None = None
+    face_source: np.ndarray | None = None
+
+    def primvar(self, prim, name, time):
+        """(values, interpolation) of the prim's primvar in this surface's terms, or
+        (None, None) where it has none that carries over."""
+        values, interp = _primvar(prim, name, time)
+        if values is None or interp == "constant":
+            return values, interp
+        if interp in ("vertex", "varying") and self.point_source is not None and \
+                len(values) > self.point_source.max(initial=0):
+            return values[self.point_source], "vertex"
+        if interp == "uniform" and self.face_source is not None and \
+                len(values) > self.face_source.max(initial=0):
+            return values[self.face_source], "uniform"
+        return None, None
 
 
 def _primvar(mesh, name, time):
@@ -79,16 +110,21 @@ def _finite(values, what, n_items=None):
         raise MeshError(f"{int(bad.sum())} of {len(bad)} {what} are not finite")
 
 
-def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=False) -> MeshData:
+def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=False,
+               surface: Surface | None = None) -> MeshData:
     """materials: [Material] (the prim's own first, then one per subset); subsets:
     [(index into materials, face indices)]. Zero-length normals are replaced by the
     surface's own (with a warning in `warnings`). `tessellate`: a subdivision surface
     becomes patches for the GPU (MeshData.patches) where its materials need no more
-    than positions, normals and UVs, else it is refined here."""
+    than positions, normals and UVs, else it is refined here. `surface`: the faces of
+    a gprim that is not a Mesh (its primvars are read through it)."""
     mesh = UsdGeom.Mesh(prim)
-    pts = mesh.GetPointsAttr().Get(time)
-    counts = mesh.GetFaceVertexCountsAttr().Get(time)
-    idx = mesh.GetFaceVertexIndicesAttr().Get(time)
+    if surface is not None:
+        pts, counts, idx = surface.points, surface.counts, surface.indices
+    else:
+        pts = mesh.GetPointsAttr().Get(time)
+        counts = mesh.GetFaceVertexCountsAttr().Get(time)
+        idx = mesh.GetFaceVertexIndicesAttr().Get(time)
     if pts is None or counts is None or idx is None or len(pts) == 0:
         raise MeshError("missing points, faceVertexCounts or faceVertexIndices")
     pts = np.asarray(pts, np.float64)
@@ -103,7 +139,7 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
     if np.any(counts < 3):
         raise MeshError("face with fewer than 3 vertices")
     _finite(pts[np.unique(idx)], "points used by faces")
-    levels, refined = subdivision_level(prim, warnings), None
+    levels, refined = (0 if surface else subdivision_level(prim, warnings)), None
     patches = tessellate and limit_surface(prim) and not any(
         m.needs_tangents or m.reads_generated or m.color_attribute or m.udim_tiles
         for m in materials)
@@ -120,14 +156,17 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
         pts, counts, idx = refined.points, refined.counts, refined.indices
     n_faces = len(counts)
     face_of_corner = np.repeat(np.arange(n_faces), counts)
-    tri, face_of_tri = triangulate(_topology_points(mesh, pts), counts, idx)
-    if mesh.GetOrientationAttr().Get(time) == UsdGeom.Tokens.leftHanded:
+    tri, face_of_tri = triangulate(pts if surface else _topology_points(mesh, pts), counts, idx)
+    if not surface and mesh.GetOrientationAttr().Get(time) == UsdGeom.Tokens.leftHanded:
         tri = tri[:, [0, 2, 1]]  # counter-clockwise is front after this, whatever the orientation
     corners = tri.reshape(-1)      # triangle corner -> face corner
 
     P = pts[idx[corners]]
     per_point = True
-    normals, interp = _primvar(mesh, "normals", time) if refined is None else (None, None)
+    if surface:
+        normals, interp = surface.normals, "vertex"
+    else:
+        normals, interp = _primvar(mesh, "normals", time) if refined is None else (None, None)
     if normals is None and refined is None:
         attr = mesh.GetNormalsAttr()
         v = attr.Get(time) if attr.HasValue() else None
@@ -147,7 +186,7 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
         N = _smooth_normals(pts, idx, corners)
 
     uv_name = next((m.uv_name for m in materials if m.uv_name), None)
-    uvs, uv_interp = _pick_uv(mesh, uv_name, time)
+    uvs, uv_interp = _pick_uv(mesh, uv_name, time) if not surface else (None, None)
     if uvs is not None and refined is not None:
         cage_uv = _per_corner(uvs, uv_interp, cage_points,
                               np.repeat(np.arange(len(cage_counts)), cage_counts), cage_idx,
@@ -175,7 +214,8 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
 
     T = np.zeros((len(corners), 4))
     if any(m.needs_tangents for m in materials):
-        tan, t_interp = _primvar(mesh, "tangents", time) if refined is None else (None, None)
+        tan, t_interp = _primvar(mesh, "tangents", time) if refined is None and not surface \
+            else (None, None)
         if tan is not None and tan.shape[1] in (3, 4):
             tc = _per_corner(tan, t_interp, len(pts), face_of_corner, idx, n_faces, "tangents")[corners]
             _finite(tc, "tangents (per corner)")
@@ -196,7 +236,8 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
     columns, streams = [P, N, UV, T], []
     if any(m.reads_generated for m in materials):
         streams.append("generated")
-        columns.append(generated_coordinates(_topology_points(mesh, pts))[idx[corners]])
+        rest = pts if surface else _topology_points(mesh, pts)
+        columns.append(generated_coordinates(rest)[idx[corners]])
     if attributes:
         streams.append("colors")
         C = np.zeros((len(corners), 4))
@@ -204,7 +245,7 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
         for name in names:
             mine = np.ones(len(corners), bool) if len(names) == 1 else np.repeat(
                 np.isin(tri_mat, [mi for mi, n in attributes.items() if n == name]), 3)
-            rgba, interp = _attribute(mesh, name, time) if refined is None else (None, None)
+            rgba, interp = _attribute(mesh, name, time, surface) if refined is None else (None, None)
             if rgba is None:
                 if warnings is not None:
                     warnings.append(f"{prim.GetPath()}: no colour primvar {name!r} for its "
@@ -240,16 +281,17 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
                     surface_normals=normals is None)
 
 
-def _attribute(mesh, name, time):
+def _attribute(mesh, name, time, surface=None):
     """(values (n, 4), interpolation) of the primvar an attribute node reads, or (None,
     None): a colour or vector as xyz, a 2D one (a UV map read by an Attribute node) as
     (x, y, 0), as Cycles reads it; alpha from its opacity primvar, else 1."""
-    values, interp = _primvar(mesh, name, time)
+    read = surface.primvar if surface else _primvar
+    values, interp = read(mesh, name, time)
     if values is None or values.ndim != 2 or values.shape[1] < 2:
         return None, None
     rgba = np.zeros((len(values), 4))
     rgba[:, :min(values.shape[1], 3)] = values[:, :3]
-    alpha, a_interp = _primvar(mesh, attribute_opacity(name), time)
+    alpha, a_interp = read(mesh, attribute_opacity(name), time)
     ok = alpha is not None and alpha.ndim == 1 and a_interp == interp and len(alpha) == len(values)
     rgba[:, 3] = alpha if ok else 1.0
     return rgba, interp

@@ -10,11 +10,12 @@ from pxr import Sdf, Usd, UsdGeom
 
 from ..scene import Changes, Instance
 from .camera import gf_to_np, is_camera
+from .gprims import is_curves, kind_of, made_surface, source_key, undrawn_type
 from .lights import is_light
 from .mesh import MeshError, build_mesh
 from .paths import traversal_order, under
 from .skel import (SkelBindings, attach_skin, blend_weights, check_unbound, pose_might_vary,
-                   skel_key, skeleton_warnings, weights_might_vary)
+                   skel_key, skeleton_warnings, skinned_points, weights_might_vary)
 from .skel import pose as skeleton_pose
 from .timeline import Dynamic, mesh_attributes_vary
 from .validate import first_bad_op
@@ -61,13 +62,6 @@ def asset_path(prim) -> str:
     return str(path.GetPrefixes()[root.pathElementCount])
 
 
-def strongest_spec(attr):
-    stack = attr.GetPropertyStack(Usd.TimeCode.Default())
-    if stack:
-        return (stack[0].layer.identifier, str(stack[0].path))
-    return ("", str(attr.GetPath()))
-
-
 class FirstRead:
     """StageReader's reading job: the whole stage, or one subtree, into records.
     The state it shares with the other jobs is set up in StageReader.__init__
@@ -104,21 +98,27 @@ class FirstRead:
                 it.PruneChildren()
                 continue
             path = str(p.GetPath())
+            kind = kind_of(p)
+            if kind is not None:
+                self._gprims[path] = str(p.GetTypeName())
             if is_light(p):
                 self._read_light(p, changes)
             elif p.IsA(UsdGeom.PointInstancer):
                 # Its prototypes are drawn per instance, never on their own.
                 it.PruneChildren()
                 self._read_instancer(p, changes)
-            elif p.IsA(UsdGeom.Points):
+            elif kind is not None and UsdGeom.Imageable(p).ComputePurpose() in (
+                    UsdGeom.Tokens.proxy, UsdGeom.Tokens.guide):
+                del self._gprims[path]
+            elif kind == "points":
                 self._read_points(p, changes)
-            elif p.IsA(UsdGeom.Mesh):
-                purpose = UsdGeom.Imageable(p).ComputePurpose()
-                if purpose not in (UsdGeom.Tokens.proxy, UsdGeom.Tokens.guide):
-                    self._read_instance(p, changes, rebuild=rebuild)
+            elif kind == "mesh":
+                self._read_instance(p, changes, rebuild=rebuild)
             elif is_camera(p):
                 self._cameras.append(path)
                 changes.cameras.add(path)
+            elif undrawn_type(p) is not None:
+                self._undrawn[path] = self._gprims[path] = undrawn_type(p)
 
     def _invisible(self, prim, ancestors: bool) -> bool:
         """Invisible at this time (and remembered if its visibility may vary)."""
@@ -146,6 +146,9 @@ class FirstRead:
             changes.cameras.add(path)
         for path in [p for p in self._visibility if under(p, root)]:
             del self._visibility[path]
+        for table in (self._gprims, self._undrawn):
+            for path in [p for p in table if under(p, root)]:
+                del table[path]
         for path in [p for p in self.scene.warnings if under(p, root)]:
             del self.scene.warnings[path]
         self._retry = {p for p in self._retry if not under(p, root)}
@@ -205,6 +208,12 @@ class FirstRead:
         skin = mesh.skin
         dyn = Dynamic(world_prim=path, mesh=key[0] == "varying",
                        materials=tuple(mesh.materials))
+        if binding is not None and is_curves(prim):
+            # Ribbons are made from points UsdSkel skinned on the CPU (skel space):
+            # made again whenever the pose may change.
+            skel_query = binding[0]
+            dyn.mesh = pose_might_vary(skel_query)
+            dyn.world_prim = str(skel_query.GetPrim().GetPath())
         previous = self._inst.get(path)
         if previous is not None and previous.skel is not None and \
                 (skin is None or previous.skel != skin.skel_key):
@@ -246,26 +255,35 @@ class FirstRead:
         if not finite:
             self._non_finite_world(path, dyn, changes)
 
-    def _mesh_key(self, prim, path, binding, rebuild, warnings, changes):
+    def _mesh_key(self, prim, path, binding, rebuild, warnings, changes, instances=1):
         """The key of the prim's MeshData, built unless shared data was built already
-        (or `rebuild`); None (with a warning) for a malformed mesh."""
+        (or `rebuild`); None (with a warning) for a malformed mesh. `instances`: how
+        many times a PointInstancer draws it (an implicit surface's detail)."""
         try:
             mats, subsets = self._face_materials(prim, warnings)
+            if not prim.IsA(UsdGeom.Mesh):
+                subsets = []             # faces the engine makes have no subsets
             if binding is not None:
                 key = ("skinned", path)
             elif mesh_attributes_vary(prim):
                 key = ("varying", str(prim.GetPath()))
             else:
-                key = (strongest_spec(UsdGeom.Mesh(prim).GetPointsAttr()),
-                       tuple(m.name for m in mats),
+                key = (source_key(prim, self._t, instances), tuple(m.name for m in mats),
                        tuple((m, tuple(f.tolist())) for m, f in subsets))
             if key not in self.scene.meshes or key not in self._built and \
                     (rebuild or key[0] in ("skinned", "varying")):
+                skinned = None
+                if binding is not None and is_curves(prim):
+                    skinned = skinned_points(prim, binding, self._t, warnings)
+                    warnings.append(f"{path}: skinned curves with normals: the ribbons face "
+                                    f"their rest-pose normals (normals are not skinned)")
+                surface = made_surface(prim, self._t, warnings, instances, skinned)
                 mesh = build_mesh(prim, self._t, mats, [(i + 1, f) for i, (_, f) in
                                                         enumerate(subsets)], key, warnings,
-                                  tessellate=self.tessellate)
-                if binding is not None:
-                    attach_skin(mesh, prim, binding, self._t, warnings)
+                                  tessellate=self.tessellate, surface=surface)
+                if binding is not None and not is_curves(prim):
+                    attach_skin(mesh, prim, binding, self._t, warnings,
+                                None if surface is None else surface.points)
                 self.scene.meshes[key] = mesh
                 self._built.add(key)
                 changes.meshes.add(key)

@@ -1,5 +1,5 @@
 """The reading of PointInstancers (one batch of GPU instances per prototype mesh and
-mirroring) and Points prims into scene records."""
+mirroring), and of Points prims and curves drawn as round tubes, into scene records."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -7,8 +7,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..scene import Changes, Instance, PointCloud
+from .curve_shapes import tubes
+from .gprims import is_curves
 from .instancers import instance_matrices, points_data, prototype_meshes
 from .read import asset_path
+from .skel import pose_might_vary, skinned_points
 from .timeline import NOT_GEOMETRY, Dynamic, mesh_attributes_vary
 
 
@@ -57,8 +60,8 @@ class InstancerReading:
             meshes, nested = prototype_meshes(self.stage, proto, self._t)
             if nested and not nested_warned:
                 nested_warned = True
-                warnings.append(f"{path}: nested PointInstancers ({nested[0]}) are not "
-                                f"drawn")
+                warnings.append(f"{path}: nested PointInstancers, Points and curve tubes "
+                                f"in prototypes ({nested[0]}) are not drawn")
             placed = world @ mats[sel]
             for mesh_prim, rel in meshes:
                 worlds = placed @ rel
@@ -75,7 +78,8 @@ class InstancerReading:
         self._instancers[path] = state
 
     def _read_batch(self, batch, mesh_prim, worlds, warnings, changes, rebuild=False) -> bool:
-        key = self._mesh_key(mesh_prim, batch, None, rebuild, warnings, changes)
+        key = self._mesh_key(mesh_prim, batch, None, rebuild, warnings, changes,
+                             instances=len(worlds))
         if key is None:
             return False
         mesh = self.scene.meshes[key]
@@ -103,13 +107,27 @@ class InstancerReading:
         self._points[path] = self._xform_varies(prim) or any(
             a.ValueMightBeTimeVarying() for a in prim.GetAuthoredAttributes()
             if not a.GetName().startswith(NOT_GEOMETRY))
-        world = self._world(path)
+        placed_by, skinned = path, None
+        binding = self.skel.get(path) if is_curves(prim) else None
+        if binding is not None:
+            # Skinned tubes: points UsdSkel skinned on the CPU, in the skeleton's space.
+            skinned = skinned_points(prim, binding, self._t, warnings)
+            if skinned is not None:
+                placed_by = str(binding[0].GetPrim().GetPath())
+                self._points[path] = self._points[path] or pose_might_vary(binding[0]) or \
+                    self._xform_varies(binding[0].GetPrim())
+        world = self._world(placed_by)
         try:
             if not np.isfinite(world).all():
                 raise ValueError(f"its world transform is not finite ({self._bad_op(prim)})")
-            points, radii, colours = points_data(prim, self._t)
+            segments = None
+            if is_curves(prim):
+                points, radii, colours, segments = tubes(prim, self._t, warnings, skinned)
+            else:
+                points, radii, colours = points_data(prim, self._t)
         except ValueError as exc:
-            warnings.append(f"{path}: malformed points ({exc}); skipped")
+            what = "curves" if is_curves(prim) else "points"
+            warnings.append(f"{path}: malformed {what} ({exc}); skipped")
             self._drop_points(path, changes, keep_prim=True)
             return
         mats, _ = self._face_materials(prim, warnings)
@@ -118,7 +136,7 @@ class InstancerReading:
             self._unuse_material(old.material, path)
         self._material_users.setdefault(mats[0].name, set()).add(path)
         self.scene.points[path] = PointCloud(path, points, radii, colours, mats[0].name, world,
-                                             asset=asset_path(prim))
+                                             asset=asset_path(prim), segments=segments)
         changes.points.add(path)
 
     def _drop_points(self, path, changes: Changes, keep_prim=False):

@@ -30,8 +30,10 @@ class ShadingReading:
             base_mat = self._material(base)
         else:
             check_binding(prim, warnings)
-            dc = UsdGeom.Gprim(prim).GetDisplayColorAttr().Get()
-            base_mat = default_material(dc[0] if dc else None)
+            gprim = UsdGeom.Gprim(prim)
+            dc = gprim.GetDisplayColorAttr().Get()
+            do = gprim.GetDisplayOpacityAttr().Get()
+            base_mat = default_material(dc[0] if dc else None, do[0] if do else None)
             self.scene.materials.setdefault(base_mat.name, base_mat)
         mats, subsets = [base_mat], []
         for subset in binding.GetMaterialBindSubsets():

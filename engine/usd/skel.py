@@ -259,13 +259,17 @@ def skeleton_warnings(skel_query) -> list:
     return out
 
 
-def attach_skin(mesh_data, prim, binding, time, warnings) -> bool:
+def attach_skin(mesh_data, prim, binding, time, warnings, points=None) -> bool:
     """Adds a SkinData (per vertex of the MeshData) to a freshly built MeshData. A
     malformed binding leaves the mesh unskinned with a warning naming it and the
-    reason; returns whether skinned."""
+    reason; returns whether skinned. `points`: the points of faces the engine made for
+    a gprim that has none (an implicit surface, which UsdSkel deforms rigidly: constant
+    influences on every point are that rigid transform, both LBS and DQS)."""
     skel_query, sq = binding
     path = str(prim.GetPath())
-    points = np.asarray(prim.GetAttribute("points").Get(time), np.float64).reshape(-1, 3)
+    if points is None:
+        points = prim.GetAttribute("points").Get(time)
+    points = np.asarray(points, np.float64).reshape(-1, 3)
     n_points = len(points)
     skin = SkinData(skel_key=skel_key(skel_query), n_points=n_points)
     try:
@@ -303,6 +307,23 @@ def attach_skin(mesh_data, prim, binding, time, warnings) -> bool:
         return False
     mesh_data.skin = skin
     return True
+
+
+def skinned_points(prim, binding, time, warnings):
+    """A bound gprim's points skinned by UsdSkel on the CPU at `time`, in the
+    skeleton's space (the prim's own transform then ignored, as for meshes), for
+    gprims whose surface is made from their points each time they are read (curves);
+    None, with a warning, where UsdSkel cannot skin them."""
+    skel_query, sq = binding
+    points = prim.GetAttribute("points").Get(time)
+    if points is None:
+        return None
+    xforms = skel_query.ComputeSkinningTransforms(time)
+    if xforms is None or not sq.ComputeSkinnedPoints(xforms, points, time):
+        warnings.append(f"{prim.GetPath()}: its skel binding could not skin its points; "
+                        f"drawn unskinned")
+        return None
+    return np.asarray(points, np.float64).reshape(-1, 3)
 
 
 def pose(skel_query, time, dqs, warnings=None) -> SkelPose:

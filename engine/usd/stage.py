@@ -20,10 +20,14 @@ from pxr import Usd, UsdGeom
 from ..scene import Changes, Scene
 from .camera import time_code
 from .changes import ChangeTracker, EditTracking
+from .gprims import undrawn_warnings
 from .read import FirstRead
 from .read_instancers import InstancerReading
 from .read_shading import ShadingReading
 from .timeline import TimeSampling
+
+
+UNDRAWN = "<undrawn>"            # scene.warnings key of the prim types not drawn
 
 
 class StageReader(FirstRead, InstancerReading, ShadingReading, EditTracking, TimeSampling):
@@ -54,7 +58,9 @@ class StageReader(FirstRead, InstancerReading, ShadingReading, EditTracking, Tim
         self._lights_moved = False    # lights added or removed: their order to restore
         self._retry = set()           # meshes skipped for a non-finite time-varying transform
         self._instancers = {}         # PointInstancer path -> InstancerState
-        self._points = {}             # Points prim path -> it may vary in time
+        self._points = {}             # Points prim (and curve tubes) path -> it may vary in time
+        self._gprims = {}             # gprim path -> its type, drawn or not
+        self._undrawn = {}            # path -> type of the gprims (and unknown types) not drawn
         self.settings_changed = False  # /Render/Settings edited since the last sync
 
     def close(self):
@@ -84,8 +90,21 @@ class StageReader(FirstRead, InstancerReading, ShadingReading, EditTracking, Tim
                 self._advance(changes)
         self.time = frame
         self._finish_lights(changes)
+        lines = undrawn_warnings(self._undrawn)
+        if lines:
+            self.scene.warnings[UNDRAWN] = lines
+        else:
+            self.scene.warnings.pop(UNDRAWN, None)
         changes.prims_read = len(self._read)
         return changes
+
+    def gprims(self) -> dict:
+        """{type name: count} of the gprims read (drawn or not) and prims of unknown
+        type, for what a blank image says was there."""
+        counts = {}
+        for type_name in self._gprims.values():
+            counts[type_name] = counts.get(type_name, 0) + 1
+        return dict(sorted(counts.items()))
 
     def cameras(self) -> list:
         """Camera prim paths in traversal order."""

@@ -12,13 +12,15 @@ import numpy as np
 
 from ..errors import require_finite
 from ..ir import InstancesRecord, PointsRecord, PrototypeRecord
+from .curves import gather_curves
 from .mesh import _get, color_attribute_names, gather_mesh
 from .tangents import mikktspace_tangents, tangent_uv_map
 
 # persistent_id entries past the instance's own level are this.
 NO_ID = 2 ** 31 - 1
 MESH_LIKE = {"MESH", "CURVE", "SURFACE", "FONT", "META"}
-UNSUPPORTED = {"CURVES": "hair curves", "VOLUME": "volumes",
+# Not exported. Hair curves are (gather/curves.py), but not as instances' prototypes.
+UNSUPPORTED = {"CURVES": "instanced hair curves", "VOLUME": "volumes",
                "GREASEPENCIL": "grease pencil", "GPENCIL": "grease pencil"}
 # Blender's point radius when a point cloud has none.
 DEFAULT_RADIUS = 0.01
@@ -97,6 +99,7 @@ class InstanceGatherer:
         self.material_users = material_users  # material key -> original Material
         self.placements = {}              # instancer key -> [(prototype key, world matrix)]
         self.points = {}                  # object key -> PointsRecord (own components)
+        self.curves = {}                  # object key -> [CurvesRecord] (own components)
         self.shared_data = set()          # mesh data names prototypes write once
         self._geometry = {}               # (instancer, data pointer) -> prototype key
         self._skipped = set()
@@ -117,6 +120,9 @@ class InstanceGatherer:
             points = pointcloud_points(inst.object.data, f"{ob.name}_points")
             require_finite(points.points, f"object '{ob.name}'", "point positions")
             self.points[ob.name_full] = points
+        elif kind == "CURVES":
+            self.curves[ob.name_full] = gather_curves(inst.object.data, f"{ob.name}_curves",
+                                                      f"object '{ob.name}'", self.warn)
         elif kind in UNSUPPORTED:
             self.warn(unsupported_warning(ob.name, UNSUPPORTED[kind]))
         # MESH: the object's own evaluated mesh, read with to_mesh like any object's

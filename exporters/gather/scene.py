@@ -10,6 +10,7 @@ from ..errors import require_finite
 from ..ir import ObjectRecord, SceneRecord, StageSettings
 from .animation import Sampler, modifiers_disabled
 from .camera import gather_camera
+from .curves import gather_curves
 from .instances import (MESH_LIKE, UNSUPPORTED, InstanceGatherer, faceless_warning,
                         particle_points, pointcloud_points, unsupported_warning)
 from .light import gather_light
@@ -255,9 +256,16 @@ def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir, instance
         elif ob.type == "POINTCLOUD" and shown[key]:
             obj.points = pointcloud_points(ob.data, ob.data.name)
             require_finite(obj.points.points, f"object '{obj.name}'", "point positions")
-        elif ob.type in UNSUPPORTED:
+        elif ob.type == "CURVES" and shown[key]:
+            obj.curves = gather_curves(ob.data, ob.data.name, f"object '{obj.name}'", warn)
+            obj.materials = _curve_material(ob, obj, material_keys, warn)
+        elif ob.type in UNSUPPORTED and ob.type != "CURVES":
             warn(unsupported_warning(obj.name, UNSUPPORTED[ob.type]))
         _gather_points(ob, obj, instances, world, warn)
+        if instances.curves.get(key) and shown[key]:    # curves geometry nodes made
+            obj.curves += instances.curves[key]
+            if not obj.materials:
+                obj.materials = _curve_material(ob, obj, material_keys, warn)
         obj.instances = instances.instances_of(key, world)
         rec.objects.append(obj)
 
@@ -268,6 +276,22 @@ def _gather_objects(depsgraph, rec, evaluated, rigs, warn, texture_dir, instance
     if scene.world is not None:
         rec.world = gather_world(scene.world, warn, texture_dir)
     return groups
+
+
+def _curve_material(ob, obj, material_keys, warn) -> list:
+    """[the material key] of a Curves object's first slot (a USD prim of curves binds
+    one material, as Blender's exporter binds it), or []; more slots in use warn."""
+    slots = [s.material.original if s.material is not None else None for s in ob.material_slots]
+    index = ob.data.attributes.get("material_index")
+    if index is not None and len(index.data) and \
+            any(d.value != 0 for d in index.data) and len(slots) > 1:
+        warn(f"object '{obj.name}': its curves use {len(slots)} material slots; the first "
+             f"is bound to all of them")
+    first = slots[0] if slots else None
+    if first is None:
+        return []
+    material_keys.setdefault(first.name_full, first)
+    return [first.name_full]
 
 
 def _gather_points(ob, obj, instances, world, warn):

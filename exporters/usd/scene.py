@@ -9,6 +9,7 @@ import numpy as np
 from pxr import Gf, Sdf, UsdGeom, UsdSkel, Vt
 
 from .camera import write_camera
+from .curves import write_curves
 from .instances import write_instances, write_points, write_prototype
 from .light import write_light
 from .material import write_material
@@ -187,6 +188,9 @@ def write_scene(stage, scene, asset_path, max_influences=None) -> StagePaths:
         write_object_attributes(prim, obj, scene.times)
         if obj.points is not None:
             write_points(stage, namer.child(path, obj.points.name), obj.points)
+        for curves in obj.curves:
+            material = paths.materials.get(obj.materials[0]) if obj.materials else None
+            write_curves(stage, namer.child(path, curves.name), curves, material)
         if obj.instances is not None:
             write_instances(stage, namer.child(path, "Instances"), obj.instances,
                             instance_paths, namer)

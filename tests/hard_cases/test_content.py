@@ -1,6 +1,7 @@
 """Content the stage cannot hold yet: each kind either exports through its evaluated
-mesh or is skipped with exactly one warning naming the object and the reason, and the
-export never aborts. Meshes with no faces are skipped with one warning."""
+mesh (or, hair curves, as curves) or is skipped with exactly one warning naming the
+object and the reason, and the export never aborts. Meshes with no faces are skipped
+with one warning."""
 import numpy as np
 import pytest
 
@@ -60,8 +61,7 @@ def _faceless():
     return _link(bpy.data.objects.new("Wire", mesh))
 
 
-SKIPPED = {"hair curves": (_hair_curves, "hair curves are not supported"),
-           "volume": (_volume, "volumes are not supported"),
+SKIPPED = {"volume": (_volume, "volumes are not supported"),
            "grease pencil": (_grease_pencil, "grease pencil are not supported"),
            "particle hair": (_particle_hair, "renders hair or paths, which are not supported"),
            "faceless mesh": (_faceless, "a mesh with no faces (3 vertices, 2 edges)")}
@@ -99,9 +99,21 @@ def test_metaballs_and_text_export_their_evaluated_mesh(empty_scene, kind):
     assert bpy.context.scene.objects[ob.name]
 
 
+def test_hair_curves_export_as_curves_without_a_warning(empty_scene):
+    from pxr import UsdGeom
+    from _export_helpers import export_current
+    _hair_curves()
+    stage, report = export_current()
+    assert report.warnings == [], report.warnings
+    curves = UsdGeom.BasisCurves(stage.GetPrimAtPath("/root/HairCurves/Hair"))
+    assert list(curves.GetCurveVertexCountsAttr().Get()) == [4, 4, 4]
+    assert curves.GetBasisAttr().Get() == "catmullRom" and curves.GetWrapAttr().Get() == "pinned"
+
+
 def test_everything_at_once_exports(empty_scene):
     from _export_helpers import export_current
-    made = [make() for make, _ in SKIPPED.values()] + [make() for make in AS_MESH.values()]
+    made = [make() for make, _ in SKIPPED.values()] + [make() for make in AS_MESH.values()] + \
+        [_hair_curves()]
     stage, report = export_current()
     for ob in made:
         assert sum(f"'{ob.name}'" in w for w in report.warnings) <= 1, report.warnings

@@ -21,7 +21,9 @@ A material with a pattern graph (engine/gpu/pattern.py) draws with its shape's
 generated variant and its parameters (stats: pattern_bytes).
 render passes: IndexOB, IndexMA into g_index (RGBA32F: the object's and material's
         pass indices, 1 + the object's id, the material's Cryptomatte id), only when
-        asked for, or when Cryptomatte is (a shader variant with one more output)"""
+        asked for, or when Cryptomatte is (a shader variant with one more output)
+coverage: a samples query around the draws (read when the frame is finished, so no
+        wait: stats fragments_drawn), which says when nothing of the stage is on screen"""
 from __future__ import annotations
 
 from ....core.cryptomatte import name_id
@@ -29,6 +31,7 @@ from ....core.passes import wants_ids
 from ....core.sheen import MODES as SHEEN_MODES
 from ..framegraph import Pass
 from ..points import set_camera_facing
+from ..readback import SLOTS
 from ..pattern import material_variant, pattern_images, set_parameters
 from ..programs import UNITS, set_uniform
 from .antialias import texture_footprint
@@ -49,13 +52,17 @@ class GBufferPass(Pass):
     name = "gbuffer"
     reads = ("skinned", "view")
     optional = ("tessellated",)
-    writes = TARGETS
+    writes = TARGETS + ("coverage",)
     writes_optional = ("g_smooth", "g_sheen", "g_index")
     aovs = {"IndexOB": ("g_index", 0), "IndexMA": ("g_index", 1)}
 
     def __init__(self, ctx, pool, programs, geometry, textures, depth):
         self.ctx, self.pool, self.programs = ctx, pool, programs
         self.geometry, self.textures, self.depth = geometry, textures, depth
+        # One coverage query per frame that can be in flight (ModernGL's queries
+        # live as long as the context): a frame's is read before it comes round again.
+        self._queries = [ctx.query(samples=True) for _ in range(SLOTS + 1)]
+        self._next_query = 0
 
     def wanted(self, frame):
         # The normal before the normal map, for Cycles' bump map correction (lib.glsl
@@ -101,6 +108,9 @@ class GBufferPass(Pass):
         frame.count("culled", culled)
         self.geometry.bind_objects(UNITS["u_objects"])
         materials = frame.scene.materials
+        coverage = board["coverage"] = self._queries[self._next_query]
+        self._next_query = (self._next_query + 1) % len(self._queries)
+        coverage.mglo.begin()
         for batch in batches:
             mat = materials[batch.material]
             threshold = mat.gbuffer_threshold
@@ -125,6 +135,7 @@ class GBufferPass(Pass):
         ctx.disable(ctx.CULL_FACE)
         if self.geometry.points.clouds:
             self._points(frame, view, materials, outputs + (["WRITE_INDEX"] if index else []))
+        coverage.mglo.end()
         ctx.disable(ctx.DEPTH_TEST)
         self.depth.far_clip(False)
 
