@@ -78,6 +78,13 @@ def _get(values, name):
     return values.get(name, FALLBACKS[name])
 
 
+def _number(values, name, **checks) -> float:
+    """An input as a float, checked (_valid) where authored: a fallback is valid."""
+    if name not in values:
+        return float(FALLBACKS[name])
+    return float(_valid(values[name], name, **checks))
+
+
 def _axis_lengths(world):
     return np.sqrt(np.einsum("ij,ij->j", world[:3, :3], world[:3, :3]))
 
@@ -147,8 +154,8 @@ def _read_light(prim, world, values, warnings):
     s = _scale(intensity, exposure, color)
     if tname == "DomeLight":
         return read_dome(prim, world, s, values, warnings)
-    diffuse = float(_valid(_get(values, "inputs:diffuse"), "inputs:diffuse"))
-    specular = float(_valid(_get(values, "inputs:specular"), "inputs:specular"))
+    diffuse = _number(values, "inputs:diffuse")
+    specular = _number(values, "inputs:specular")
     shadow = bool(_get(values, "inputs:shadow:enable"))
     shadow_res = int(_get(values, "lantern:shadowResolution") or 0)
     scale = _axis_lengths(world)
@@ -164,31 +171,28 @@ def _read_light(prim, world, values, warnings):
     kind = kind_of_usd(tname, spot=shaped and cone < 90.0)
 
     if kind in (POINT, SPOT):
-        radius = float(_valid(_get(values, "inputs:radius"), "inputs:radius",
-                              nonneg=True)) * float(np.mean(scale))
+        radius = _number(values, "inputs:radius", nonneg=True) * float(np.mean(scale))
         point = bool(_get(values, "treatAsPoint")) or radius <= 0
         if normalize:
             I = s / 4.0
         else:
             I = s if point else s * math.pi * radius * radius
-        soft = float(_valid(_get(values, "inputs:shaping:cone:softness"),
-                            "inputs:shaping:cone:softness"))
+        soft = _number(values, "inputs:shaping:cone:softness")
         return Light(kind=kind, color=I, radius=0.0 if point else radius,
                      soft_falloff=bool(_get(values, "lantern:softFalloff")),
                      cone_angle=cone, cone_softness=max(soft, 0.0), **common)
     if kind == SUN:
-        angle = float(_valid(_get(values, "inputs:angle"), "inputs:angle", nonneg=True))
+        angle = _number(values, "inputs:angle", nonneg=True)
         return Light(kind=SUN, color=s, angle=angle, **common)
     if kind == RECT:
-        w = float(_valid(_get(values, "inputs:width"), "inputs:width", positive=True))
-        h = float(_valid(_get(values, "inputs:height"), "inputs:height", positive=True))
+        w = _number(values, "inputs:width", positive=True)
+        h = _number(values, "inputs:height", positive=True)
         w, h = w * scale[0], h * scale[1]
         if not w * h > 0:
             raise _Bad("its transform scales it to no area")
         return Light(kind=RECT, color=s / (w * h) if normalize else s, width=w, height=h, **common)
     if kind == DISK:
-        r = float(_valid(_get(values, "inputs:radius"), "inputs:radius",
-                         positive=True)) * float(np.mean(scale[:2]))
+        r = _number(values, "inputs:radius", positive=True) * float(np.mean(scale[:2]))
         if not r > 0:
             raise _Bad("its transform scales it to no area")
         return Light(kind=DISK, color=s / (math.pi * r * r) if normalize else s, radius=r, **common)
