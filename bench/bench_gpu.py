@@ -155,8 +155,7 @@ def measure(name, stage, size, preset, images, image_sizes, form="compute"):
             n = sum(1 for _ in s.render_frames([c[0] for c in changes[1:]]))
             queued = (time.perf_counter() - t0) / n
         size_name = f"{size[0]}x{size[1]}"
-        if images is not None and preset == "medium" and size_name in image_sizes \
-                and form == "compute":
+        if images is not None and preset == "medium" and size_name in image_sizes:
             np.savez_compressed(images / f"{name}_{size_name}.npz", rgba=last.rgba)
     med = statistics.median
     return {
@@ -195,8 +194,9 @@ def run(folder, sizes, presets, json_path, images, everything, image_sizes=("640
                     print(f"  {name:<6} {size_name:>9} {preset:<7} skipped on llvmpipe "
                           f"({size[0] * k}x{size[1] * k} drawn; --all runs it)", flush=True)
                     continue
-                for form in forms:
-                    row = measure(name, stage, size, preset, images, image_sizes, form)
+                for form in forms:          # the images: of the first form
+                    row = measure(name, stage, size, preset,
+                                  images if form == forms[0] else None, image_sizes, form)
                     gl = row["gl"]
                     rows.append(row)
                     _print(row)

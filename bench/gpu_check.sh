@@ -1,48 +1,53 @@
 #!/usr/bin/env bash
-# The checks that need an NVIDIA GPU, in one call of the `device` tool (docs/gpu.md).
-# Here, before it:
-#   ../shared/gpu/prepare.sh
-#   .venv/bin/python bench/bench_gpu.py prepare .gpu/scenes
-#   .venv/bin/python bench/bench_gpu.py run .gpu/scenes --sizes 640x360 --presets medium --images .gpu/ref46
-#   LANTERN_MAX_GL=33 .venv/bin/python bench/bench_gpu.py run .gpu/scenes --sizes 640x360 \
-#       --presets medium --images .gpu/ref33
+# Every check that needs an NVIDIA GPU, in one call of the `device` tool (docs/gpu.md):
+# the devices, the images against llvmpipe's, frame times in each form (compute,
+# volumes, raster) at 1080p and 4K, the demo at ultra, many lights against numpy's sum,
+# the read-back's modes, compute skinning against transform feedback, and the engine
+# tests that need no bpy. At most 9 minutes: each step has its own time limit.
+# Here, before it: bash bench/gpu_prepare.sh   (the wheels, the scenes, llvmpipe's images)
 # Then the device command `bash .gpu/run.sh bash bench/gpu_check.sh`, carrying [".gpu"].
-# Back in $OUT: log.txt, gpu.json (frame times) and nvidia_640x360.npz (the images, half floats).
+# Back in $OUT: log.txt, devices.txt, gpu.json, gpu_ultra.json, gpu_lights.json,
+# readback.json, gpu_mapped.json and nvidia_640x360.npz (the images, half floats).
 set -u
 OUT=${OUT:-/tmp/gpu-check}; mkdir -p "$OUT"
 exec > >(tee "$OUT/log.txt") 2>&1
-nvidia-smi --query-gpu=name,driver_version --format=csv,noheader || true
+nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader || true
+run() { python3 bench/bench_gpu.py run .gpu/scenes "$@"; }
 
-echo "== the images against llvmpipe's: GL 4.x paths, then GL 3.3's"
-timeout 90 python3 bench/bench_gpu.py run .gpu/scenes --sizes 640x360 --presets medium --images /tmp/img46
+echo "== devices, the CPU warning, memory, frames too large (bench/gpu_devices.sh)"
+OUT="$OUT" timeout 60 bash bench/gpu_devices.sh > /dev/null
+
+echo "== the images against llvmpipe's (compute forms)"
+timeout 60 run --sizes 640x360 --presets medium --forms compute --images /tmp/img46
 python3 bench/bench_gpu.py compare .gpu/ref46 /tmp/img46
-LANTERN_MAX_GL=33 timeout 90 python3 bench/bench_gpu.py run .gpu/scenes --sizes 640x360 \
-    --presets medium --images /tmp/img33
-python3 bench/bench_gpu.py compare .gpu/ref33 /tmp/img33
 python3 - "$OUT/nvidia_640x360.npz" <<'PY'
 import pathlib, sys
 import numpy as np
-images = {f"{d[-2:]}_{p.stem}": np.load(p)["rgba"].astype(np.float16)
-          for d in ("/tmp/img46", "/tmp/img33") for p in pathlib.Path(d).glob("*.npz")}
+images = {p.stem: np.load(p)["rgba"].astype(np.float16) for p in pathlib.Path("/tmp/img46").glob("*.npz")}
 np.savez_compressed(sys.argv[1], **images)
 PY
 
-echo "== cold start: lantern render in new processes against a warm Session.render"
-timeout 100 python3 bench/bench_cold.py --parts cli --runs 3 --baseline none --demo .gpu/scenes/demo.usdc
+echo "== frame times into a caller's buffer, medium, compute and raster forms"
+timeout 140 run --sizes 1920x1080 3840x2160 --presets medium --forms compute raster \
+    --json "$OUT/gpu.json"
+echo "== the demo at ultra, 1080p"
+timeout 50 run --scenes demo --sizes 1920x1080 --presets ultra --forms compute raster \
+    --json "$OUT/gpu_ultra.json"
+echo "== many lights at 1080p: 1, 256, 16,384 against numpy's sum"
+timeout 60 run --scenes --lights --forms compute volumes --json "$OUT/gpu_lights.json"
 
-echo "== frame times: medium at each size, then low, high and ultra at 1920x1080"
-timeout 150 python3 bench/bench_gpu.py run .gpu/scenes --presets medium --json "$OUT/gpu.json"
-timeout 100 python3 bench/bench_gpu.py run .gpu/scenes --sizes 1920x1080 --presets low high ultra \
-    --json "$OUT/gpu_presets.json"
+echo "== the read-back: each mode against one bare glReadPixels; the demo read mapped"
+timeout 30 python3 bench/bench_readback.py --json "$OUT/readback.json"
+LANTERN_READBACK=mapped timeout 30 run --scenes demo --sizes 1920x1080 --presets medium \
+    --forms compute --json "$OUT/gpu_mapped.json"
+echo "== skinning alone: compute against transform feedback"
+timeout 20 python3 bench/bench_skinning.py --quick
 
-echo "== the engine tests that need no bpy"
-PYTHONPATH=tests:$PYTHONPATH timeout 130 python3 -m pytest --noconftest -p no:cacheprovider -q \
+echo "== the engine tests that need no bpy (compute skinning, the light tree, read-back, ...)"
+PYTHONPATH=tests:${PYTHONPATH:-} timeout 90 python3 -m pytest --noconftest -p no:cacheprovider -q \
     -n 8 --continue-on-collection-errors \
-    tests/test_bump_correction.py tests/test_cold_start.py tests/test_engine_calibration.py \
-    tests/test_engine_image_io.py tests/test_engine_scenes.py tests/test_engine_textures.py \
-    tests/test_fragments.py tests/test_light_volumes.py tests/test_overlays.py \
-    tests/test_readback.py tests/test_reference_scenes.py tests/test_shading.py \
-    tests/test_tessellation.py tests/test_transparency.py tests/test_shadows.py \
-    tests/test_program_cache.py tests/test_many_lights.py tests/test_area_shadows.py \
-    tests/test_render_passes.py 2>&1 | tail -40
+    tests/test_skinning_compute.py tests/test_light_tree.py tests/test_readback.py \
+    tests/test_engine_calibration.py tests/test_light_volumes.py tests/test_engine_scenes.py \
+    tests/test_shading.py tests/test_render_passes.py tests/test_many_lights.py \
+    -k "not usdskel" 2>&1 | tail -30
 echo "== done"
