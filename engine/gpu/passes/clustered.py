@@ -61,14 +61,15 @@ class ClusteredLightPass(Pass):
         defines = (["WRITE_AOVS"] if aovs else []) + surface_defines(frame, board)
         w, h = frame.size
 
-        prog = self._program(board, view, defines)
-        set_uniform(prog, "cluster_tiles", clusters.tiles)
-        set_tree_uniforms(prog, tree, clusters.error)
-        set_uniform(prog, "n_exact", len(clusters.exact))
-        set_uniform(prog, "u_offset", (0, 0))
-        prog.run(*clusters.tiles)
-        ctx.memory_barrier()
-        frame.count("lights_drawn", len(frame.scene.lights) - len(clusters.mapped))
+        if clusters.exact or tree is not None:
+            prog = self._program(board, view, defines)
+            set_uniform(prog, "cluster_tiles", clusters.tiles)
+            set_tree_uniforms(prog, tree, clusters.error)
+            set_uniform(prog, "n_exact", len(clusters.exact))
+            set_uniform(prog, "u_offset", (0, 0))
+            prog.run(*clusters.tiles)
+            ctx.memory_barrier()
+            frame.count("lights_drawn", len(frame.scene.lights) - len(clusters.mapped))
 
         shadow_maps = board.get("shadow_maps", {})
         for path in clusters.mapped:

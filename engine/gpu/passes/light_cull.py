@@ -99,6 +99,10 @@ class LightCullPass(Pass):
         counts = self._counts[self._next]
         self._next = (self._next + 1) % len(self._counts)
         counts.clear()
+        board["clusters"] = Clusters(tiles, exact, mapped, tree, error, counts)
+        frame.stats["light_clusters"] = n_clusters
+        if not exact and tree is None:
+            return                  # every light has its map: nothing to list
         self.bind(tree_buffer, counts)
         board["g_depth"].use(UNITS["g_depth"])
 
@@ -130,8 +134,6 @@ class LightCullPass(Pass):
                 set_uniform(prog, "items_capacity", self.capacity)
                 prog.run(-(-n_clusters // 64))
                 ctx.memory_barrier()
-        board["clusters"] = Clusters(tiles, exact, mapped, tree, error, counts)
-        frame.stats["light_clusters"] = n_clusters
 
     def bind(self, tree_buffer, counts):
         """The culling's buffers at the binding points the shaders name."""
