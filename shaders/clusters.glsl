@@ -6,12 +6,13 @@
 // cluster's list. Both constants match engine/gpu/passes/light_cull.py.
 #define TILE 16
 #define SLICES 8
-const uint OVERFLOW = 0xFFFFFFFFu;   // a cluster whose list did not fit: lights.comp walks it all
-const uint TREE_ITEM = 0x80000000u;  // an item that is a tree node (else a light-table row)
 
 // Per tile: view depth range of its surfaces, slices holding one (bits), surfaces.
 layout(std430, binding = 4) buffer TileBounds { vec4 tile_bounds[]; };
-layout(std430, binding = 5) buffer ClusterRanges { uvec2 cluster_ranges[]; };  // first, count
+// A cluster's list: its first item, how many light-table rows (lights shaded one by
+// one) then how many light-tree nodes follow, and 1 where the list did not fit
+// (lights.comp then walks every light).
+layout(std430, binding = 5) buffer ClusterRanges { uvec4 cluster_ranges[]; };
 layout(std430, binding = 6) buffer ClusterItems { uint cluster_items[]; };
 layout(std430, binding = 7) buffer CullCounts { uint items_asked; uint clusters_overflowed; };
 uniform ivec2 cluster_tiles;        // tiles across, down

@@ -9,9 +9,9 @@
 // lights.comp may still open a group whose lights straddle a pixel's horizon), leaves as
 // themselves; at error 0 (tree_exact) only leaves, where their volumes reach. Lights shaded
 // one by one (exact_rows: spots, area lights, suns, point lights whose shadows have no
-// map this frame) go in where their volume reaches. A list is counted, then its place
-// taken with one atomic add, then written; a list that does not fit marks its cluster
-// OVERFLOW (lights.comp then walks every light) and the renderer grows the pool.
+// map this frame) go in first, where their volume reaches. A list is counted, then its
+// place taken with one atomic add, then written; a list that does not fit marks its
+// cluster (lights.comp then walks every light) and the renderer grows the pool.
 layout(local_size_x = 64) in;
 layout(std430, binding = 8) readonly buffer ExactLights { int exact_rows[]; };
 uniform int n_exact;
@@ -35,9 +35,20 @@ vec3 at_depth(vec2 uv, float z) {
     return a + (b - a) * ((z - za) / (zb - za));
 }
 
-// Counts (write false) or writes from `first` the cluster's items; returns how many.
-uint visit(bool write, uint first) {
+// Counts (write false) or writes from `first` the cluster's items: the lights shaded
+// one by one, then the tree's nodes; returns how many of each.
+uvec2 visit(bool write, uint first) {
     uint n = 0u;
+    for (int k = 0; k < n_exact; ++k) {
+        int row = exact_rows[k];
+        vec4 t0 = light_table(row, 0);
+        bool distant = (int(light_table(row, 3).w) & 16) != 0;
+        if (!distant && box_distance(world_to_view * rebase(t0.xyz, light_table(row, 7).xyz)) > t0.w)
+            continue;
+        if (write) cluster_items[first + n] = uint(row);
+        ++n;
+    }
+    uint rows = n;
     if (tree_leaves > 0) {
         int stack[TREE_STACK];
         int top = 0;
@@ -48,7 +59,7 @@ uint visit(bool write, uint first) {
             float d = box_distance(world_to_view * node_centre(i));
             if (tree_exact && d > node_reach(i)) continue;
             if (node_is_leaf(i) || d >= node_group_distance(i)) {
-                if (write) cluster_items[first + n] = TREE_ITEM | uint(i);
+                if (write) cluster_items[first + n] = uint(i);
                 ++n;
                 continue;
             }
@@ -56,16 +67,7 @@ uint visit(bool write, uint first) {
             stack[top++] = 2 * i + 1;
         }
     }
-    for (int k = 0; k < n_exact; ++k) {
-        int row = exact_rows[k];
-        vec4 t0 = light_table(row, 0);
-        bool distant = (int(light_table(row, 3).w) & 16) != 0;
-        if (!distant && box_distance(world_to_view * rebase(t0.xyz, light_table(row, 7).xyz)) > t0.w)
-            continue;
-        if (write) cluster_items[first + n] = uint(row);
-        ++n;
-    }
-    return n;
+    return uvec2(rows, n - rows);
 }
 
 void main() {
@@ -75,7 +77,7 @@ void main() {
     int t = cluster / SLICES, k = cluster % SLICES;
     vec4 bounds = tile_bounds[t];
     if ((floatBitsToUint(bounds.z) & (1u << uint(k))) == 0u || bounds.w == 0.0) {
-        cluster_ranges[cluster] = uvec2(0u);
+        cluster_ranges[cluster] = uvec4(0u);
         return;
     }
     // The box: the tile's four corner rays between the slice's depths, padded for the
@@ -97,13 +99,13 @@ void main() {
     vec3 slack = 1e-5 * max(abs(box_lo), abs(box_hi));
     box_lo -= slack;
     box_hi += slack;
-    uint n = visit(false, 0u);
-    uint first = atomicAdd(items_asked, n);
-    if (first + n > items_capacity) {
-        cluster_ranges[cluster] = uvec2(0u, OVERFLOW);
+    uvec2 n = visit(false, 0u);
+    uint first = atomicAdd(items_asked, n.x + n.y);
+    if (first + n.x + n.y > items_capacity) {
+        cluster_ranges[cluster] = uvec4(0u, 0u, 0u, 1u);
         atomicAdd(clusters_overflowed, 1u);
         return;
     }
     visit(true, first);
-    cluster_ranges[cluster] = uvec2(first, n);
+    cluster_ranges[cluster] = uvec4(first, n, 0u);
 }

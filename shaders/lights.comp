@@ -35,10 +35,16 @@ void add_light(Surface s, inout vec3 sum_d, inout vec3 sum_g) {
     sum_g += glossy;
 }
 
-// Whether the loaded light's volume reaches camera-relative p (a sun's always does):
-// tested before the pixel's surface is read from the G-buffer, which costs more.
+// Whether the loaded light's volume reaches camera-relative p (a sun's always does; a
+// spot's is the cone the light volumes draw, its apex moved back by radius / sin(half
+// angle) so that it holds every point of the light's sphere's cones): tested before the
+// pixel's surface is read from the G-buffer, which costs more.
 bool reaches(vec3 p) {
-    return is_distant || distance(p, light_pos) <= light_range;
+    if (is_distant) return true;
+    if (distance(p, light_pos) > light_range) return false;
+    if (!is_spot || cos_half <= 0.0) return true;
+    vec3 apex = light_pos - light_axis * light_radius / sqrt(max(1.0 - cos_half * cos_half, 1e-6));
+    return dot(normalize(p - apex), light_axis) >= cos_half - 1e-5;
 }
 
 void main() {
@@ -63,35 +69,24 @@ void main() {
     lit = light_shadow(s.p, s.n, dot(s.p, cam_forward));
 #endif
 #else
-    uvec2 range = cluster_ranges[cluster_of(px, dot(p, cam_forward))];
-    if (range.y == 0u) return;
-    bool read = false;              // the surface, read once a light reaches the pixel
-    if (range.y == OVERFLOW) {
-        // Its list did not fit: every light, the tree from its root.
-        s = gbuffer_surface(px, depth);
-        read = true;
-        if (tree_leaves > 0) shade_node(s, 0, cam_forward, sum_d, sum_g);
-        for (int k = 0; k < n_exact; ++k) {
-            load_light(exact_rows[k], cam_forward);
-            if (reaches(p)) add_light(s, sum_d, sum_g);
-        }
-    } else {
-        for (uint k = 0u; k < range.y; ++k) {
-            uint item = cluster_items[range.x + k];
-            bool tree = (item & TREE_ITEM) != 0u;
-            if (!tree) {
-                load_light(int(item), cam_forward);
-                if (!reaches(p)) continue;
-            }
-            if (!read) {
-                s = gbuffer_surface(px, depth);
-                read = true;
-            }
-            if (tree) shade_node(s, int(item & ~TREE_ITEM), cam_forward, sum_d, sum_g);
-            else add_light(s, sum_d, sum_g);
-        }
+    // The cluster's list: lights shaded one by one (HAS_EXACT), then the light tree's
+    // nodes (HAS_TREE); or, where it did not fit, every light.
+    uvec4 range = cluster_ranges[cluster_of(px, dot(p, cam_forward))];
+    bool overflow = range.w != 0u;
+    uint exact = overflow ? uint(n_exact) : range.y;
+    if (exact + range.z == 0u && !overflow) return;
+    s = gbuffer_surface(px, depth);
+#ifdef HAS_EXACT
+    for (uint k = 0u; k < exact; ++k) {
+        load_light(overflow ? exact_rows[k] : int(cluster_items[range.x + k]), cam_forward);
+        if (reaches(p)) add_light(s, sum_d, sum_g);
     }
-    if (!read) return;
+#endif
+#ifdef HAS_TREE
+    if (overflow) shade_node(s, 0, cam_forward, sum_d, sum_g);
+    for (uint k = 0u; k < range.z; ++k)
+        shade_node(s, int(cluster_items[range.x + range.y + k]), cam_forward, sum_d, sum_g);
+#endif
     vec3 radiance = sum_d + sum_g;
 #endif
     // NaN or Inf goes through: the resolve pass counts it.

@@ -192,9 +192,24 @@ void area_light(Surface s, out vec3 diffuse, out vec3 glossy) {
         * (brdf_specular(s, l, min(1.0, a + widen)) + brdf_coat(s, l, min(1.0, ac + widen)));
 }
 
-// Any kind, by the loaded row's flags.
+// Any kind, by the loaded row's flags. A program that knows the kinds it meets
+// (LIGHT_KINDS, with KIND_DISTANT, KIND_AREA, KIND_SPHERE: the clustered light pass)
+// compiles only theirs; without it, every kind (the transparency pass).
 void light_reflected(Surface s, out vec3 diffuse, out vec3 glossy) {
-    if (is_distant) distant_light(s, diffuse, glossy);
-    else if (n_poly > 0) area_light(s, diffuse, glossy);
-    else sphere_light(s, diffuse, glossy);
+    diffuse = glossy = vec3(0.0);
+#if !defined(LIGHT_KINDS) || defined(KIND_DISTANT)
+    if (is_distant) {
+        distant_light(s, diffuse, glossy);
+        return;
+    }
+#endif
+#if !defined(LIGHT_KINDS) || defined(KIND_AREA)
+    if (n_poly > 0) {
+        area_light(s, diffuse, glossy);
+        return;
+    }
+#endif
+#if !defined(LIGHT_KINDS) || defined(KIND_SPHERE)
+    sphere_light(s, diffuse, glossy);
+#endif
 }

@@ -17,18 +17,26 @@ from __future__ import annotations
 
 import numpy as np
 
-from ....core.lights import SUN
+from ....core.lights import DISK, RECT, SUN
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
 from .ambient import GBUFFER, LIGHTING_AOVS, LIGHTING_TARGETS, bind_gbuffer, surface_defines, \
     lighting_aovs
 from .light_cull import TILE, set_tree_uniforms
-from .lights import screen_rect, sphere_hull
+from .lights import screen_rect, volume_hull
 from .shadows import set_shadow_uniforms
 
 GL_RGBA32F = 0x8814
 # Images the shader writes, by binding: shaders/lights.comp.
 IMAGES = ("hdr", "aov_diffuse", "aov_glossy", "aov_shadow")
+
+
+def kind_defines(lights) -> list:
+    """The variant that shades these lights' kinds only (shaders/lights.glsl
+    light_reflected): a program with every kind's code runs slower for any of them."""
+    kinds = {"KIND_DISTANT" if light.kind == SUN else
+             "KIND_AREA" if light.kind in (RECT, DISK) else "KIND_SPHERE" for light in lights}
+    return ["LIGHT_KINDS", *sorted(kinds)]
 
 
 class ClusteredLightPass(Pass):
@@ -62,7 +70,10 @@ class ClusteredLightPass(Pass):
         w, h = frame.size
 
         if clusters.exact or tree is not None:
-            prog = self._program(board, view, defines)
+            listed = [frame.scene.lights[p] for p in clusters.exact]
+            prog = self._program(board, view, defines + kind_defines(listed)
+                                 + (["HAS_EXACT"] if listed else [])
+                                 + (["HAS_TREE"] if tree is not None else []))
             set_uniform(prog, "cluster_tiles", clusters.tiles)
             set_tree_uniforms(prog, tree, clusters.error)
             set_uniform(prog, "n_exact", len(clusters.exact))
@@ -77,11 +88,13 @@ class ClusteredLightPass(Pass):
             rect = (0, 0, w, h)
             if light.kind != SUN:
                 centre = np.asarray(light.position, np.float64) - view.origin
-                rect = screen_rect(view, frame.size, sphere_hull(centre, self.table.ranges[path]))
+                rect = screen_rect(view, frame.size,
+                                   volume_hull(light, self.table.ranges[path], centre))
                 rect = rect or (0, 0, w, h)
             if rect[2] <= 0 or rect[3] <= 0:
                 continue
-            prog = self._program(board, view, defines + ["SINGLE_LIGHT", "HAS_SHADOW"])
+            prog = self._program(board, view, defines + kind_defines([light])
+                                 + ["SINGLE_LIGHT", "HAS_SHADOW"])
             set_shadow_uniforms(prog, shadow_maps[path], frame.preset, view.origin)
             set_uniform(prog, "light_index", self.table.index[path])
             set_uniform(prog, "u_offset", rect[:2])

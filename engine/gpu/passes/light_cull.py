@@ -38,7 +38,7 @@ from ...view import relative_view
 TILE = 16            # shaders/clusters.glsl
 SLICES = 8
 ITEMS_PER_CLUSTER = 16   # the pool's first size, per cluster
-TILE_TEXELS, RANGE_BYTES, COUNT_BYTES = 16, 8, 8
+TILE_TEXELS, RANGE_BYTES, COUNT_BYTES = 16, 16, 8
 
 
 @dataclass

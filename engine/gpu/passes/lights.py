@@ -322,6 +322,14 @@ class LightPass(Pass):
         self._cones.clear()
 
 
+def volume_hull(light, R, center) -> np.ndarray:
+    """Points around a light's volume at a camera-relative centre, for its screen
+    rectangle: a narrow spot's cone (as drawn), else the sphere's box."""
+    if light.kind == SPOT and light.cone_angle <= CONE_MAX_HALF_ANGLE:
+        return center + cone(light, R).astype(float)
+    return sphere_hull(center, R)
+
+
 def sphere_hull(center, R) -> np.ndarray:
     """Corners of a box around a light volume of radius R (its icosphere's faces
     circumscribe the sphere: 1.3 R holds them) at a camera-relative centre."""
