@@ -132,16 +132,17 @@ vec4 near_probe(sampler2D t, Map m, vec2 w, float lod, vec2 box, bool minified) 
 }
 
 // A texture lookup at uv, as Cycles' pixel filter averages the image's interpolation
-// (Cycles reads textures at points, without mip levels). Where the footprint is two
-// texels or more along its shorter side (or its share of the longer), GL filters
-// levels 1 and deeper, trilinear and anisotropic: their texels are the averages
-// Cycles would make (an sRGB image's: engine/gpu/textures.py cycles_srgb_mips), and
-// the sampler never lets GL read level 0 (engine/gpu/textures.py sampler). Under that,
-// the shader reads level 0 itself, through the image's interpolation (near_probe):
-// in an image not supersampled, with the pixel filter's weights on a grid of probes
-// a texel or less apart; in a supersampled one, over its sub-pixel, with probes
-// along the footprint's longer side as GL's anisotropic filter takes them
-// (EXT_texture_filter_anisotropic), and the pixel filter after.
+// (Cycles reads textures at points, without mip levels). A linear lookup of data (not
+// an 8-bit sRGB colour) is GL's: GL filters in linear values as Cycles does. Else,
+// where the footprint is two texels or more along its shorter side (or its share of
+// the longer), GL filters levels 1 and deeper, trilinear and anisotropic: their
+// texels are the averages Cycles would make (an sRGB image's: engine/gpu/textures.py
+// cycles_srgb_mips), and the sampler keeps GL off level 0 (textures.py sampler).
+// Under that the shader reads level 0 itself, through the image's interpolation
+// (near_probe): in an image not supersampled, with the pixel filter's weights on a
+// grid of probes a texel or less apart; in a supersampled one, over its sub-pixel,
+// with probes along the footprint's longer side as GL's anisotropic filter takes
+// them (EXT_texture_filter_anisotropic), and the pixel filter after.
 vec4 sample_map(sampler2D t, Map m, vec2 uv) {
     // Gradients from the unwrapped st so mirror folds do not spike the level.
     vec2 dx = dFdx(uv), dy = dFdy(uv);
@@ -152,7 +153,7 @@ vec4 sample_map(sampler2D t, Map m, vec2 uv) {
     float count = clamp(ceil(major / max(minor, 1e-8)), 1.0, cap);
     float lod = log2(max(major / count, 1e-8));
     vec4 c = vec4(0.0);
-    if (lod >= 1.0) {
+    if (lod >= 1.0 || (m.filtertype == 0 && !m.srgb)) {
         c = textureGrad(t, vec2(wrap1(uv.x, m.wrap.x), wrap1(uv.y, m.wrap.y)), dx, dy);
     } else if (u_pixel_filter_reach > 0.0) {
         // Closest's texels are squares with sharp sides, which the pixel filter

@@ -19,9 +19,10 @@ file's own precision:
                 when it loads them).
   half / float  RGBA16F / RGBA32F as the file stores them: nothing is clamped, 4.0
                 stays 4.0.
-Levels 1 and deeper are GL's to filter (trilinear, anisotropic; the sampler starts at
-level 1), level 0 the shader's, which reads it through the image's interpolation as
-Cycles does (shaders/material.glsl sample_map).
+GL filters the mips (trilinear, anisotropic); level 0 of an image filtered as Cycles
+filters 8-bit sRGB, or of an interpolation other than Linear, is the shader's, which
+reads it through the image's interpolation as Cycles does, and GL's filter of it
+starts at level 1 (shaders/material.glsl sample_map, `sampler`).
 Wrap modes via samplers (mirror and black are finished in the shader). Reading the files is
 engine/textures.py's job; an image that cannot be read (corrupt, truncated, empty,
 not an image) becomes a magenta texel and a warning naming the file, here and only
@@ -159,19 +160,20 @@ class MaterialTextures:
         for sampler in self._samplers.values():
             sampler.anisotropy = anisotropy
 
-    def sampler(self, wrap_s: str, wrap_t: str):
+    def sampler(self, wrap_s: str, wrap_t: str, shader_level0: bool = False):
         """Repeat for repeat/mirror (mirror folds st in the shader), clamp-to-edge for
-        clamp/black (black masks outside [0,1] in the shader). GL's filter starts at
-        level 1: level 0 is the shader's to read through the image's interpolation
-        (material.glsl sample_map), where llvmpipe's anisotropic filter would read it
-        wherever the footprint's shorter side is under a texel, and average an sRGB
-        image's texels in linear light there."""
-        key = (wrap_s in ("repeat", "mirror"), wrap_t in ("repeat", "mirror"))
+        clamp/black (black masks outside [0,1] in the shader). `shader_level0`: the
+        shader reads the image's level 0 itself (an 8-bit sRGB image as Cycles
+        interpolates it, or an interpolation other than Linear: material.glsl
+        sample_map), so GL's filter starts at level 1 (llvmpipe's anisotropic filter
+        would read level 0 wherever the footprint's shorter side is under a texel)."""
+        key = (wrap_s in ("repeat", "mirror"), wrap_t in ("repeat", "mirror"), bool(shader_level0))
         if key not in self._samplers:
             sampler = self._samplers[key] = self.ctx.sampler(
                 repeat_x=key[0], repeat_y=key[1],
                 filter=(self.ctx.LINEAR_MIPMAP_LINEAR, self.ctx.LINEAR),
-                anisotropy=self.anisotropy, compare_func="", min_lod=1.0)
+                anisotropy=self.anisotropy, compare_func="",
+                min_lod=1.0 if key[2] else -1000.0)
         return self._samplers[key]
 
     def prune(self, materials):

@@ -203,7 +203,7 @@ def _bind_map(prog, short, ref, textures):
     tex, decode = textures.get(ref.path, ref.colorspace)
     tex.use(unit)
     set_uniform(prog, f"m_{short}.srgb", bool(decode))
-    textures.sampler(ref.wrap_s, ref.wrap_t).use(unit)
+    textures.sampler(ref.wrap_s, ref.wrap_t, decode or ref.filtertype != "linear").use(unit)
     set_uniform(prog, f"m_{short}.wrap", (WRAP.get(ref.wrap_s, 0), WRAP.get(ref.wrap_t, 0)))
     set_uniform(prog, f"m_{short}.scale", tuple(ref.scale))
     set_uniform(prog, f"m_{short}.bias", tuple(ref.bias))
