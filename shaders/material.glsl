@@ -160,7 +160,9 @@ vec4 sample_map(sampler2D t, Map m, vec2 uv) {
         // blurs over its reach however large the texels: four probes at least.
         float reach = u_pixel_filter_reach;
         float least = m.filtertype == 1 ? 4.0 : 1.0;
+        // (Two probes would sit at +-0.75 px, twice the filter's spread: three.)
         ivec2 k = ivec2(clamp(ceil(2.0 * reach * vec2(lx, ly)), vec2(least), vec2(4.0 * cap)));
+        k += ivec2(equal(k, ivec2(2)));
         vec2 cell = reach / vec2(k);               // how far a probe's box reaches, pixels
         vec2 box = (abs(dx) * cell.x + abs(dy) * cell.y) * n;
         float total = 0.0;

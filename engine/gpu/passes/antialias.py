@@ -6,10 +6,11 @@ Deferred shading).
                       it down with Cycles' pixel filter: Blackman-Harris reaching
                       1.5 px either side of each pixel centre (Cycles doubles the
                       user's 1.5 px width for this filter, scene/film.cpp
-                      filter_table), separably, in two draws. Textures pick their
-                      mips for the larger image, one level sharper still
-                      (texture_footprint).
-  k = 1               FXAA at geometric edges (passes/post.py), when the preset asks.
+                      filter_table), separably, in two draws. A texture lookup
+                      filters its sub-pixel (shaders/material.glsl sample_map).
+  k = 1               FXAA at geometric edges (passes/post.py), when the preset asks;
+                      texture lookups filter with the same pixel filter
+                      (BLACKMAN_HARRIS, FILTER_WIDTH: material.glsl sample_map).
 
 Chosen by measurement (bench/bench_antialias.py, docs/rendering.md "Anti-aliasing"): against
 jittered accumulation of as many drawings (a still's TAA) supersampling had the lower
