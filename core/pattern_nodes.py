@@ -4,6 +4,8 @@ generates GLSL from them; an operation's position in its list is its number in
 shaders/pattern_lib.glsl."""
 from __future__ import annotations
 
+from .images import FILTERTYPES
+
 # Blender's Math node operations, as shaders/pattern_lib.glsl pt_math numbers them.
 MATH_OPS = (
     "ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "MULTIPLY_ADD", "POWER", "LOGARITHM", "SQRT",
@@ -48,7 +50,8 @@ KINDS = {
     # Blender's Perlin fBm in 3D (shaders/pattern_lib.glsl pt_noise_fbm).
     "noise": {"dimensions": ("3D",), "noise_type": ("FBM",)},
     # An image inside a network (one directly on a surface input stays a UsdUVTexture).
-    "image": {"wrap": ("repeat", "clamp", "black", "mirror"), "color_space": ("sRGB", "raw")},
+    "image": {"wrap": ("repeat", "clamp", "black", "mirror"), "color_space": ("sRGB", "raw"),
+              "filtertype": FILTERTYPES},
     "voronoi": {"dimensions": ("3D",), "feature": ("F1",), "distance": VORONOI_METRICS,
                 "normalize": ("0",)},
     "wave": {"wave_type": WAVE_TYPES, "direction": WAVE_DIRECTIONS, "wave_profile": WAVE_PROFILES},

@@ -29,6 +29,7 @@ class TextureRef:
     scale: tuple = (1.0, 1.0, 1.0, 1.0)
     bias: tuple = (0.0, 0.0, 0.0, 0.0)
     channel: str = "rgb"           # rgb | r | g | b | a
+    filtertype: str = "linear"     # core/images.py FILTERTYPES (Blender's interpolation)
     # A UDIM image (a `<UDIM>` path): ((tile number, resolved path), ...) of the tiles
     # found, first tile first; `path` is the first tile's. () for a plain image.
     tiles: tuple = ()

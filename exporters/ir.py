@@ -39,6 +39,7 @@ class TextureRecord:
     color_space: str = "sRGB"  # sRGB / raw
     scale: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
     bias: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    filtertype: str = "linear"  # core/images.py FILTERTYPES (Blender's interpolation)
 
 
 @dataclass

@@ -20,16 +20,25 @@ uniform vec4 u_sheen;   // what g_sheen holds (engine/gpu/passes/gbuffer.py shee
 #endif
 // Cycles' bump map correction (Material > Settings), for a normal-mapped material.
 uniform bool u_bump_correction = true;
-// The footprint a lookup filters over, as a fraction of the fragment's own
-// (engine/gpu/passes/antialias.py texture_footprint): 1 but in supersampled images.
-uniform float u_texture_footprint = 1.0;
+// Texture lookups (sample_map): the most probes one takes along a long footprint (the
+// preset's anisotropy), and the pixel filter that lookups of an image not
+// supersampled filter with: Cycles' (engine/gpu/passes/antialias.py BLACKMAN_HARRIS,
+// its cosine terms, and its reach in pixels); reach 0 in a supersampled image, whose
+// pixel filter comes after (passes/antialias.py downsample_taps).
+uniform float u_max_anisotropy = 16.0;
+uniform vec4 u_pixel_filter = vec4(0.0);
+uniform float u_pixel_filter_reach = 0.0;
 
+float pixel_filter(float x) {
+    float t = 3.14159265 * (x / u_pixel_filter_reach + 1.0);
+    return dot(u_pixel_filter, vec4(1.0, cos(t), cos(2.0 * t), cos(3.0 * t)));
+}
 
 // A UsdUVTexture: wrap (0 repeat, 1 mirror, 2 clamp, 3 black), scale, bias, channel
-// (-1 rgb, 0..3 r g b a). srgb: an 8-bit sRGB image filtered as Cycles filters it
-// (engine/gpu/textures.py): magnified, its stored values are interpolated and then
-// decoded; minified, its mips (averages of that in linear light) are filtered by GL.
-struct Map { ivec2 wrap; vec4 scale; vec4 bias; int channel; bool srgb; };
+// (-1 rgb, 0..3 r g b a), filtertype (0 linear, 1 closest, 2 cubic, 3 smart:
+// core/images.py FILTERTYPES). srgb: an 8-bit sRGB image, which Cycles interpolates
+// in its stored (encoded) values and then decodes (engine/gpu/textures.py).
+struct Map { ivec2 wrap; vec4 scale; vec4 bias; int channel; bool srgb; int filtertype; };
 
 float wrap1(float x, int mode) {
     if (mode == 1) return 1.0 - abs(mod(x, 2.0) - 1.0);
@@ -45,35 +54,138 @@ vec3 linear_to_srgb(vec3 c) {
     return mix(1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, 12.92 * c, vec3(low));
 }
 
-// Cycles' 8-bit sRGB lookup at w: bilinear over the four stored (encoded) texels, then
-// decoded. The texture is an sRGB format, so fetched texels come decoded: encode them
-// again (exact for 8-bit values).
-vec4 bilinear_encoded(sampler2D t, Map m, vec2 w) {
-    ivec2 n = textureSize(t, 0);
-    vec2 f = w * vec2(n) - 0.5;
-    ivec2 i = ivec2(floor(f));
-    vec2 a = f - vec2(i);
-    int x0 = wrap_texel(i.x, n.x, m.wrap.x), x1 = wrap_texel(i.x + 1, n.x, m.wrap.x);
-    int y0 = wrap_texel(i.y, n.y, m.wrap.y), y1 = wrap_texel(i.y + 1, n.y, m.wrap.y);
-    vec4 c00 = texelFetch(t, ivec2(x0, y0), 0), c10 = texelFetch(t, ivec2(x1, y0), 0);
-    vec4 c01 = texelFetch(t, ivec2(x0, y1), 0), c11 = texelFetch(t, ivec2(x1, y1), 0);
-    c00.rgb = linear_to_srgb(c00.rgb); c10.rgb = linear_to_srgb(c10.rgb);
-    c01.rgb = linear_to_srgb(c01.rgb); c11.rgb = linear_to_srgb(c11.rgb);
-    vec4 c = mix(mix(c00, c10, a.x), mix(c01, c11, a.x), a.y);
-    return vec4(srgb_to_linear(c.rgb), c.a);
+// Texel i of `level`, wrapped; `encoded`: as stored in an sRGB image (GL's fetch
+// decodes it; encoding again is exact for 8-bit values). Probes below fetch texels
+// rather than filter: on llvmpipe a sampler with anisotropy filters textureLod and
+// textureGrad with derivatives of its own, whatever level or gradients they name.
+vec4 texel(sampler2D t, Map m, ivec2 i, int level, bool encoded) {
+    ivec2 n = textureSize(t, level);
+    vec4 c = texelFetch(t, ivec2(wrap_texel(i.x, n.x, m.wrap.x), wrap_texel(i.y, n.y, m.wrap.y)), level);
+    if (encoded) c.rgb = linear_to_srgb(c.rgb);
+    return c;
 }
 
+vec4 decoded(vec4 c, bool encoded) { return encoded ? vec4(srgb_to_linear(c.rgb), c.a) : c; }
+
+// Cycles' closest (the texel of level 0 under w) averaged over a box reaching `box`
+// texels either way, as the pixel filter averages its many point lookups: the texels'
+// sides stay sharp where the box is a point, and blend by how much of each texel the
+// box covers (reaching half a texel, bilinear).
+vec4 closest0(sampler2D t, Map m, vec2 w, vec2 box) {
+    vec2 f = w * vec2(textureSize(t, 0)) - 0.5;
+    ivec2 i = ivec2(floor(f));
+    vec2 a = clamp((f - vec2(i) - 0.5) / max(2.0 * box, 1e-6) + 0.5, 0.0, 1.0);
+    return mix(mix(texel(t, m, i, 0, false), texel(t, m, i + ivec2(1, 0), 0, false), a.x),
+               mix(texel(t, m, i + ivec2(0, 1), 0, false), texel(t, m, i + ivec2(1, 1), 0, false), a.x),
+               a.y);
+}
+
+// Cycles' linear lookup at w in `level`: bilinear over four texels; of an 8-bit sRGB
+// image's level 0, over the stored (encoded) values, then decoded.
+vec4 bilinear(sampler2D t, Map m, vec2 w, int level) {
+    bool e = m.srgb && level == 0;
+    vec2 f = w * vec2(textureSize(t, level)) - 0.5;
+    ivec2 i = ivec2(floor(f));
+    vec2 a = f - vec2(i);
+    return decoded(mix(mix(texel(t, m, i, level, e), texel(t, m, i + ivec2(1, 0), level, e), a.x),
+                       mix(texel(t, m, i + ivec2(0, 1), level, e), texel(t, m, i + ivec2(1, 1), level, e), a.x),
+                       a.y), e);
+}
+
+// Cycles' cubic B-spline weights of the taps i - 1 .. i + 2 at fraction a.
+vec4 bspline_weights(float a) {
+    float b = 1.0 - a;
+    return vec4(b * b * b, 4.0 - 6.0 * a * a + 3.0 * a * a * a,
+                4.0 - 6.0 * b * b + 3.0 * b * b * b, a * a * a) * (1.0 / 6.0);
+}
+
+// Cycles' cubic lookup at w in `level`: the B-spline over 4 x 4 texels (of an sRGB
+// image's level 0, over the stored values, then decoded).
+vec4 bspline(sampler2D t, Map m, vec2 w, int level) {
+    bool e = m.srgb && level == 0;
+    vec2 f = w * vec2(textureSize(t, level)) - 0.5;
+    vec2 i = floor(f);
+    vec4 wx = bspline_weights(f.x - i.x), wy = bspline_weights(f.y - i.y);
+    vec4 c = vec4(0.0);
+    for (int y = 0; y < 4; ++y) {
+        vec4 row = vec4(0.0);
+        for (int x = 0; x < 4; ++x)
+            row += wx[x] * texel(t, m, ivec2(i) + ivec2(x - 1, y - 1), level, e);
+        c += wy[y] * row;
+    }
+    return decoded(c, e);
+}
+
+// One probe at w, of a lookup whose footprint is under two texels (`minified`: over
+// one): the image's interpolation at level 0, blended towards level 1 by `lod` (in
+// [0, 1)) as trilinear filtering blends (levels 1 and deeper of an sRGB image hold
+// averages of Cycles' own lookups: engine/gpu/textures.py cycles_srgb_mips). `box`:
+// how far the probe's box reaches either way, in texels of level 0, which Closest
+// averages its nearest texels over (sharp where magnified). Smart is Cubic where
+// magnified and Linear where not.
+vec4 near_probe(sampler2D t, Map m, vec2 w, float lod, vec2 box, bool minified) {
+    bool cubic = m.filtertype == 2 || (m.filtertype == 3 && !minified);
+    vec4 c = m.filtertype == 1 ? closest0(t, m, w, min(box, vec2(0.5))) :
+             cubic ? bspline(t, m, w, 0) : bilinear(t, m, w, 0);
+    if (lod <= 0.0) return c;
+    return mix(c, m.filtertype == 2 ? bspline(t, m, w, 1) : bilinear(t, m, w, 1), lod);
+}
+
+// A texture lookup at uv, as Cycles' pixel filter averages the image's interpolation
+// (Cycles reads textures at points, without mip levels). A linear lookup of data (not
+// an 8-bit sRGB colour) is GL's: GL filters in linear values as Cycles does. Else,
+// where the footprint is two texels or more along its shorter side (or its share of
+// the longer), GL filters levels 1 and deeper, trilinear and anisotropic: their
+// texels are the averages Cycles would make (an sRGB image's: engine/gpu/textures.py
+// cycles_srgb_mips), and the sampler keeps GL off level 0 (textures.py sampler).
+// Under that the shader reads level 0 itself, through the image's interpolation
+// (near_probe): in an image not supersampled, with the pixel filter's weights on a
+// grid of probes a texel or less apart; in a supersampled one, over its sub-pixel,
+// with probes along the footprint's longer side as GL's anisotropic filter takes
+// them (EXT_texture_filter_anisotropic), and the pixel filter after.
 vec4 sample_map(sampler2D t, Map m, vec2 uv) {
-    // Gradients from the unwrapped st so mirror folds do not spike the mip level.
-    vec2 dx = dFdx(uv) * u_texture_footprint, dy = dFdy(uv) * u_texture_footprint;
-    vec2 w = vec2(wrap1(uv.x, m.wrap.x), wrap1(uv.y, m.wrap.y));
-    vec4 c = textureGrad(t, w, dx, dy);
-    if (m.srgb) {
-        // Magnified (the footprint under a texel along its longer axis) one lookup is
-        // the pixel; from two texels on GL's filtering averages the footprint.
-        vec2 n = vec2(textureSize(t, 0));
-        float major = max(length(dx * n), length(dy * n));
-        c = mix(bilinear_encoded(t, m, w), c, clamp(log2(max(major, 1e-8)), 0.0, 1.0));
+    // Gradients from the unwrapped st so mirror folds do not spike the level.
+    vec2 dx = dFdx(uv), dy = dFdy(uv);
+    vec2 n = vec2(textureSize(t, 0));
+    float lx = length(dx * n), ly = length(dy * n);            // texels per fragment
+    float major = max(lx, ly), minor = min(lx, ly);
+    float cap = max(u_max_anisotropy, 1.0);
+    float count = clamp(ceil(major / max(minor, 1e-8)), 1.0, cap);
+    float lod = log2(max(major / count, 1e-8));
+    vec4 c = vec4(0.0);
+    if (lod >= 1.0 || (m.filtertype == 0 && !m.srgb)) {
+        c = textureGrad(t, vec2(wrap1(uv.x, m.wrap.x), wrap1(uv.y, m.wrap.y)), dx, dy);
+    } else if (u_pixel_filter_reach > 0.0) {
+        // Closest's texels are squares with sharp sides, which the pixel filter
+        // blurs over its reach however large the texels: four probes at least.
+        float reach = u_pixel_filter_reach;
+        float least = m.filtertype == 1 ? 4.0 : 1.0;
+        // (Two probes would sit at +-0.75 px, twice the filter's spread: three.)
+        ivec2 k = ivec2(clamp(ceil(2.0 * reach * vec2(lx, ly)), vec2(least), vec2(4.0 * cap)));
+        k += ivec2(equal(k, ivec2(2)));
+        vec2 cell = reach / vec2(k);               // how far a probe's box reaches, pixels
+        vec2 box = (abs(dx) * cell.x + abs(dy) * cell.y) * n;
+        float total = 0.0;
+        for (int j = 0; j < k.y; ++j)
+            for (int i = 0; i < k.x; ++i) {
+                vec2 o = reach * ((2.0 * vec2(i, j) + 1.0) / vec2(k) - 1.0);   // in pixels
+                float weight = pixel_filter(o.x) * pixel_filter(o.y);
+                vec2 p = uv + dx * o.x + dy * o.y;
+                c += weight * near_probe(t, m, vec2(wrap1(p.x, m.wrap.x), wrap1(p.y, m.wrap.y)),
+                                         0.0, box, lod > 0.0);
+                total += weight;
+            }
+        c /= total;
+    } else {
+        bool along_x = lx >= ly;
+        vec2 axis = along_x ? dx : dy;
+        vec2 box = 0.5 * (abs(axis) / count + abs(along_x ? dy : dx)) * n;
+        for (int i = 0; i < int(count); ++i) {
+            vec2 p = uv + axis * ((float(i) + 0.5) / count - 0.5);
+            c += near_probe(t, m, vec2(wrap1(p.x, m.wrap.x), wrap1(p.y, m.wrap.y)),
+                            max(lod, 0.0), box, lod > 0.0);
+        }
+        c /= count;
     }
     bool outside = (m.wrap.x == 3 && (uv.x < 0.0 || uv.x > 1.0)) ||
                    (m.wrap.y == 3 && (uv.y < 0.0 || uv.y > 1.0));

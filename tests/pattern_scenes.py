@@ -12,6 +12,9 @@ from reference_scenes import _camera, _mesh_object, _sun, _world
 
 SIZE = (128, 128)
 SAMPLES = 64
+# Scenes whose quads are images of sharp texels under a pixel filter: fewer samples
+# leave Cycles' own noise in the reference (the interpolation families).
+SAMPLES_OF = {f"image_{i}": 1024 for i in ("linear", "closest", "cubic", "smart")}
 COLUMNS = 5
 
 
@@ -687,6 +690,85 @@ def build_image(workdir=None):
                            ("mapping_only", _image_mapping_only), ("two_images", _two_images)])
 
 
+def _pixel_art_file():
+    """A 16 x 16 8-bit sRGB PNG of pixel art: each texel its own colour (a hash of its
+    position), so that every interpolation shows (in the temporary folder, one a
+    process)."""
+    import os
+    import tempfile
+    import numpy as np
+    from reference_scenes import _write_image
+    path = os.path.join(tempfile.gettempdir(), f"lantern-pattern-pixels-{os.getpid()}.png")
+    if not os.path.exists(path):
+        y, x = np.mgrid[0:16, 0:16]
+        h = (x * 73 + y * 151 + (x * y) % 7 * 37) % 256
+        rgba = np.stack([h, (h * 5 + 80) % 256, (255 - h + x * 9) % 256,
+                         np.full_like(h, 255)], -1)
+        _write_image(path, rgba.astype(np.uint8))
+    return path
+
+
+def _pixel_art(tree, interpolation, extension="REPEAT"):
+    import bpy
+    node = tree.nodes.new("ShaderNodeTexImage")
+    node.image = bpy.data.images.load(_pixel_art_file(), check_existing=True)
+    node.interpolation, node.extension = interpolation, extension
+    return node
+
+
+def _uv_square(u0, v0, size):
+    """Mesh hook: the quad's UVs a square of `size` at (u0, v0)."""
+    def mesh(me):
+        corners = [(u0, v0), (u0 + size, v0), (u0 + size, v0 + size), (u0, v0 + size)]
+        for loop, uv in zip(me.uv_layers.active.data, corners):
+            loop.uv = uv
+    return mesh
+
+
+def _straight_image(interpolation, u0, v0, size):
+    """The image straight on Base Color (a UsdUVTexture), the quad's UVs a square of
+    `size` texel-widths of the image / 16 at (u0, v0)."""
+    def build(tree, bsdf):
+        _to_base(tree, bsdf, _pixel_art(tree, interpolation).outputs["Color"])
+    build.mesh = _uv_square(u0, v0, size)
+    return build
+
+
+def _network_image(interpolation, scale, extension="REPEAT"):
+    """The image through a Mapping node (rotated 30 degrees, scaled) and a Hue/Saturation
+    and an Invert node: a network's image (the issue's "through a Mapping node")."""
+    def build(tree, bsdf):
+        mapping = _uv_mapping(tree, "POINT", (0.13, 0.27, 0.0), (0.0, 0.0, 0.5236),
+                              (scale, scale, 1.0))
+        image = _pixel_art(tree, interpolation, extension)
+        tree.links.new(mapping.outputs[0], image.inputs["Vector"])
+        hsv = tree.nodes.new("ShaderNodeHueSaturation")
+        hsv.inputs["Hue"].default_value = 0.8
+        tree.links.new(image.outputs["Color"], hsv.inputs["Color"])
+        invert = tree.nodes.new("ShaderNodeInvert")
+        invert.inputs["Fac"].default_value = 0.25
+        tree.links.new(hsv.outputs[0], invert.inputs["Color"])
+        _to_base(tree, bsdf, invert.outputs[0])
+    return build
+
+
+def build_interpolation(interpolation):
+    """One Image Texture interpolation (Blender's Linear, Closest, Cubic, Smart) on a
+    16 x 16 image of pixel art: straight on Base Color magnified 6.4 times and minified
+    1.9 times, and in a network (Mapping, Hue/Saturation, Invert) magnified 5.3 times
+    (mirrored) and minified 1.9 times."""
+    def build(workdir=None):
+        return _grid(f"image_{interpolation.lower()}", [
+            ("magnified", _straight_image(interpolation, 0.3, 0.45, 0.25)),
+            ("minified", _straight_image(interpolation, 0.1, 0.2, 3.0)),
+            ("network_magnified", _network_image(interpolation, 0.3, "MIRROR")),
+            ("network_minified", _network_image(interpolation, 3.0))])
+    return build
+
+
+INTERPOLATIONS = ("Linear", "Closest", "Cubic", "Smart")
+
+
 def _height(kind, scale):
     """A height for the Bump node: Noise's Fac, Wave bands' Fac or a linear Gradient, on
     the UV coordinates."""
@@ -880,7 +962,8 @@ def build_udim(workdir=None):
                           ("tile_1002_zoomed", _udim(1.25, 0.25, 0.5))])
 
 
-SCENES = {"udim": build_udim,
+SCENES = {**{f"image_{i.lower()}": build_interpolation(i) for i in INTERPOLATIONS},
+          "udim": build_udim,
           "attribute": build_attribute,
           "mix_shader": build_mix_shader,
           "generated": build_generated,

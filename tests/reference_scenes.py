@@ -51,6 +51,8 @@ SCENES = {
     "transparency_planes": Spec((128, 72), 1024, "three overlapping blended planes (alpha 0.5) at three depths"),
     "cutout_shadow": Spec((128, 72), 1024, "an alpha-clipped cut-out casting a sun shadow on a floor"),
     "tex_grazing_checker": Spec((128, 72), 2048, "an 8-bit sRGB 0/1 checker seen at a grazing angle"),
+    "tex_grazing_rotated": Spec((128, 128), 1024, "an 8-bit sRGB 0/1 checker on a plane turned 30 degrees, "
+                                "seen through a long lens from 1.8 to 22 degrees above it"),
     "tex_gradient16": Spec((512, 8), 256, "a 16-bit PNG ramp 0..1 (Non-Color), top down"),
     "tex_exr4": Spec((16, 16), 16, "an EXR emission texture of value 4.0"),
     "02_suzanne": Spec((128, 72), 1024, "corpus: textured, normal-mapped Suzanne under the world"),
@@ -454,6 +456,28 @@ def build_tex_grazing_checker(workdir):
     _image_node(mat, _write_png(os.path.join(workdir, "checker.png"), checker_pixels()))
     _quad(scene, "Ground", [(-20, -2, 0), (20, -2, 0), (20, 38, 0), (-20, 38, 0)], mat, uv_scale=10.0)
     _camera(scene, (0.0, -2.0, 0.6), (0.0, 10.0, 0.0), lens=35.0)
+    return scene
+
+
+def build_tex_grazing_rotated(workdir):
+    """A 0/1 checker of 32 x 32 cells (8 px each) tiled 40 times on an 80 m plane turned
+    30 degrees about the vertical, seen from 0.6 m above it through a 100 mm lens
+    looking 12 degrees down: from the top row (1.8 degrees above the plane, 19 m
+    away) to the bottom (22 degrees), the plane fills the frame (no horizon: the
+    plane's far side is a geometric edge, not a texture's). A sun of irradiance pi
+    straight down: a pixel reads its albedo."""
+    scene = _empty_scene("tex_grazing_rotated")
+    _world(scene, (0.0, 0.0, 0.0), 0.0)
+    _sun(scene, math.pi)
+    mat = _lambert("Checker", (1.0, 1.0, 1.0))
+    _image_node(mat, _write_png(os.path.join(workdir, "checker32.png"), checker_pixels(256, 32)))
+    c, s = math.cos(math.radians(30.0)), math.sin(math.radians(30.0))
+    corners = [(x * c - y * s, 20.0 + x * s + y * c, 0.0)
+               for x, y in ((-40, -40), (40, -40), (40, 40), (-40, 40))]
+    _quad(scene, "Ground", corners, mat, uv_scale=40.0)
+    down = math.radians(12.0)
+    _camera(scene, (0.0, -2.0, 0.6), (0.0, -2.0 + 10.0 * math.cos(down), 0.6 - 10.0 * math.sin(down)),
+            lens=100.0)
     return scene
 
 

@@ -1055,3 +1055,52 @@ def test_sheen_is_the_principled_bsdfs_or_a_sheen_bsdfs(empty_scene):
     assert _sheen(stage, "Fabric")[0] == "principled"
     assert any("second sheen" in w for w in report.warnings), report.warnings
     assert not any("not supported" in w for w in report.warnings), report.warnings
+
+
+def _gltf_quad(path, png, mag_filter):
+    """A glTF 2.0 file of one textured quad whose sampler has `mag_filter` (9728
+    NEAREST, 9729 LINEAR) and the same minification filter, its image `png`."""
+    import base64
+    import json
+    positions = np.array([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)], np.float32)
+    uvs = np.array([(0, 1), (1, 1), (1, 0), (0, 0)], np.float32)
+    indices = np.array([0, 1, 2, 0, 2, 3], np.uint16)
+    blob = positions.tobytes() + uvs.tobytes() + indices.tobytes()
+    views = [(0, 48, 34962), (48, 32, 34962), (80, 12, 34963)]
+    doc = {
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1},
+                                    "indices": 2, "material": 0}]}],
+        "materials": [{"name": "Pixels", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+        "textures": [{"sampler": 0, "source": 0}],
+        "samplers": [{"magFilter": mag_filter, "minFilter": mag_filter}],
+        "images": [{"uri": os.path.basename(png)}],
+        "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64,"
+                     + base64.b64encode(blob).decode()}],
+        "bufferViews": [{"buffer": 0, "byteOffset": o, "byteLength": n, "target": t}
+                        for o, n, t in views],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}],
+    }
+    path.write_text(json.dumps(doc))
+    return path
+
+
+@pytest.mark.parametrize("mag_filter, filtertype", [(9728, "closest"), (9729, None)])
+def test_the_gltf_importers_nearest_sampler_is_exported_as_closest(empty_scene, tmp_path,
+                                                                   mag_filter, filtertype):
+    """Blender's glTF importer reads a NEAREST sampler as the Image Texture's Closest
+    (pixel art, low-poly assets); the UsdUVTexture says so in lantern:filtertype, which
+    is not written for Linear (UsdUVTexture has no input for it: the stage contract,
+    "Textures")."""
+    png = saved_image(tmp_path, "pixels", "sRGB").filepath_raw
+    bpy.ops.import_scene.gltf(filepath=str(_gltf_quad(tmp_path / "quad.gltf", png, mag_filter)))
+    stage, report = export_current()
+    assert report.warnings == []
+    tex, _ = source(surface(stage, "Pixels"), "diffuseColor")
+    attr = tex.GetPrim().GetAttribute("lantern:filtertype")
+    assert (attr.Get() if attr and attr.HasAuthoredValue() else None) == filtertype

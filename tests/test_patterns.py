@@ -399,3 +399,81 @@ def test_the_materials_of_one_mesh_read_their_own_attributes(empty_scene):
     image = render_stage(stage, RenderSettings(width=64, height=32)).rgba
     np.testing.assert_allclose(image[16, 12, :3], colours["Left"], atol=0.02)
     np.testing.assert_allclose(image[16, 52, :3], colours["Right"], atol=0.02)
+
+
+INTERPOLATION_SCENES = [f"image_{i.lower()}" for i in pattern_scenes.INTERPOLATIONS]
+
+
+@pytest.mark.parametrize("name", INTERPOLATION_SCENES)
+def test_an_image_interpolation_is_within_flip_of_cycles_at_medium(name):
+    """Each Image Texture interpolation, straight on Base Color and in a network,
+    magnified and minified, at the medium preset (its ultra figure is
+    test_node_family_within_flip_of_cycles'): Cycles' Closest texels are sharp
+    squares, its Cubic a B-spline, and Lantern's the same. Smart is Cubic where
+    magnified and Linear where not (Cycles renders it as Cubic throughout)."""
+    flip, per_tile, result = lantern_flip(name, preset="medium")
+    worst = max(per_tile, key=per_tile.get)
+    print(f"{name} (medium): interior HDR-FLIP {flip:.4f}, worst {worst} {per_tile[worst]:.4f}")
+    assert not result.warnings, result.warnings
+    assert flip < FLIP_BOUND
+
+
+def _filtertypes(stage, material):
+    """(lantern:filtertype of the material's UsdUVTextures, filtertype of its network's
+    images): None where not authored."""
+    from pxr import Usd, UsdShade
+    textures, network = [], []
+    for prim in Usd.PrimRange(stage.GetPrimAtPath(f"/root/_materials/{material}")):
+        shader = UsdShade.Shader(prim)
+        if shader and shader.GetIdAttr().Get() == "UsdUVTexture":
+            attr = prim.GetAttribute("lantern:filtertype")
+            textures.append(attr.Get() if attr.HasAuthoredValue() else None)
+        if prim.GetAttribute("lantern:nodeDef").Get() == "ND_lantern_image":
+            network.append(shader.GetInput("filtertype").Get())
+    return textures, network
+
+
+def test_the_interpolation_is_written_where_the_stage_can_say_it():
+    """A UsdUVTexture has no input for it: lantern:filtertype, written where not
+    Linear; a network's image has MaterialX's filtertype setting (and smart)."""
+    stage, _ = exported("image_closest")
+    assert _filtertypes(stage, "image_closest_magnified") == (["closest"], [])
+    assert _filtertypes(stage, "image_closest_network_magnified") == ([], ["closest"])
+    stage, _ = exported("image_smart")
+    assert _filtertypes(stage, "image_smart_minified") == (["smart"], [])
+    stage, _ = exported("image_linear")
+    assert _filtertypes(stage, "image_linear_magnified") == ([None], [])
+    assert _filtertypes(stage, "image_linear_network_minified") == ([], ["linear"])
+
+
+def test_an_unknown_interpolation_warns_and_reads_as_linear():
+    """A filter type the engine does not know, on a UsdUVTexture and on a network's
+    image: one warning each naming the prim and the value, and the image drawn as
+    Linear draws it."""
+    import bpy
+    from pxr import Usd, UsdShade
+    from lantern.engine import RenderSettings, render_stage
+    from lantern.exporters import stage_from_depsgraph
+
+    def stage_of(interpolation):
+        pattern_scenes.SCENES[f"image_{interpolation}"]()
+        return stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())[0]
+
+    stage = stage_of("closest")
+    edited = []
+    for prim in Usd.PrimRange(stage.GetPrimAtPath("/root/_materials")):
+        attr = prim.GetAttribute("lantern:filtertype")
+        if attr.HasAuthoredValue():
+            attr.Set("bicubic")
+            edited.append(str(prim.GetPath()))
+        elif prim.GetAttribute("lantern:nodeDef").Get() == "ND_lantern_image":
+            UsdShade.Shader(prim).GetInput("filtertype").Set("bicubic")
+            edited.append(str(prim.GetPath()))
+    assert len(edited) == 4
+    settings = RenderSettings(width=64, height=64)
+    result = render_stage(stage, settings)
+    for path in edited:
+        named = [w for w in result.warnings if path in w]
+        assert len(named) == 1 and "'bicubic'" in named[0] and "Linear" in named[0], result.warnings
+    linear = render_stage(stage_of("linear"), settings)
+    np.testing.assert_array_equal(result.rgba, linear.rgba)

@@ -333,7 +333,8 @@ def pattern_images(mat) -> list:
             path = next(v for i, t, v in node.values if t == "asset")
             wrap = settings.get("wrap", "repeat")
             refs.append(TextureRef(path=path, colorspace=settings.get("color_space", "sRGB"),
-                                   wrap_s=wrap, wrap_t=wrap))
+                                   wrap_s=wrap, wrap_t=wrap,
+                                   filtertype=settings.get("filtertype", "linear")))
     return refs
 
 

@@ -8,10 +8,9 @@ file's own precision:
                 0.5, on the grazing checker). Here the image goes up as
                 GL_SRGB8_ALPHA8 with its own mip chain (cycles_srgb_mips): level 1 is
                 the average, over each texel, of Cycles' decoded bilinear lookup of
-                level 0, and deeper levels average in linear light. Magnified, the
-                shader interpolates the encoded texels itself and decodes
-                (gbuffer.frag bilinear_encoded); minified, GL filters those mips
-                (trilinear, anisotropic); between levels 0 and 1 the two blend.
+                level 0, and deeper levels average in linear light. Level 0 the
+                shader interpolates in the encoded values itself and decodes
+                (material.glsl bilinear, bspline); GL filters the mips.
                 RenderSettings.srgb_filtering = "linear" takes EEVEE's (and GL's) way:
                 decoded, then filtered, mips averaged in linear light.
                 Other 8-bit data: RGBA8, as stored.
@@ -20,8 +19,11 @@ file's own precision:
                 when it loads them).
   half / float  RGBA16F / RGBA32F as the file stores them: nothing is clamped, 4.0
                 stays 4.0.
-Trilinear filtering with anisotropy, wrap modes via samplers (mirror and black are
-finished in the shader, see gbuffer.frag sample_map). Reading the files is
+GL filters the mips (trilinear, anisotropic); level 0 of an image filtered as Cycles
+filters 8-bit sRGB, or of an interpolation other than Linear, is the shader's, which
+reads it through the image's interpolation as Cycles does, and GL's filter of it
+starts at level 1 (shaders/material.glsl sample_map, `sampler`).
+Wrap modes via samplers (mirror and black are finished in the shader). Reading the files is
 engine/textures.py's job; an image that cannot be read (corrupt, truncated, empty,
 not an image) becomes a magenta texel and a warning naming the file, here and only
 here (`_image`), whatever the reader raises."""
@@ -148,7 +150,8 @@ class MaterialTextures:
         return tex, decode
 
     def set_anisotropy(self, anisotropy: float):
-        """The preset's anisotropic filtering, on the images and samplers already made."""
+        """The preset's anisotropic filtering, on the images and samplers already made
+        (material.glsl's own probes take it as u_max_anisotropy)."""
         if anisotropy == self.anisotropy:
             return
         self.anisotropy = anisotropy
@@ -157,15 +160,20 @@ class MaterialTextures:
         for sampler in self._samplers.values():
             sampler.anisotropy = anisotropy
 
-    def sampler(self, wrap_s: str, wrap_t: str):
+    def sampler(self, wrap_s: str, wrap_t: str, shader_level0: bool = False):
         """Repeat for repeat/mirror (mirror folds st in the shader), clamp-to-edge for
-        clamp/black (black masks outside [0,1] in the shader)."""
-        key = (wrap_s in ("repeat", "mirror"), wrap_t in ("repeat", "mirror"))
+        clamp/black (black masks outside [0,1] in the shader). `shader_level0`: the
+        shader reads the image's level 0 itself (an 8-bit sRGB image as Cycles
+        interpolates it, or an interpolation other than Linear: material.glsl
+        sample_map), so GL's filter starts at level 1 (llvmpipe's anisotropic filter
+        would read level 0 wherever the footprint's shorter side is under a texel)."""
+        key = (wrap_s in ("repeat", "mirror"), wrap_t in ("repeat", "mirror"), bool(shader_level0))
         if key not in self._samplers:
             sampler = self._samplers[key] = self.ctx.sampler(
                 repeat_x=key[0], repeat_y=key[1],
                 filter=(self.ctx.LINEAR_MIPMAP_LINEAR, self.ctx.LINEAR),
-                anisotropy=self.anisotropy, compare_func="")
+                anisotropy=self.anisotropy, compare_func="",
+                min_lod=1.0 if key[2] else -1000.0)
         return self._samplers[key]
 
     def prune(self, materials):

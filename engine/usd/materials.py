@@ -13,6 +13,7 @@ import os
 import numpy as np
 from pxr import Usd, UsdShade
 
+from ...core.images import DEFAULT_FILTERTYPE, filtertype_of
 from ...core.sheen import MODES as SHEEN_MODES
 from ..scene import Material, TextureRef
 from .patterns import read_pattern
@@ -169,6 +170,9 @@ def _texture_ref(shader, channel, time, mat_path, warnings):
         warnings.append(f"{mat_path}: texture file {asset.path!r} not found; using the "
                         f"constant fallback")
         return None
+    filtertype = shader.GetPrim().GetAttribute("lantern:filtertype")
+    filtertype = filtertype_of(str(filtertype.Get(time)), str(shader.GetPath()), warnings.append) \
+        if filtertype and filtertype.HasAuthoredValue() else DEFAULT_FILTERTYPE
     scale = _input_value(shader, "scale", time, (1.0, 1.0, 1.0, 1.0))
     bias = _input_value(shader, "bias", time, (0.0, 0.0, 0.0, 0.0))
     return TextureRef(
@@ -177,7 +181,8 @@ def _texture_ref(shader, channel, time, mat_path, warnings):
         wrap_s=str(_input_value(shader, "wrapS", time, "useMetadata")).replace("useMetadata", "repeat"),
         wrap_t=str(_input_value(shader, "wrapT", time, "useMetadata")).replace("useMetadata", "repeat"),
         scale=tuple(float(c) for c in scale), bias=tuple(float(c) for c in bias),
-        channel=channel if channel in ("r", "g", "b", "a") else "rgb", tiles=tiles)
+        channel=channel if channel in ("r", "g", "b", "a") else "rgb", tiles=tiles,
+        filtertype=filtertype)
 
 
 def _udim_tiles(shader, path) -> tuple:

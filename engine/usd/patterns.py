@@ -13,6 +13,7 @@ import os
 import numpy as np
 from pxr import Sdf, UsdShade
 
+from ...core.images import filtertype_of
 from ...core.pattern_nodes import SURFACE_INPUTS, unsupported_setting
 from ..scene import PatternGraph, PatternNode
 
@@ -97,6 +98,9 @@ def read_pattern(mat: UsdShade.Material, time, warnings: list) -> PatternGraph |
                 if not np.all(np.isfinite(np.asarray(value, np.float64))):
                     raise _Bad(f"{path}: input {base} of {name} is not finite ({value})")
                 values.append((base, typ, value))
+        if ident == PREFIX + "image":          # an unknown interpolation reads as Linear
+            settings = [(k, filtertype_of(v, name, warnings.append) if k == "filtertype" else v)
+                        for k, v in settings]
         why = unsupported_setting(ident[len(PREFIX):], dict(settings))
         if why is not None:
             raise _Bad(f"{path}: node {name}: {why}")

@@ -6,13 +6,13 @@ the node, and a constant."""
 import dataclasses
 import math
 
+from ...core.images import BLENDER_INTERPOLATIONS, WRAP, filtertype_of
 from ...core.sheen import DISTRIBUTIONS
 from ..ir import MaterialRecord, SheenRecord, TexInput, TextureRecord
 from . import node_groups
 from .image import image_file
 from .pattern import PatternBuilder, Unsupported, is_pattern
 
-WRAP = {"REPEAT": "repeat", "EXTEND": "clamp", "CLIP": "black", "MIRROR": "mirror"}
 SEPARATE = {"ShaderNodeSeparateColor", "ShaderNodeSeparateRGB"}
 
 
@@ -104,7 +104,7 @@ class _Walker:
         self.material = material
         self.warn = warn
         self.texture_dir = texture_dir
-        self.pattern = PatternBuilder(_link, self.image_path)
+        self.pattern = PatternBuilder(_link, self.network_image)
         self.base_occlusion = False
         self.sheen = None          # SheenRecord: the first sheen lobe met
 
@@ -139,19 +139,29 @@ class _Walker:
             return None
         return None
 
-    def image_path(self, node):
-        return image_file(node.image, f"material '{self.material.name}', node '{node.name}'",
-                          self.warn, self.texture_dir)
+    def _owner(self, node):
+        return f"material '{self.material.name}', node '{node.name}'"
+
+    def filtertype(self, node):
+        """The Image Texture node's interpolation as the stage's filter type."""
+        return filtertype_of(BLENDER_INTERPOLATIONS.get(node.interpolation, node.interpolation),
+                             self._owner(node), self.warn)
+
+    def network_image(self, node):
+        """(file, filter type) of an Image Texture node in a network; None when it has
+        no file (it has warned)."""
+        path = image_file(node.image, self._owner(node), self.warn, self.texture_dir)
+        return None if path is None else (path, self.filtertype(node))
 
     def texture(self, node, raw=False):
-        path = image_file(node.image, f"material '{self.material.name}', node '{node.name}'",
-                          self.warn, self.texture_dir, udim=True)
+        path = image_file(node.image, self._owner(node), self.warn, self.texture_dir, udim=True)
         if path is None:
             return None
         space = node.image.colorspace_settings.name
         return TextureRecord(file=path, uv=self.uv_of(node),
                              wrap=WRAP.get(node.extension, "repeat"),
-                             color_space="sRGB" if space == "sRGB" and not raw else "raw")
+                             color_space="sRGB" if space == "sRGB" and not raw else "raw",
+                             filtertype=self.filtertype(node))
 
     def value(self, socket, kind, target=None):
         """A constant, or a TexInput when `socket` reads an image (maybe one channel).

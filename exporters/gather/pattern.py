@@ -6,13 +6,13 @@ NODES anywhere upstream is one warning naming it; the caller then keeps its cons
 (the UsdPreviewSurface fallback)."""
 from __future__ import annotations
 
+from ...core.images import WRAP
 from ...core.pattern_nodes import MAX_IMAGES, unsupported_setting
 from ..ir import PatternGraph, PatternNode
 from .mesh import attribute_primvar
 
 SOCKET_TYPES = {"VALUE": "float", "INT": "float", "BOOLEAN": "float",
                 "VECTOR": "vector", "RGBA": "color"}
-WRAP = {"REPEAT": "repeat", "EXTEND": "clamp", "CLIP": "black", "MIRROR": "mirror"}
 MIX_TYPES = {"FLOAT": ("Float", "float"), "VECTOR": ("Vector", "vector"), "RGBA": ("Color", "color")}
 
 
@@ -230,11 +230,12 @@ def is_pattern(node) -> bool:
 class PatternBuilder:
     """Builds one material's PatternGraph across its surface inputs (shared nodes once).
     `link_of(socket)`: the link feeding a socket through reroutes, or None;
-    `image_path(node)`: an Image Texture node's file, or None (it has warned)."""
+    `image_of(node)`: an Image Texture node's (file, filter type), or None (it has
+    warned)."""
 
-    def __init__(self, link_of, image_path):
+    def __init__(self, link_of, image_of):
         self.link_of = link_of
-        self.image_path = image_path
+        self.image_of = image_of
         self.graph = PatternGraph()
         self._names = {}          # Blender node name -> PatternNode name
 
@@ -332,10 +333,11 @@ class PatternBuilder:
         elif kind == "image":
             if sum(n.kind == "image" for n in self.graph.nodes) >= MAX_IMAGES:
                 raise Unsupported(node, f"is a network's image beyond {MAX_IMAGES}: not supported")
-            path = self.image_path(node)
-            if path is None:
+            image = self.image_of(node)
+            if image is None:
                 raise Unsupported(node, "has no image file")
-            rec.values["file"] = ("asset", path)
+            rec.values["file"] = ("asset", image[0])
+            rec.settings["filtertype"] = image[1]
         for name, socket in inputs.items():
             typ = socket_type(socket)
             link = self.link_of(socket)

@@ -18,6 +18,8 @@ MTLX_INPUT_TYPES = {**INPUT_TYPES, "normal": Sdf.ValueTypeNames.Float3}
 ALPHA_MODE = "lantern:alphaMode"
 BUMP_CORRECTION = "lantern:bumpMapCorrection"
 BASE_OCCLUSION = "lantern:baseColorOcclusion"
+# A UsdUVTexture's interpolation, where not linear (contract: "Textures").
+FILTERTYPE = "lantern:filtertype"
 # A sheen lobe (contract: "Sheen"; core/sheen.py its modes).
 SHEEN = (("lantern:sheenMode", Sdf.ValueTypeNames.Token),
          ("lantern:sheenColor", Sdf.ValueTypeNames.Color3f),
@@ -45,7 +47,7 @@ def write_material(stage, path, rec, default_uv, asset_path):
         return readers[varname]
 
     def texture(tex):
-        key = (tex.file, tex.uv, tex.wrap, tex.color_space, tex.scale, tex.bias)
+        key = (tex.file, tex.uv, tex.wrap, tex.color_space, tex.scale, tex.bias, tex.filtertype)
         if key not in textures:
             shader = UsdShade.Shader.Define(stage, path.AppendChild(f"tex_{len(textures)}"))
             shader.CreateIdAttr("UsdUVTexture")
@@ -58,6 +60,9 @@ def write_material(stage, path, rec, default_uv, asset_path):
                 shader.CreateInput("scale", Sdf.ValueTypeNames.Float4).Set(Gf.Vec4f(*tex.scale))
             if tex.bias != (0.0, 0.0, 0.0, 0.0):
                 shader.CreateInput("bias", Sdf.ValueTypeNames.Float4).Set(Gf.Vec4f(*tex.bias))
+            if tex.filtertype != "linear":
+                shader.GetPrim().CreateAttribute(FILTERTYPE, Sdf.ValueTypeNames.Token,
+                                                 custom=True).Set(tex.filtertype)
             textures[key] = shader
         return textures[key]
 

@@ -2,8 +2,8 @@
 small EXRs are committed as patterns/<scene>.exr (RGB, half float, ZIP).
 
 Cycles as for references/looks/ (make_cycles_references.configure_cycles: CPU, seed 0,
-no denoiser, direct light only, Blackman-Harris 1.5 px), pattern_scenes.SAMPLES spp at
-pattern_scenes.SIZE. Run from the repository root:
+no denoiser, direct light only, Blackman-Harris 1.5 px), pattern_scenes.SAMPLES spp
+(SAMPLES_OF where a scene needs more) at pattern_scenes.SIZE. Run from the repository root:
     .venv/bin/python tests/references/make_pattern_references.py [NAME ...]
 """
 import pathlib
@@ -23,7 +23,8 @@ OUT = HERE / "patterns"
 
 def render(name):
     scene = pattern_scenes.SCENES[name]()
-    configure_cycles(scene, pattern_scenes.SAMPLES, point_filter=False)
+    configure_cycles(scene, pattern_scenes.SAMPLES_OF.get(name, pattern_scenes.SAMPLES),
+                     point_filter=False)
     OUT.mkdir(exist_ok=True)
     start = time.perf_counter()
     write_exr(scene, OUT / f"{name}.exr", half=True, rgb=True)

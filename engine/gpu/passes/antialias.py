@@ -6,10 +6,11 @@ Deferred shading).
                       it down with Cycles' pixel filter: Blackman-Harris reaching
                       1.5 px either side of each pixel centre (Cycles doubles the
                       user's 1.5 px width for this filter, scene/film.cpp
-                      filter_table), separably, in two draws. Textures pick their
-                      mips for the larger image, one level sharper still
-                      (texture_footprint).
-  k = 1               FXAA at geometric edges (passes/post.py), when the preset asks.
+                      filter_table), separably, in two draws. A texture lookup
+                      filters its sub-pixel (shaders/material.glsl sample_map).
+  k = 1               FXAA at geometric edges (passes/post.py), when the preset asks;
+                      texture lookups filter with the same pixel filter
+                      (BLACKMAN_HARRIS, FILTER_WIDTH: material.glsl sample_map).
 
 Chosen by measurement (bench/bench_antialias.py, docs/rendering.md "Anti-aliasing"): against
 jittered accumulation of as many drawings (a still's TAA) supersampling had the lower
@@ -31,24 +32,15 @@ FILTER_WIDTH = 1.5          # pixels, Cycles' default (Film > Pixel Filter > Wid
 MAX_TAPS = 64               # shaders/post.glsl POST_DOWNSAMPLE
 
 
-# Cycles looks a texture up at points (bilinear, no mips) and leaves all averaging to
-# its pixel filter. A supersampled sub-pixel is averaged with its neighbours by the
-# same filter, so a lookup filtering over the whole sub-pixel blurs twice; over half
-# of it (one mip level sharper) the grazing checker's HDR-FLIP goes 0.084 -> 0.077
-# (high) and 0.062 -> 0.047 (ultra), and sharper still gains nothing (docs/compare.md).
-SUPERSAMPLED_FOOTPRINT = 0.5
-
-
-def texture_footprint(k: int) -> float:
-    """What a texture lookup filters over, as a fraction of its fragment, in an image
-    supersampled k times (1: the fragment is the pixel, the lookup its only filter)."""
-    return 1.0 if k <= 1 else SUPERSAMPLED_FOOTPRINT
+# Blackman-Harris's cosine terms 0..3 (Cycles' scene/film.cpp): this filter and the
+# one each texture lookup of an image not supersampled filters with (material.glsl).
+BLACKMAN_HARRIS = (0.35875, -0.48829, 0.14128, -0.01168)
 
 
 def blackman_harris(x, width=2.0 * FILTER_WIDTH):
     """Cycles' film filter: Blackman-Harris over [-width/2, width/2]."""
     t = 2 * np.pi * (np.asarray(x, float) / width + 0.5)
-    w = 0.35875 - 0.48829 * np.cos(t) + 0.14128 * np.cos(2 * t) - 0.01168 * np.cos(3 * t)
+    w = sum(a * np.cos(n * t) for n, a in enumerate(BLACKMAN_HARRIS))
     return np.where(np.abs(x) <= width / 2, w, 0.0)
 
 

@@ -27,6 +27,7 @@ coverage: a samples query around the draws (read when the frame is finished, so 
 from __future__ import annotations
 
 from ....core.cryptomatte import name_id
+from ....core.images import FILTERTYPES
 from ....core.passes import wants_ids
 from ....core.sheen import MODES as SHEEN_MODES
 from ..framegraph import Pass
@@ -34,7 +35,7 @@ from ..points import set_camera_facing
 from ..readback import SLOTS
 from ..pattern import material_variant, pattern_images, set_parameters
 from ..programs import UNITS, set_uniform
-from .antialias import texture_footprint
+from .antialias import BLACKMAN_HARRIS, FILTER_WIDTH
 
 # Material input -> shader names and variant define.
 MAP_SLOTS = [("diffuseColor", "diffuse", "HAS_DIFFUSE_MAP"), ("metallic", "metallic", "HAS_METALLIC_MAP"),
@@ -121,7 +122,7 @@ class GBufferPass(Pass):
             set_uniform(prog, "u_far", view.far_clip)
             view.set_origin(prog)
             frame.count("pattern_bytes", set_material(prog, mat, self.textures, threshold,
-                                                      texture_footprint(frame.supersample)))
+                                                      frame.supersample == 1))
             # A mirroring transform turns counter-clockwise triangles clockwise.
             ctx.front_face = "cw" if batch.mirrored else "ccw"
             if batch.cull:
@@ -145,8 +146,7 @@ class GBufferPass(Pass):
         def setup(prog, cloud):
             set_camera_facing(prog, view)
             mat = materials[cloud.material]
-            set_material(prog, mat, self.textures, mat.opacity_threshold,
-                         texture_footprint(frame.supersample))
+            set_material(prog, mat, self.textures, mat.opacity_threshold, frame.supersample == 1)
 
         draws, points = self.geometry.points.draw(
             self.programs, "gbuffer", setup, lambda lo, hi: not view.outside(lo[None], hi[None])[0],
@@ -155,12 +155,14 @@ class GBufferPass(Pass):
         frame.count("points_drawn", points)
 
 
-def set_material(prog, mat, textures, threshold, footprint=1.0):
+def set_material(prog, mat, textures, threshold, pixel_filter=False):
     """A material's uniforms and maps (shaders/material.glsl); `threshold`: the alpha
-    test, discarding below it (0: none); `footprint`: what a texture lookup filters
-    over, as a fraction of the fragment (antialias.texture_footprint). Returns the
-    pattern parameters' bytes."""
-    set_uniform(prog, "u_texture_footprint", footprint)
+    test, discarding below it (0: none); `pixel_filter`: texture lookups filter with
+    Cycles' pixel filter (an image not supersampled: they are its only filter), else
+    over their fragment only. Returns the pattern parameters' bytes."""
+    set_uniform(prog, "u_max_anisotropy", float(textures.anisotropy))
+    set_uniform(prog, "u_pixel_filter", BLACKMAN_HARRIS)
+    set_uniform(prog, "u_pixel_filter_reach", FILTER_WIDTH if pixel_filter else 0.0)
     set_uniform(prog, "u_diffuse", mat.diffuse)
     set_uniform(prog, "u_metallic", mat.metallic)
     set_uniform(prog, "u_roughness", mat.roughness)
@@ -201,11 +203,12 @@ def _bind_map(prog, short, ref, textures):
     tex, decode = textures.get(ref.path, ref.colorspace)
     tex.use(unit)
     set_uniform(prog, f"m_{short}.srgb", bool(decode))
-    textures.sampler(ref.wrap_s, ref.wrap_t).use(unit)
+    textures.sampler(ref.wrap_s, ref.wrap_t, decode or ref.filtertype != "linear").use(unit)
     set_uniform(prog, f"m_{short}.wrap", (WRAP.get(ref.wrap_s, 0), WRAP.get(ref.wrap_t, 0)))
     set_uniform(prog, f"m_{short}.scale", tuple(ref.scale))
     set_uniform(prog, f"m_{short}.bias", tuple(ref.bias))
     set_uniform(prog, f"m_{short}.channel", CHANNEL.get(ref.channel, -1))
+    set_uniform(prog, f"m_{short}.filtertype", FILTERTYPES.index(ref.filtertype))
 
 
 def map_defines(mat) -> list:

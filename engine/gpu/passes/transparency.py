@@ -42,7 +42,6 @@ from ...scene import OPAQUE_ALPHA
 from ..framegraph import Pass
 from ..pattern import material_variant
 from ..programs import UNITS, set_uniform
-from .antialias import texture_footprint
 from .gbuffer import map_defines, set_material
 from .shadows import set_shadow_uniforms
 
@@ -165,7 +164,7 @@ class TransparencyPass(Pass):
         set_uniform(prog, "u_far", view.far_clip)
         view.set_camera(prog)
         set_uniform(prog, "u_size", tuple(float(s) for s in frame.size))
-        set_material(prog, mat, self.textures, 0.0, texture_footprint(frame.supersample))
+        set_material(prog, mat, self.textures, 0.0, frame.supersample == 1)
         set_uniform(prog, "u_opaque_alpha", OPAQUE_ALPHA if "opacity" in mat.maps or mat.opacity_varies
                     else 2.0)
         self.environment.bind(prog, dome, env)    # and the split-sum table every draw needs
