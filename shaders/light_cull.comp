@@ -3,15 +3,18 @@
 #include "lights.glsl"
 #include "light_tree.glsl"
 #include "clusters.glsl"
-// One invocation a cluster: the lights that reach its box (view space, from its tile's
+// One invocation a cluster, in two dispatches (CULL_WRITE the second): the lights that
+// reach its box (view space, from its tile's
 // corner rays between its slice's depths), as items of its list. Tree nodes go in whole
 // where the box is at least their group distance away (one group for every pixel in it:
 // lights.comp may still open a group whose lights straddle a pixel's horizon), leaves as
 // themselves; at error 0 (tree_exact) only leaves, where their volumes reach. Lights shaded
 // one by one (exact_rows: spots, area lights, suns, point lights whose shadows have no
-// map this frame) go in first, where their volume reaches. A list is counted, then its
-// place taken with one atomic add, then written; a list that does not fit marks its
-// cluster (lights.comp then walks every light) and the renderer grows the pool.
+// map this frame) go in first, where their volume reaches. A list is counted and its
+// place taken with one atomic add (the first dispatch), then written (the second: each
+// walk in an invocation of its own, as llvmpipe ends an invocation's loops after 65,535
+// iterations in all); a list that does not fit marks its cluster (lights.comp then walks
+// every light) and the renderer grows the pool.
 layout(local_size_x = 64) in;
 layout(std430, binding = 8) readonly buffer ExactLights { int exact_rows[]; };
 uniform int n_exact;
@@ -49,23 +52,21 @@ uvec2 visit(bool write, uint first) {
         ++n;
     }
     uint rows = n;
-    if (tree_leaves > 0) {
-        int stack[TREE_STACK];
-        int top = 0;
-        stack[top++] = 0;
-        while (top > 0) {
-            int i = stack[--top];
-            if (node_count(i) <= 0.0) continue;
+    int i = tree_leaves > 0 ? 0 : -1;
+    while (i >= 0) {
+        bool down = false;
+        if (node_count(i) > 0.0) {
             float d = box_distance(world_to_view * node_centre(i));
-            if (tree_exact && d > node_reach(i)) continue;
-            if (node_is_leaf(i) || d >= node_group_distance(i)) {
-                if (write) cluster_items[first + n] = uint(i);
-                ++n;
-                continue;
+            if (!(tree_exact && d > node_reach(i))) {
+                if (node_is_leaf(i) || d >= node_group_distance(i)) {
+                    if (write) cluster_items[first + n] = uint(i);
+                    ++n;
+                } else {
+                    down = true;
+                }
             }
-            stack[top++] = 2 * i + 2;
-            stack[top++] = 2 * i + 1;
         }
+        i = down ? 2 * i + 1 : tree_next(i, 0);
     }
     return uvec2(rows, n - rows);
 }
@@ -77,9 +78,15 @@ void main() {
     int t = cluster / SLICES, k = cluster % SLICES;
     vec4 bounds = tile_bounds[t];
     if ((floatBitsToUint(bounds.z) & (1u << uint(k))) == 0u || bounds.w == 0.0) {
+#ifndef CULL_WRITE
         cluster_ranges[cluster] = uvec4(0u);
+#endif
         return;
     }
+#ifdef CULL_WRITE
+    uvec4 range = cluster_ranges[cluster];
+    if (range.w != 0u || range.y + range.z == 0u) return;
+#endif
     // The box: the tile's four corner rays between the slice's depths, padded for the
     // rounding of a pixel's slice (clusters.glsl slice_of) at the slice's ends.
     ivec2 tile = ivec2(t % cluster_tiles.x, t / cluster_tiles.x);
@@ -99,13 +106,13 @@ void main() {
     vec3 slack = 1e-5 * max(abs(box_lo), abs(box_hi));
     box_lo -= slack;
     box_hi += slack;
+#ifdef CULL_WRITE
+    visit(true, range.x);
+#else
     uvec2 n = visit(false, 0u);
     uint first = atomicAdd(items_asked, n.x + n.y);
-    if (first + n.x + n.y > items_capacity) {
-        cluster_ranges[cluster] = uvec4(0u, 0u, 0u, 1u);
-        atomicAdd(clusters_overflowed, 1u);
-        return;
-    }
-    visit(true, first);
-    cluster_ranges[cluster] = uvec4(first, n, 0u);
+    bool fits = first + n.x + n.y <= items_capacity;
+    if (!fits) atomicAdd(clusters_overflowed, 1u);
+    cluster_ranges[cluster] = uvec4(first, n, fits ? 0u : 1u);
+#endif
 }

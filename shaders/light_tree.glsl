@@ -88,35 +88,42 @@ void shade_leaf(Surface s, int i, vec3 view_forward, inout vec3 sum_d, inout vec
     sum_g += glossy;
 }
 
+// The node after i in a depth-first walk of root's subtree once i's own subtree is done:
+// the right sibling of i or of its nearest ancestor below root that has one; -1 when
+// the walk is over. The tree is complete and implicit (children 2i+1, 2i+2): numbered
+// from 1 (k = i + 1), right children are odd, so the climb is a shift past k's trailing
+// ones, and the walk needs neither a stack nor a loop of its own (llvmpipe ends a
+// shader invocation's loops after 65,535 iterations in all: a walk costs one a node).
+int tree_next(int i, int root) {
+    int k = (i + 1) >> findLSB(~(i + 1));         // up to the nearest left child
+    return findMSB(k) <= findMSB(root + 1) ? -1 : k;  // its right sibling, 0-based
+}
+
 // What group i's lights send from s, added to sum_d and sum_g: the group as one light
 // where it is far enough and above the horizon; else walking down its subtree, each
 // part the same way and each light on its own.
-#define TREE_STACK 32
 void shade_group(Surface s, int root, vec3 view_forward, inout vec3 sum_d, inout vec3 sum_g) {
-    int stack[TREE_STACK];
-    int top = 0;
-    stack[top++] = root;
-    while (top > 0) {
-        int i = stack[--top];
+    int i = root;
+    while (i >= 0) {
+        bool down = false;
         if (node_is_leaf(i)) {
             shade_leaf(s, i, view_forward, sum_d, sum_g);
-            continue;
+        } else if (node_count(i) > 0.0) {
+            vec3 centre = node_centre(i);
+            float d = length(centre - s.p);
+            vec2 horizon = node_horizon(i, centre, s.p, s.n);
+            if ((tree_exact && d > node_reach(i)) || horizon.y <= 0.0) {
+                // out of reach, or every light below the horizon: nothing
+            } else if (horizon.x > 0.0 && group_holds(i, centre - s.p, d, s.n)) {
+                vec3 diffuse, glossy;
+                group_reflected(s, i, centre, diffuse, glossy);
+                sum_d += diffuse;
+                sum_g += glossy;
+            } else {
+                down = true;
+            }
         }
-        if (node_count(i) <= 0.0) continue;
-        vec3 centre = node_centre(i);
-        float d = length(centre - s.p);
-        if (tree_exact && d > node_reach(i)) continue;
-        vec2 horizon = node_horizon(i, centre, s.p, s.n);
-        if (horizon.y <= 0.0) continue;              // every light below: nothing
-        if (horizon.x > 0.0 && group_holds(i, centre - s.p, d, s.n)) {
-            vec3 diffuse, glossy;
-            group_reflected(s, i, centre, diffuse, glossy);
-            sum_d += diffuse;
-            sum_g += glossy;
-            continue;
-        }
-        stack[top++] = 2 * i + 2;
-        stack[top++] = 2 * i + 1;
+        i = down ? 2 * i + 1 : tree_next(i, root);
     }
 }
 

@@ -6,7 +6,8 @@ then shades per pixel.
 
   light_tiles.comp   one work group a tile: its surfaces' view-depth range and the
                      slices that hold one (a tile of background lists nothing)
-  light_cull.comp    one invocation a cluster: its box, then the light tree's nodes
+  light_cull.comp    one invocation a cluster, counting, then writing: its box, then
+                     the lights shaded one by one and the light tree's nodes
                      (engine/light_tree.py: groups where far enough for the error bound,
                      else single lights) and the lights shaded one by one, each where
                      it reaches (a light with a volume: where its sphere meets the box)
@@ -112,16 +113,10 @@ class LightCullPass(Pass):
         prog.run(*tiles)
         ctx.memory_barrier()
 
-        prog = self.programs.get("light_cull.comp", compute=True)
-        view.set_camera(prog)
-        set_uniform(prog, "cluster_tiles", tiles)
-        set_uniform(prog, "u_size", (float(w), float(h)))
-        set_uniform(prog, "world_to_view", relative_view(view.camera)[:3, :3])
-        set_uniform(prog, "items_capacity", self.capacity)
-        set_tree_uniforms(prog, tree, error)
-        set_uniform(prog, "n_exact", len(exact))
         self.table.texture.use(UNITS["u_lights"])
-        prog.run(-(-n_clusters // 64))
+        count = self._cull_program("light_cull.comp", view, tiles, (w, h), tree, error, exact)
+        groups = -(-n_clusters // 64)
+        count.run(groups)
         ctx.memory_barrier()
         sized = (self.table.version, error, tiles)
         if self._sized != sized:
@@ -131,9 +126,24 @@ class LightCullPass(Pass):
                 self._grow(asked + asked // 4)
                 self.bind(tree_buffer, counts)
                 counts.clear()
-                set_uniform(prog, "items_capacity", self.capacity)
-                prog.run(-(-n_clusters // 64))
+                set_uniform(count, "items_capacity", self.capacity)
+                count.run(groups)
                 ctx.memory_barrier()
+        write = self._cull_program("light_cull.comp", view, tiles, (w, h), tree, error, exact,
+                                   ["CULL_WRITE"])
+        write.run(groups)
+        ctx.memory_barrier()
+
+    def _cull_program(self, name, view, tiles, size, tree, error, exact, defines=()):
+        prog = self.programs.get(name, defines=defines, compute=True)
+        view.set_camera(prog)
+        set_uniform(prog, "cluster_tiles", tiles)
+        set_uniform(prog, "u_size", (float(size[0]), float(size[1])))
+        set_uniform(prog, "world_to_view", relative_view(view.camera)[:3, :3])
+        set_uniform(prog, "items_capacity", self.capacity)
+        set_tree_uniforms(prog, tree, error)
+        set_uniform(prog, "n_exact", len(exact))
+        return prog
 
     def bind(self, tree_buffer, counts):
         """The culling's buffers at the binding points the shaders name."""
