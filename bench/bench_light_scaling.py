@@ -17,7 +17,6 @@ Prints figures, asserts nothing. Runs without Blender (usd-core).
 import json
 import math
 import pathlib
-import resource
 import subprocess
 import sys
 import time
@@ -29,6 +28,13 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "tests")
 WIDTH, HEIGHT = 640, 360
 COUNTS = (1, 16, 256, 1024, 4096, 16384)
 SHADOWED = (1, 256, 16384)
+
+
+def peak_rss_mib() -> float:
+    """This process's peak resident memory. Not getrusage's ru_maxrss: that survives
+    execve, so a child would report its parent's peak from before the fork."""
+    with open("/proc/self/status") as status:
+        return next(int(line.split()[1]) for line in status if line.startswith("VmHWM:")) / 1024
 
 
 def stage_with_lights(positions, power, shadows):
@@ -92,7 +98,7 @@ def measure(count, shadows, form="clustered", runs=3):
         "load_ms": 1000 * float(np.median(loads)), "render_ms": 1000 * float(np.median(renders)),
         "light_pass_ms": 1000 * (result.gpu_timings.get("lights", 0.0)
                                  + result.gpu_timings.get("light_cull", 0.0)),
-        "rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+        "rss_mib": peak_rss_mib(),
         "shadow_maps": result.stats.get("shadow_maps", 0),
         "unshadowed": result.stats.get("unshadowed_lights", 0),
         "finite": bool(np.all(np.isfinite(result.rgba))),

@@ -67,12 +67,16 @@ def test_20000_lights_equal_the_sum_of_20_renders_of_1000():
 
 
 _SHADOWED = """
-import json, resource, sys
+import json, sys
 sys.path.insert(0, sys.argv[1])
 from test_many_lights import LIGHTS, grid, many_lights_stage, render
 import numpy as np
 result = render(many_lights_stage(grid(LIGHTS), True))
-print(json.dumps({"rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+# VmHWM is this address space's peak; getrusage's ru_maxrss is not: it survives
+# execve, so it would report the parent test process's peak from before the fork.
+with open("/proc/self/status") as status:
+    peak_kib = next(int(line.split()[1]) for line in status if line.startswith("VmHWM:"))
+print(json.dumps({"rss_mib": peak_kib / 1024,
                   "mean": float(result.rgba[..., :3].mean()),
                   "finite": bool(np.all(np.isfinite(result.rgba))),
                   "unshadowed": result.stats["unshadowed_lights"],
