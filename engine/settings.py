@@ -66,13 +66,15 @@ class RenderSettings:
     # GL 4.3 and later run the passes that do not rasterise (lighting, ambient
     # occlusion, the dome, post, the supersample reduction, the render passes, the
     # resolve) and skinning as compute shaders, which every shader core of a GPU runs
-    # (fragment and vertex work runs on a few of a datacenter GPU's). None: wherever the
-    # context allows; False: their raster forms (full-screen fragment passes, transform
-    # feedback), as GL 3.3 and 4.1 draw them. Both forms share one GLSL body.
+    # (fragment and vertex work runs on a few of a datacenter GPU's). None: on a GPU
+    # wherever the context allows, and not on a software rasteriser, which runs both
+    # forms on the same CPU threads; False: their raster forms (full-screen fragment
+    # passes, transform feedback), as GL 3.3 and 4.1 draw them. One GLSL body each.
     compute: bool | None = None
     # How lights are shaded: "clustered" (lights culled into screen tiles and depth
     # slices on the GPU, then one compute pass; needs compute) or "volumes" (a light
-    # volume per light, the GL 3.3/4.1 path). None: clustered wherever compute runs.
+    # volume per light, the GL 3.3/4.1 path). None: clustered wherever compute runs,
+    # and for many lights on a software rasteriser (engine/gpu/renderer.py).
     lighting: str | None = None
     # Clustered lighting's error bound, as a fraction of each pixel's light: far lights
     # are shaded in groups where that stays within it (0: every light on its own, cut

@@ -117,7 +117,8 @@ def irradiance(points, positions):
 
 def render(stage, light_error=0.01, pixels=PIXELS):
     settings = RenderSettings(width=pixels, height=pixels, preset="low", ambient_occlusion=False,
-                              fxaa=False, supersample=1, light_error=light_error)
+                              fxaa=False, supersample=1, light_error=light_error,
+                              lighting="clustered")
     return render_stage(stage, settings)
 
 
@@ -138,7 +139,7 @@ def test_many_small_lights_are_their_exact_sum_within_the_bound():
     expected = irradiance(points, many) / (len(many) * irradiance(points, [(0, 0, HEIGHT)]))
     X, Y = points
     assert (np.hypot(X, Y) > 15).any() and (np.hypot(X, Y) < 1).any()
-    settings = RenderSettings(width=PIXELS, height=PIXELS, preset="low",
+    settings = RenderSettings(width=PIXELS, height=PIXELS, preset="low", lighting="clustered",
                               ambient_occlusion=False, fxaa=False, supersample=1)
     with Session(plane_stage(many, POWER), settings) as lots, \
             Session(plane_stage([(0.0, 0.0, HEIGHT)], POWER * len(many)), settings) as one:
@@ -170,7 +171,7 @@ def test_65536_lights_are_the_sum_of_renders_of_their_parts():
                                                           "specular": 0.0}, False,
                           treat_as_point=True)
     halves = [stage.GetPrimAtPath(f"/root/half{i}") for i in range(2)]
-    settings = RenderSettings(width=pixels, height=pixels, preset="low",
+    settings = RenderSettings(width=pixels, height=pixels, preset="low", lighting="clustered",
                               ambient_occlusion=False, fxaa=False, supersample=1)
     with Session(stage, settings) as session:
         whole = session.render()
@@ -223,7 +224,7 @@ def test_lights_that_reach_few_pixels_are_never_dropped():
     settings = dict(width=W, height=H, preset="low", ambient_occlusion=False, fxaa=False,
                     supersample=1)
     volumes = render_stage(stage, RenderSettings(**settings, lighting="volumes", compute=False))
-    clustered = render_stage(stage, RenderSettings(**settings, light_error=0.0))
+    clustered = render_stage(stage, RenderSettings(**settings, lighting="clustered", light_error=0.0))
     a, b = volumes.rgba[..., :3], clustered.rgba[..., :3]
     lit = a[..., 0] > 0
     assert 0.05 < lit.mean() < 0.9               # lights that reach some pixels, not all

@@ -46,7 +46,8 @@ def grid(count):
 def render(stage, light_error=0.01):
     from lantern.engine import RenderSettings, render_stage
     settings = RenderSettings(width=SIZE, height=SIZE, preset="low", ambient_occlusion=False,
-                              fxaa=False, supersample=1, light_error=light_error)
+                              fxaa=False, supersample=1, light_error=light_error,
+                              lighting="clustered")
     return render_stage(stage, settings)
 
 
