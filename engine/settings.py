@@ -73,8 +73,8 @@ class RenderSettings:
     compute: bool | None = None
     # How lights are shaded: "clustered" (lights culled into screen tiles and depth
     # slices on the GPU, then one compute pass; needs compute) or "volumes" (a light
-    # volume per light, the GL 3.3/4.1 path). None: clustered wherever compute runs,
-    # and for many lights on a software rasteriser (engine/gpu/renderer.py).
+    # volume per light, the GL 3.3/4.1 path). None: clustered wherever GL 4.3 runs,
+    # unless compute is False.
     lighting: str | None = None
     # Clustered lighting's error bound, as a fraction of each pixel's light: far lights
     # are shaded in groups where that stays within it (0: every light on its own, cut

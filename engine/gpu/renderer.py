@@ -41,11 +41,6 @@ from .textures import MaterialTextures
 
 # Render passes that are data, not light: never filtered.
 DATA_PASSES = {"Depth", "Normal", "IndexOB", "IndexMA"}
-# From this many lights a software rasteriser shades them clustered (_forms): light
-# volumes cut each light where it reflects 1% of the brightest light at 1 m, and the
-# tails of many lights add up to a third of a pixel's light (docs/design.md, "Clustered
-# lighting and many lights"); on llvmpipe 64 clustered lights cost 3x their volumes.
-MANY_LIGHTS = 64
 
 
 def shadow_ratio(sums: np.ndarray) -> np.ndarray:
@@ -176,7 +171,7 @@ class Renderer:
                       stats={name: 0 for name in COUNTERS},
                       options=settings or RenderSettings(),
                       readback=readback or ReadbackRequest())
-        frame.compute, frame.lighting = self._forms(frame.options, scene)
+        frame.compute, frame.lighting = self._forms(frame.options)
         frame.stats["forms"] = {"compute": frame.compute, "lighting": frame.lighting}
         frame.stats["meshes_uploaded"] = self.update(scene, changes, cull_backfaces)
         frame.scene = self._drawable(frame)
@@ -223,26 +218,20 @@ class Renderer:
         budget.check(frame.output_size, frame.supersample, quality, self.largest_side,
                      needed, memory)
 
-    def _forms(self, options, scene) -> tuple:
-        """(compute, lighting) of a frame with these settings and lights on this context.
-        Left to Lantern (None), a GPU gets the compute forms and clustered lighting. A
-        software rasteriser (llvmpipe) runs compute and fragment work on the same CPU
-        threads, so compute gains nothing there, and its clustered pass costs more than
-        a few lights' volumes (docs/gpu.md): unless asked for compute, it gets the raster
-        forms, and clustered lighting only for MANY_LIGHTS or more, where volumes'
-        cut-off tails add up."""
+    def _forms(self, options) -> tuple:
+        """(compute, lighting) of a frame with these settings on this context. Left to
+        Lantern (None), lights are clustered wherever compute runs: the light tree keeps
+        every light within light_error, where volumes cut each light's tail. The other
+        passes take the compute forms on a GPU, and their raster forms on a software
+        rasteriser (llvmpipe), which runs both on the same CPU threads: compute gains
+        nothing there (docs/gpu.md)."""
         if options.compute and not self.features.compute:
             raise ValueError(f"compute passes need GL 4.3; this context is GL "
                              f"{self.features.version // 100}.{self.features.version // 10 % 10}")
-        software = self.gl.software
         compute = self.features.compute and (options.compute if options.compute is not None
-                                             else not software)
-        if options.lighting:
-            lighting = options.lighting
-        else:
-            many = len(scene.lights) >= MANY_LIGHTS
-            clustered = options.compute is not False and (compute or many)
-            lighting = "clustered" if self.features.compute and clustered else "volumes"
+                                             else not self.gl.software)
+        clustered = self.features.compute and options.compute is not False
+        lighting = options.lighting or ("clustered" if clustered else "volumes")
         if lighting == "clustered" and not self.features.compute:
             raise ValueError("clustered lighting needs compute passes (GL 4.3)")
         return compute, lighting
@@ -328,7 +317,7 @@ class Renderer:
         self.update(scene, changes, bool(self._cull_backfaces))
         frame = Frame(scene=scene, changes=changes, size=(1, 1), preset=self.preset,
                       options=settings or RenderSettings())
-        frame.compute, frame.lighting = self._forms(frame.options, scene)
+        frame.compute, frame.lighting = self._forms(frame.options)
         board = {}
         if self.skinning.needed(frame):
             self.skinning.execute(frame, board)
