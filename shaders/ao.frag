@@ -9,8 +9,17 @@
 // samples per side, rotated per pixel over a 4x4 tile (a Bayer pattern) that the
 // bilateral blur (ao_blur.frag) then averages away. Depth is read through lib.glsl's
 // helpers.
+// One more slice, through the surface's specular lobe (lib.glsl Lobe: its mean
+// direction, and the cap that stands for it), gives the occlusion of the dome's
+// reflections: the share of the lobe's arc in that slice within the visible arc, over
+// the share an unoccluded arc holds. A mirror is lit where the scene leaves its
+// direction open and black where it does not (as Cycles' direct light). (GTSO's cone
+// about a bent normal counted a convex surface's few percent of estimator noise as a
+// horizon all round, and blacked out a lone mirror sphere's rim; the AO slices seldom
+// pass through a mirror's direction.) Output: (occlusion, specular occlusion, 0, 0).
 uniform sampler2D g_depth;
 uniform sampler2D g_normal;
+uniform sampler2D g_mat;       // roughness: the specular lobe (and dfg_lut, lib.glsl)
 uniform mat4 inv_view_proj;
 uniform vec3 cam_forward;
 uniform bool cam_ortho;
@@ -22,7 +31,7 @@ uniform int steps;
 // Drawn at 1/u_step of the G-buffer's size per side (a supersampled frame's AO at the
 // output's resolution): each AO pixel searches from the centre sub-pixel of its block.
 uniform int u_step;
-out float ao;
+out vec4 ao;
 
 // A 4x4 Bayer index in [0, 16): the tile's 16 pixels take 16 evenly spaced slice
 // rotations, so the blur's average is a stratified quadrature over the half circle
@@ -77,18 +86,69 @@ vec3 depth_normal(ivec2 px, vec3 p, vec3 fallback) {
     return dot(n, fallback) < 0.0 ? -n : n;
 }
 
+// The share of the angle interval [c - w, c + w] inside [lo, hi] (a box; w > 0).
+float interval_share(float lo, float hi, float c, float w) {
+    return clamp((min(hi, c + w) - max(lo, c - w)) / (2.0 * w), 0.0, 1.0);
+}
+
+// A slice through the view vector along screen direction dir (unit, pixels): its
+// side axis (the direction of +dir across the view, unit), the angle of the normal
+// projected into it from v towards that side, the projected normal's length, and the
+// visible arc [h0, h1] within that normal's hemisphere: the highest horizon on each
+// side within the radius (angles from v, positive towards +dir).
+struct Slice { vec3 side; float angle_n, proj_len, h0, h1; };
+
+Slice search(vec2 dir, vec2 centre, vec2 uv, float depth, vec3 p, vec3 v, vec3 n,
+             float r_px, float jitter) {
+    ivec2 size = textureSize(g_depth, 0);
+    Slice sl;
+    vec3 along = position_from_depth(uv + dir / vec2(size), depth, inv_view_proj) - p;
+    vec3 ortho = along - dot(along, v) * v;
+    sl.side = normalize(ortho);
+    vec3 axis = normalize(cross(ortho, v));
+    vec3 proj_n = n - axis * dot(n, axis);
+    sl.proj_len = length(proj_n);
+    float cos_n = clamp(dot(proj_n, v) / max(sl.proj_len, 1e-6), -1.0, 1.0);
+    sl.angle_n = sign(dot(ortho, proj_n)) * acos(cos_n);
+    vec2 horizon = vec2(-1.0);          // cos of the highest horizon, + and - side
+    for (int side = 0; side < 2; ++side) {
+        vec2 d = side == 0 ? dir : -dir;
+        for (int j = 0; j < steps; ++j) {
+            // Steps crowd near the pixel, where small occluders are.
+            float t = (float(j) + jitter) / float(steps);
+            float offset = max(t * t * r_px, float(j) + 1.0);
+            if (offset > r_px) break;
+            vec2 w = centre + d * offset;
+            if (any(lessThan(w, vec2(0.0))) || any(greaterThanEqual(w, vec2(size)))) break;
+            bool drawn;
+            vec3 delta = position_at(w, drawn) - p;
+            if (!drawn) continue;
+            float dist = length(delta);
+            if (dist < 1e-6 * length(p)) continue;
+            float c = clamp(dot(delta, v) / dist, -1.0, 1.0);
+            // Occluders fade out over the last fifth of the radius.
+            float fade = clamp((radius - dist) / (0.2 * radius), 0.0, 1.0);
+            horizon[side] = max(horizon[side], mix(-1.0, c, fade));
+        }
+    }
+    sl.h1 = sl.angle_n + min(acos(horizon.x) - sl.angle_n, 0.5 * PI);
+    sl.h0 = sl.angle_n + max(-acos(horizon.y) - sl.angle_n, -0.5 * PI);
+    return sl;
+}
+
 void main() {
     ivec2 cell = ivec2(gl_FragCoord.xy);
     ivec2 px = cell * u_step + u_step / 2;
     vec2 centre = vec2(px) + 0.5;
     ivec2 size = textureSize(g_depth, 0);
     float depth = texelFetch(g_depth, px, 0).r;
-    ao = 1.0;
+    ao = vec4(1.0, 1.0, 0.0, 0.0);
     if (is_background(depth)) return;
     vec2 uv = (vec2(px) + 0.5) / vec2(size);
     vec3 p = position_from_depth(uv, depth, inv_view_proj);
     vec3 v = cam_ortho ? -cam_forward : normalize(-p);
-    vec3 n = depth_normal(px, p, normalize(texelFetch(g_normal, px, 0).xyz));
+    vec3 shading_n = normalize(texelFetch(g_normal, px, 0).xyz);
+    vec3 n = depth_normal(px, p, shading_n);
     // A normal turned away from the viewer (a back face seen at a silhouette) has no
     // visible hemisphere to search: take it as unoccluded.
     if (dot(n, v) <= 0.0) return;
@@ -100,45 +160,36 @@ void main() {
     float visible = 0.0;
     for (int s = 0; s < slices; ++s) {
         float phi = (float(s) + rotation) * PI / float(slices);
-        vec2 dir = vec2(cos(phi), sin(phi));
-        // The slice's screen direction as a 3D vector, and the normal projected into it.
-        vec3 along = position_from_depth(uv + dir / vec2(size), depth, inv_view_proj) - p;
-        vec3 ortho = along - dot(along, v) * v;
-        vec3 axis = normalize(cross(ortho, v));
-        vec3 proj_n = n - axis * dot(n, axis);
-        float proj_len = length(proj_n);
-        if (proj_len < 1e-4) { visible += 1.0; continue; }
-        float cos_n = clamp(dot(proj_n, v) / proj_len, -1.0, 1.0);
-        float angle_n = sign(dot(ortho, proj_n)) * acos(cos_n);
-        vec2 horizon = vec2(-1.0);          // cos of the highest horizon, + and - side
-        for (int side = 0; side < 2; ++side) {
-            vec2 d = side == 0 ? dir : -dir;
-            for (int j = 0; j < steps; ++j) {
-                // Steps crowd near the pixel, where small occluders are.
-                float t = (float(j) + jitter) / float(steps);
-                float offset = max(t * t * r_px, float(j) + 1.0);
-                if (offset > r_px) break;
-                vec2 w = centre + d * offset;
-                if (any(lessThan(w, vec2(0.0))) || any(greaterThanEqual(w, vec2(size)))) break;
-                bool drawn;
-                vec3 delta = position_at(w, drawn) - p;
-                if (!drawn) continue;
-                float dist = length(delta);
-                if (dist < 1e-6 * length(p)) continue;
-                float c = clamp(dot(delta, v) / dist, -1.0, 1.0);
-                // Occluders fade out over the last fifth of the radius.
-                float fade = clamp((radius - dist) / (0.2 * radius), 0.0, 1.0);
-                horizon[side] = max(horizon[side], mix(-1.0, c, fade));
-            }
-        }
-        float h1 = angle_n + min(acos(horizon.x) - angle_n, 0.5 * PI);
-        float h0 = angle_n + max(-acos(horizon.y) - angle_n, -0.5 * PI);
-        float sin_n = sin(angle_n);
-        float arc = 0.25 * (cos_n + 2.0 * h0 * sin_n - cos(2.0 * h0 - angle_n))
-                  + 0.25 * (cos_n + 2.0 * h1 * sin_n - cos(2.0 * h1 - angle_n));
-        visible += proj_len * arc;
+        Slice sl = search(vec2(cos(phi), sin(phi)), centre, uv, depth, p, v, n, r_px, jitter);
+        if (sl.proj_len < 1e-4) { visible += 1.0; continue; }
+        // The visible arc, cosine-weighted about the projected normal, in closed form.
+        float sin_n = sin(sl.angle_n), cos_n = cos(sl.angle_n);
+        float arc = 0.25 * (cos_n + 2.0 * sl.h0 * sin_n - cos(2.0 * sl.h0 - sl.angle_n))
+                  + 0.25 * (cos_n + 2.0 * sl.h1 * sin_n - cos(2.0 * sl.h1 - sl.angle_n));
+        visible += sl.proj_len * arc;
     }
     // Not clamped: with few slices one pixel's estimate may pass 1 (a grazing plane's
     // steep slices weigh more than 1); the blur averages it to the true value first.
-    ao = visible / float(slices);
+    ao.x = visible / float(slices);
+
+    // The specular lobe's slice: its screen direction is that of the lobe's mean
+    // direction across the view (in the basis of one-pixel steps at this depth). Seen
+    // along v (that direction points at the camera) nothing on screen can hide it.
+    Lobe lobe = make_lobe(shading_n, v, texelFetch(g_mat, px, 0).y);
+    vec3 mean = lobe_mean(lobe);
+    vec3 dir_l = length(mean) > 1e-6 ? normalize(mean) : shading_n;
+    vec3 across = dir_l - dot(dir_l, v) * v;
+    vec3 ex = position_from_depth(uv + vec2(1.0, 0.0) / vec2(size), depth, inv_view_proj) - p;
+    vec3 ey = position_from_depth(uv + vec2(0.0, 1.0) / vec2(size), depth, inv_view_proj) - p;
+    ex -= dot(ex, v) * v;
+    ey -= dot(ey, v) * v;
+    vec2 screen = inverse(mat2(dot(ex, ex), dot(ex, ey), dot(ex, ey), dot(ey, ey)))
+                * vec2(dot(across, ex), dot(across, ey));
+    if (length(across) < 1e-3 || length(screen) < 1e-12) return;
+    Slice sl = search(normalize(screen), centre, uv, depth, p, v, n, r_px, jitter);
+    float angle_l = atan(dot(dir_l, sl.side), dot(dir_l, v));
+    float width = max(lobe_cone(lobe), 1e-3);
+    float open = interval_share(sl.angle_n - 0.5 * PI, sl.angle_n + 0.5 * PI, angle_l, width);
+    if (open > 1e-3)
+        ao.y = min(interval_share(sl.h0, sl.h1, angle_l, width) / open, 1.0);
 }

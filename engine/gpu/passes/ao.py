@@ -1,8 +1,8 @@
 """The ambient-occlusion pass (docs/design.md, Ambient occlusion): screen-space occlusion of the dome's light
 by a horizon search (shaders/ao.frag), then a depth-aware blur (shaders/ao_blur.frag).
 The ambient pass multiplies the dome's diffuse light by it, and its specular light by
-the specular occlusion it implies; lights and emission are never occluded here
-(lights have their shadows).
+the share of the specular lobe its visibility cone lets through; lights and emission
+are never occluded here (lights have their shadows).
 
 The search radius is Blender's AO distance (the world's `lantern:aoDistance`, scene
 units; 10 when unset, Blender's default), reaching at most across the whole image on
@@ -25,8 +25,13 @@ the drawn size: the search is k^2 times cheaper, and the occlusion it finds vari
 the distance radius, far wider than a sub-pixel (GTAO in UE and EEVEE runs at reduced
 resolution too). Measured in docs/gpu.md ("Passes to budget").
 
-reads: g_depth, g_normal, view   writes: ao (R32F); its search (R32F, scratch) comes
-from the pool at the search's size
+The same horizons give the occlusion of the dome's reflections: per slice, the share
+of the surface's specular lobe (its roughness from g_mat, its shape from the split-sum
+table) within the visible arc (shaders/ao.frag).
+
+reads: g_depth, g_normal, g_mat, view   writes: ao (RGBA32F: occlusion, specular
+occlusion); its search (RGBA32F: occlusion and the specular share's two sums, scratch)
+comes from the pool at the search's size
 render passes: AO (the blurred occlusion, grey)"""
 from __future__ import annotations
 
@@ -46,12 +51,12 @@ def occludes(frame) -> bool:
 
 class AoPass(Pass):
     name = "ao"
-    reads = ("g_depth", "g_normal", "view")
+    reads = ("g_depth", "g_normal", "g_mat", "view")
     writes = ("ao",)
     aovs = {"AO": ("aov_ao", 0)}
 
-    def __init__(self, ctx, pool, programs):
-        self.ctx, self.pool, self.programs = ctx, pool, programs
+    def __init__(self, ctx, pool, programs, environment):
+        self.ctx, self.pool, self.programs, self.environment = ctx, pool, programs, environment
 
     def needed(self, frame):
         return occludes(frame) or "AO" in frame.aovs
@@ -62,11 +67,13 @@ class AoPass(Pass):
         preset, (w, h) = frame.preset, frame.size
         board["g_depth"].use(UNITS["g_depth"])
         board["g_normal"].use(UNITS["g_normal"])
+        board["g_mat"].use(UNITS["g_mat"])
+        self.environment.lut.use(UNITS["dfg_lut"])
         dome = frame.scene.dome
         distance = getattr(dome, "ao_distance", None) or DEFAULT_DISTANCE
         cam = view.camera
         step = max(int(frame.supersample), 1)
-        raw = self.pool.acquire((-(-w // step), -(-h // step)), "r32f")
+        raw = self.pool.acquire((-(-w // step), -(-h // step)), "rgba32f")
         self.pool.framebuffer([raw]).use()
         prog = self.programs.get("fullscreen.vert", "ao.frag")
         view.set_camera(prog)
