@@ -168,20 +168,27 @@ float arc_to(float x, float nn) {
 // share of the angle interval [c - w, c + w] (within the half circle) it leaves open
 // over the share of it the half circle holds (1 if none).
 float open_arc(Slice sl) {
+    if (sl.hidden == 0xFFFFFFFFu) return 0.0;
     float lo = sl.angle_n - 0.5 * PI, sector = PI / float(SECTORS);
-    float sum = 0.0, previous = arc_to(lo, sl.angle_n);
-    for (int i = 0; i < SECTORS; ++i) {
-        float next = arc_to(lo + float(i + 1) * sector, sl.angle_n);
-        if ((sl.hidden & (1u << uint(i))) == 0u) sum += next - previous;
-        previous = next;
+    // Summed run by run of open sectors: arc_to at the runs' ends only.
+    float sum = 0.0, start = 0.0;
+    bool open = false;
+    for (int i = 0; i <= SECTORS; ++i) {
+        bool free_i = i < SECTORS && (sl.hidden & (1u << uint(i))) == 0u;
+        if (free_i == open) continue;
+        float edge = arc_to(lo + float(i) * sector, sl.angle_n);
+        if (free_i) start = edge; else sum += edge - start;
+        open = free_i;
     }
     return sum;
 }
 
 float open_interval(Slice sl, float c, float w) {
     float lo = sl.angle_n - 0.5 * PI, sector = PI / float(SECTORS);
+    int first = clamp(int(floor((c - w - lo) / sector)), 0, SECTORS - 1);
+    int last = clamp(int(floor((c + w - lo) / sector)), 0, SECTORS - 1);
     float inside = 0.0, seen = 0.0;
-    for (int i = 0; i < SECTORS; ++i) {
+    for (int i = first; i <= last; ++i) {
         float a = lo + float(i) * sector;
         float overlap = max(min(a + sector, c + w) - max(a, c - w), 0.0);
         inside += overlap;
