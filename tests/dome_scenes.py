@@ -72,10 +72,12 @@ def sphere_mesh(stage, path, centre, material, segments=96, rings=48):
     mesh.CreateFaceVertexCountsAttr(counts)
     mesh.CreateFaceVertexIndicesAttr(indices)
     mesh.CreateOrientationAttr(UsdGeom.Tokens.leftHanded)
+    # Closed: a blended sphere shows its near side only (as Blender's Backface Culling).
+    mesh.GetPrim().CreateAttribute("lantern:backfaceCulling", Sdf.ValueTypeNames.Bool).Set(True)
     UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(material)
 
 
-def material(stage, name, roughness, metallic, ior):
+def material(stage, name, roughness, metallic, ior, opacity=1.0):
     mat = UsdShade.Material.Define(stage, f"/root/_materials/{name}")
     sh = UsdShade.Shader.Define(stage, f"/root/_materials/{name}/surface")
     sh.CreateIdAttr("UsdPreviewSurface")
@@ -83,18 +85,22 @@ def material(stage, name, roughness, metallic, ior):
     sh.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(roughness)
     sh.CreateInput("metallic", Sdf.ValueTypeNames.Float).Set(metallic)
     sh.CreateInput("ior", Sdf.ValueTypeNames.Float).Set(ior)
+    if opacity < 1.0:
+        sh.CreateInput("opacity", Sdf.ValueTypeNames.Float).Set(opacity)
     mat.CreateSurfaceOutput().ConnectToSource(sh.ConnectableAPI(), "surface")
     return mat
 
 
-def stage_with(map_path):
-    """The sphere grid under a dome showing `map_path`; returns (stage, (w, h))."""
+def stage_with(map_path, opacity=1.0):
+    """The sphere grid under a dome showing `map_path`, the spheres' opacity
+    `opacity` (below 1: blended, drawn by the transparency pass); returns
+    (stage, (w, h))."""
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
     UsdGeom.Xform.Define(stage, "/root")
     for row, (name, params) in enumerate(MATERIALS.items()):
         for col, r in enumerate(ROUGHNESS):
-            mat = material(stage, f"{name}{col}", r, **params)
+            mat = material(stage, f"{name}{col}", r, opacity=opacity, **params)
             sphere_mesh(stage, f"/root/{name}{col}", centre(row, col), mat)
     dome = UsdLux.DomeLight.Define(stage, "/root/dome")
     dome.CreateTextureFileAttr(Sdf.AssetPath(map_path))

@@ -69,6 +69,29 @@ def test_a_two_colour_dome_against_its_integral(tmp):
     assert max(np.abs(e).max() for e in worst.values()) <= 0.03
 
 
+def test_the_transparency_pass_reflects_the_dome_alike(tmp):
+    """The spheres at opacity 0.5 (blended: the transparency pass shades them, through
+    the same environment.glsl dome_light) are half their opaque selves (the ambient
+    pass's) and half the dome behind them, within 1% per sphere half."""
+    from lantern.engine import RenderSettings, render_stage
+    from pxr import UsdGeom
+    path = ds.write_map(f"{tmp}/two-colour.exr", "two-colour")
+    opaque = rendered("two-colour", tmp).rgba[..., :3].astype(np.float64)
+    stage, (w, h) = ds.stage_with(path, opacity=0.5)
+    settings = RenderSettings(width=w, height=h, ambient_occlusion=False)
+    blended = render_stage(stage, settings).rgba[..., :3].astype(np.float64)
+    for prim in stage.GetPseudoRoot().GetChildren()[0].GetChildren():
+        if prim.IsA(UsdGeom.Mesh):
+            UsdGeom.Imageable(prim).MakeInvisible()
+    dome = render_stage(stage, settings).rgba[..., :3].astype(np.float64)
+    worst = 0.0
+    for key, mask in halves(tmp):
+        want = 0.5 * (opaque[mask] + dome[mask]).mean(axis=0)
+        worst = max(worst, np.abs(blended[mask].mean(axis=0) / want - 1.0).max())
+    print(f"blended spheres against half opaque, half dome: worst {100 * worst:.2f} %")
+    assert worst <= 0.01
+
+
 def test_a_mirror_ball_shows_the_plane_where_it_reflects_it():
     """Where the ball's mirror direction points down and towards the camera it sees the
     plane in front of the ball, which Cycles' direct light shows black (the plane is not
