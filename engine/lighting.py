@@ -231,16 +231,20 @@ def dfg_terms(nov, roughness, samples: int = DFG_SAMPLES, fresnel_ior=None) -> n
     return out.reshape(shape + (2,))
 
 
-def lobe_moments(nov, roughness, samples: int = DFG_SAMPLES) -> np.ndarray:
+def lobe_moments(nov, roughness, samples: int = DFG_SAMPLES, fresnel_ior=None) -> np.ndarray:
     """(..., 8): the first and second moments of the light directions a GGX lobe
     reflects towards v, weighted as it reflects them (f cos with F = 1, normalised: the
     lobe's share of each direction), in the frame t (the tangent towards v), b, n:
     (E[l_t], E[l_b] (0: the lobe is symmetric about the plane of n and v), E[l_n], E[l_t l_n], E[l_t^2], E[l_b^2], E[l_n^2], 0). Any
     quadratic function of direction averages over the lobe exactly from them, as
-    order-2 spherical harmonics do (shaders/environment.glsl dome_specular)."""
+    order-2 spherical harmonics do (shaders/environment.glsl dome_specular). With
+    fresnel_ior, of the lobe weighted by a dielectric's exact Fresnel as well, which
+    leans it towards grazing directions."""
     nov, roughness = np.broadcast_arrays(np.asarray(nov, float), np.asarray(roughness, float))
     shape = nov.shape
-    l, _, weight = _lobe_samples(nov, roughness, samples)
+    l, voh, weight = _lobe_samples(nov, roughness, samples)
+    if fresnel_ior is not None:
+        weight = weight * fresnel_dielectric(voh, fresnel_ior)
     w = weight / np.maximum(weight.sum(axis=1, keepdims=True), 1e-30)
     m = np.einsum("ps,psk->pk", w, l)
     s = np.einsum("ps,psk->pk", w, l * l)
@@ -280,7 +284,7 @@ def dfg_lut() -> np.ndarray:
     return _stored("dfg_lut", compute_dfg_lut)
 
 
-DFG_BLOCKS = 3         # the table's blocks of DFG_SIZE rows: the albedos, the lobe's moments (2)
+DFG_BLOCKS = 5         # the table's blocks of DFG_SIZE rows: the albedos, the lobes' moments (4)
 
 
 def compute_dfg_lut(size: int = DFG_SIZE) -> np.ndarray:
@@ -292,16 +296,18 @@ def compute_dfg_lut(size: int = DFG_SIZE) -> np.ndarray:
     Block 0: dfg_terms, the exact-Fresnel albedo at COAT_IOR, and the lobe's albedo
     averaged over the hemisphere, E_avg = 2 * integral of E(mu) mu (the same in every
     column; Cycles' multiple-scattering Fresnel needs it: lib.glsl lobe_energy).
-    Blocks 1 and 2: lobe_moments' eight channels, four each (the dome's reflections)."""
+    Blocks 1 and 2: lobe_moments' eight channels, four each (the dome's reflections);
+    blocks 3 and 4 the same with the exact Fresnel of IOR 1.5 (dielectric lobes)."""
     c = np.linspace(0.0, 1.0, size)
     rows = [np.concatenate([dfg_terms(c, r), dfg_terms(c, r, fresnel_ior=COAT_IOR)[:, None],
-                            lobe_moments(c, r)], axis=1) for r in c]    # row by row: cache-sized
-    table = np.stack(rows)                                              # (size, size, 11)
+                            lobe_moments(c, r), lobe_moments(c, r, fresnel_ior=COAT_IOR)],
+                           axis=1) for r in c]                      # row by row: cache-sized
+    table = np.stack(rows)                                          # (size, size, 19)
     e_avg = 2.0 * _trapezoid(table[:, :, 1] * c[None, :], c)
     albedos = np.concatenate([table[:, :, :3], np.repeat(e_avg[:, None, None], size, axis=1)],
                              axis=2)
-    return np.concatenate([albedos, table[:, :, 3:7], table[:, :, 7:11]],
-                          axis=0).astype(np.float32)
+    return np.concatenate([albedos, table[:, :, 3:7], table[:, :, 7:11], table[:, :, 11:15],
+                           table[:, :, 15:19]], axis=0).astype(np.float32)
 
 
 def specular_albedo(f0, f90, nov, roughness) -> np.ndarray:

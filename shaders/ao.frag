@@ -231,7 +231,10 @@ void main() {
     // The specular lobe's slice: its screen direction is that of the lobe's mean
     // direction across the view (in the basis of one-pixel steps at this depth). Seen
     // along v (that direction points at the camera) nothing on screen can hide it.
-    Lobe lobe = make_lobe(shading_n, v, texelFetch(g_mat, px, 0).y);
+    // Its dielectric share by metallic alone (the ambient pass weighs it by the two
+    // lobes' albedos; where the lobe points hardly depends on it).
+    vec4 mat = texelFetch(g_mat, px, 0);
+    Lobe lobe = make_lobe(shading_n, v, mat.y, 1.0 - clamp(mat.x, 0.0, 1.0));
     vec3 mean = lobe_mean(lobe);
     vec3 dir_l = length(mean) > 1e-6 ? normalize(mean) : shading_n;
     vec3 across = dir_l - dot(dir_l, v) * v;

@@ -61,10 +61,11 @@ float ggx_alpha(float roughness) {
 // the other. Block 0: x = integral of Fc G_vis, y = integral of G_vis (the GGX albedo
 // with F = 1), z = integral of F G_vis with the exact Fresnel of IOR 1.5, w = y
 // averaged over the hemisphere. Blocks 1 and 2: the moments of the directions the
-// lobe reflects (engine/lighting.py lobe_moments; environment.glsl dome_specular).
+// lobe reflects (engine/lighting.py lobe_moments; environment.glsl dome_specular);
+// blocks 3 and 4 the same for a lobe weighted by the exact Fresnel of IOR 1.5.
 // Every program that shades a Surface binds it.
 uniform sampler2D dfg_lut;
-const int DFG_BLOCKS = 3;
+const int DFG_BLOCKS = 5;
 // The coordinates of (s, t) in [0, 1]^2 in a table of `size` texels stored at texel
 // centres, as engine/lighting.py makes them (the split-sum and velvet tables).
 vec2 table_uv(ivec2 size, float s, float t) {
@@ -81,11 +82,14 @@ float dfg_ior15(float NoV, float roughness) { return dfg_block(0, NoV, roughness
 float dfg_e_avg(float roughness) { return dfg_block(0, 0.5, roughness).w; }
 
 // A GGX lobe of perceptual roughness r reflecting towards v off normal n, each light
-// direction weighted as the lobe reflects it (f cos with F = 1, normalised): its
-// frame (t, the tangent towards v; n) and the moments of its directions in that frame
-// (dfg_lut blocks 1 and 2: first = E[l_t], 0, E[l_n], E[l_t l_n]; second = E[l_t^2],
-// E[l_b^2], E[l_n^2]). The dome's reflections (environment.glsl dome_specular) and
-// their occlusion (ao.frag) read it.
+// direction weighted as the lobe reflects it (f cos, normalised), its Fresnel F = 1
+// (a metal's, near enough) for a share 1 - dielectric of its light and a dielectric's
+// exact one for the rest: its frame (t, the tangent towards v; n) and the moments of
+// its directions in that frame (dfg_lut blocks 1 and 2, and 3 and 4 for the
+// dielectric part, mixed by their shares: first = E[l_t], 0, E[l_n], E[l_t l_n];
+// second = E[l_t^2], E[l_b^2], E[l_n^2]). A dielectric's Fresnel leans its lobe
+// towards grazing directions. The dome's reflections (environment.glsl dome_specular)
+// and their occlusion (ao.frag) read it.
 struct Lobe {
     vec3 n, v, t;
     float roughness;
@@ -93,7 +97,7 @@ struct Lobe {
     vec3 second;
 };
 
-Lobe make_lobe(vec3 n, vec3 v, float r) {
+Lobe make_lobe(vec3 n, vec3 v, float r, float dielectric) {
     Lobe lobe;
     lobe.n = n; lobe.v = v; lobe.roughness = r;
     float NoV = dot(n, v);
@@ -101,8 +105,8 @@ Lobe make_lobe(vec3 n, vec3 v, float r) {
     float len = length(t);
     lobe.t = len > 1e-5 ? t / len
                         : normalize(cross(n, abs(n.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
-    lobe.first = dfg_block(1, NoV, r);
-    lobe.second = dfg_block(2, NoV, r).xyz;
+    lobe.first = mix(dfg_block(1, NoV, r), dfg_block(3, NoV, r), dielectric);
+    lobe.second = mix(dfg_block(2, NoV, r), dfg_block(4, NoV, r), dielectric).xyz;
     return lobe;
 }
 
@@ -175,6 +179,7 @@ struct Surface {
     float energy_d;
     vec3 energy_m;
     vec3 spec_albedo;   // the base lobe's albedo at n.v (multiple scattering included)
+    float spec_dielectric;  // the dielectric lobe's share of it (lib.glsl Lobe)
     vec3 diffuse;       // Lambert albedo left to the diffuse layer
     float coat;         // coat weight
     float coat_roughness;
@@ -211,7 +216,10 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, vec4 base, vec4 mat, float coat_rou
     s.energy_m = lobe_energy(t, fresnel_avg(s.base, f90_m), e_avg);
     // The dielectric lobe's albedo (what its diffuse layer does not get), and the metal's.
     float e_d = lobe_albedo(t, vec3(f0_d), vec3(f90_d)).x * s.energy_d * exact_ratio;
-    s.spec_albedo = mix(vec3(e_d), lobe_albedo(t, s.base, f90_m) * s.energy_m, s.metallic);
+    vec3 e_m = lobe_albedo(t, s.base, f90_m) * s.energy_m;
+    s.spec_albedo = mix(vec3(e_d), e_m, s.metallic);
+    float dielectric_part = (1.0 - s.metallic) * e_d;
+    s.spec_dielectric = dielectric_part / max(dielectric_part + s.metallic * dot(e_m, vec3(1.0 / 3.0)), 1e-6);
     s.coat = clamp(mat.w, 0.0, 1.0);
     s.coat_roughness = clamp(coat_roughness, 0.0, 1.0);
     s.coat_energy = 1.0;
