@@ -296,11 +296,24 @@ def compute_dfg_lut(size: int = DFG_SIZE) -> np.ndarray:
     Block 0: dfg_terms, the exact-Fresnel albedo at COAT_IOR, and the lobe's albedo
     averaged over the hemisphere, E_avg = 2 * integral of E(mu) mu (the same in every
     column; Cycles' multiple-scattering Fresnel needs it: lib.glsl lobe_energy).
-    Blocks 1 and 2: lobe_moments' eight channels, four each (the dome's reflections);
-    blocks 3 and 4 the same with the exact Fresnel of IOR 1.5 (dielectric lobes)."""
+    Blocks 1 and 2: lobe_moments' eight channels, four each (the dome's reflections),
+    E[l_t] and E[l_t l_n] over sin(theta_v); blocks 3 and 4 the same with the exact
+    Fresnel of IOR 1.5 (dielectric lobes)."""
     c = np.linspace(0.0, 1.0, size)
+    # E[l_t] and E[l_t l_n] go as sin(theta_v) = sqrt(1 - n.v^2), whose slope is
+    # infinite at n.v = 1, so that a bilinear lookup bent a mirror's direction by up to
+    # 3 degrees: stored divided by it (lib.glsl make_lobe multiplies it back), at
+    # n.v = 1 extrapolated from the two columns before.
+    sin_v = np.sqrt(1.0 - c * c)[:, None]
+    odd = np.array([1, 0, 0, 1, 0, 0, 0, 0], bool)
+
+    def moments(r, **kw):
+        m = lobe_moments(c, r, **kw)
+        ratio = m[:-1] / sin_v[:-1]
+        ratio = np.concatenate([ratio, 2.0 * ratio[-1:] - ratio[-2:-1]])
+        return np.where(odd, ratio, m)
     rows = [np.concatenate([dfg_terms(c, r), dfg_terms(c, r, fresnel_ior=COAT_IOR)[:, None],
-                            lobe_moments(c, r), lobe_moments(c, r, fresnel_ior=COAT_IOR)],
+                            moments(r), moments(r, fresnel_ior=COAT_IOR)],
                            axis=1) for r in c]                      # row by row: cache-sized
     table = np.stack(rows)                                          # (size, size, 19)
     e_avg = 2.0 * _trapezoid(table[:, :, 1] * c[None, :], c)

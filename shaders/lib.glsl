@@ -61,7 +61,8 @@ float ggx_alpha(float roughness) {
 // the other. Block 0: x = integral of Fc G_vis, y = integral of G_vis (the GGX albedo
 // with F = 1), z = integral of F G_vis with the exact Fresnel of IOR 1.5, w = y
 // averaged over the hemisphere. Blocks 1 and 2: the moments of the directions the
-// lobe reflects (engine/lighting.py lobe_moments; environment.glsl dome_specular);
+// lobe reflects (engine/lighting.py lobe_moments, E[l_t] and E[l_t l_n] over
+// sin(theta_v); environment.glsl dome_specular);
 // blocks 3 and 4 the same for a lobe weighted by the exact Fresnel of IOR 1.5.
 // Every program that shades a Surface binds it.
 uniform sampler2D dfg_lut;
@@ -107,6 +108,8 @@ Lobe make_lobe(vec3 n, vec3 v, float r, float dielectric) {
                         : normalize(cross(n, abs(n.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
     lobe.first = mix(dfg_block(1, NoV, r), dfg_block(3, NoV, r), dielectric);
     lobe.second = mix(dfg_block(2, NoV, r), dfg_block(4, NoV, r), dielectric).xyz;
+    float c = clamp(NoV, 0.0, 1.0);
+    lobe.first.xw *= sqrt(1.0 - c * c);     // stored over sin(theta_v): engine/lighting.py
     return lobe;
 }
 
