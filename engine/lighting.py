@@ -192,13 +192,11 @@ def fresnel_dielectric(cos_i, eta):
     return np.where(g2 > 0, 0.5 * a * a * (1 + b * b), 1.0)
 
 
-def dfg_terms(nov, roughness, samples: int = DFG_SAMPLES, fresnel_ior=None) -> np.ndarray:
-    """(..., 2): the GGX integrals (sum of Fc G_vis, sum of G_vis) for n.v and
-    perceptual roughness (broadcast), by importance sampling D (height-correlated
-    Smith visibility, lib.glsl's v_smith). With fresnel_ior, (...,): the integral of
-    F G_vis with a dielectric's exact Fresnel, its single-scattering albedo."""
-    nov, roughness = np.broadcast_arrays(np.asarray(nov, float), np.asarray(roughness, float))
-    shape = nov.shape
+def _lobe_samples(nov, roughness, samples):
+    """GGX lobes by importance sampling D, for each (n.v, perceptual roughness) row:
+    the light directions l (x towards v's side of the normal, z the normal), the half
+    vectors' v.h, and each sample's weight in the integral of f cos with F = 1
+    (height-correlated Smith visibility, lib.glsl's v_smith; 0 below the horizon)."""
     nov = np.clip(nov.reshape(-1, 1), 1e-4, 1.0)
     a = ggx_alpha(roughness.reshape(-1, 1))
     u1, u2 = _hammersley(samples)
@@ -213,11 +211,46 @@ def dfg_terms(nov, roughness, samples: int = DFG_SAMPLES, fresnel_ior=None) -> n
     gl = nov * np.sqrt(np.maximum(nol, 0) ** 2 * (1 - a2) + a2)
     vis = 0.5 / np.maximum(gv + gl, 1e-12)
     weight = np.where(nol > 0, 4 * vis * nol * voh / cos_h, 0.0)
+    l = np.stack([2 * voh * sin_h * np.cos(phi) - vx, 2 * voh * sin_h * np.sin(phi),
+                  nol + 0 * vx], axis=-1)
+    return l, voh, weight
+
+
+def dfg_terms(nov, roughness, samples: int = DFG_SAMPLES, fresnel_ior=None) -> np.ndarray:
+    """(..., 2): the GGX integrals (sum of Fc G_vis, sum of G_vis) for n.v and
+    perceptual roughness (broadcast), by importance sampling D (height-correlated
+    Smith visibility, lib.glsl's v_smith). With fresnel_ior, (...,): the integral of
+    F G_vis with a dielectric's exact Fresnel, its single-scattering albedo."""
+    nov, roughness = np.broadcast_arrays(np.asarray(nov, float), np.asarray(roughness, float))
+    shape = nov.shape
+    _, voh, weight = _lobe_samples(nov, roughness, samples)
     if fresnel_ior is not None:
         return (weight * fresnel_dielectric(voh, fresnel_ior)).mean(axis=1).reshape(shape)
     fc = (1 - voh) ** 5
     out = np.stack([(weight * fc).mean(axis=1), weight.mean(axis=1)], axis=-1)
     return out.reshape(shape + (2,))
+
+
+def lobe_moments(nov, roughness, samples: int = DFG_SAMPLES, fresnel_ior=None) -> np.ndarray:
+    """(..., 8): the first and second moments of the light directions a GGX lobe
+    reflects towards v, weighted as it reflects them (f cos with F = 1, normalised: the
+    lobe's share of each direction), in the frame t (the tangent towards v), b, n:
+    (E[l_t], E[l_b] (0: the lobe is symmetric about the plane of n and v), E[l_n], E[l_t l_n], E[l_t^2], E[l_b^2], E[l_n^2], 0). Any
+    quadratic function of direction averages over the lobe exactly from them, as
+    order-2 spherical harmonics do (shaders/environment.glsl dome_specular). With
+    fresnel_ior, of the lobe weighted by a dielectric's exact Fresnel as well, which
+    leans it towards grazing directions."""
+    nov, roughness = np.broadcast_arrays(np.asarray(nov, float), np.asarray(roughness, float))
+    shape = nov.shape
+    l, voh, weight = _lobe_samples(nov, roughness, samples)
+    if fresnel_ior is not None:
+        weight = weight * fresnel_dielectric(voh, fresnel_ior)
+    w = weight / np.maximum(weight.sum(axis=1, keepdims=True), 1e-30)
+    m = np.einsum("ps,psk->pk", w, l)
+    s = np.einsum("ps,psk->pk", w, l * l)
+    tn = np.einsum("ps,ps->p", w, l[..., 0] * l[..., 2])
+    out = np.stack([m[:, 0], 0 * tn, m[:, 2], tn, s[:, 0], s[:, 1], s[:, 2], 0 * tn], axis=-1)
+    return out.reshape(shape + (8,))
 
 
 def _trapezoid(y, x):
@@ -251,21 +284,43 @@ def dfg_lut() -> np.ndarray:
     return _stored("dfg_lut", compute_dfg_lut)
 
 
+DFG_BLOCKS = 5         # the table's blocks of DFG_SIZE rows: the albedos, the lobes' moments (4)
+
+
 def compute_dfg_lut(size: int = DFG_SIZE) -> np.ndarray:
-    """(size, size, 4) float32, row j = roughness j / (size - 1), column i = n.v
-    i / (size - 1): the table the shaders read, at texel centres for those values
-    (lib.glsl dfg_uv), so that n.v and roughness 0 and 1 are in it, not clamped half a
-    texel short (E at n.v 1 and roughness 1 read 0.326 that way; it is 0.307);
-    channels: dfg_terms, the exact-Fresnel albedo at COAT_IOR, and the lobe's albedo
+    """(DFG_BLOCKS * size, size, 4) float32: blocks of `size` rows one under the other
+    (lib.glsl dfg_block), in each row j = roughness j / (size - 1), column i = n.v
+    i / (size - 1), the values at texel centres (lib.glsl dfg_uv), so that n.v and
+    roughness 0 and 1 are in it, not clamped half a texel short (E at n.v 1 and
+    roughness 1 read 0.326 that way; it is 0.307).
+    Block 0: dfg_terms, the exact-Fresnel albedo at COAT_IOR, and the lobe's albedo
     averaged over the hemisphere, E_avg = 2 * integral of E(mu) mu (the same in every
-    column; Cycles' multiple-scattering Fresnel needs it: lib.glsl lobe_energy)."""
+    column; Cycles' multiple-scattering Fresnel needs it: lib.glsl lobe_energy).
+    Blocks 1 and 2: lobe_moments' eight channels, four each (the dome's reflections),
+    E[l_t] and E[l_t l_n] over sin(theta_v); blocks 3 and 4 the same with the exact
+    Fresnel of IOR 1.5 (dielectric lobes)."""
     c = np.linspace(0.0, 1.0, size)
-    rows = [np.concatenate([dfg_terms(c, r), dfg_terms(c, r, fresnel_ior=COAT_IOR)[:, None]],
-                           axis=1) for r in c]                       # row by row: cache-sized
-    table = np.stack(rows)
+    # E[l_t] and E[l_t l_n] go as sin(theta_v) = sqrt(1 - n.v^2), whose slope is
+    # infinite at n.v = 1, so that a bilinear lookup bent a mirror's direction by up to
+    # 3 degrees: stored divided by it (lib.glsl make_lobe multiplies it back), at
+    # n.v = 1 extrapolated from the two columns before.
+    sin_v = np.sqrt(1.0 - c * c)[:, None]
+    odd = np.array([1, 0, 0, 1, 0, 0, 0, 0], bool)
+
+    def moments(r, **kw):
+        m = lobe_moments(c, r, **kw)
+        ratio = m[:-1] / sin_v[:-1]
+        ratio = np.concatenate([ratio, 2.0 * ratio[-1:] - ratio[-2:-1]])
+        return np.where(odd, ratio, m)
+    rows = [np.concatenate([dfg_terms(c, r), dfg_terms(c, r, fresnel_ior=COAT_IOR)[:, None],
+                            moments(r), moments(r, fresnel_ior=COAT_IOR)],
+                           axis=1) for r in c]                      # row by row: cache-sized
+    table = np.stack(rows)                                          # (size, size, 19)
     e_avg = 2.0 * _trapezoid(table[:, :, 1] * c[None, :], c)
-    return np.concatenate([table, np.repeat(e_avg[:, None, None], size, axis=1)],
-                          axis=2).astype(np.float32)
+    albedos = np.concatenate([table[:, :, :3], np.repeat(e_avg[:, None, None], size, axis=1)],
+                             axis=2)
+    return np.concatenate([albedos, table[:, :, 3:7], table[:, :, 7:11], table[:, :, 11:15],
+                           table[:, :, 15:19]], axis=0).astype(np.float32)
 
 
 def specular_albedo(f0, f90, nov, roughness) -> np.ndarray:
@@ -330,4 +385,4 @@ def compute_velvet_albedo_lut(size: int = VELVET_SIZE, steps: int = 64) -> np.nd
 
 
 # The stored tables' shapes (float32), as their compute_ functions make them.
-TABLE_SHAPES = {"dfg_lut": (DFG_SIZE, DFG_SIZE, 4), "velvet_albedo": (VELVET_SIZE, VELVET_SIZE, 1)}
+TABLE_SHAPES = {"dfg_lut": (DFG_BLOCKS * DFG_SIZE, DFG_SIZE, 4), "velvet_albedo": (VELVET_SIZE, VELVET_SIZE, 1)}

@@ -4,8 +4,8 @@
 // Full screen, once: the dome's light (environment.glsl dome_light: harmonics for
 // diffuse, the prefiltered cube and the split-sum table for the specular lobe and the
 // coat), emission, and the dome as the background where nothing was drawn. Ambient
-// occlusion (HAS_AO) dims the dome's diffuse light, and its specular light by
-// Lagarde's specular occlusion; it never touches emission or the lights. Positions are camera-relative (lib.glsl):
+// occlusion (HAS_AO) dims the dome's diffuse light, and its specular occlusion the
+// dome's reflections (ao.frag); it never touches emission or the lights. Positions are camera-relative (lib.glsl):
 // the viewer is at the origin.
 uniform sampler2D g_base;
 uniform sampler2D g_normal;
@@ -63,11 +63,11 @@ void main() {
         apply_sheen(s, texelFetch(g_sheen, px, 0));
 #endif
         emitted = texelFetch(g_emit, px, 0).rgb;
-        float ao = 1.0;
+        vec2 occlusion = vec2(1.0);         // ambient occlusion, specular occlusion: ao.frag
 #ifdef HAS_AO
-        ao = texelFetch(ao_tex, px, 0).r;
+        occlusion = texelFetch(ao_tex, px, 0).xy;
 #endif
-        dome_light(s, ao, diffuse, glossy);
+        dome_light(s, occlusion, diffuse, glossy);
     }
     // Alpha: coverage (resolve.frag), averaged by anti-aliasing.
     frag = vec4(diffuse + glossy + background + emitted, is_background(depth) ? 0.0 : 1.0);

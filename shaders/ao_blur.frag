@@ -5,13 +5,14 @@
 // by more than a few percent, or a normal turned away) weigh nothing, so occlusion
 // never bleeds across edges. When the occlusion was drawn at 1/u_step of the size,
 // this is also its depth-aware upsampling: each raw value stands at the centre
-// sub-pixel of its block, and is weighed by that sub-pixel's surface.
+// sub-pixel of its block, and is weighed by that sub-pixel's surface. The specular
+// occlusion (ao.frag) is blurred alike: (occlusion, specular occlusion) out.
 uniform sampler2D ao_tex;      // raw occlusion
 uniform int u_step;
 uniform sampler2D g_depth;
 uniform sampler2D g_normal;
 uniform mat4 inv_view_proj;
-layout(location = 0) out float ao;
+layout(location = 0) out vec4 ao;
 #ifdef WRITE_AOV
 layout(location = 1) out vec4 aov_ao;     // the AO render pass, grey
 #endif
@@ -21,7 +22,7 @@ void main() {
     ivec2 size = textureSize(g_depth, 0);
     float depth = texelFetch(g_depth, px, 0).r;
     if (is_background(depth)) {
-        ao = 1.0;
+        ao = vec4(1.0, 1.0, 0.0, 0.0);
 #ifdef WRITE_AOV
         aov_ao = vec4(1.0);
 #endif
@@ -31,6 +32,7 @@ void main() {
     vec3 n = normalize(texelFetch(g_normal, px, 0).xyz);
     float scale = max(length(p), 1e-6);
     float sum = 0.0, weight = 0.0;
+    float specular = 0.0;
     ivec2 cells = textureSize(ao_tex, 0);
     ivec2 home = px / u_step;
     for (int y = -2; y < 2; ++y) {
@@ -43,12 +45,16 @@ void main() {
             vec3 nq = normalize(texelFetch(g_normal, q, 0).xyz);
             float plane = abs(dot(pq - p, n)) / scale;       // distance off p's plane
             float w = exp(-plane * plane / (2.0 * 0.02 * 0.02)) * max(dot(n, nq), 0.0);
-            sum += texelFetch(ao_tex, c, 0).r * w;
+            vec4 raw = texelFetch(ao_tex, c, 0);
+            sum += raw.x * w;
+            specular += raw.y * w;
             weight += w;
         }
     }
-    ao = clamp(weight > 1e-6 ? sum / weight : texelFetch(ao_tex, home, 0).r, 0.0, 1.0);
+    vec4 own = texelFetch(ao_tex, home, 0);
+    if (weight <= 1e-6) { sum = own.x; specular = own.y; weight = 1.0; }
+    ao = vec4(clamp(sum / weight, 0.0, 1.0), clamp(specular / weight, 0.0, 1.0), 0.0, 0.0);
 #ifdef WRITE_AOV
-    aov_ao = vec4(vec3(ao), 1.0);
+    aov_ao = vec4(vec3(ao.x), 1.0);
 #endif
 }

@@ -3,7 +3,10 @@
 // One face of one level of an environment cube map (engine/gpu/environment.py), in
 // the dome's own frame. Variants:
 // ENV_FROM_LATLONG  the radiance cube's level 0, resampled from the lat-long map
-//                   (UsdLux's convention: +Y up, u = (atan2(z, x) + pi/2) / 2pi).
+//                   (UsdLux's convention: +Y up, u = (atan2(z, x) + pi/2) / 2pi),
+//                   less the radiance its order-2 harmonics hold: the shaders average
+//                   those over a lobe exactly (environment.glsl dome_specular), and
+//                   the cubes keep the rest.
 // (none)            a prefiltered level: the radiance cube convolved with the GGX
 //                   lobe of `roughness` for n = v = r (Karis' split sum), by
 //                   importance sampling with filtered lookups (Krivanek and Colbert
@@ -14,6 +17,7 @@ uniform int face_size;     // this level's texels per side
 #ifdef ENV_FROM_LATLONG
 uniform sampler2D latlong;
 uniform float latlong_lod; // the map's mip whose texels match this face's
+uniform vec3 map_sh[9];    // the map's irradiance harmonics (engine/lighting.py latlong_sh)
 #else
 uniform samplerCube radiance;
 uniform float radiance_size;   // level 0 texels per side
@@ -49,7 +53,8 @@ void main() {
     vec3 d = normalize(face_direction(gl_FragCoord.xy / float(face_size)));
 #ifdef ENV_FROM_LATLONG
     vec2 uv = vec2((atan(d.z, d.x) + 0.5 * PI) / (2.0 * PI), acos(clamp(d.y, -1.0, 1.0)) / PI);
-    frag = vec4(textureLod(latlong, uv, latlong_lod).rgb, 1.0);
+    vec3 smooth_part = sh_radiance_mean(map_sh, d, outerProduct(d, d));
+    frag = vec4(textureLod(latlong, uv, latlong_lod).rgb - smooth_part, 1.0);
 #else
     float a = ggx_alpha(roughness);
     vec3 up = abs(d.z) < 0.999 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0);

@@ -1,7 +1,8 @@
 // The dome's light, as engine/gpu/environment.py binds it: irradiance from order-2
-// harmonics (in the dome's frame), reflections from the prefiltered cube (a level per
-// roughness, lod = L r (2 - r)), the background from the lat-long map itself. A
-// uniform dome (no HAS_DOME_MAP) is exact: a constant radiance everywhere.
+// harmonics (in the dome's frame); reflections from the same harmonics, averaged over
+// the lobe exactly, plus what they miss, prefiltered in a cube (a level per roughness,
+// lod = L r (2 - r)); the background from the lat-long map itself. A uniform dome (no
+// HAS_DOME_MAP) is exact: a constant radiance everywhere.
 uniform vec3 dome_sh[9];         // irradiance, radiance scale included
 uniform vec3 dome_radiance;      // colour x intensity (the map's multiplier)
 uniform mat3 dome_to_local;      // world -> the dome's frame
@@ -26,10 +27,27 @@ vec3 dome_irradiance(vec3 n) {
     return max(sh_irradiance(dome_sh, dome_to_local * n), vec3(0.0));
 }
 
-// Radiance prefiltered with the GGX lobe of perceptual roughness r about direction d.
-vec3 dome_specular(vec3 d, float r) {
+// The dome's radiance averaged over the lobe: a lobe's albedo times this is its
+// light. The split sum's one lookup along the mirror direction, of a map prefiltered
+// for n = v = r, put a white metal of roughness 1 under a sky 17% too red above and
+// 20% short of blue below: a rough lobe leans from the mirror direction towards n,
+// and a grazing one is narrower across the plane of n and v than along it, and
+// clipped by the horizon. So in two parts. The harmonics' share is exact whatever the
+// lobe's shape: a quadratic function of direction, averaged from the lobe's first and
+// second moments. The rest, the map less its harmonics (small, and sharp: a sun, a
+// horizon), is prefiltered as Karis does and read along the lobe's dominant direction
+// (Lagarde and de Rousiers 2014, getSpecularDominantDir).
+vec3 dome_specular(Lobe lobe) {
 #ifdef HAS_DOME_MAP
-    return textureLod(env_specular, dome_to_local * d, env_lod_max * r * (2.0 - r)).rgb * dome_radiance;
+    vec3 tl = dome_to_local * lobe.t, nl = dome_to_local * lobe.n, bl = cross(nl, tl);
+    mat3 S = lobe.second.x * outerProduct(tl, tl) + lobe.second.y * outerProduct(bl, bl)
+           + lobe.second.z * outerProduct(nl, nl)
+           + lobe.first.w * (outerProduct(tl, nl) + outerProduct(nl, tl));
+    vec3 smooth_part = sh_radiance_mean(dome_sh, lobe.first.x * tl + lobe.first.z * nl, S);
+    float r = lobe.roughness, a = r * r;
+    vec3 dominant = mix(lobe.n, reflect(-lobe.v, lobe.n), (1.0 - a) * (sqrt(1.0 - a) + a));
+    vec3 rest = textureLod(env_specular, dome_to_local * dominant, env_lod_max * r * (2.0 - r)).rgb;
+    return max(smooth_part + rest * dome_radiance, vec3(0.0));
 #else
     return dome_radiance;
 #endif
@@ -39,26 +57,23 @@ vec3 dome_specular(vec3 d, float r) {
 // transparency pass (blended ones) both call this, so both are lit alike.
 uniform bool has_dome;
 
-// Lagarde and de Rousiers 2014: the visible share of a specular lobe, from AO.
-float specular_occlusion(float NoV, float ao, float roughness) {
-    return clamp(pow(NoV + ao, exp2(-16.0 * roughness - 1.0)) - 1.0 + ao, 0.0, 1.0);
-}
-
 // The dome's light leaving surface s, diffuse and glossy (the base lobe and the coat),
-// its ambient occlusion `ao` applied; 0 without a dome.
-void dome_light(Surface s, float ao, out vec3 diffuse, out vec3 glossy) {
+// its occlusion applied: (ambient occlusion, the reflections' share the scene leaves)
+// from the AO pass (ao.frag), (1, 1) where there is none; 0 without a dome. The coat
+// takes the base lobe's share.
+void dome_light(Surface s, vec2 occlusion, out vec3 diffuse, out vec3 glossy) {
     diffuse = vec3(0.0);
     glossy = vec3(0.0);
     if (!has_dome) return;
+    float ao = occlusion.x;
     vec3 E = dome_irradiance(s.n);
     diffuse = brdf_diffuse(s) * E * ao * bump_dome(s);
 #ifdef SHEEN
     diffuse += sheen_ambient(s, E) * ao;
 #endif
-    vec3 r = reflect(-s.v, s.n);
-    glossy = s.under_coat * s.spec_albedo * dome_specular(r, s.roughness)
-           * specular_occlusion(s.NoV, ao, s.roughness);
+    glossy = s.under_coat * s.spec_albedo
+           * dome_specular(make_lobe(s.n, s.v, s.roughness, s.spec_dielectric));
     if (s.coat > 0.0)
-        glossy += s.coat_albedo * dome_specular(r, s.coat_roughness)
-                * specular_occlusion(s.NoV, ao, s.coat_roughness);
+        glossy += s.coat_albedo * dome_specular(make_lobe(s.n, s.v, s.coat_roughness, 1.0));
+    glossy *= occlusion.y;
 }

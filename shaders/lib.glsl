@@ -56,23 +56,69 @@ float ggx_alpha(float roughness) {
     return max(roughness * roughness, 2e-3);
 }
 
-// The split-sum table (engine/lighting.py dfg_lut): x = integral of Fc G_vis, y =
-// integral of G_vis (the GGX albedo with F = 1), z = integral of F G_vis with the exact
-// Fresnel of IOR 1.5, w = y averaged over the hemisphere, by n.v (s) and perceptual
-// roughness (t), texel i at i / (size - 1). Every program that shades a Surface binds it.
+// The split-sum table (engine/lighting.py dfg_lut), by n.v (s) and perceptual
+// roughness (t), texel i at i / (size - 1), in DFG_BLOCKS blocks of rows one under
+// the other. Block 0: x = integral of Fc G_vis, y = integral of G_vis (the GGX albedo
+// with F = 1), z = integral of F G_vis with the exact Fresnel of IOR 1.5, w = y
+// averaged over the hemisphere. Blocks 1 and 2: the moments of the directions the
+// lobe reflects (engine/lighting.py lobe_moments, E[l_t] and E[l_t l_n] over
+// sin(theta_v); environment.glsl dome_specular);
+// blocks 3 and 4 the same for a lobe weighted by the exact Fresnel of IOR 1.5.
+// Every program that shades a Surface binds it.
 uniform sampler2D dfg_lut;
+const int DFG_BLOCKS = 5;
 // The coordinates of (s, t) in [0, 1]^2 in a table of `size` texels stored at texel
 // centres, as engine/lighting.py makes them (the split-sum and velvet tables).
 vec2 table_uv(ivec2 size, float s, float t) {
     vec2 n = vec2(size);
     return (clamp(vec2(s, t), 0.0, 1.0) * (n - 1.0) + 0.5) / n;
 }
-vec2 dfg_uv(float NoV, float roughness) {
-    return table_uv(textureSize(dfg_lut, 0), NoV, roughness);
+vec4 dfg_block(int block, float NoV, float roughness) {
+    ivec2 size = textureSize(dfg_lut, 0);
+    vec2 uv = table_uv(ivec2(size.x, size.y / DFG_BLOCKS), NoV, roughness);
+    return texture(dfg_lut, vec2(uv.x, (uv.y + float(block)) / float(DFG_BLOCKS)));
 }
-vec2 dfg(float NoV, float roughness) { return texture(dfg_lut, dfg_uv(NoV, roughness)).xy; }
-float dfg_ior15(float NoV, float roughness) { return texture(dfg_lut, dfg_uv(NoV, roughness)).z; }
-float dfg_e_avg(float roughness) { return texture(dfg_lut, dfg_uv(0.5, roughness)).w; }
+vec2 dfg(float NoV, float roughness) { return dfg_block(0, NoV, roughness).xy; }
+float dfg_ior15(float NoV, float roughness) { return dfg_block(0, NoV, roughness).z; }
+float dfg_e_avg(float roughness) { return dfg_block(0, 0.5, roughness).w; }
+
+// A GGX lobe of perceptual roughness r reflecting towards v off normal n, each light
+// direction weighted as the lobe reflects it (f cos, normalised), its Fresnel F = 1
+// (a metal's, near enough) for a share 1 - dielectric of its light and a dielectric's
+// exact one for the rest: its frame (t, the tangent towards v; n) and the moments of
+// its directions in that frame (dfg_lut blocks 1 and 2, and 3 and 4 for the
+// dielectric part, mixed by their shares: first = E[l_t], 0, E[l_n], E[l_t l_n];
+// second = E[l_t^2], E[l_b^2], E[l_n^2]). A dielectric's Fresnel leans its lobe
+// towards grazing directions. The dome's reflections (environment.glsl dome_specular)
+// and their occlusion (ao.frag) read it.
+struct Lobe {
+    vec3 n, v, t;
+    float roughness;
+    vec4 first;
+    vec3 second;
+};
+
+Lobe make_lobe(vec3 n, vec3 v, float r, float dielectric) {
+    Lobe lobe;
+    lobe.n = n; lobe.v = v; lobe.roughness = r;
+    float NoV = dot(n, v);
+    vec3 t = v - n * NoV;
+    float len = length(t);
+    lobe.t = len > 1e-5 ? t / len
+                        : normalize(cross(n, abs(n.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
+    lobe.first = mix(dfg_block(1, NoV, r), dfg_block(3, NoV, r), dielectric);
+    lobe.second = mix(dfg_block(2, NoV, r), dfg_block(4, NoV, r), dielectric).xyz;
+    float c = clamp(NoV, 0.0, 1.0);
+    lobe.first.xw *= sqrt(1.0 - c * c);     // stored over sin(theta_v): engine/lighting.py
+    return lobe;
+}
+
+// The lobe's mean direction, E[l] (shorter than 1 by its spread).
+vec3 lobe_mean(Lobe lobe) { return lobe.first.x * lobe.t + lobe.first.z * lobe.n; }
+
+// The half-angle of the cap about the lobe's mean direction that stands for it: a
+// uniform cap whose mean direction is as short, cos = 2 |E[l]| - 1 (0 for a mirror).
+float lobe_cone(Lobe lobe) { return acos(clamp(2.0 * length(lobe_mean(lobe)) - 1.0, -1.0, 1.0)); }
 
 // A dielectric's exact (unpolarised) Fresnel reflectance, relative IOR eta >= 1, as
 // Cycles' fresnel_dielectric_cos: its Principled BSDF's dielectric lobes and coat use
@@ -136,6 +182,7 @@ struct Surface {
     float energy_d;
     vec3 energy_m;
     vec3 spec_albedo;   // the base lobe's albedo at n.v (multiple scattering included)
+    float spec_dielectric;  // the dielectric lobe's share of it (lib.glsl Lobe)
     vec3 diffuse;       // Lambert albedo left to the diffuse layer
     float coat;         // coat weight
     float coat_roughness;
@@ -172,7 +219,10 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, vec4 base, vec4 mat, float coat_rou
     s.energy_m = lobe_energy(t, fresnel_avg(s.base, f90_m), e_avg);
     // The dielectric lobe's albedo (what its diffuse layer does not get), and the metal's.
     float e_d = lobe_albedo(t, vec3(f0_d), vec3(f90_d)).x * s.energy_d * exact_ratio;
-    s.spec_albedo = mix(vec3(e_d), lobe_albedo(t, s.base, f90_m) * s.energy_m, s.metallic);
+    vec3 e_m = lobe_albedo(t, s.base, f90_m) * s.energy_m;
+    s.spec_albedo = mix(vec3(e_d), e_m, s.metallic);
+    float dielectric_part = (1.0 - s.metallic) * e_d;
+    s.spec_dielectric = dielectric_part / max(dielectric_part + s.metallic * dot(e_m, vec3(1.0 / 3.0)), 1e-6);
     s.coat = clamp(mat.w, 0.0, 1.0);
     s.coat_roughness = clamp(coat_roughness, 0.0, 1.0);
     s.coat_energy = 1.0;
@@ -275,6 +325,19 @@ vec3 sh_irradiance(vec3 sh[9], vec3 d) {
         + sh[4] * 1.092548 * d.x * d.y + sh[5] * 1.092548 * d.y * d.z
         + sh[6] * 0.315392 * (3.0 * d.z * d.z - 1.0)
         + sh[7] * 1.092548 * d.x * d.z + sh[8] * 0.546274 * (d.x * d.x - d.y * d.y);
+}
+
+// The mean radiance over a distribution of directions l whose first moment is m =
+// E[l] and second S = E[l l^T], of the radiance the harmonics above hold (each band's
+// cosine-lobe factor A_l = pi, 2pi/3, pi/4 taken out): exact, as a quadratic function of
+// l, whatever the distribution. A single direction d is m = d, S = d d^T.
+vec3 sh_radiance_mean(vec3 sh[9], vec3 m, mat3 S) {
+    const float A1 = 2.0 * PI / 3.0, A2 = PI / 4.0;
+    return sh[0] * (0.282095 / PI)
+        + (sh[1] * m.y + sh[2] * m.z + sh[3] * m.x) * (0.488603 / A1)
+        + (sh[4] * (1.092548 * S[0][1]) + sh[5] * (1.092548 * S[1][2])
+           + sh[6] * (0.315392 * (3.0 * S[2][2] - (S[0][0] + S[1][1] + S[2][2])))
+           + sh[7] * (1.092548 * S[0][2]) + sh[8] * (0.546274 * (S[0][0] - S[1][1]))) / A2;
 }
 
 // The sRGB transfer function, decoded (IEC 61966-2-1), as Cycles decodes 8-bit images.

@@ -46,7 +46,7 @@ void main() {
 #endif
     vec3 c = vec3(0.0), diffuse, glossy;
 #ifdef AMBIENT
-    dome_light(s, 1.0, diffuse, glossy);      // no ambient occlusion: it is screen space
+    dome_light(s, vec2(1.0), diffuse, glossy);      // no ambient occlusion: it is screen space
     c += m.emissive + diffuse + glossy;
 #endif
     for (int i = 0; i < n_lights; ++i) {

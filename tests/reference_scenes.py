@@ -42,6 +42,8 @@ class Spec:
 SCENES = {
     "environment_diffuse": Spec((128, 72), 2048, "a white Lambert sphere under an asymmetric lat-long sky"),
     "environment_mirror": Spec((128, 72), 1024, "a mirror sphere under the same sky"),
+    "dome_probe": Spec((360, 64), 512, "five spheres under the same sky: white metal of roughness "
+                       "1, 0.6, 0.3, a rough dielectric, a white Lambert"),
     "ao_corner": Spec((128, 72), 2048, "a box in a corner under a uniform white world"),
     "ao_node": Spec((128, 72), 2048, "ao_corner, its base colour through an Ambient Occlusion node"),
     "furnace_rough0": Spec((48, 48), 1024, "white dielectric sphere, roughness 0, uniform white world"),
@@ -274,6 +276,31 @@ def build_environment_mirror(workdir):
     _environment.workdir = workdir
     return _environment("environment_mirror",
                         ("Mirror", (1.0, 1.0, 1.0), dict(roughness=0.0, metallic=1.0)))
+
+
+# The probe's spheres, left to right: (name, colour, Principled inputs).
+PROBE = (("Metal1", (1.0, 1.0, 1.0), dict(roughness=1.0, metallic=1.0)),
+         ("Metal06", (1.0, 1.0, 1.0), dict(roughness=0.6, metallic=1.0)),
+         ("Metal03", (1.0, 1.0, 1.0), dict(roughness=0.3, metallic=1.0)),
+         ("Dielectric", (0.8, 0.8, 0.8), dict(roughness=0.5)),
+         ("Lambert", (0.8, 0.8, 0.8), dict(roughness=1.0, specular=0.0)))
+PROBE_SPACING = 5.0
+
+
+def build_dome_probe(workdir):
+    """Five unit spheres in a row along X under the sky, seen from 10 degrees above
+    the horizon, each showing the dome's light alone (the dome's integral, not what
+    the neighbours hide of it): in Cycles hidden from every ray but the camera's, in
+    Lantern beyond the AO distance (2) of each other."""
+    scene = _empty_scene("dome_probe")
+    _world(scene, image=write_sky(workdir)).light_settings.distance = 2.0
+    for i, (name, colour, inputs) in enumerate(PROBE):
+        ob = _sphere(scene, name, ((i - 2) * PROBE_SPACING, 0.0, 0.0), 1.0,
+                     _material(name, colour, **inputs))
+        ob.visible_diffuse = ob.visible_glossy = ob.visible_transmission = False
+        ob.visible_shadow = ob.visible_volume_scatter = False
+    _camera(scene, (0.0, -60.0, 60.0 * math.tan(math.radians(10.0))), (0.0, 0.0, 0.0), lens=95.0)
+    return scene
 
 
 def build_ao_corner(workdir):

@@ -44,7 +44,7 @@ TARGETS = {
     "g_depth": "depth",         # 32-bit float, reversed (engine/view.py)
     "g_smooth": "rgba16f",     # world normal before the normal map (bump map correction)
     "g_sheen": "rgba16f",      # sheen colour; roughness + 2 x mode (passes/gbuffer.py)
-    "ao": "r32f",              # ambient occlusion of the dome's light
+    "ao": "rgba32f",           # ambient occlusion of the dome's light, bent normal (passes/ao.py)
     "hdr": "rgba32f",          # light accumulation: float32, 1e-38..3e38 (a 1e-6 W and a
                                # 1e6 W light alike; float16 underflowed and overflowed)
     "depth_stencil": "depth_stencil",  # scene depth copy and light-volume marks

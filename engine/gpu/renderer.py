@@ -121,7 +121,7 @@ class Renderer:
             self.shadows,
             self.gbuffer,
             AovPass(ctx, self.pool, programs),
-            AoPass(ctx, self.pool, programs),
+            AoPass(ctx, self.pool, programs, self.environment),
             AmbientPass(ctx, self.pool, programs, self.environment),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
                       self.geometry, self.environment),
