@@ -59,7 +59,7 @@ uniform bool has_dome;
 
 // The dome's light leaving surface s, diffuse and glossy (the base lobe and the coat),
 // its occlusion applied: (ambient occlusion, the reflections' share the scene leaves)
-// from the AO pass (ao.frag), (1, 1) where there is none; 0 without a dome. The coat
+// from the AO pass (ao.glsl), (1, 1) where there is none; 0 without a dome. The coat
 // takes the base lobe's share.
 void dome_light(Surface s, vec2 occlusion, out vec3 diffuse, out vec3 glossy) {
     diffuse = vec3(0.0);

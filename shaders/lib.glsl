@@ -90,7 +90,7 @@ float dfg_e_avg(float roughness) { return dfg_block(0, 0.5, roughness).w; }
 // dielectric part, mixed by their shares: first = E[l_t], 0, E[l_n], E[l_t l_n];
 // second = E[l_t^2], E[l_b^2], E[l_n^2]). A dielectric's Fresnel leans its lobe
 // towards grazing directions. The dome's reflections (environment.glsl dome_specular)
-// and their occlusion (ao.frag) read it.
+// and their occlusion (ao.glsl) read it.
 struct Lobe {
     vec3 n, v, t;
     float roughness;

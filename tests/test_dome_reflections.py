@@ -3,7 +3,7 @@ map, and a two-colour dome (sky above, ground below) against the integral in num
 (tests/dome_scenes.py), for a white metal and a white dielectric at roughness 0.05,
 0.3, 0.6 and 1 (shaders/environment.glsl dome_specular; ambient occlusion off: these
 check the dome's integral, not what the scene hides of it); and what the scene hides
-of it, a mirror ball on a plane (shaders/ao.frag, specular occlusion)."""
+of it, a mirror ball on a plane (shaders/ao.glsl, specular occlusion)."""
 import functools
 
 import numpy as np

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
+from ..screen import run_screen, screen_program
 from .ao import occludes
 
 GBUFFER = ("g_base", "g_normal", "g_mat", "g_emit", "g_depth")
@@ -85,28 +86,23 @@ class AmbientPass(Pass):
             if line not in warnings:
                 warnings.append(line)
         aovs = lighting_aovs(frame)
-        for name in LIGHTING_TARGETS if aovs else ():
-            clear = self.pool.framebuffer([board[name]])
+        # The light pass adds to the Shadow pass, which nothing here writes: it starts
+        # at 0. The other targets this pass writes whole.
+        if aovs:
+            clear = self.pool.framebuffer([board["aov_shadow"]])
             clear.use()
             clear.clear(0.0, 0.0, 0.0, 0.0)
-        fbo = self.pool.framebuffer([board["hdr"]] + ([board[n] for n in LIGHTING_TARGETS[:3]]
-                                                       if aovs else []))
-        fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, 0.0)
-        ctx.disable(ctx.DEPTH_TEST | ctx.CULL_FACE)
-        ctx.enable(ctx.BLEND)
-        ctx.blend_func = ctx.ONE, ctx.ONE
-        ctx.blend_equation = ctx.FUNC_ADD
+        targets = [board["hdr"]] + ([board[n] for n in LIGHTING_TARGETS[:3]] if aovs else [])
+        ctx.disable(ctx.DEPTH_TEST | ctx.CULL_FACE | ctx.BLEND)
         # The AO pass may run only for its render pass; the image uses it when the
         # preset has occlusion.
         ao = board.get("ao") if occludes(frame) else None
         defines = (["HAS_DOME_MAP"] if env is not None else []) + (["HAS_AO"] if ao else []) + \
             (["WRITE_AOVS"] if aovs else []) + surface_defines(frame, board)
-        prog = self.programs.get("fullscreen.vert", "ambient.frag", defines)
+        prog = screen_program(self.programs, "ambient", defines, frame.compute, len(targets))
         bind_gbuffer(board, prog, board["view"])
         self.environment.bind(prog, dome, env)
         self.environment.bind_sheen(frame.scene.materials.values())
         set_uniform(prog, "has_dome", dome is not None)
         set_uniform(prog, "transparent", bool(frame.transparent))
-        self.programs.fullscreen(prog)
-        ctx.disable(ctx.BLEND)
+        run_screen(ctx, self.programs, self.pool, prog, targets, frame.compute)

@@ -1,5 +1,6 @@
 """The ambient-occlusion pass (docs/design.md, Ambient occlusion): screen-space occlusion of the dome's light
-by a horizon search (shaders/ao.frag), then a depth-aware blur (shaders/ao_blur.frag).
+by a horizon search (shaders/ao.glsl), then a depth-aware blur (shaders/ao_blur.glsl), each a screen
+pass's body (engine/gpu/screen.py) run in the frame's form.
 The ambient pass multiplies the dome's diffuse light by it, and its specular light by
 the share of the specular lobe its visibility cone lets through; lights and emission
 are never occluded here (lights have their shadows).
@@ -30,7 +31,7 @@ distance behind it (a visibility bit mask per slice, Therrien et al. 2023), not 
 the directions beyond (GTAO's horizon). One more slice, along the surface's specular
 lobe (its roughness from g_mat, its shape from the split-sum table), gives the share
 of the lobe the scene leaves open: the occlusion of the dome's reflections
-(shaders/ao.frag).
+(shaders/ao.glsl).
 
 reads: g_depth, g_normal, g_mat, view   writes: ao (RGBA32F: occlusion, specular
 occlusion); its search (RGBA32F: occlusion and the specular share's two sums, scratch)
@@ -40,6 +41,7 @@ from __future__ import annotations
 
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
+from ..screen import run_screen, screen_program
 
 DEFAULT_DISTANCE = 10.0      # Blender's world.light_settings.distance default
 MAX_SCREEN_FRACTION = 2.0
@@ -83,8 +85,7 @@ class AoPass(Pass):
         cam = view.camera
         step = max(int(frame.supersample), 1)
         raw = self.pool.acquire((-(-w // step), -(-h // step)), "rgba32f")
-        self.pool.framebuffer([raw]).use()
-        prog = self.programs.get("fullscreen.vert", "ao.frag")
+        prog = screen_program(self.programs, "ao", (), frame.compute)
         view.set_camera(prog)
         set_uniform(prog, "u_step", step)
         set_uniform(prog, "radius", float(distance))
@@ -94,13 +95,12 @@ class AoPass(Pass):
         set_uniform(prog, "max_pixels", float((w * w + h * h) ** 0.5))
         set_uniform(prog, "slices", max(preset.ao_slices, 1))
         set_uniform(prog, "steps", max(preset.ao_steps, 1))
-        self.programs.fullscreen(prog)
+        run_screen(ctx, self.programs, self.pool, prog, [raw], frame.compute)
         targets = [board["ao"]] + [board[t] for t in self.aov_targets(frame)]
-        self.pool.framebuffer(targets).use()
-        prog = self.programs.get("fullscreen.vert", "ao_blur.frag",
-                                 ["WRITE_AOV"] if len(targets) > 1 else [])
+        prog = screen_program(self.programs, "ao_blur", ["WRITE_AOV"] if len(targets) > 1 else [],
+                              frame.compute, len(targets))
         raw.use(UNITS["ao_tex"])
         view.set_camera(prog)
         set_uniform(prog, "u_step", step)
-        self.programs.fullscreen(prog)
+        run_screen(ctx, self.programs, self.pool, prog, targets, frame.compute)
         self.pool.release(raw)

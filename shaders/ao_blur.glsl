@@ -1,24 +1,22 @@
-#version 330 core
 #include "lib.glsl"
 // Depth-aware (bilateral) blur of the raw occlusion over the 4x4 tile its noise
-// repeats on (ao.frag): neighbours on another surface (depth off the centre's plane
+// repeats on (ao.glsl): neighbours on another surface (depth off the centre's plane
 // by more than a few percent, or a normal turned away) weigh nothing, so occlusion
 // never bleeds across edges. When the occlusion was drawn at 1/u_step of the size,
 // this is also its depth-aware upsampling: each raw value stands at the centre
 // sub-pixel of its block, and is weighed by that sub-pixel's surface. The specular
-// occlusion (ao.frag) is blurred alike: (occlusion, specular occlusion) out.
+// occlusion (ao.glsl) is blurred alike: (occlusion, specular occlusion) out.
 uniform sampler2D ao_tex;      // raw occlusion
 uniform int u_step;
 uniform sampler2D g_depth;
 uniform sampler2D g_normal;
 uniform mat4 inv_view_proj;
-layout(location = 0) out vec4 ao;
-#ifdef WRITE_AOV
-layout(location = 1) out vec4 aov_ao;     // the AO render pass, grey
-#endif
 
-void main() {
-    ivec2 px = ivec2(gl_FragCoord.xy);
+// A screen pass's body (engine/gpu/screen.py): outputs the occlusion and, with
+// WRITE_AOV, the AO render pass (grey).
+void screen_pixel(ivec2 px, out vec4 ao, out vec4 aov_ao, out vec4 unused2,
+                  out vec4 unused3) {
+    aov_ao = unused2 = unused3 = vec4(0.0);
     ivec2 size = textureSize(g_depth, 0);
     float depth = texelFetch(g_depth, px, 0).r;
     if (is_background(depth)) {

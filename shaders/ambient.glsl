@@ -1,11 +1,10 @@
-#version 330 core
 #include "lib.glsl"
 #include "environment.glsl"
 // Full screen, once: the dome's light (environment.glsl dome_light: harmonics for
 // diffuse, the prefiltered cube and the split-sum table for the specular lobe and the
 // coat), emission, and the dome as the background where nothing was drawn. Ambient
 // occlusion (HAS_AO) dims the dome's diffuse light, and its specular occlusion the
-// dome's reflections (ao.frag); it never touches emission or the lights. Positions are camera-relative (lib.glsl):
+// dome's reflections (ao.glsl); it never touches emission or the lights. Positions are camera-relative (lib.glsl):
 // the viewer is at the origin.
 uniform sampler2D g_base;
 uniform sampler2D g_normal;
@@ -27,17 +26,13 @@ uniform bool transparent;
 uniform sampler2D ao_tex;
 #endif
 
-layout(location = 0) out vec4 frag;
-#ifdef WRITE_AOVS
-// Render passes (engine/gpu/passes/ambient.py): the dome's diffuse and glossy light
-// (added to by the light pass), the background, and the occlusion.
-layout(location = 1) out vec4 aov_diffuse;
-layout(location = 2) out vec4 aov_glossy;
-layout(location = 3) out vec4 aov_env;
-#endif
 
-void main() {
-    ivec2 px = ivec2(gl_FragCoord.xy);
+// A screen pass's body (engine/gpu/screen.py): the HDR image and, with WRITE_AOVS,
+// the render passes (engine/gpu/passes/ambient.py): the dome's diffuse and glossy
+// light (added to by the light pass) and the background.
+void screen_pixel(ivec2 px, out vec4 frag, out vec4 aov_diffuse, out vec4 aov_glossy,
+                  out vec4 aov_env) {
+    aov_diffuse = aov_glossy = aov_env = vec4(0.0);
     float depth = texelFetch(g_depth, px, 0).r;
     vec2 uv = (vec2(px) + 0.5) / vec2(textureSize(g_depth, 0));
     vec3 diffuse = vec3(0.0), glossy = vec3(0.0), background = vec3(0.0), emitted = vec3(0.0);
@@ -63,7 +58,7 @@ void main() {
         apply_sheen(s, texelFetch(g_sheen, px, 0));
 #endif
         emitted = texelFetch(g_emit, px, 0).rgb;
-        vec2 occlusion = vec2(1.0);         // ambient occlusion, specular occlusion: ao.frag
+        vec2 occlusion = vec2(1.0);         // ambient occlusion, specular occlusion: ao.glsl
 #ifdef HAS_AO
         occlusion = texelFetch(ao_tex, px, 0).xy;
 #endif

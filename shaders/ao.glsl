@@ -1,4 +1,3 @@
-#version 330 core
 #include "lib.glsl"
 // Screen-space ambient occlusion (docs/design.md, Ambient occlusion), the fraction of a
 // surface's cosine-weighted hemisphere that sees the dome within `radius` (Blender's AO
@@ -8,7 +7,7 @@
 // hide, and the cosine-weighted measure of the open ones, in closed form per sector,
 // about the normal projected into the slice. `slices` directions (the preset's rays)
 // x `steps` depth samples per side, rotated per pixel over a 4x4 tile (a Bayer
-// pattern) that the bilateral blur (ao_blur.frag) then averages away. Depth is read
+// pattern) that the bilateral blur (ao_blur.glsl) then averages away. Depth is read
 // through lib.glsl's helpers.
 // One more slice, through the surface's specular lobe (lib.glsl Lobe: its mean
 // direction, and the cap that stands for it), gives the occlusion of the dome's
@@ -33,7 +32,6 @@ uniform int steps;
 // Drawn at 1/u_step of the G-buffer's size per side (a supersampled frame's AO at the
 // output's resolution): each AO pixel searches from the centre sub-pixel of its block.
 uniform int u_step;
-out vec4 ao;
 
 // A 4x4 Bayer index in [0, 16): the tile's 16 pixels take 16 evenly spaced slice
 // rotations, so the blur's average is a stratified quadrature over the half circle
@@ -197,8 +195,10 @@ float open_interval(Slice sl, float c, float w) {
     return inside > 1e-6 * w ? seen / inside : 1.0;
 }
 
-void main() {
-    ivec2 cell = ivec2(gl_FragCoord.xy);
+// A screen pass's body (engine/gpu/screen.py): one raw AO texel, `cell`.
+void screen_pixel(ivec2 cell, out vec4 ao, out vec4 unused1, out vec4 unused2,
+                  out vec4 unused3) {
+    unused1 = unused2 = unused3 = vec4(0.0);
     ivec2 px = cell * u_step + u_step / 2;
     vec2 centre = vec2(px) + 0.5;
     ivec2 size = textureSize(g_depth, 0);
