@@ -74,7 +74,7 @@ def _worst(a, b) -> float:
 def _both_forms_agree(stage, forms, name):
     t0, t1 = stage.GetStartTimeCode(), stage.GetEndTimeCode()
     times = [float(t) for t in np.linspace(t0, t1, 3)]
-    computed = _deformed(stage, None, times)        # GL 4.3+: compute wherever it runs
+    computed = _deformed(stage, True, times)
     assert forms and set(forms) == {"compute"}
     forms.clear()
     fed = _deformed(stage, False, times)
@@ -102,7 +102,7 @@ def test_crowd_images_are_equal_in_both_forms(forms):
     a frame change deforms both meshes once."""
     stage = crowd_stage()
     images = {}
-    for compute in (None, False):
+    for compute in (True, False):
         settings = RenderSettings(width=48, height=32, compute=compute, ambient_occlusion=False)
         with Session(stage, settings) as session:
             session.render(frame=1)
@@ -110,13 +110,13 @@ def test_crowd_images_are_equal_in_both_forms(forms):
         assert result.stats["meshes_skinned"] == 2
         images[compute] = result.rgba
     assert forms.count("compute") == forms.count("feedback") == 4
-    assert np.abs(images[None] - images[False]).max() <= 1e-5
+    assert np.abs(images[True] - images[False]).max() <= 1e-5
 
 
 def test_a_skinned_cage_is_skinned_and_tessellated_alike(forms):
     stage = _cage_stage()
     out = {}
-    for compute in (None, False):
+    for compute in (True, False):
         settings = RenderSettings(width=48, height=32, frame=3, compute=compute,
                                   tessellation_px=2.0)
         with Session(stage, settings) as s:
@@ -126,7 +126,7 @@ def test_a_skinned_cage_is_skinned_and_tessellated_alike(forms):
             out[compute] = run_gl(lambda gl: (r.skinning.read(key), r.tessellation.read(key)))
         assert result.stats["meshes_skinned"] == 1 == result.stats["meshes_tessellated"]
     assert set(forms) == {"compute", "feedback"}
-    for got, want in zip(out[None], out[False]):
+    for got, want in zip(out[True], out[False]):
         assert got.shape == want.shape and len(want)
         p = want[:, :3]
         diag = np.linalg.norm(p.max(axis=0) - p.min(axis=0))
@@ -138,9 +138,9 @@ def test_compute_skinning_reads_no_memory_that_nothing_wrote(forms, junk, monkey
     """Fresh buffers and textures holding junk (as a GPU driver may hand them out;
     llvmpipe's are zeros): the crowd and a cage deform as they do in clean memory."""
     stages = (crowd_stage(), _cage_stage())
-    clean = [_deformed(stage, None, [2.0])[2.0] for stage in stages]
+    clean = [_deformed(stage, True, [2.0])[2.0] for stage in stages]
     _garbage(monkeypatch, junk)
-    dirty = [_deformed(stage, None, [2.0])[2.0] for stage in stages]
+    dirty = [_deformed(stage, True, [2.0])[2.0] for stage in stages]
     assert set(forms) == {"compute"}
     for a, b in zip(clean, dirty):
         assert _worst(a, b) == 0.0
@@ -151,7 +151,7 @@ def test_a_store_bound_from_an_aligned_texel_below_the_mesh(forms):
     store is then bound from below a mesh's first vertex and the shader starts that
     many texels in. The crowd's second mesh starts mid-block at that alignment."""
     stage = crowd_stage()
-    with Session(stage, RenderSettings(width=1, height=1)) as session:
+    with Session(stage, RenderSettings(width=1, height=1, compute=True)) as session:
         skinning_pass = session._renderer.skinning
         skinning_pass._align = 256
         got = session.skinned_points(2.0)
