@@ -41,9 +41,10 @@ import numpy as np
 HERE = pathlib.Path(__file__).resolve().parent
 SCENES = ("demo", "crowd", "cubes", "demo_cage")
 # The frame's forms (RenderSettings): every pass that can in compute, the light volumes
-# with the rest in compute, and every pass in its raster form.
-FORMS = {"compute": {}, "volumes": {"lighting": "volumes"},
-         "raster": {"compute": False, "lighting": "volumes"}}
+# with the rest in compute, every pass in its raster form, and Lantern's own choice
+# (a GPU: compute; a software rasteriser: clustered lights, the rest raster).
+FORMS = {"compute": {"compute": True}, "volumes": {"compute": True, "lighting": "volumes"},
+         "raster": {"compute": False, "lighting": "volumes"}, "default": {}}
 LIGHT_COUNTS = (1, 256, 16384)
 LIGHTS_SIZE = (1920, 1080)
 LIGHTS_EXTENT = 48.0            # metres across the many-lights image
