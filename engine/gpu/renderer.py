@@ -220,7 +220,7 @@ class Renderer:
 
     def _forms(self, options) -> tuple:
         """(compute, lighting) of a frame with these settings on this context. Left to
-        Lantern (None), lights are clustered wherever compute runs: the light tree keeps
+        Lantern (None), lights are clustered wherever GL 4.3 runs: the light tree keeps
         every light within light_error, where volumes cut each light's tail. The other
         passes take the compute forms on a GPU, and their raster forms on a software
         rasteriser (llvmpipe), which runs both on the same CPU threads: compute gains
