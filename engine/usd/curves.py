@@ -399,26 +399,6 @@ def _bspline_basis(t, order, n, u):
     return basis[:, :n]
 
 
-def _bspline_basis(t, order, n, u):
-    """(m, n) B-spline basis functions of `order` over knots `t` at parameters u
-    (Cox-de Boor), u = t[n] taken from the left."""
-    u = np.asarray(u, np.float64)
-    span = np.clip(np.searchsorted(t, u, side="right") - 1, order - 1, n - 1)
-    m = len(u)
-    basis = np.zeros((m, len(t) - 1))
-    basis[np.arange(m), span] = 1.0
-    for d in range(1, order):
-        nxt = np.zeros((m, len(t) - 1 - d))
-        for j in range(len(t) - 1 - d):
-            left = t[j + d] - t[j]
-            right = t[j + d + 1] - t[j + 1]
-            a = (u - t[j]) / left * basis[:, j] if left > 0 else 0.0
-            b = (t[j + d + 1] - u) / right * basis[:, j + 1] if right > 0 else 0.0
-            nxt[:, j] = a + b
-        basis = nxt
-    return basis[:, :n]
-
-
 def polylines(prim, time, points=None) -> Polylines:
     """The samples of a curves prim, of `points` (skinned) in place of its own."""
     if prim.IsA(UsdGeom.NurbsCurves):
