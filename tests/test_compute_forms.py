@@ -52,6 +52,36 @@ def test_a_software_rasteriser_gets_the_raster_forms_and_clustered_lights():
     assert raster.stats["forms"] == {"compute": False, "lighting": "volumes"}
 
 
+def test_a_software_rasteriser_draws_each_light_with_a_map_as_its_volume():
+    """Left to Lantern on llvmpipe, a light with its own shadow map (a pass of its own
+    in either form) is drawn as its light volume, as the other screen passes are
+    raster there; the lights without one are clustered. The image is the compute
+    form's, within float16 rounding."""
+    from pxr import Usd, UsdGeom
+    from light_grids import add_sphere_lights
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    for path, z, half in (("/root/plane", 0.0, 5.0), ("/root/caster", 0.5, 0.3)):
+        quad = UsdGeom.Mesh.Define(stage, path)
+        quad.CreatePointsAttr([(-half, -half, z), (half, -half, z), (half, half, z),
+                               (-half, half, z)])
+        quad.CreateFaceVertexCountsAttr([4])
+        quad.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
+    UsdGeom.Xform.Define(stage, "/root/shadowed")
+    add_sphere_lights(stage, "/root", [(1.0, 0.0, 1.0)], {"intensity": 50.0, "radius": 0.05},
+                      False, treat_as_point=True)
+    add_sphere_lights(stage, "/root/shadowed", [(0.0, 0.0, 1.5)],
+                      {"intensity": 80.0, "radius": 0.1}, True)
+    settings = dict(width=48, height=48, preset="low", light_error=0.0)
+    left = render_stage(stage, RenderSettings(**settings))
+    assert left.stats["forms"] == {"compute": False, "lighting": "clustered"}
+    assert left.stats["shadow_maps"] == 1 and left.stats["light_volumes"] == 1
+    assert "light_cull" in left.stats["passes"]
+    compute = render_stage(stage, RenderSettings(**settings, compute=True))
+    assert compute.stats["light_volumes"] == 0
+    assert_same(left.rgba, compute.rgba, "default forms")
+
+
 def stage_has_lights(result) -> bool:
     return "lights" in result.stats["passes"]
 

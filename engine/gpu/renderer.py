@@ -224,7 +224,8 @@ class Renderer:
         every light within light_error, where volumes cut each light's tail. The other
         passes take the compute forms on a GPU, and their raster forms on a software
         rasteriser (llvmpipe), which runs both on the same CPU threads: compute gains
-        nothing there (docs/gpu.md)."""
+        nothing there (docs/gpu.md), and a light with its own shadow map is drawn as
+        its volume (passes/lights.py LightPass.drawn)."""
         if options.compute and not self.features.compute:
             raise ValueError(f"compute passes need GL 4.3; this context is GL "
                              f"{self.features.version // 100}.{self.features.version // 10 % 10}")

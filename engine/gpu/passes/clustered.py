@@ -3,7 +3,9 @@ dispatch shades every pixel with the lights its cluster lists (passes/light_cull
 the light tree's groups included, and adds them once into the HDR target and the
 lighting render passes (shaders/lights.comp). Then each light whose shadows have a
 map this frame is one more dispatch over its screen rectangle with that map (each map
-is a texture of its own, so one light a dispatch), adding the same way.
+is a texture of its own, so one light a dispatch), adding the same way; where the
+screen passes are raster (Frame.compute False: a software rasteriser), the light pass
+draws those lights as their volumes instead (passes/lights.py LightPass.drawn).
 
 Every light is shaded by the functions the light volumes use (shaders/lights.glsl,
 gbuffer_surface.glsl), so at error 0 (RenderSettings.light_error) the two forms give
@@ -83,7 +85,7 @@ class ClusteredLightPass(Pass):
             frame.count("lights_drawn", len(frame.scene.lights) - len(clusters.mapped))
 
         shadow_maps = board.get("shadow_maps", {})
-        for path in clusters.mapped:
+        for path in clusters.mapped if frame.compute else ():  # else the light volumes'
             light = frame.scene.lights[path]
             rect = (0, 0, w, h)
             if light.kind != SUN:

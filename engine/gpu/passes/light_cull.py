@@ -20,8 +20,9 @@ wait on the GPU, then never again for them); later frames read it with their pix
 and grow the pool for the next frame (stats light_items, clusters_overflowed), so a
 moving view never waits mid-frame.
 
-Lights whose shadows have a map this frame are not listed: the clustered pass shades
-each with its own map over its screen rectangle.
+Lights whose shadows have a map this frame are not listed: each is a pass of its own
+with its map, a dispatch over its screen rectangle (passes/clustered.py) or, where the
+screen passes are raster, its light volume (passes/lights.py).
 
 reads: g_depth, view, shadow_maps (optional)   writes: clusters (a Clusters record)"""
 from __future__ import annotations

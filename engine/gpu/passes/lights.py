@@ -15,6 +15,8 @@ ONE), reading its numbers from the light table (engine/gpu/lights.py).
                            Python and draw calls would cost more than their few pixels.
 Shadow-casting lights read their map from the shadow pass. Volumes are placed
 relative to the camera (positions are camera-relative, as the surfaces they light).
+Under clustered lighting with the screen passes raster, this pass draws only the
+lights with a shadow map this frame (LightPass.drawn).
 
 reads: g_base, g_normal, g_mat, g_emit, g_depth, hdr, view, shadow_maps (optional),
        g_smooth (optional: normals before the normal maps, for the bump map correction),
@@ -115,7 +117,20 @@ class LightPass(Pass):
         return LIGHTING_TARGETS if lighting_aovs(frame) else ()
 
     def needed(self, frame):
-        return frame.lighting == "volumes" and (bool(frame.scene.lights) or lighting_aovs(frame))
+        if frame.lighting == "volumes":
+            return bool(frame.scene.lights) or lighting_aovs(frame)
+        return not frame.compute and any(light.shadow for light in frame.scene.lights.values())
+
+    @staticmethod
+    def drawn(frame, shadow_maps) -> list:
+        """The lights this pass draws: every light, or under clustered lighting with
+        the screen passes raster (a software rasteriser), those with a shadow map this
+        frame. Each of those is a pass of its own in either form (passes/clustered.py
+        dispatches it), and its volume shades the same pixels for a fraction of the
+        dispatch's time on llvmpipe (docs/gpu.md)."""
+        if frame.lighting == "volumes":
+            return list(frame.scene.lights)
+        return [path for path in frame.scene.lights if path in shadow_maps]
 
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]
@@ -149,7 +164,8 @@ class LightPass(Pass):
         self.environment.bind_sheen(frame.scene.materials.values())
 
         batched = []
-        for path, light in frame.scene.lights.items():
+        for path in self.drawn(frame, shadow_maps):
+            light = frame.scene.lights[path]
             R = self.table.ranges[path]
             if light.kind != SUN and R <= 0:
                 continue
