@@ -116,19 +116,33 @@ vec4 bspline(sampler2D t, Map m, vec2 w, int level) {
     return decoded(c, e);
 }
 
+// The image's interpolation at w in `level`: Closest (level 0 only, averaged over
+// `box`), Cubic, else Linear. Closest and Cubic are compiled in only where one of the
+// program's images has them (FILTER_CLOSEST, FILTER_CUBIC: engine/gpu/passes/gbuffer.py
+// FILTER_DEFINES): llvmpipe runs every branch, masked, so a Linear image's probes
+// would pay for the other two.
+vec4 interpolated(sampler2D t, Map m, vec2 w, int level, vec2 box, bool cubic) {
+#ifdef FILTER_CLOSEST
+    if (m.filtertype == 1 && level == 0) return closest0(t, m, w, box);
+#endif
+#ifdef FILTER_CUBIC
+    if (cubic) return bspline(t, m, w, level);
+#endif
+    return bilinear(t, m, w, level);
+}
+
 // One probe at w, of a lookup whose footprint is under two texels (`minified`: over
 // one): the image's interpolation at level 0, blended towards level 1 by `lod` (in
 // [0, 1)) as trilinear filtering blends (levels 1 and deeper of an sRGB image hold
-// averages of Cycles' own lookups: engine/gpu/textures.py cycles_srgb_mips). `box`:
-// how far the probe's box reaches either way, in texels of level 0, which Closest
-// averages its nearest texels over (sharp where magnified). Smart is Cubic where
-// magnified and Linear where not.
+// averages of Cycles' own lookups: engine/gpu/textures.py cycles_srgb_mips), Linear
+// there but for Cubic. `box`: how far the probe's box reaches either way, in texels of
+// level 0, which Closest averages its nearest texels over (sharp where magnified).
+// Smart is Cubic where magnified and Linear where not.
 vec4 near_probe(sampler2D t, Map m, vec2 w, float lod, vec2 box, bool minified) {
     bool cubic = m.filtertype == 2 || (m.filtertype == 3 && !minified);
-    vec4 c = m.filtertype == 1 ? closest0(t, m, w, min(box, vec2(0.5))) :
-             cubic ? bspline(t, m, w, 0) : bilinear(t, m, w, 0);
+    vec4 c = interpolated(t, m, w, 0, min(box, vec2(0.5)), cubic);
     if (lod <= 0.0) return c;
-    return mix(c, m.filtertype == 2 ? bspline(t, m, w, 1) : bilinear(t, m, w, 1), lod);
+    return mix(c, interpolated(t, m, w, 1, box, m.filtertype == 2), lod);
 }
 
 // A texture lookup at uv, as Cycles' pixel filter averages the image's interpolation

@@ -42,6 +42,10 @@ MAP_SLOTS = [("diffuseColor", "diffuse", "HAS_DIFFUSE_MAP"), ("metallic", "metal
              ("roughness", "roughness", "HAS_ROUGHNESS_MAP"), ("emissiveColor", "emissive", "HAS_EMISSIVE_MAP"),
              ("opacity", "opacity", "HAS_OPACITY_MAP"), ("normal", "normal", "HAS_NORMAL_MAP")]
 WRAP = {"repeat": 0, "mirror": 1, "clamp": 2, "black": 3}
+# The interpolations beside Linear whose code a program compiles in where one of its
+# images has them (material.glsl interpolated): llvmpipe runs every branch of a
+# shader, masked, and a Linear image's lookups took 1.5x as long with the other two in.
+FILTER_DEFINES = {"closest": "FILTER_CLOSEST", "cubic": "FILTER_CUBIC", "smart": "FILTER_CUBIC"}
 CHANNEL = {"rgb": -1, "r": 0, "g": 1, "b": 2, "a": 3}
 TARGETS = ("g_base", "g_normal", "g_mat", "g_emit", "g_depth")
 # The optional targets, in this order after the first four, and the define of the
@@ -211,6 +215,12 @@ def _bind_map(prog, short, ref, textures):
     set_uniform(prog, f"m_{short}.filtertype", FILTERTYPES.index(ref.filtertype))
 
 
+def filter_defines(refs) -> list:
+    """The defines of the interpolations these images (TextureRefs) need beside
+    Linear (FILTER_DEFINES)."""
+    return sorted({FILTER_DEFINES[r.filtertype] for r in refs if r.filtertype in FILTER_DEFINES})
+
+
 def map_defines(mat) -> list:
     """The variant of a program including shaders/material.glsl for this material (and
     PATTERN_NORMAL: a network bends the normal, which needs the position;
@@ -218,6 +228,7 @@ def map_defines(mat) -> list:
     its Generated coordinates)."""
     pattern_normal = mat.pattern is not None and mat.pattern.feeds("normal")
     return [flag for name, _, flag in MAP_SLOTS if name in mat.maps] + \
+        filter_defines([*mat.maps.values(), *pattern_images(mat)]) + \
         (["PATTERN_NORMAL"] if pattern_normal else []) + \
         (["COLOR_ATTRIBUTE"] if mat.color_attribute is not None else []) + \
         (["PATTERN_GENERATED"] if mat.reads_generated else [])

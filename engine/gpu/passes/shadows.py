@@ -48,7 +48,7 @@ from ...shadow_plan import casts, importance, plan, stale_tiles
 from ...view import translate
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
-from .gbuffer import set_material
+from .gbuffer import filter_defines, set_material
 from .view import set_origin
 
 # Every shadow map of a frame together (32-bit depth texels): under llvmpipe they are
@@ -245,8 +245,9 @@ class ShadowPass(Pass):
         blended = False
         for store, name, first, count, oid, n in self.geometry.commands.alpha_casters():
             mat = frame.scene.materials[name]
+            opacity = mat.maps.get("opacity")
             prog = self.programs.get("shadow.vert", "shadow.frag", ["ALPHA_TEST"] + (
-                ["HAS_OPACITY_MAP"] if "opacity" in mat.maps else []))
+                ["HAS_OPACITY_MAP", *filter_defines([opacity])] if opacity else []))
             _set_light(prog, sm, light)
             set_uniform(prog, "view_proj", view_proj)
             set_material(prog, mat, self.textures,
