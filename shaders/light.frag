@@ -1,9 +1,10 @@
 #version 330 core
 #include "lib.glsl"
-// One light, added into the HDR target (blend ONE, ONE). Variants: LIGHT_DISTANT
-// (full-screen), LIGHT_SPHERE (point and spot, drawn as a light volume), LIGHT_AREA
-// (rect and disk as a polygon, drawn as a light volume). See engine/usd/lights.py for
-// the light forms; the light itself, and what it reflects, come from lights.glsl.
+// One light, added into the HDR target (blend ONE, ONE). Variants, one kind each
+// (lights.glsl): LIGHT_DISTANT (full-screen), LIGHT_SPHERE (point and spot, drawn as a
+// light volume), LIGHT_AREA (rect and disk as a polygon, drawn as a light volume). See
+// engine/usd/lights.py for the light forms; the light itself, and what it reflects,
+// come from lights.glsl.
 #include "gbuffer_surface.glsl"
 #include "lights.glsl"
 #ifdef LIGHTS_INSTANCED
@@ -36,15 +37,7 @@ void main() {
     Surface s = gbuffer_surface(px, depth);
     vec3 p = s.p, n = s.n;
     vec3 diffuse, glossy;        // what the light reflects diffusely, and specularly
-#ifdef LIGHT_DISTANT
-    distant_light(s, diffuse, glossy);
-#endif
-#ifdef LIGHT_SPHERE
-    sphere_light(s, diffuse, glossy);
-#endif
-#ifdef LIGHT_AREA
-    area_light(s, diffuse, glossy);
-#endif
+    light_reflected(s, diffuse, glossy);
     vec3 radiance = diffuse + glossy;
     if (max(radiance.r, max(radiance.g, radiance.b)) <= 0.0) discard;
     float lit = 1.0;

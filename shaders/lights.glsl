@@ -5,6 +5,15 @@
 #include "origin.glsl"
 #include "light_table.glsl"
 
+// The light kinds a program shades: those it defines (core/lights.py KINDS' shader
+// defines: LIGHT_DISTANT, LIGHT_SPHERE, LIGHT_AREA), else every kind (the transparency
+// pass). Only theirs are compiled: llvmpipe runs every branch of a shader, masked.
+#if !defined(LIGHT_DISTANT) && !defined(LIGHT_SPHERE) && !defined(LIGHT_AREA)
+#define LIGHT_DISTANT
+#define LIGHT_SPHERE
+#define LIGHT_AREA
+#endif
+
 vec3 light_pos;             // camera-relative
 float light_range;          // volume radius: nothing is added beyond it
 vec3 light_color;           // I [W/sr], L [W/(sr m2)] or E [W/m2]
@@ -192,24 +201,22 @@ void area_light(Surface s, out vec3 diffuse, out vec3 glossy) {
         * (brdf_specular(s, l, min(1.0, a + widen)) + brdf_coat(s, l, min(1.0, ac + widen)));
 }
 
-// Any kind, by the loaded row's flags. A program that knows the kinds it meets
-// (LIGHT_KINDS, with KIND_DISTANT, KIND_AREA, KIND_SPHERE: the clustered light pass)
-// compiles only theirs; without it, every kind (the transparency pass).
+// Any of the program's kinds, by the loaded row's flags.
 void light_reflected(Surface s, out vec3 diffuse, out vec3 glossy) {
     diffuse = glossy = vec3(0.0);
-#if !defined(LIGHT_KINDS) || defined(KIND_DISTANT)
+#ifdef LIGHT_DISTANT
     if (is_distant) {
         distant_light(s, diffuse, glossy);
         return;
     }
 #endif
-#if !defined(LIGHT_KINDS) || defined(KIND_AREA)
+#ifdef LIGHT_AREA
     if (n_poly > 0) {
         area_light(s, diffuse, glossy);
         return;
     }
 #endif
-#if !defined(LIGHT_KINDS) || defined(KIND_SPHERE)
+#ifdef LIGHT_SPHERE
     sphere_light(s, diffuse, glossy);
 #endif
 }

@@ -282,11 +282,18 @@ float area_shadow_factor(vec3 p, vec3 n, vec3 c, vec3 x, vec3 y, vec2 half_exten
     return total > 0.0 ? lit / total : 1.0;
 }
 
-// The loaded light's shadow (lights.glsl's globals), whatever its kind.
+// The loaded light's shadow (lights.glsl's globals), of any of the program's kinds
+// (lights.glsl LIGHT_DISTANT, LIGHT_SPHERE, LIGHT_AREA).
 float light_shadow(vec3 p, vec3 n, float view_depth) {
+#ifdef LIGHT_AREA
     if (n_poly > 0)
         return area_shadow_factor(p, n, light_pos, light_x, light_y,
                                   is_disk ? vec2(half_size.x) : half_size, is_disk,
                                   light_axis, view_depth);
+#endif
+#if defined(LIGHT_DISTANT) || defined(LIGHT_SPHERE)
     return shadow_factor(p, n, light_pos, light_axis, view_depth);
+#else
+    return 1.0;
+#endif
 }

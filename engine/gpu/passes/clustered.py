@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ....core.lights import DISK, RECT, SUN
+from ....core.lights import KINDS, SUN
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
 from .ambient import GBUFFER, LIGHTING_AOVS, LIGHTING_TARGETS, bind_gbuffer, surface_defines, \
@@ -34,11 +34,9 @@ IMAGES = ("hdr", "aov_diffuse", "aov_glossy", "aov_shadow")
 
 
 def kind_defines(lights) -> list:
-    """The variant that shades these lights' kinds only (shaders/lights.glsl
-    light_reflected): a program with every kind's code runs slower for any of them."""
-    kinds = {"KIND_DISTANT" if light.kind == SUN else
-             "KIND_AREA" if light.kind in (RECT, DISK) else "KIND_SPHERE" for light in lights}
-    return ["LIGHT_KINDS", *sorted(kinds)]
+    """The variant that shades these lights' kinds only (shaders/lights.glsl): a
+    program with every kind's code runs slower for any of them."""
+    return sorted({KINDS[light.kind].shader for light in lights})
 
 
 class ClusteredLightPass(Pass):
