@@ -165,18 +165,24 @@ float arc_to(float x, float nn) {
 // The cosine-weighted share of the slice's half circle the scene leaves open, and the
 // share of the angle interval [c - w, c + w] (within the half circle) it leaves open
 // over the share of it the half circle holds (1 if none).
+// The index of x's lowest set bit (x > 0; findLSB is GLSL 4.00): that bit alone is a
+// power of two, which a float holds exactly, in its exponent.
+int lowest_bit(uint x) { return int(floatBitsToUint(float(x & (~x + 1u))) >> 23) - 127; }
+
 float open_arc(Slice sl) {
-    if (sl.hidden == 0xFFFFFFFFu) return 0.0;
     float lo = sl.angle_n - 0.5 * PI, sector = PI / float(SECTORS);
-    // Summed run by run of open sectors: arc_to at the runs' ends only.
-    float sum = 0.0, start = 0.0;
-    bool open = false;
-    for (int i = 0; i <= SECTORS; ++i) {
-        bool free_i = i < SECTORS && (sl.hidden & (1u << uint(i))) == 0u;
-        if (free_i == open) continue;
-        float edge = arc_to(lo + float(i) * sector, sl.angle_n);
-        if (free_i) start = edge; else sum += edge - start;
-        open = free_i;
+    // Summed run by run of open sectors, found by their bits (a loop over the sectors
+    // would cost its every step on llvmpipe, which runs masked branches): arc_to at
+    // the runs' ends only.
+    uint open = ~sl.hidden;
+    float sum = 0.0;
+    while (open != 0u) {
+        int first = lowest_bit(open);                    // the run's first open sector
+        uint hidden_above = ~open & (0xFFFFFFFFu << uint(first));
+        int end = hidden_above == 0u ? SECTORS : lowest_bit(hidden_above);
+        sum += arc_to(lo + float(end) * sector, sl.angle_n)
+             - arc_to(lo + float(first) * sector, sl.angle_n);
+        open = end >= SECTORS ? 0u : open & (0xFFFFFFFFu << uint(end));
     }
     return sum;
 }
