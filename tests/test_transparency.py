@@ -261,3 +261,26 @@ def test_blend_modes_reach_the_engine(configure, mode, engine_alpha):
     assert mat.alpha_mode == (mode or "")
     if engine_alpha == "blend":
         assert opacity == pytest.approx(0.4)
+
+
+def test_a_blended_casters_shadow_is_the_same_in_every_process(tmp_path):
+    """A blended layer's shadow texels hash its object's id (shaders/shadow.frag), so
+    objects take their ids in path order, not in the order of a set of paths, which
+    Python's hash seed changes from one process to the next."""
+    import os
+    import subprocess
+    import sys
+    path = tmp_path / "layers.usda"
+    T.shadow_layers().Export(str(path))
+    script = ("import sys, numpy as np\n"
+              "from pxr import Usd\n"
+              "from lantern.engine import RenderSettings, render_stage\n"
+              "r = render_stage(Usd.Stage.Open(sys.argv[1]), RenderSettings(width=48, height=48))\n"
+              "np.save(sys.argv[2], r.rgba)\n")
+    images = []
+    for seed in ("0", "1", "2"):
+        out = tmp_path / f"seed{seed}.npy"
+        subprocess.run([sys.executable, "-c", script, str(path), str(out)], check=True,
+                       env={**os.environ, "PYTHONHASHSEED": seed})
+        images.append(np.load(out))
+    assert all(np.array_equal(images[0], image) for image in images[1:])

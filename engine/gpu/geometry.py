@@ -67,7 +67,9 @@ class Geometry:
             if key in scene.meshes:
                 self._upload_mesh(scene.meshes[key])
                 uploaded += 1
-        for path in changes.instances:
+        # In path order, so objects take the same ids whatever the set's (hash) order:
+        # a blended caster's shadow thresholds hash its id (shaders/shadow.frag).
+        for path in sorted(changes.instances):
             inst = scene.instances.get(path)
             if inst is not None:
                 self._place(inst, scene.meshes[inst.mesh_key], cull_backfaces)

@@ -53,7 +53,7 @@ class PointClouds:
         """Uploads the clouds that changed; returns the world boxes that moved (for
         shadow maps)."""
         moved = []
-        for path in changed:
+        for path in sorted(changed):          # ids in path order (geometry.py update)
             old = self.clouds.pop(path, None)
             if old is not None:
                 moved.append(self._box(old))
