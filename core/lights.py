@@ -21,7 +21,7 @@ class LightKind:
 
 KINDS = {k.name: k for k in (
     LightKind(POINT, "SphereLight", "POINT", (), True, False, "LIGHT_SPHERE"),
-    LightKind(SPOT, "SphereLight", "SPOT", (), True, False, "LIGHT_SPHERE"),  # + ShapingAPI
+    LightKind(SPOT, "SphereLight", "SPOT", (), True, False, "LIGHT_SPOT"),  # + ShapingAPI
     LightKind(SUN, "DistantLight", "SUN", (), False, False, "LIGHT_DISTANT"),
     LightKind(RECT, "RectLight", "AREA", ("SQUARE", "RECTANGLE"), True, True, "LIGHT_AREA"),
     LightKind(DISK, "DiskLight", "AREA", ("DISK", "ELLIPSE"), True, True, "LIGHT_AREA"),

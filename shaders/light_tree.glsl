@@ -55,37 +55,22 @@ float group_irradiance(int i, vec3 u, vec3 n) {
     return nu / (d2 * d) + corr;
 }
 
-// What group i (all of its lights above s's horizon) sends from s towards the viewer:
-// its diffuse power through group_irradiance, its specular power as a sphere light of
-// the group's radius at the centroid (the lobe widened, as sphere_light widens it).
-void group_reflected(Surface s, int i, vec3 centre, out vec3 diffuse, out vec3 glossy) {
+// Group i (all of its lights above s's horizon) seen from s, for point_reflected
+// (lights.glsl): its diffuse power through group_irradiance, its specular power as a
+// sphere light of the group's radius at the centroid (the lobe widened, as
+// sphere_emitter widens it); false where it is below s's horizon.
+bool group_emitter(Surface s, int i, vec3 centre, out vec3 l, out vec3 Ed, out vec3 Es,
+                   out float widen) {
     vec3 u = centre - s.p;
     float d = length(u);
-    vec3 l = u / d;
+    l = u / d;
     float NoL = dot(s.n, l);
-    diffuse = glossy = vec3(0.0);
-    if (NoL <= 0.0) return;
-    vec3 Ed = node_texel(i, 2).rgb * max(group_irradiance(i, u, s.n), 0.0) * bump_visible(s, l);
-    vec3 Es = node_texel(i, 3).rgb * (NoL / (d * d)) * bump_visible(s, l);
-    float a = ggx_alpha(s.roughness), ac = ggx_alpha(s.coat_roughness);
-    float widen = node_radius(i) / max(2.0 * d, 1e-6);
-    diffuse = Ed * brdf_diffuse(s) * bump_shadowing(s, l);
-#ifdef SHEEN
-    diffuse += Ed * brdf_sheen(s, l);
-#endif
-    glossy = Es * (brdf_specular(s, l, min(1.0, a + widen)) + brdf_coat(s, l, min(1.0, ac + widen)));
-}
-
-// What tree light i (a leaf) sends from s, added to sum_d and sum_g; view_forward: the
-// camera's axis (a headlight's direction).
-void shade_leaf(Surface s, int i, vec3 view_forward, inout vec3 sum_d, inout vec3 sum_g) {
-    if (node_count(i) <= 0.0) return;
-    vec3 diffuse, glossy;
-    load_light(node_light_row(i), view_forward);
-    if (!tree_exact) light_range = 3.0e38;           // a tree light has no volume
-    sphere_light(s, diffuse, glossy);
-    sum_d += diffuse;
-    sum_g += glossy;
+    Ed = Es = vec3(0.0);
+    widen = node_radius(i) / max(2.0 * d, 1e-6);
+    if (NoL <= 0.0) return false;
+    Ed = node_texel(i, 2).rgb * max(group_irradiance(i, u, s.n), 0.0) * bump_visible(s, l);
+    Es = node_texel(i, 3).rgb * (NoL / (d * d)) * bump_visible(s, l);
+    return true;
 }
 
 // The node after i in a depth-first walk of root's subtree once i's own subtree is done:
@@ -99,15 +84,24 @@ int tree_next(int i, int root) {
     return findMSB(k) <= findMSB(root + 1) ? -1 : k;  // its right sibling, 0-based
 }
 
-// What group i's lights send from s, added to sum_d and sum_g: the group as one light
-// where it is far enough and above the horizon; else walking down its subtree, each
-// part the same way and each light on its own.
-void shade_group(Surface s, int root, vec3 view_forward, inout vec3 sum_d, inout vec3 sum_g) {
+// What node i's lights send from s, added to sum_d and sum_g; view_forward: the
+// camera's axis (a headlight's direction). Walking down its subtree: a group as one
+// light where it is far enough and above the horizon, else its parts the same way, and
+// each leaf as its light. Every step shades at most one emitter, a leaf or a group,
+// through one point_reflected: llvmpipe runs every branch of a shader, masked, so a
+// step costs one BRDF however the tree is walked.
+void shade_node(Surface s, int root, vec3 view_forward, inout vec3 sum_d, inout vec3 sum_g) {
     int i = root;
     while (i >= 0) {
-        bool down = false;
+        bool down = false, emits = false;
+        vec3 l, Ed, Es;
+        float widen;
         if (node_is_leaf(i)) {
-            shade_leaf(s, i, view_forward, sum_d, sum_g);
+            if (node_count(i) > 0.0) {
+                load_light(node_light_row(i), view_forward);
+                if (!tree_exact) light_range = 3.0e38;       // a tree light has no volume
+                emits = sphere_emitter(s, l, Ed, Es, widen);
+            }
         } else if (node_count(i) > 0.0) {
             vec3 centre = node_centre(i);
             float d = length(centre - s.p);
@@ -115,20 +109,17 @@ void shade_group(Surface s, int root, vec3 view_forward, inout vec3 sum_d, inout
             if ((tree_exact && d > node_reach(i)) || horizon.y <= 0.0) {
                 // out of reach, or every light below the horizon: nothing
             } else if (horizon.x > 0.0 && group_holds(i, centre - s.p, d, s.n)) {
-                vec3 diffuse, glossy;
-                group_reflected(s, i, centre, diffuse, glossy);
-                sum_d += diffuse;
-                sum_g += glossy;
+                emits = group_emitter(s, i, centre, l, Ed, Es, widen);
             } else {
                 down = true;
             }
         }
+        if (emits) {
+            vec3 diffuse, glossy;
+            point_reflected(s, l, Ed, Es, widen, diffuse, glossy);
+            sum_d += diffuse;
+            sum_g += glossy;
+        }
         i = down ? 2 * i + 1 : tree_next(i, root);
     }
-}
-
-// What node i's lights send from s (shade_leaf or shade_group).
-void shade_node(Surface s, int i, vec3 view_forward, inout vec3 sum_d, inout vec3 sum_g) {
-    if (node_is_leaf(i)) shade_leaf(s, i, view_forward, sum_d, sum_g);
-    else shade_group(s, i, view_forward, sum_d, sum_g);
 }

@@ -83,9 +83,14 @@ void main() {
     }
 #endif
 #ifdef HAS_TREE
-    if (overflow) shade_node(s, 0, cam_forward, sum_d, sum_g);
-    for (uint k = 0u; k < range.z; ++k)
-        shade_node(s, int(cluster_items[range.x + range.y + k]), cam_forward, sum_d, sum_g);
+    // One walk, from the root where the list did not fit (one inlined walk: llvmpipe
+    // runs a second under its mask even where no pixel takes it).
+    uint nodes = overflow ? 1u : range.z;
+    for (uint k = 0u; k < nodes; ++k) {
+        int node = 0;
+        if (!overflow) node = int(cluster_items[range.x + range.y + k]);
+        shade_node(s, node, cam_forward, sum_d, sum_g);
+    }
 #endif
     vec3 radiance = sum_d + sum_g;
 #endif

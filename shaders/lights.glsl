@@ -6,12 +6,16 @@
 #include "light_table.glsl"
 
 // The light kinds a program shades: those it defines (core/lights.py KINDS' shader
-// defines: LIGHT_DISTANT, LIGHT_SPHERE, LIGHT_AREA), else every kind (the transparency
-// pass). Only theirs are compiled: llvmpipe runs every branch of a shader, masked.
-#if !defined(LIGHT_DISTANT) && !defined(LIGHT_SPHERE) && !defined(LIGHT_AREA)
+// defines: LIGHT_DISTANT, LIGHT_SPHERE for points, LIGHT_SPOT for spots, LIGHT_AREA),
+// else every kind (the transparency pass). Only theirs are compiled: llvmpipe runs
+// every branch of a shader, masked.
+#if !defined(LIGHT_DISTANT) && !defined(LIGHT_SPHERE) && !defined(LIGHT_SPOT) && !defined(LIGHT_AREA)
 #define LIGHT_DISTANT
-#define LIGHT_SPHERE
+#define LIGHT_SPOT
 #define LIGHT_AREA
+#endif
+#ifdef LIGHT_SPOT
+#define LIGHT_SPHERE            // a spot is a sphere light with a cone
 #endif
 
 vec3 light_pos;             // camera-relative
@@ -137,29 +141,50 @@ void distant_light(Surface s, out vec3 diffuse, out vec3 glossy) {
     glossy = E * light_specular * (brdf_specular(s, l, a) + brdf_coat(s, l, ac));
 }
 
-void sphere_light(Surface s, out vec3 diffuse, out vec3 glossy) {
-    diffuse = glossy = vec3(0.0);
+// What an emitter in direction l (unit) from s sends towards the viewer: Ed and Es,
+// the irradiance its diffuse and specular parts bring (the bump's visibility taken),
+// and its specular lobes widened by `widen` (a sphere's size, Karis 2013). Sphere
+// lights and the light tree's groups (light_tree.glsl) both end here, so a pass that
+// shades either evaluates the BRDF once.
+void point_reflected(Surface s, vec3 l, vec3 Ed, vec3 Es, float widen,
+                     out vec3 diffuse, out vec3 glossy) {
+    float a = ggx_alpha(s.roughness), ac = ggx_alpha(s.coat_roughness);
+    diffuse = Ed * brdf_diffuse(s) * bump_shadowing(s, l);
+#ifdef SHEEN
+    diffuse += Ed * brdf_sheen(s, l);
+#endif
+    glossy = Es * (brdf_specular(s, l, min(1.0, a + widen)) + brdf_coat(s, l, min(1.0, ac + widen)));
+}
+
+// The loaded sphere light (point or spot) seen from s, for point_reflected: its
+// direction l, its diffuse and specular irradiance and its lobes' widening; false
+// where it adds nothing (beyond its range, below the horizon).
+bool sphere_emitter(Surface s, out vec3 l, out vec3 Ed, out vec3 Es, out float widen) {
     vec3 to_light = light_pos - s.p;
     float d2 = dot(to_light, to_light);
     float d = sqrt(d2);
-    if (d > light_range) return;
     // A light sitting on the surface: take it as straight overhead, never 0/0.
-    vec3 l = d > 1e-6 ? to_light / d : s.n;
+    l = d > 1e-6 ? to_light / d : s.n;
     float NoL = dot(s.n, l);
-    if (NoL <= 0.0) return;
+    Ed = Es = vec3(0.0);
+    widen = light_radius / max(2.0 * d, 1e-6);
+    if (d > light_range || NoL <= 0.0) return false;
     float falloff = soft_falloff ? d2 + light_radius * light_radius : d2;
     vec3 E = light_color * NoL / max(falloff, 1e-8);
+#ifdef LIGHT_SPOT
     if (is_spot) E *= spot_mask(s.p, l, d);
-    // A sphere source widens the highlight (Karis 2013); a point keeps alpha.
-    float a = ggx_alpha(s.roughness), ac = ggx_alpha(s.coat_roughness);
-    float widen = light_radius / max(2.0 * d, 1e-6);
-    E *= bump_visible(s, l);
-    diffuse = E * light_diffuse * brdf_diffuse(s) * bump_shadowing(s, l);
-#ifdef SHEEN
-    diffuse += E * light_diffuse * brdf_sheen(s, l);
 #endif
-    glossy = E * light_specular * (brdf_specular(s, l, min(1.0, a + widen))
-                                   + brdf_coat(s, l, min(1.0, ac + widen)));
+    E *= bump_visible(s, l);
+    Ed = E * light_diffuse;
+    Es = E * light_specular;
+    return true;
+}
+
+void sphere_light(Surface s, out vec3 diffuse, out vec3 glossy) {
+    diffuse = glossy = vec3(0.0);
+    vec3 l, Ed, Es;
+    float widen;
+    if (sphere_emitter(s, l, Ed, Es, widen)) point_reflected(s, l, Ed, Es, widen, diffuse, glossy);
 }
 
 void area_light(Surface s, out vec3 diffuse, out vec3 glossy) {

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ....core.lights import KINDS, SUN
+from ....core.lights import KINDS, POINT, SUN
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
 from .ambient import GBUFFER, LIGHTING_AOVS, LIGHTING_TARGETS, bind_gbuffer, surface_defines, \
@@ -33,10 +33,10 @@ GL_RGBA32F = 0x8814
 IMAGES = ("hdr", "aov_diffuse", "aov_glossy", "aov_shadow")
 
 
-def kind_defines(lights) -> list:
-    """The variant that shades these lights' kinds only (shaders/lights.glsl): a
+def kind_defines(kinds) -> list:
+    """The variant that shades these light kinds only (shaders/lights.glsl): a
     program with every kind's code runs slower for any of them."""
-    return sorted({KINDS[light.kind].shader for light in lights})
+    return sorted({KINDS[kind].shader for kind in kinds})
 
 
 class ClusteredLightPass(Pass):
@@ -71,7 +71,8 @@ class ClusteredLightPass(Pass):
 
         if clusters.exact or tree is not None:
             listed = [frame.scene.lights[p] for p in clusters.exact]
-            prog = self._program(board, view, defines + kind_defines(listed)
+            kinds = {light.kind for light in listed} | ({POINT} if tree is not None else set())
+            prog = self._program(board, view, defines + kind_defines(kinds)
                                  + (["HAS_EXACT"] if listed else [])
                                  + (["HAS_TREE"] if tree is not None else []))
             set_uniform(prog, "cluster_tiles", clusters.tiles)
@@ -93,7 +94,7 @@ class ClusteredLightPass(Pass):
                 rect = rect or (0, 0, w, h)
             if rect[2] <= 0 or rect[3] <= 0:
                 continue
-            prog = self._program(board, view, defines + kind_defines([light])
+            prog = self._program(board, view, defines + kind_defines([light.kind])
                                  + ["SINGLE_LIGHT", "HAS_SHADOW"])
             set_shadow_uniforms(prog, shadow_maps[path], frame.preset, view.origin)
             set_uniform(prog, "light_index", self.table.index[path])

@@ -221,7 +221,8 @@ class LightPass(Pass):
                 self._drop_vaos(self._instances[1])
                 self._instances[1].release()
             self._instances = (rows, self.uploads.buffer(rows, kind="lights"))
-        prog = self.programs.get("volume.vert", "light.frag", ["LIGHT_SPHERE", "LIGHTS_INSTANCED"]
+        kinds = sorted({KINDS[frame.scene.lights[p].kind].shader for p in paths})
+        prog = self.programs.get("volume.vert", "light.frag", kinds + ["LIGHTS_INSTANCED"]
                                  + (["WRITE_AOVS"] if self._aovs else [])
                                  + surface_defines(frame, board))
         bind_gbuffer(board, prog, view)
@@ -271,7 +272,7 @@ class LightPass(Pass):
         if light.kind == SUN:
             ctx.disable(ctx.DEPTH_TEST)
             self.programs.fullscreen(self._program(frame, board, view, "fullscreen.vert",
-                                                   "LIGHT_DISTANT", row, sm))
+                                                   KINDS[SUN].shader, row, sm))
             frame.count("lights_drawn")
             return
         variant = KINDS[light.kind].shader
