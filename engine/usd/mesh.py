@@ -13,10 +13,10 @@ from dataclasses import dataclass
 import numpy as np
 from pxr import Sdf, Usd, UsdGeom
 
-from ...core.transforms import cross
 from ...core.triangulate import triangulate
 from ...core.pattern_nodes import attribute_opacity
 from ..scene import STREAM_WIDTHS, MeshData, PatchData
+from ..vertex_attributes import compute_tangents, generated_coordinates, index_corners, smooth_normals
 from .subdivision import RefinedCage, limit_surface, skinned_cage_unrefined, subdivision_level
 
 
@@ -178,12 +178,12 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
         per_point &= _per_point(interp)
         zero = np.linalg.norm(N, axis=1) == 0
         if zero.any():
-            N[zero] = _smooth_normals(pts, idx, corners)[zero]
+            N[zero] = smooth_normals(pts, idx, corners)[zero]
             if warnings is not None:
                 warnings.append(f"{prim.GetPath()}: {int(zero.sum())} zero-length normals "
                                 f"(per corner); the surface's own used there")
     else:
-        N = _smooth_normals(pts, idx, corners)
+        N = smooth_normals(pts, idx, corners)
 
     uv_name = next((m.uv_name for m in materials if m.uv_name), None)
     uvs, uv_interp = _pick_uv(mesh, uv_name, time) if not surface else (None, None)
@@ -266,7 +266,7 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
             ranges.append((mi, int(sel[0]) * 3, len(sel) * 3))
     sorted_corners = corners.reshape(-1, 3)[order].reshape(-1)
     point_of_corner = idx[sorted_corners]
-    vertices, indices, first = _index(soup, point_of_corner if per_point else sorted_corners,
+    vertices, indices, first = index_corners(soup, point_of_corner if per_point else sorted_corners,
                                       len(pts) if per_point else len(idx))
     double, culling = _sidedness(prim, mesh, time)
     extra, at = {}, 12
@@ -402,18 +402,6 @@ def _patch_mesh(prim, mesh, refined, render_level, time, materials, subsets, key
                                       ranges, refined.levels, cap, stencils))
 
 
-def generated_coordinates(rest):
-    """Blender's Generated texture coordinates of points: their place in the bounding
-    box of the rest points, [0, 1] on each axis (the mesh's auto texture space; an axis
-    of no extent has size 1, as Blender gives it)."""
-    if not len(rest):
-        return np.zeros((0, 3))
-    lo, hi = rest.min(axis=0), rest.max(axis=0)
-    half = (hi - lo) / 2.0
-    half[half == 0.0] = 1.0
-    return (rest - (lo + hi) / 2.0) / (2.0 * half) + 0.5
-
-
 def _topology_points(mesh, pts):
     """The points a mesh is triangulated against. Topology is static data: cutting each
     frame's quads by that frame's shape would let triangles flip as a mesh deforms, and
@@ -425,50 +413,3 @@ def _topology_points(mesh, pts):
         if ref is not None and len(ref) == len(pts):
             return np.asarray(ref, np.float64)
     return pts
-
-
-def _index(soup, keys, n_keys):
-    """Triangle corners with one key (a face corner, or a point) share one vertex:
-    (vertices, uint32 indices, the corner each vertex was taken from). Every corner
-    with a key holds the same values, so any one of them will do."""
-    first = np.full(n_keys, -1, np.int64)
-    first[keys] = np.arange(len(keys))
-    used = np.nonzero(first >= 0)[0]
-    vertex_of_key = np.zeros(n_keys, np.int64)
-    vertex_of_key[used] = np.arange(len(used))
-    taken = first[used]
-    return (np.ascontiguousarray(soup[taken], np.float32),
-            vertex_of_key[keys].astype(np.uint32), taken)
-
-
-def _smooth_normals(pts, idx, corners):
-    tri = idx[corners].reshape(-1, 3)
-    a, b, c = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
-    fn = cross(b - a, c - a)  # area-weighted
-    acc = np.zeros_like(pts)
-    for j in range(3):
-        np.add.at(acc, tri[:, j], fn)
-    n = acc / np.maximum(np.linalg.norm(acc, axis=1, keepdims=True), 1e-30)
-    return n[tri.reshape(-1)]
-
-
-def compute_tangents(P, N, UV, point_of_corner):
-    """Per-triangle tangents from UVs, accumulated per point, Gram-Schmidt against
-    each corner's normal; w = handedness of the UV frame."""
-    p = P.reshape(-1, 3, 3)
-    uv = UV.reshape(-1, 3, 2)
-    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
-    d1, d2 = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
-    det = d1[:, 0] * d2[:, 1] - d2[:, 0] * d1[:, 1]
-    r = np.where(np.abs(det) > 1e-20, 1.0 / np.where(det == 0, 1, det), 0.0)[:, None]
-    t = (e1 * d2[:, 1:2] - e2 * d1[:, 1:2]) * r
-    b = (e2 * d1[:, 0:1] - e1 * d2[:, 0:1]) * r
-    n_pts = int(point_of_corner.max()) + 1
-    tacc, bacc = np.zeros((n_pts, 3)), np.zeros((n_pts, 3))
-    np.add.at(tacc, point_of_corner, np.repeat(t, 3, axis=0))
-    np.add.at(bacc, point_of_corner, np.repeat(b, 3, axis=0))
-    tc, bc = tacc[point_of_corner], bacc[point_of_corner]
-    tc = tc - N * np.sum(N * tc, axis=1, keepdims=True)
-    tc /= np.maximum(np.linalg.norm(tc, axis=1, keepdims=True), 1e-30)
-    w = np.where(np.sum(cross(N, tc) * bc, axis=1) < 0, -1.0, 1.0)
-    return np.concatenate([tc, w[:, None]], axis=1)
