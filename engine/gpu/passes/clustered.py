@@ -19,24 +19,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from ....core.lights import KINDS, POINT, SUN
+from ....core.lights import POINT, SUN
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
 from .ambient import GBUFFER, LIGHTING_AOVS, LIGHTING_TARGETS, bind_gbuffer, surface_defines, \
     lighting_aovs
 from .light_cull import TILE, set_tree_uniforms
-from .lights import screen_rect, volume_hull
+from .lights import kind_defines, screen_rect, volume_hull
 from .shadows import set_shadow_uniforms
 
 GL_RGBA32F = 0x8814
 # Images the shader writes, by binding: shaders/lights.comp.
 IMAGES = ("hdr", "aov_diffuse", "aov_glossy", "aov_shadow")
-
-
-def kind_defines(kinds) -> list:
-    """The variant that shades these light kinds only (shaders/lights.glsl): a
-    program with every kind's code runs slower for any of them."""
-    return sorted({KINDS[kind].shader for kind in kinds})
 
 
 class ClusteredLightPass(Pass):

@@ -221,7 +221,7 @@ class LightPass(Pass):
                 self._drop_vaos(self._instances[1])
                 self._instances[1].release()
             self._instances = (rows, self.uploads.buffer(rows, kind="lights"))
-        kinds = sorted({KINDS[frame.scene.lights[p].kind].shader for p in paths})
+        kinds = kind_defines(frame.scene.lights[p].kind for p in paths)
         prog = self.programs.get("volume.vert", "light.frag", kinds + ["LIGHTS_INSTANCED"]
                                  + (["WRITE_AOVS"] if self._aovs else [])
                                  + surface_defines(frame, board))
@@ -269,13 +269,13 @@ class LightPass(Pass):
         scene surface lies inside the volume."""
         ctx = self.ctx
         row = self.table.index[path]
+        variant = KINDS[light.kind].shader
         if light.kind == SUN:
             ctx.disable(ctx.DEPTH_TEST)
             self.programs.fullscreen(self._program(frame, board, view, "fullscreen.vert",
-                                                   KINDS[SUN].shader, row, sm))
+                                                   variant, row, sm))
             frame.count("lights_drawn")
             return
-        variant = KINDS[light.kind].shader
         use_cone = light.kind == SPOT and light.cone_angle <= CONE_MAX_HALF_ANGLE
         center = np.asarray(light.position, np.float64) - view.origin   # camera-relative
         if use_cone:
@@ -337,6 +337,12 @@ class LightPass(Pass):
         self._spheres.clear()
         self._vaos.clear()
         self._cones.clear()
+
+
+def kind_defines(kinds) -> list:
+    """The variant that shades these light kinds only (shaders/lights.glsl, core/lights.py
+    KINDS' shader defines): a program with every kind's code runs slower for any of them."""
+    return sorted({KINDS[kind].shader for kind in kinds})
 
 
 def volume_hull(light, R, center) -> np.ndarray:
