@@ -1,10 +1,10 @@
 #version 330 core
 #include "lib.glsl"
 // One light, added into the HDR target (blend ONE, ONE). Variants, one kind each
-// (lights.glsl): LIGHT_DISTANT (full-screen), LIGHT_SPHERE (point and spot, drawn as a
-// light volume), LIGHT_AREA (rect and disk as a polygon, drawn as a light volume). See
-// engine/usd/lights.py for the light forms; the light itself, and what it reflects,
-// come from lights.glsl.
+// (lights.glsl): LIGHT_DISTANT (full-screen), LIGHT_SPHERE and LIGHT_SPOT (point, spot:
+// drawn as a light volume), LIGHT_AREA (rect and disk as a polygon, drawn as a light
+// volume). See engine/usd/lights.py for the light forms; the light itself, and what it
+// reflects, come from lights.glsl.
 #include "gbuffer_surface.glsl"
 #include "lights.glsl"
 #ifdef LIGHTS_INSTANCED

@@ -126,26 +126,12 @@ float spot_mask(vec3 p, vec3 l, float d) {
     return mask;
 }
 
-void distant_light(Surface s, out vec3 diffuse, out vec3 glossy) {
-    diffuse = glossy = vec3(0.0);
-    vec3 l = -light_axis;
-    float NoL = dot(s.n, l);
-    if (NoL <= 0.0) return;
-    vec3 E = light_color * NoL;
-    float a = ggx_alpha(s.roughness), ac = ggx_alpha(s.coat_roughness);
-    E *= bump_visible(s, l);
-    diffuse = E * light_diffuse * brdf_diffuse(s) * bump_shadowing(s, l);
-#ifdef SHEEN
-    diffuse += E * light_diffuse * brdf_sheen(s, l);
-#endif
-    glossy = E * light_specular * (brdf_specular(s, l, a) + brdf_coat(s, l, ac));
-}
-
 // What an emitter in direction l (unit) from s sends towards the viewer: Ed and Es,
 // the irradiance its diffuse and specular parts bring (the bump's visibility taken),
-// and its specular lobes widened by `widen` (a sphere's size, Karis 2013). Sphere
-// lights and the light tree's groups (light_tree.glsl) both end here, so a pass that
-// shades either evaluates the BRDF once.
+// and its specular lobes widened by `widen` (a sphere's size, Karis 2013; 0 for the
+// sun, whose roughness at most 1 the min leaves as it is). Suns, sphere lights and the
+// light tree's groups (light_tree.glsl) all end here, so a pass that shades any of
+// them evaluates the BRDF once.
 void point_reflected(Surface s, vec3 l, vec3 Ed, vec3 Es, float widen,
                      out vec3 diffuse, out vec3 glossy) {
     float a = ggx_alpha(s.roughness), ac = ggx_alpha(s.coat_roughness);
@@ -154,6 +140,15 @@ void point_reflected(Surface s, vec3 l, vec3 Ed, vec3 Es, float widen,
     diffuse += Ed * brdf_sheen(s, l);
 #endif
     glossy = Es * (brdf_specular(s, l, min(1.0, a + widen)) + brdf_coat(s, l, min(1.0, ac + widen)));
+}
+
+void distant_light(Surface s, out vec3 diffuse, out vec3 glossy) {
+    diffuse = glossy = vec3(0.0);
+    vec3 l = -light_axis;
+    float NoL = dot(s.n, l);
+    if (NoL <= 0.0) return;
+    vec3 E = light_color * NoL * bump_visible(s, l);
+    point_reflected(s, l, E * light_diffuse, E * light_specular, 0.0, diffuse, glossy);
 }
 
 // The loaded sphere light (point or spot) seen from s, for point_reflected: its
