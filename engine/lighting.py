@@ -168,7 +168,9 @@ def ggx_alpha(roughness):
     return np.maximum(np.asarray(roughness, float) ** 2, 2e-3)
 
 
-def _hammersley(n: int) -> tuple[np.ndarray, np.ndarray]:
+def hammersley(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The n points of the Hammersley set in [0, 1)^2: (i + 0.5) / n and the radical
+    inverse of i in base 2."""
     i = np.arange(n, dtype=np.uint32)
     bits = i.copy()
     bits = ((bits << 16) | (bits >> 16)) & 0xFFFFFFFF
@@ -199,7 +201,7 @@ def _lobe_samples(nov, roughness, samples):
     (height-correlated Smith visibility, lib.glsl's v_smith; 0 below the horizon)."""
     nov = np.clip(nov.reshape(-1, 1), 1e-4, 1.0)
     a = ggx_alpha(roughness.reshape(-1, 1))
-    u1, u2 = _hammersley(samples)
+    u1, u2 = hammersley(samples)
     phi = 2 * math.pi * u1[None, :]
     cos_h = np.sqrt((1 - u2[None, :]) / (1 + (a * a - 1) * u2[None, :]))
     sin_h = np.sqrt(1 - cos_h * cos_h)

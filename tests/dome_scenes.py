@@ -17,6 +17,8 @@ import math
 import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade
 
+from lantern.engine.lighting import hammersley   # a point set, not one of its tables
+
 ROUGHNESS = (0.05, 0.3, 0.6, 1.0)
 MATERIALS = {"metal": dict(metallic=1.0, ior=1.5), "dielectric": dict(metallic=0.0, ior=1.5)}
 SPACING = 2.5                 # between sphere centres (radius 1)
@@ -166,16 +168,6 @@ def sphere_masks(result, shrink=0.9):
 
 # --- the integral ------------------------------------------------------------------------
 
-def _hammersley(n):
-    i = np.arange(n, dtype=np.uint32)
-    b = ((i << 16) | (i >> 16)) & 0xFFFFFFFF
-    b = ((b & 0x55555555) << 1) | ((b & 0xAAAAAAAA) >> 1)
-    b = ((b & 0x33333333) << 2) | ((b & 0xCCCCCCCC) >> 2)
-    b = ((b & 0x0F0F0F0F) << 4) | ((b & 0xF0F0F0F0) >> 4)
-    b = ((b & 0x00FF00FF) << 8) | ((b & 0xFF00FF00) >> 8)
-    return (i + 0.5) / n, b.astype(np.float64) / 2.0 ** 32
-
-
 def _smith_lambda(c, a2):
     c = np.clip(c, 1e-7, 1.0)
     return 0.5 * (np.sqrt(1.0 + a2 * (1.0 - c * c) / (c * c)) - 1.0)
@@ -201,7 +193,7 @@ def lobe_mean(radiance, n, v, roughness, ior=None, samples=2048, seed=1):
     vl = np.stack([tx @ v, ty @ v, n @ v], -1)                        # (P, 3), local
     vl[:, 2] = np.maximum(vl[:, 2], 1e-4)
     vl /= np.linalg.norm(vl, axis=-1, keepdims=True)
-    u1, u2 = _hammersley(samples)
+    u1, u2 = hammersley(samples)
     shift = np.random.default_rng(seed).random((len(n), 2))
     u1 = (u1[None] + shift[:, :1]) % 1.0
     u2 = (u2[None] + shift[:, 1:]) % 1.0
