@@ -28,18 +28,26 @@ def both(stage, **settings):
     return raster, compute
 
 
+def quads_stage(quads):
+    """An in-memory stage, Z up, of horizontal squares: {path: (height, half side)}."""
+    from pxr import Usd, UsdGeom
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    for path, (z, half) in quads.items():
+        quad = UsdGeom.Mesh.Define(stage, path)
+        quad.CreatePointsAttr([(-half, -half, z), (half, -half, z), (half, half, z),
+                               (-half, half, z)])
+        quad.CreateFaceVertexCountsAttr([4])
+        quad.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
+    return stage
+
+
 def test_a_software_rasteriser_gets_the_raster_forms_and_clustered_lights():
     """Left to Lantern, llvmpipe (this suite's device) draws the raster forms of the
     screen passes and skinning (compute gains nothing on a CPU), and clustered lights
     (volumes would cut their tails)."""
-    from pxr import Usd, UsdGeom
     from light_grids import add_sphere_lights
-    stage = Usd.Stage.CreateInMemory()
-    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
-    plane = UsdGeom.Mesh.Define(stage, "/root/plane")
-    plane.CreatePointsAttr([(-5, -5, 0), (5, -5, 0), (5, 5, 0), (-5, 5, 0)])
-    plane.CreateFaceVertexCountsAttr([4])
-    plane.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
+    stage = quads_stage({"/root/plane": (0.0, 5.0)})
     add_sphere_lights(stage, "/root", [(0.0, 0.0, 1.0)], {"intensity": 50.0, "radius": 0.05},
                       False, treat_as_point=True)
     left = render_stage(stage, RenderSettings(width=16, height=16, preset="low"))
@@ -57,16 +65,9 @@ def test_a_software_rasteriser_draws_each_light_with_a_map_as_its_volume():
     in either form) is drawn as its light volume, as the other screen passes are
     raster there; the lights without one are clustered. The image is the compute
     form's, within float16 rounding."""
-    from pxr import Usd, UsdGeom
+    from pxr import UsdGeom
     from light_grids import add_sphere_lights
-    stage = Usd.Stage.CreateInMemory()
-    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
-    for path, z, half in (("/root/plane", 0.0, 5.0), ("/root/caster", 0.5, 0.3)):
-        quad = UsdGeom.Mesh.Define(stage, path)
-        quad.CreatePointsAttr([(-half, -half, z), (half, -half, z), (half, half, z),
-                               (-half, half, z)])
-        quad.CreateFaceVertexCountsAttr([4])
-        quad.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
+    stage = quads_stage({"/root/plane": (0.0, 5.0), "/root/caster": (0.5, 0.3)})
     UsdGeom.Xform.Define(stage, "/root/shadowed")
     add_sphere_lights(stage, "/root", [(1.0, 0.0, 1.0)], {"intensity": 50.0, "radius": 0.05},
                       False, treat_as_point=True)
