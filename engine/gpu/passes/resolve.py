@@ -11,7 +11,8 @@ engine/gpu/readback.py after) and, only when there are some, the pass draws the
 scene's object ids (shaders/ids.vert, points.frag's POINTS_ID) to name the prims those
 pixels lie on, in one warning per render ("the background" where nothing is).
 
-reads: hdr, view   writes: output, rgba (the image, numpy; None while queued)"""
+reads: hdr, view   writes: output or output_half (the read-back's format), rgba (the
+image, numpy; None while queued)"""
 from __future__ import annotations
 
 import time
@@ -23,33 +24,40 @@ from ..points import set_camera_facing
 from ..programs import UNITS, set_uniform
 from ..screen import run_screen, screen_program
 
+# The target the image is resolved into, by read-back format (engine/gpu/readback.py).
+OUTPUT = {"float32": "output", "half": "output_half"}
 NAMED = 5                    # prims named in the warning, most pixels first
 
 
 class ResolvePass(Pass):
     name = "resolve"
     reads = ("hdr", "view")
-    writes = ("output", "rgba")
+    writes = ("rgba",)
+    writes_optional = ("output", "output_half")
 
     def __init__(self, ctx, pool, programs, geometry, depth, readback):
         self.ctx, self.pool, self.programs = ctx, pool, programs
         self.geometry, self.depth, self.readback = geometry, depth, readback
         self.warnings = []       # the last finished render's
 
+    def wanted(self, frame):
+        return (OUTPUT[frame.readback.format],)
+
     def execute(self, frame, board):
         (w, h), request = frame.size, frame.readback
+        output = board[OUTPUT[request.format]]
         self.ctx.disable(self.ctx.BLEND | self.ctx.DEPTH_TEST | self.ctx.CULL_FACE)
         prog = screen_program(self.programs, "resolve", (), frame.compute)
         board["hdr"].use(UNITS["hdr"])
         set_uniform(prog, "transparent", bool(frame.transparent))
         set_uniform(prog, "top_down", bool(request.top_down))
         slot = self.readback.slot()
-        fbo = self.pool.framebuffer([board["output"]])
+        fbo = self.pool.framebuffer([output])
         if frame.compute:            # the compute form counts as it writes
             self.readback.counting(slot)
-            run_screen(self.ctx, self.programs, self.pool, prog, [board["output"]], True)
+            run_screen(self.ctx, self.programs, self.pool, prog, [output], True)
         else:
-            run_screen(self.ctx, self.programs, self.pool, prog, [board["output"]], False)
+            run_screen(self.ctx, self.programs, self.pool, prog, [output], False)
             self.readback.count(slot, board["hdr"], fbo, (w, h), frame.transparent)
         t0 = time.perf_counter()
         board["rgba"] = self.readback.read(slot, fbo, (w, h), request)
