@@ -3,6 +3,7 @@ light_cull.py, clustered.py): the group's error model against brute force, culli
 that never drops a light, and many small lights against the exact sum of all of them,
 which numpy computes."""
 import math
+import sys
 
 import numpy as np
 import pytest
@@ -230,3 +231,24 @@ def test_lights_that_reach_few_pixels_are_never_dropped():
     assert 0.05 < lit.mean() < 0.9               # lights that reach some pixels, not all
     assert np.array_equal(lit, b[..., 0] > 0)
     assert np.allclose(a, b, rtol=1e-5, atol=0)
+
+
+def test_a_frame_in_which_no_light_changed_asks_nothing_of_each_light(monkeypatch):
+    """Which lights cast and which go through the tree is sorted when a light changes,
+    not by a loop over every light in passes of every frame (on an H100, a frame of
+    16,384 lights took 21.6 ms of CPU, one light 2.5 ms)."""
+    from lantern.engine import Session, light_tree, shadow_plan
+    stage = plane_stage(patch()[:64], 1.0)
+    asked = []
+    for real in (light_tree.in_tree, shadow_plan.casts):    # wherever a module holds them
+        for module in [m for n, m in sys.modules.items() if n.startswith("lantern.")]:
+            if getattr(module, real.__name__, None) is real:
+                monkeypatch.setattr(module, real.__name__,
+                                    lambda *a, real=real: asked.append(real) or real(*a))
+    settings = RenderSettings(width=PIXELS, height=PIXELS, preset="low", lighting="clustered")
+    with Session(stage, settings) as session:
+        first = session.render().rgba
+        assert asked, "the first frame sorts the lights"
+        asked.clear()
+        again = session.render().rgba
+    assert asked == [] and np.array_equal(first, again)

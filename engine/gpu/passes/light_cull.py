@@ -34,7 +34,6 @@ import numpy as np
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
 from ..readback import SLOTS
-from ...light_tree import in_tree
 from ...view import relative_view
 
 TILE = 16            # shaders/clusters.glsl
@@ -54,14 +53,13 @@ class Clusters:
     counts: object          # the buffer of items asked and clusters overflowed
 
 
-def light_kinds(scene, shadow_maps):
+def light_kinds(table, shadow_maps):
     """(lights shaded one by one from the lists, lights shaded with their maps):
-    every light outside the tree (light_tree.in_tree), split by whether its map was
-    made this frame."""
+    every light outside the tree (LightTable.one_by_one), split by whether its map
+    was made this frame."""
     exact, mapped = [], []
-    for path, light in scene.lights.items():
-        if not in_tree(light):
-            (mapped if path in shadow_maps else exact).append(path)
+    for path in table.one_by_one:
+        (mapped if path in shadow_maps else exact).append(path)
     return exact, mapped
 
 
@@ -92,7 +90,7 @@ class LightCullPass(Pass):
         self._size_buffers(tiles, n_clusters)
         error = float(frame.options.light_error)
         tree, tree_buffer = self.table.tree_for(frame.scene, error)
-        exact, mapped = light_kinds(frame.scene, board.get("shadow_maps", {}))
+        exact, mapped = light_kinds(self.table, board.get("shadow_maps", {}))
         rows = np.array([self.table.index[p] for p in exact] or [0], np.int32)
         if self._exact is None or not np.array_equal(self._exact[0], rows):
             if self._exact is not None:

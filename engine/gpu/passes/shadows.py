@@ -124,9 +124,7 @@ class ShadowPass(Pass):
 
     def needed(self, frame):
         has_casters = self.geometry.has_casters()
-        wanted = has_casters and any(
-            casts(light, self.lights.ranges.get(path, 0.0))
-            for path, light in frame.scene.lights.items())
+        wanted = has_casters and bool(self.lights.casting)
         if not wanted:
             self._drop(list(self.maps))
             self._drop_kept()
