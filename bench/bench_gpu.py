@@ -177,12 +177,23 @@ def measure(name, stage, size, preset, images, image_sizes, form="compute"):
     }
 
 
+def _renderer() -> str:
+    """The GL renderer a session gets here."""
+    from lantern.engine.gpu.context import GLContext
+    context = GLContext()
+    try:
+        return context.ctx.info["GL_RENDERER"]
+    finally:
+        context.release()
+
+
 def run(folder, sizes, presets, json_path, images, everything, image_sizes=("640x360",),
         forms=tuple(FORMS), lights=False, scenes=SCENES):
     from lantern.engine.usd.opening import open_stage
     if images is not None:
         images.mkdir(parents=True, exist_ok=True)
     rows, gl = [], None
+    software = "llvmpipe" in _renderer()
     for name in scenes:
         stage = open_stage(str(folder / f"{name}.usdc"))
         for size_name in sizes:
@@ -191,7 +202,7 @@ def run(folder, sizes, presets, json_path, images, everything, image_sizes=("640
                 from lantern.core.presets import preset as find_preset
                 k = find_preset(preset).supersample
                 if not everything and size[0] * size[1] * k * k > LLVMPIPE_PIXELS \
-                        and "llvmpipe" in (gl or {}).get("gl_renderer", "llvmpipe"):
+                        and software:
                     print(f"  {name:<6} {size_name:>9} {preset:<7} skipped on llvmpipe "
                           f"({size[0] * k}x{size[1] * k} drawn; --all runs it)", flush=True)
                     continue
@@ -234,19 +245,19 @@ def many_lights(folder, forms):
             total += pz / ((X - px) ** 2 + (Y - py) ** 2 + pz * pz) ** 1.5
         return total * power
 
-    out, one, llvmpipe = [], {}, None
+    out, one = [], {}
     print(f"many lights at {w}x{h}, medium: error against the exact sum on "
           f"{X.size} pixels; times against one light of the same form")
     for count in LIGHT_COUNTS:
         stage = open_stage(str(folder / f"lights_{count}.usdc"))
         truth = exact(light_positions(count), 1.0 / count)
         for form in forms:
-            if form == "raster" or (form == "volumes" and count > 256 and llvmpipe):
-                continue          # the raster form lights as `volumes` does; 16,384 volumes
-                                  # on llvmpipe take minutes a frame
+            # The raster form lights as `volumes` does. 16,384 volumes are 16,384 draws:
+            # minutes a frame on llvmpipe, and 256 took 141 ms on an H100 (docs/gpu.md).
+            if form == "raster" or (form == "volumes" and count > 256):
+                continue
             row = measure(f"lights_{count}", stage, LIGHTS_SIZE, "medium", None, (), form)
             got = row["image"][rows_][:, cols, 0].astype(np.float64)
-            llvmpipe = "llvmpipe" in row["gl"]["gl_renderer"]
             if count == 1:
                 one[form] = (row, got / truth)          # the plane's radiance per irradiance
             base, scale = one[form]

@@ -80,7 +80,7 @@ with Session(open_stage(sys.argv[1]), RenderSettings(width=1920, height=1080)) a
     print(f"1920x1080 medium: targets {gib(stats['target_bytes_allocated'])}, "
           f"{gib(stats['gpu_memory_free'] or 0)} free of {gib(stats['gpu_memory_total'] or 0)}")
 
-    def drew(self, frame):         # never draw these: a frame that fits stops here
+    def drew(self, frame, plan=None):   # never draw these: a frame that fits stops here
         raise RuntimeError(f"fits: would draw {frame.size[0]}x{frame.size[1]}")
     FrameGraph.run = drew
     for size, preset in (((16384, 16384), "ultra"), ((16384, 16384), "high"),
