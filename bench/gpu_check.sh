@@ -2,8 +2,9 @@
 # Every check that needs an NVIDIA GPU, in one call of the `device` tool (docs/gpu.md):
 # the devices, the images against llvmpipe's, frame times in each form (compute,
 # volumes, raster) at 1080p and 4K, the demo at ultra, many lights against numpy's sum,
-# the read-back's modes, compute skinning against transform feedback, and the engine
-# tests that need no bpy. At most 9 minutes: each step has its own time limit.
+# each pass and dispatch alone, the read-back's modes, compute skinning against
+# transform feedback, and the engine tests that need no bpy. About 4 minutes on an H100
+# (2026-11-27); each step has its own time limit.
 # Here, before it: bash bench/gpu_prepare.sh   (the wheels, the scenes, llvmpipe's images)
 # Then the device command `bash .gpu/run.sh bash bench/gpu_check.sh`, carrying [".gpu"].
 # Back in $OUT: log.txt, devices.txt, gpu.json, gpu_ultra.json, gpu_lights.json,
@@ -36,6 +37,9 @@ run 50 --scenes demo --sizes 1920x1080 --presets ultra --forms compute raster \
     --json "$OUT/gpu_ultra.json"
 echo "== many lights at 1080p: 1, 256, 16,384 against numpy's sum"
 run 60 --scenes --lights --forms compute volumes --json "$OUT/gpu_lights.json"
+
+echo "== each pass and dispatch alone (glFinish around each): one light over the plane, the demo"
+timeout 60 python3 bench/bench_dispatches.py .gpu/scenes lights_1 demo
 
 echo "== the read-back: each mode against one bare glReadPixels; the demo read mapped"
 timeout 30 python3 bench/bench_readback.py --json "$OUT/readback.json"
