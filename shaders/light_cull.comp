@@ -11,10 +11,11 @@
 // themselves; at error 0 (tree_exact) only leaves, where their volumes reach. Lights shaded
 // one by one (exact_rows: spots, area lights, suns, point lights whose shadows have no
 // map this frame) go in first, where their volume reaches. A list is counted and its
-// place taken with one atomic add (the first dispatch), then written (the second: each
-// walk in an invocation of its own, as llvmpipe ends an invocation's loops after 65,535
-// iterations in all); a list that does not fit marks its cluster (lights.comp then walks
-// every light) and the renderer grows the pool.
+// place taken within its work group's, which takes its place with one atomic add (the
+// first dispatch), then written (the second: each walk in an invocation of its own, as
+// llvmpipe ends an invocation's loops after 65,535 iterations in all); a list that does
+// not fit marks its cluster (lights.comp then walks every light) and the renderer grows
+// the pool.
 layout(local_size_x = 64) in;
 layout(std430, binding = 8) readonly buffer ExactLights { int exact_rows[]; };
 uniform int n_exact;
@@ -71,24 +72,9 @@ uvec2 visit(bool write, uint first) {
     return uvec2(rows, n - rows);
 }
 
-void main() {
-    int cluster = int(gl_GlobalInvocationID.x);
-    int tiles = cluster_tiles.x * cluster_tiles.y;
-    if (cluster >= tiles * SLICES) return;
-    int t = cluster / SLICES, k = cluster % SLICES;
-    vec4 bounds = tile_bounds[t];
-    if ((floatBitsToUint(bounds.z) & (1u << uint(k))) == 0u || bounds.w == 0.0) {
-#ifndef CULL_WRITE
-        cluster_ranges[cluster] = uvec4(0u);
-#endif
-        return;
-    }
-#ifdef CULL_WRITE
-    uvec4 range = cluster_ranges[cluster];
-    if (range.w != 0u || range.y + range.z == 0u) return;
-#endif
-    // The box: the tile's four corner rays between the slice's depths, padded for the
-    // rounding of a pixel's slice (clusters.glsl slice_of) at the slice's ends.
+// Sets the cluster's box: its tile's four corner rays between its slice's depths,
+// padded for the rounding of a pixel's slice (clusters.glsl slice_of) at the slice's ends.
+void cluster_box(int t, int k, vec4 bounds) {
     ivec2 tile = ivec2(t % cluster_tiles.x, t / cluster_tiles.x);
     float pad = 1e-4 * abs(bounds.y - bounds.x) + 1e-6 * max(abs(bounds.x), abs(bounds.y));
     float z0 = slice_depth(k, bounds.xy) - pad, z1 = slice_depth(k + 1, bounds.xy) + pad;
@@ -106,13 +92,48 @@ void main() {
     vec3 slack = 1e-5 * max(abs(box_lo), abs(box_hi));
     box_lo -= slack;
     box_hi += slack;
+}
+
 #ifdef CULL_WRITE
+void main() {
+    int cluster = int(gl_GlobalInvocationID.x);
+    int tiles = cluster_tiles.x * cluster_tiles.y;
+    if (cluster >= tiles * SLICES) return;
+    uvec4 range = cluster_ranges[cluster];
+    if (range.w != 0u || range.y + range.z == 0u) return;
+    int t = cluster / SLICES, k = cluster % SLICES;
+    cluster_box(t, k, tile_bounds[t]);
     visit(true, range.x);
+}
 #else
-    uvec2 n = visit(false, 0u);
-    uint first = atomicAdd(items_asked, n.x + n.y);
+// The work group takes its clusters' places with one atomic add on the pool's counter,
+// not one a cluster: every cluster of the screen adding to one address in turn is what
+// the count would otherwise wait on.
+shared uint group_items;
+shared uint group_first;
+
+void main() {
+    if (gl_LocalInvocationIndex == 0u) group_items = 0u;
+    barrier();
+    int cluster = int(gl_GlobalInvocationID.x);
+    int tiles = cluster_tiles.x * cluster_tiles.y;
+    int t = cluster / SLICES, k = cluster % SLICES;
+    bool inside = cluster < tiles * SLICES;
+    vec4 bounds = inside ? tile_bounds[t] : vec4(0.0);
+    bool lit = inside && (floatBitsToUint(bounds.z) & (1u << uint(k))) != 0u && bounds.w != 0.0;
+    uvec2 n = uvec2(0u);
+    if (lit) {
+        cluster_box(t, k, bounds);
+        n = visit(false, 0u);
+    }
+    uint offset = atomicAdd(group_items, n.x + n.y);
+    barrier();
+    if (gl_LocalInvocationIndex == 0u) group_first = atomicAdd(items_asked, group_items);
+    barrier();
+    if (!inside) return;
+    uint first = lit ? group_first + offset : 0u;
     bool fits = first + n.x + n.y <= items_capacity;
     if (!fits) atomicAdd(clusters_overflowed, 1u);
-    cluster_ranges[cluster] = uvec4(first, n, fits ? 0u : 1u);
-#endif
+    cluster_ranges[cluster] = lit ? uvec4(first, n, fits ? 0u : 1u) : uvec4(0u);
 }
+#endif
