@@ -119,10 +119,9 @@ class LightPass(Pass):
     def needed(self, frame):
         if frame.lighting == "volumes":
             return bool(frame.scene.lights) or lighting_aovs(frame)
-        return not frame.compute and any(light.shadow for light in frame.scene.lights.values())
+        return not frame.compute and bool(self.table.casting)
 
-    @staticmethod
-    def drawn(frame, shadow_maps) -> list:
+    def drawn(self, frame, shadow_maps) -> list:
         """The lights this pass draws: every light, or under clustered lighting with
         the screen passes raster (a software rasteriser), those with a shadow map this
         frame. Each of those is a pass of its own in either form (passes/clustered.py
@@ -130,7 +129,7 @@ class LightPass(Pass):
         dispatch's time on llvmpipe (docs/gpu.md)."""
         if frame.lighting == "volumes":
             return list(frame.scene.lights)
-        return [path for path in frame.scene.lights if path in shadow_maps]
+        return [path for path in self.table.casting if path in shadow_maps]
 
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]
