@@ -162,13 +162,13 @@ float arc_to(float x, float nn) {
     return sign(x) * (g + 0.25 * cos(nn));
 }
 
-// The cosine-weighted share of the slice's half circle the scene leaves open, and the
-// share of the angle interval [c - w, c + w] (within the half circle) it leaves open
-// over the share of it the half circle holds (1 if none).
 // The index of x's lowest set bit (x > 0; findLSB is GLSL 4.00): that bit alone is a
 // power of two, which a float holds exactly, in its exponent.
 int lowest_bit(uint x) { return int(floatBitsToUint(float(x & (~x + 1u))) >> 23) - 127; }
 
+// The cosine-weighted share of the slice's half circle the scene leaves open, and the
+// share of the angle interval [c - w, c + w] (within the half circle) it leaves open
+// over the share of it the half circle holds (1 if none).
 float open_arc(Slice sl) {
     float lo = sl.angle_n - 0.5 * PI, sector = PI / float(SECTORS);
     // Summed run by run of open sectors, found by their bits (a loop over the sectors
