@@ -267,7 +267,7 @@ def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=Fa
     sorted_corners = corners.reshape(-1, 3)[order].reshape(-1)
     point_of_corner = idx[sorted_corners]
     vertices, indices, first = index_corners(soup, point_of_corner if per_point else sorted_corners,
-                                      len(pts) if per_point else len(idx))
+                                             len(pts) if per_point else len(idx))
     double, culling = _sidedness(prim, mesh, time)
     extra, at = {}, 12
     for name in streams:
