@@ -45,23 +45,31 @@ float wrap1(float x, int mode) {
     return x;
 }
 
+// Repeat without integer division, which CPU rasterisers (llvmpipe) run lane by lane:
+// i + 0.5 keeps the quotient off whole numbers, so floor cannot round across one.
 int wrap_texel(int i, int n, int mode) {
-    return mode == 0 ? ((i % n) + n) % n : clamp(i, 0, n - 1);
+    return mode == 0 ? i - n * int(floor((float(i) + 0.5) / float(n))) : clamp(i, 0, n - 1);
 }
 
-vec3 linear_to_srgb(vec3 c) {
-    bvec3 low = lessThanEqual(c, vec3(0.0031308));
-    return mix(1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, 12.92 * c, vec3(low));
+// The 8-bit value an sRGB image stores, from GL's decoding of it: the encoding as a
+// cubic in the fourth root (within 0.06 of a step of the exact curve, 1.055 c^(1/2.4)
+// - 0.055, over every 8-bit value), rounded to the step. Exact, and cheaper than pow,
+// which the probes below would take 36 times a lookup. Values of 10 and under are on
+// the curve's linear segment.
+vec3 stored_value(vec3 c) {
+    vec3 q = sqrt(sqrt(c));
+    vec3 e = ((-0.13683543 * q + 0.95259386) * q + 0.2557853) * q - 0.07175894;
+    e = mix(e, 12.92 * c, vec3(lessThanEqual(c, vec3(0.0031308))));
+    return floor(e * 255.0 + 0.5) * (1.0 / 255.0);
 }
 
-// Texel i of `level`, wrapped; `encoded`: as stored in an sRGB image (GL's fetch
-// decodes it; encoding again is exact for 8-bit values). Probes below fetch texels
-// rather than filter: on llvmpipe a sampler with anisotropy filters textureLod and
-// textureGrad with derivatives of its own, whatever level or gradients they name.
-vec4 texel(sampler2D t, Map m, ivec2 i, int level, bool encoded) {
-    ivec2 n = textureSize(t, level);
+// Texel i of `level` (of n texels), wrapped; `encoded`: as stored in an sRGB image
+// (GL's fetch decodes it). Probes below fetch texels rather than filter: on llvmpipe a
+// sampler with anisotropy filters textureLod and textureGrad with derivatives of its
+// own, whatever level or gradients they name.
+vec4 texel(sampler2D t, Map m, ivec2 i, ivec2 n, int level, bool encoded) {
     vec4 c = texelFetch(t, ivec2(wrap_texel(i.x, n.x, m.wrap.x), wrap_texel(i.y, n.y, m.wrap.y)), level);
-    if (encoded) c.rgb = linear_to_srgb(c.rgb);
+    if (encoded) c.rgb = stored_value(c.rgb);
     return c;
 }
 
@@ -72,11 +80,12 @@ vec4 decoded(vec4 c, bool encoded) { return encoded ? vec4(srgb_to_linear(c.rgb)
 // sides stay sharp where the box is a point, and blend by how much of each texel the
 // box covers (reaching half a texel, bilinear).
 vec4 closest0(sampler2D t, Map m, vec2 w, vec2 box) {
-    vec2 f = w * vec2(textureSize(t, 0)) - 0.5;
+    ivec2 n = textureSize(t, 0);
+    vec2 f = w * vec2(n) - 0.5;
     ivec2 i = ivec2(floor(f));
     vec2 a = clamp((f - vec2(i) - 0.5) / max(2.0 * box, 1e-6) + 0.5, 0.0, 1.0);
-    return mix(mix(texel(t, m, i, 0, false), texel(t, m, i + ivec2(1, 0), 0, false), a.x),
-               mix(texel(t, m, i + ivec2(0, 1), 0, false), texel(t, m, i + ivec2(1, 1), 0, false), a.x),
+    return mix(mix(texel(t, m, i, n, 0, false), texel(t, m, i + ivec2(1, 0), n, 0, false), a.x),
+               mix(texel(t, m, i + ivec2(0, 1), n, 0, false), texel(t, m, i + ivec2(1, 1), n, 0, false), a.x),
                a.y);
 }
 
@@ -84,11 +93,12 @@ vec4 closest0(sampler2D t, Map m, vec2 w, vec2 box) {
 // image's level 0, over the stored (encoded) values, then decoded.
 vec4 bilinear(sampler2D t, Map m, vec2 w, int level) {
     bool e = m.srgb && level == 0;
-    vec2 f = w * vec2(textureSize(t, level)) - 0.5;
+    ivec2 n = textureSize(t, level);
+    vec2 f = w * vec2(n) - 0.5;
     ivec2 i = ivec2(floor(f));
     vec2 a = f - vec2(i);
-    return decoded(mix(mix(texel(t, m, i, level, e), texel(t, m, i + ivec2(1, 0), level, e), a.x),
-                       mix(texel(t, m, i + ivec2(0, 1), level, e), texel(t, m, i + ivec2(1, 1), level, e), a.x),
+    return decoded(mix(mix(texel(t, m, i, n, level, e), texel(t, m, i + ivec2(1, 0), n, level, e), a.x),
+                       mix(texel(t, m, i + ivec2(0, 1), n, level, e), texel(t, m, i + ivec2(1, 1), n, level, e), a.x),
                        a.y), e);
 }
 
@@ -103,14 +113,15 @@ vec4 bspline_weights(float a) {
 // image's level 0, over the stored values, then decoded).
 vec4 bspline(sampler2D t, Map m, vec2 w, int level) {
     bool e = m.srgb && level == 0;
-    vec2 f = w * vec2(textureSize(t, level)) - 0.5;
+    ivec2 n = textureSize(t, level);
+    vec2 f = w * vec2(n) - 0.5;
     vec2 i = floor(f);
     vec4 wx = bspline_weights(f.x - i.x), wy = bspline_weights(f.y - i.y);
     vec4 c = vec4(0.0);
     for (int y = 0; y < 4; ++y) {
         vec4 row = vec4(0.0);
         for (int x = 0; x < 4; ++x)
-            row += wx[x] * texel(t, m, ivec2(i) + ivec2(x - 1, y - 1), level, e);
+            row += wx[x] * texel(t, m, ivec2(i) + ivec2(x - 1, y - 1), n, level, e);
         c += wy[y] * row;
     }
     return decoded(c, e);
