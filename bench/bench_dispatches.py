@@ -1,9 +1,13 @@
 """Wall time of each pass and each compute dispatch of a warm frame, with glFinish on
 both sides of each, so that nothing overlaps it: where the frame graph's timestamps
 (bench_gpu.py) blur the gaps a driver leaves between passes, this says which step
-costs. Scenes from `bench_gpu.py prepare`.
+costs. Each step's time is split in two: the CPU's, until the step's calls return
+(Python, and the driver's own work at the call: a recompile, an allocation, a wait it
+makes), and the wait in glFinish after them (the GPU's work, and what the driver
+deferred to it). llvmpipe runs a compute dispatch within its call, so there it is all
+CPU. Scenes from `bench_gpu.py prepare`.
 
-    python bench/bench_dispatches.py .gpu/scenes lights_1 demo --size 1920x1080
+    python bench/bench_dispatches.py .gpu/scenes lights_1 lights_16384 demo --size 1920x1080
 """
 from __future__ import annotations
 
@@ -17,7 +21,8 @@ import numpy as np
 
 
 def timed_steps(folder, name, size, preset, frames=3) -> dict:
-    """{step: median ms}: each pass ("pass"), each dispatch ("pass: dispatch (x, y)")."""
+    """{step: (median ms, median ms of CPU, median ms waiting)}: each pass ("pass"),
+    each dispatch ("pass: dispatch (x, y)")."""
     from lantern.engine import RenderSettings, Session
     from lantern.engine.gpu import framegraph
     from lantern.engine.usd.opening import open_stage
@@ -27,8 +32,10 @@ def timed_steps(folder, name, size, preset, frames=3) -> dict:
         ctx.finish()
         t0 = time.perf_counter()
         out = fn(*args, **kw)
+        t1 = time.perf_counter()
         ctx.finish()
-        log.setdefault(label, []).append((time.perf_counter() - t0) * 1e3)
+        t2 = time.perf_counter()
+        log.setdefault(label, []).append(((t2 - t0) * 1e3, (t1 - t0) * 1e3, (t2 - t1) * 1e3))
         return out
 
     dispatch, run = moderngl.ComputeShader.run, framegraph.FrameGraph.run
@@ -57,7 +64,7 @@ def timed_steps(folder, name, size, preset, frames=3) -> dict:
                 session.render(out=out)
     finally:
         moderngl.ComputeShader.run, framegraph.FrameGraph.run = dispatch, run
-    return {k: statistics.median(v) for k, v in log.items()}
+    return {k: tuple(statistics.median(column) for column in zip(*v)) for k, v in log.items()}
 
 
 def main():
@@ -70,10 +77,11 @@ def main():
     size = tuple(int(v) for v in args.size.split("x"))
     for name in args.scenes:
         steps = timed_steps(args.folder, name, size, args.preset)
-        print(f"{name} {args.size} {args.preset}, ms (glFinish around each step):")
-        for label, ms in sorted(steps.items(), key=lambda kv: -kv[1]):
+        print(f"{name} {args.size} {args.preset}, ms (glFinish around each step): "
+              f"all = CPU until the calls return + wait in glFinish")
+        for label, (ms, cpu, wait) in sorted(steps.items(), key=lambda kv: -kv[1][0]):
             if ms >= 0.05:
-                print(f"  {ms:8.2f}  {label}")
+                print(f"  {ms:8.2f} = {cpu:7.2f} + {wait:7.2f}  {label}")
 
 
 if __name__ == "__main__":

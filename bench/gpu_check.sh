@@ -38,8 +38,8 @@ run 50 --scenes demo --sizes 1920x1080 --presets ultra --forms compute raster \
 echo "== many lights at 1080p: 1, 256, 16,384 against numpy's sum"
 run 60 --scenes --lights --forms compute volumes --json "$OUT/gpu_lights.json"
 
-echo "== each pass and dispatch alone (glFinish around each): one light over the plane, the demo"
-timeout 60 python3 bench/bench_dispatches.py .gpu/scenes lights_1 demo
+echo "== each pass and dispatch alone (glFinish around each; CPU + wait): one light and 16,384 over the plane, the demo"
+timeout 90 python3 bench/bench_dispatches.py .gpu/scenes lights_1 lights_16384 demo
 
 echo "== the read-back: each mode against one bare glReadPixels; the demo read mapped"
 timeout 30 python3 bench/bench_readback.py --json "$OUT/readback.json"
