@@ -37,6 +37,9 @@ CANDIDATES = {
     "ultra, ss2": ("ultra", dict(supersample=2)),
     "ultra, high taps": ("ultra", dict(pcf_taps=32, blocker_taps=16, ao_slices=4, ao_steps=12)),
     "ultra, high shadow taps": ("ultra", dict(pcf_taps=32, blocker_taps=16)),
+    "low, AO every pixel": ("low", dict(ao_block=1)),
+    "medium, AO every pixel": ("medium", dict(ao_block=1)),
+    "high, AO in 2x2 blocks": ("high", dict(ao_block=2)),
 }
 
 

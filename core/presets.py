@@ -7,6 +7,9 @@ blocker-search samples. cascades: sun cascades. anisotropy: texture filtering.
 disk_sides: the polygon a disk light is shaded as. ico_level: subdivisions of the
 sphere drawn as a point light's volume. ao_slices / ao_steps: ambient occlusion's
 horizon-search directions (rays) and depth samples per side (0 slices: no AO).
+ao_block: the search runs once per ao_block x ao_block pixels of the image, which the
+blur fills in depth-aware (occlusion varies over the AO distance, far wider than a
+pixel: docs/rendering.md, "Presets").
 supersample: the image is drawn this many times wider and taller and filtered down
 with Cycles' pixel filter (anti-aliasing; 1: not). fxaa: FXAA on images not
 supersampled.
@@ -30,19 +33,20 @@ class Preset:
     cascades: int
     ao_slices: int
     ao_steps: int
+    ao_block: int
     supersample: int
     fxaa: bool
 
 
 PRESETS = {p.name: p for p in (
     Preset("low", "Low", "Fastest: smallest shadow maps, fewest filter taps, light occlusion, FXAA",
-           1.0, 16, 1, 512, 8, 8, 2, 2, 4, 1, True),
+           1.0, 16, 1, 512, 8, 8, 2, 2, 4, 2, 1, True),
     Preset("medium", "Medium", "Balanced quality and speed, FXAA",
-           4.0, 32, 1, 1024, 16, 12, 3, 3, 8, 1, True),
+           4.0, 32, 1, 1024, 16, 12, 3, 3, 8, 2, 1, True),
     Preset("high", "High", "Larger shadow maps, 2x2 supersampling (F12 and command line)",
-           8.0, 32, 2, 2048, 16, 12, 4, 4, 12, 2, False),
+           8.0, 32, 2, 2048, 16, 12, 4, 4, 12, 1, 2, False),
     Preset("ultra", "Ultra", "Closest to Cycles, slowest: 3x3 supersampling",
-           16.0, 32, 2, 4096, 32, 16, 4, 8, 16, 3, False),
+           16.0, 32, 2, 4096, 32, 16, 4, 8, 16, 1, 3, False),
 )}
 DEFAULT = "medium"
 

@@ -20,11 +20,12 @@ search is kept; what it misses is geometry off screen.
 Runs when the scene has a dome and the preset has AO, or the AO render pass is asked
 for.
 
-A supersampled frame (high, ultra) searches at the output's resolution, one search
-per k x k block from its centre sub-pixel, and the blur upsamples it depth-aware to
-the drawn size: the search is k^2 times cheaper, and the occlusion it finds varies over
-the distance radius, far wider than a sub-pixel (GTAO in UE and EEVEE runs at reduced
-resolution too). Measured in docs/gpu.md ("Passes to budget").
+The search runs once per block of the drawn image, from the block's centre pixel, and
+the blur upsamples it depth-aware to the drawn size: a block is the preset's ao_block
+output pixels a side (2 at low and medium, 1 at high and ultra), each k x k sub-pixels
+in a frame supersampled k times. The occlusion it finds varies over the distance
+radius, far wider than a pixel (GTAO in UE and EEVEE runs at reduced resolution too).
+Measured in docs/gpu.md ("Passes to budget") and docs/rendering.md ("Presets").
 
 Each sample hides the directions from its surface point to the point THICKNESS x the
 distance behind it (a visibility bit mask per slice, Therrien et al. 2023), not all
@@ -83,8 +84,10 @@ class AoPass(Pass):
         dome = frame.scene.dome
         distance = getattr(dome, "ao_distance", None) or DEFAULT_DISTANCE
         cam = view.camera
-        step = max(int(frame.supersample), 1)
-        raw = self.pool.acquire((-(-w // step), -(-h // step)), "rgba32f")
+        step = max(int(frame.supersample), 1) * max(int(preset.ao_block), 1)
+        search = (-(-w // step), -(-h // step))
+        frame.stats["ao_searches"] = search[0] * search[1]
+        raw = self.pool.acquire(search, "rgba32f")
         prog = screen_program(self.programs, "ao", (), frame.compute)
         view.set_camera(prog)
         set_uniform(prog, "u_step", step)
