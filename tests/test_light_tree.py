@@ -239,6 +239,12 @@ def test_a_frame_in_which_no_light_changed_asks_nothing_of_each_light(monkeypatc
     16,384 lights took 21.6 ms of CPU, one light 2.5 ms)."""
     from lantern.engine import Session, light_tree, shadow_plan
     stage = plane_stage(patch()[:64], 1.0)
+    # And one light with a shadow, over a caster: the shadow pass runs every frame.
+    add_sphere_lights(stage, "/root", [(0.0, 0.0, 2.0)], {"intensity": 1.0}, True)  # light_0
+    caster = UsdGeom.Mesh.Define(stage, "/root/caster")
+    caster.CreatePointsAttr([(-0.2, -0.2, 1.0), (0.2, -0.2, 1.0), (0.2, 0.2, 1.0), (-0.2, 0.2, 1.0)])
+    caster.CreateFaceVertexCountsAttr([4])
+    caster.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
     asked = []
     for real in (light_tree.in_tree, shadow_plan.casts):    # wherever a module holds them
         for module in [m for n, m in sys.modules.items() if n.startswith("lantern.")]:
@@ -247,7 +253,9 @@ def test_a_frame_in_which_no_light_changed_asks_nothing_of_each_light(monkeypatc
                                     lambda *a, real=real: asked.append(real) or real(*a))
     settings = RenderSettings(width=PIXELS, height=PIXELS, preset="low", lighting="clustered")
     with Session(stage, settings) as session:
-        first = session.render().rgba
+        result = session.render()
+        first = result.rgba
+        assert result.stats["shadow_maps"] >= 1
         assert asked, "the first frame sorts the lights"
         asked.clear()
         again = session.render().rgba

@@ -44,7 +44,7 @@ from __future__ import annotations
 import numpy as np
 
 from ....core.lights import SUN
-from ...shadow_plan import casts, importance, plan, stale_tiles
+from ...shadow_plan import importance, plan, stale_tiles
 from ...view import translate
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
@@ -149,12 +149,10 @@ class ShadowPass(Pass):
             self._see_through = see_through
         for path in [p for p in self.maps if p not in scene.lights or p in frame.changes.lights]:
             self._drop([path])           # stale: drawn again below if it still casts
-        out, used, casting = {}, 0, []
-        for path, light in scene.lights.items():
-            if casts(light, self.lights.ranges[path]):
-                casting.append(path)
-            else:
-                self._drop([path])
+        out, used = {}, 0
+        casting = list(self.lights.casting)       # worked out once per light change
+        kept = set(casting)
+        self._drop([p for p in self.maps if p not in kept])
         casting.sort(key=lambda p: -importance(scene.lights[p], view.origin))
         for n, path in enumerate(casting):
             light, R = scene.lights[path], self.lights.ranges[path]
