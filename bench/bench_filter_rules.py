@@ -16,12 +16,10 @@ import argparse
 import numpy as np
 
 from lantern.engine.gpu.passes.antialias import FILTER_WIDTH, blackman_harris
+from lantern.engine.textures import srgb_to_linear
 
 FINE = np.linspace(-FILTER_WIDTH, FILTER_WIDTH, 3001)
-
-
-def decode(e):
-    return np.where(e <= 0.04045, e / 12.92, ((e + 0.055) / 1.055) ** 2.4)
+FILTER = blackman_harris(FINE) / blackman_harris(FINE).sum()    # the filter on FINE
 
 
 def lookup(texels, u):
@@ -30,7 +28,7 @@ def lookup(texels, u):
     i = np.floor(f).astype(int)
     a = f - i
     n = len(texels)
-    return decode(texels[i % n] * (1 - a) + texels[(i + 1) % n] * a)
+    return srgb_to_linear(texels[i % n] * (1 - a) + texels[(i + 1) % n] * a)
 
 
 def grid(n):
@@ -42,8 +40,7 @@ def grid(n):
 
 def gauss(n):
     """The n-point Gauss rule with the filter as its weight (Golub-Welsch on a fine grid)."""
-    w = blackman_harris(FINE)
-    w = w / w.sum()
+    w = FILTER
     p_prev, p, norm_prev, a, b = np.zeros_like(FINE), np.ones_like(FINE), None, [], []
     for k in range(n):
         norm = np.sum(w * p * p)
@@ -66,14 +63,12 @@ def sub_samples(k):
 
 
 def rms_error(rule, texels_per_pixel, kind, rng, trials=400):
-    exact_w = blackman_harris(FINE)
-    exact_w = exact_w / exact_w.sum()
     nodes, weights = rule
     errors = []
     for _ in range(trials):
         texels = rng.integers(0, 2, 64).astype(float) if kind == "0/1" else rng.random(64)
         u0 = rng.random() * 64
-        exact = np.sum(exact_w * lookup(texels, u0 + FINE * texels_per_pixel))
+        exact = np.sum(FILTER * lookup(texels, u0 + FINE * texels_per_pixel))
         errors.append(np.sum(weights * lookup(texels, u0 + nodes * texels_per_pixel)) - exact)
     return float(np.sqrt(np.mean(np.square(errors))))
 
