@@ -19,7 +19,8 @@ from lantern.engine.gpu.passes.antialias import FILTER_WIDTH, blackman_harris
 from lantern.engine.textures import srgb_to_linear
 
 FINE = np.linspace(-FILTER_WIDTH, FILTER_WIDTH, 3001)
-FILTER = blackman_harris(FINE) / blackman_harris(FINE).sum()    # the filter on FINE
+FILTER = blackman_harris(FINE)
+FILTER /= FILTER.sum()                       # the filter on FINE, summing to 1
 
 
 def lookup(texels, u):
