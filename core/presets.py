@@ -11,7 +11,9 @@ ao_block: the search runs once per ao_block x ao_block pixels of the image, whic
 blur fills in depth-aware (occlusion varies over the AO distance, far wider than a
 pixel: docs/rendering.md, "Presets").
 supersample: the image is drawn this many times wider and taller and filtered down
-with Cycles' pixel filter (anti-aliasing; 1: not). fxaa: FXAA on images not
+with Cycles' pixel filter (anti-aliasing; 1: not). edge_samples: a supersampled image's
+geometric edges are placed by four depth samples a sub-pixel (multisampled depth), not by
+the sub-pixels alone (engine/gpu/passes/antialias.py). fxaa: FXAA on images not
 supersampled.
 Cost and error of each preset against the Cycles references: docs/rendering.md, "Presets"."""
 from __future__ import annotations
@@ -35,18 +37,19 @@ class Preset:
     ao_steps: int
     ao_block: int
     supersample: int
+    edge_samples: bool
     fxaa: bool
 
 
 PRESETS = {p.name: p for p in (
     Preset("low", "Low", "Fastest: smallest shadow maps, fewest filter taps, light occlusion, FXAA",
-           1.0, 16, 1, 512, 8, 8, 2, 2, 4, 2, 1, True),
+           1.0, 16, 1, 512, 8, 8, 2, 2, 4, 2, 1, False, True),
     Preset("medium", "Medium", "Balanced quality and speed, FXAA",
-           4.0, 32, 1, 1024, 16, 12, 3, 3, 8, 2, 1, True),
+           4.0, 32, 1, 1024, 16, 12, 3, 3, 8, 2, 1, False, True),
     Preset("high", "High", "Larger shadow maps, 2x2 supersampling (F12 and command line)",
-           8.0, 32, 2, 2048, 16, 12, 4, 4, 12, 1, 2, False),
+           8.0, 32, 2, 2048, 16, 12, 4, 4, 12, 1, 2, True, False),
     Preset("ultra", "Ultra", "Closest to Cycles, slowest: 3x3 supersampling",
-           16.0, 32, 2, 4096, 32, 16, 4, 8, 16, 1, 3, False),
+           16.0, 32, 2, 4096, 32, 16, 4, 8, 16, 1, 3, True, False),
 )}
 DEFAULT = "medium"
 

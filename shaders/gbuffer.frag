@@ -4,7 +4,8 @@
 // metallic / roughness / dielectric F0 / clearcoat, RT3 emission + the base-occlusion mark
 // (alpha: BASE_OCCLUSION in the lighting passes); then, in the frames that need them,
 // the smooth normal and the sheen (lib.glsl apply_sheen). The material itself is
-// material.glsl's.
+// material.glsl's. DEPTH_ONLY: the edge samples' drawing (engine/gpu/passes/gbuffer.py),
+// into a depth target alone: the alpha test, and no material.
 in vec3 v_normal;
 in vec2 v_uv;
 in vec4 v_tangent;
@@ -47,6 +48,7 @@ void main() {
     float alpha = material_alpha(v_uv);
     // A cut-out's threshold, or a blended material's opaque texels (Material.alpha).
     if (u_opacity_threshold > 0.0 && alpha < u_opacity_threshold) discard;
+#ifndef DEPTH_ONLY
     MaterialSample m = material_sample(v_uv, v_normal, v_tangent, gl_FrontFacing);
     rt_base = vec4(m.base, alpha);
     rt_normal = vec4(m.n, m.coat_roughness);
@@ -60,5 +62,6 @@ void main() {
 #endif
 #ifdef WRITE_INDEX
     rt_index = vec4(v_object_index, u_material_index, v_object_id, u_material_id);
+#endif
 #endif
 }

@@ -43,6 +43,7 @@ TARGETS = {
     "g_mat": "rgba16f",        # metallic, roughness, dielectric F0, clearcoat
     "g_emit": "rgba16f",       # emission; alpha 1 where the base colour takes the AO
     "g_depth": "depth",         # 32-bit float, reversed (engine/view.py)
+    "edge_depth": "depth_ms4",  # g_depth at four places a texel (passes/gbuffer.py)
     "g_smooth": "rgba16f",     # world normal before the normal map (bump map correction)
     "g_sheen": "rgba16f",      # sheen colour; roughness + 2 x mode (passes/gbuffer.py)
     "ao": "rgba32f",           # ambient occlusion of the dome's light, bent normal (passes/ao.py)

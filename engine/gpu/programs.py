@@ -50,6 +50,9 @@ UNITS.update(t_pattern5=UNITS["radiance"], t_pattern6=UNITS["overlay_image"],
              t_pattern7=UNITS["overlay_atlas"])
 # The Cryptomatte pass samples nothing else (passes/cryptomatte.py).
 UNITS.update(crypto_ids=UNITS["g_base"], crypto_names=UNITS["g_normal"])
+# Nor do the supersample reduction's edge passes (shaders/edge_samples.glsl).
+UNITS.update(edge_depth=UNITS["g_base"], edge_marks=UNITS["g_normal"], separable=UNITS["g_mat"],
+             edge_pixels=UNITS["g_emit"])
 
 
 class ShaderError(RuntimeError):

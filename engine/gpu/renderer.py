@@ -19,7 +19,7 @@ from .framegraph import Frame, FrameGraph
 from .geometry import Geometry
 from .lights import LightTable
 from .passes.ambient import AmbientPass
-from .passes.antialias import SupersamplePass, centre_samples, downsample
+from .passes.antialias import DATA_PASSES, SupersamplePass, centre_samples, downsample
 from .passes.ao import AoPass
 from .passes.aovs import AovPass
 from .passes.cryptomatte import CryptomattePass
@@ -38,10 +38,6 @@ from .readback import Readback, ReadbackRequest, read_mode
 from .resources import TargetPool, Uploads
 from .stencil import Stencil
 from .textures import MaterialTextures
-
-# Render passes that are data, not light: never filtered.
-DATA_PASSES = {"Depth", "Normal", "IndexOB", "IndexMA"}
-
 
 def shadow_ratio(sums: np.ndarray) -> np.ndarray:
     """The Shadow pass from its sums (light with shadows, without): their ratio, grey,
@@ -129,7 +125,7 @@ class Renderer:
             ClusteredLightPass(ctx, programs, self.lights, self.environment, self.light_cull),
             TransparencyPass(ctx, self.pool, programs, self.geometry, self.textures,
                              self.lights, self.environment, self.depth),
-            SupersamplePass(ctx, self.pool, programs),
+            SupersamplePass(ctx, self.pool, programs, self.depth),
             CryptomattePass(ctx, self.pool, programs, self.geometry, self.uploads),
             PostPass(ctx, self.pool, programs),
             self.resolve,
@@ -188,10 +184,12 @@ class Renderer:
             self.depth.end()
         self._drawn = dict(frame.scene.materials)
         # Render passes were drawn at the supersampled size too: light is filtered as
-        # the image is, data (depth, normals, indices) keeps the centre sub-pixel.
+        # the image is (its edge samples included), data (depth, normals, indices)
+        # keeps the centre sub-pixel.
         # Cryptomatte's pass ranked its sub-pixels itself, at the image's size.
+        edges = board.get("edge_marks")
         board["aovs"] = {name: (a if PASSES[name].matte else centre_samples(a, k)
-                                if name in DATA_PASSES else downsample(a, k))
+                                if name in DATA_PASSES else downsample(a, k, edges))
                          for name, a in board["aovs"].items()}
         if "Shadow" in board["aovs"]:
             board["aovs"]["Shadow"] = shadow_ratio(board["aovs"]["Shadow"])

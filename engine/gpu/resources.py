@@ -93,7 +93,8 @@ def _bytes(data) -> bytes:
 COLOR_FORMATS = {"rgba16f": (4, "f2"), "rgba32f": (4, "f4"),
                  "r32f": (1, "f4"), "rg32f": (2, "f4")}   # render passes (AOVs)
 # Bytes per texel of every format (depth_stencil: DEPTH32F_STENCIL8 is stored in 8).
-TEXEL_BYTES = {"depth": 4, "depth_stencil": 8,
+# depth_ms4: four samples a texel (passes/gbuffer.py, edge samples).
+TEXEL_BYTES = {"depth": 4, "depth_stencil": 8, "depth_ms4": 16,
                **{fmt: n * int(dtype[1]) for fmt, (n, dtype) in COLOR_FORMATS.items()}}
 
 
@@ -129,6 +130,9 @@ class TargetPool:
         if fmt == "depth":
             tex = self.depth.float_depth(ctx.depth_texture(size))
             tex.compare_func = ""
+        elif fmt == "depth_ms4":
+            # Read only with texelFetch: a multisampled texture has no sampling state.
+            return self.depth.float_depth_multisample(ctx.depth_texture(size, samples=4))
         else:
             components, dtype = COLOR_FORMATS[fmt]
             tex = ctx.texture(size, components, dtype=dtype)

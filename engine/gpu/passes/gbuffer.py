@@ -22,9 +22,15 @@ generated variant and its parameters (stats: pattern_bytes).
 render passes: IndexOB, IndexMA into g_index (RGBA32F: the object's and material's
         pass indices, 1 + the object's id, the material's Cryptomatte id), only when
         asked for, or when Cryptomatte is (a shader variant with one more output)
+edge samples: edge_depth (g_depth at four places a texel: multisampled, 32-bit float),
+        in supersampled frames whose preset has edge_samples: the same draws again,
+        depth only (DEPTH_ONLY: the alpha test and nothing else). The supersample
+        reduction places geometric edges by it (passes/antialias.py).
 coverage: a samples query around the draws (read when the frame is finished, so no
         wait: stats fragments_drawn), which says when nothing of the stage is on screen"""
 from __future__ import annotations
+
+from collections import Counter
 
 from ....core.cryptomatte import name_id
 from ....core.images import FILTERTYPES
@@ -58,7 +64,7 @@ class GBufferPass(Pass):
     reads = ("skinned", "view")
     optional = ("tessellated",)
     writes = TARGETS + ("coverage",)
-    writes_optional = ("g_smooth", "g_sheen", "g_index")
+    writes_optional = ("g_smooth", "g_sheen", "g_index", "edge_depth")
     aovs = {"IndexOB": ("g_index", 0), "IndexMA": ("g_index", 1)}
 
     def __init__(self, ctx, pool, programs, geometry, textures, depth):
@@ -74,10 +80,15 @@ class GBufferPass(Pass):
         # bump_shadowing), only in frames that draw a normal-mapped material.
         # A sheen, only in frames that draw one.
         # The ids, for Cryptomatte (passes/cryptomatte.py).
+        # The edge samples, in supersampled frames that ask for them, where the GL
+        # has four samples a texel.
         materials = frame.scene.materials.values()
+        edges = frame.supersample > 1 and frame.preset.edge_samples and \
+            self.ctx.max_samples >= 4
         return (("g_smooth",) if any(m.needs_smooth_normal for m in materials) else ()) + \
             (("g_sheen",) if any(m.has_sheen for m in materials) else ()) + \
-            (("g_index",) if wants_ids(frame.aovs) else ())
+            (("g_index",) if wants_ids(frame.aovs) else ()) + \
+            (("edge_depth",) if edges else ())
 
     def program_args(self, mat, outputs, index):
         """ProgramCache.get's arguments for `mat`'s variant, with these optional
@@ -98,35 +109,52 @@ class GBufferPass(Pass):
         extra = [n for n in OUTPUT_DEFINES if n in board]
         colors = [board[n] for n in TARGETS[:4] + tuple(extra)] + \
             ([board["g_index"]] if index else [])
-        outputs = [OUTPUT_DEFINES[n] for n in extra]
-        fbo = self.pool.framebuffer(colors, depth=board["g_depth"])
-        fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=0.0)
-        ctx.enable(ctx.DEPTH_TEST)
-        ctx.depth_func = ">"
-        self.depth.far_clip(True)
-        ctx.disable(ctx.BLEND)
-        ctx.cull_face = "back"
+        outputs = [OUTPUT_DEFINES[n] for n in extra] + (["WRITE_INDEX"] if index else [])
         cam = view.camera
         batches, culled = self.geometry.commands.view_batches(
             view.boxes, cam.position, cam.forward, view.outside)
         frame.count("culled", culled)
         self.geometry.bind_objects(UNITS["u_objects"])
-        materials = frame.scene.materials
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.depth_func = ">"
+        self.depth.far_clip(True)
+        ctx.disable(ctx.BLEND)
         coverage = board["coverage"] = self._queries[self._next_query]
         self._next_query = (self._next_query + 1) % len(self._queries)
         coverage.mglo.begin()
+        drawn = self._draw(frame, view, batches,
+                           self.pool.framebuffer(colors, depth=board["g_depth"]), outputs)
+        coverage.mglo.end()
+        for name, n in drawn.items():
+            frame.count(name, n)
+        if "edge_depth" in board:
+            drawn = self._draw(frame, view, batches,
+                               self.pool.framebuffer(depth=board["edge_depth"]), ["DEPTH_ONLY"])
+            frame.count("edge_draw_calls", drawn["draw_calls"])
+        ctx.disable(ctx.DEPTH_TEST)
+        self.depth.far_clip(False)
+
+    def _draw(self, frame, view, batches, fbo, defines) -> dict:
+        """The frame's batches and point clouds into `fbo`, cleared first, with these
+        variant defines. Returns the stats of what it drew (draw_calls,
+        instances_drawn, points_drawn, pattern_bytes), each only where it drew any."""
+        ctx = self.ctx
+        fbo.use()
+        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=0.0)
+        ctx.cull_face = "back"
+        materials = frame.scene.materials
+        drawn = Counter()
         for batch in batches:
             mat = materials[batch.material]
             threshold = mat.gbuffer_threshold
             if threshold is None:
                 continue                   # wholly see-through: the transparency pass's
-            prog = self.programs.get(*self.program_args(mat, outputs, index))
+            prog = self.programs.get(*self.program_args(mat, defines, False))
             set_uniform(prog, "view_proj", view.view_proj)
             set_uniform(prog, "u_far", view.far_clip)
             view.set_origin(prog)
-            frame.count("pattern_bytes", set_material(prog, mat, self.textures, threshold,
-                                                      frame.supersample == 1))
+            drawn["pattern_bytes"] += set_material(prog, mat, self.textures, threshold,
+                                                   frame.supersample == 1)
             # A mirroring transform turns counter-clockwise triangles clockwise.
             ctx.front_face = "cw" if batch.mirrored else "ccw"
             if batch.cull:
@@ -134,29 +162,27 @@ class GBufferPass(Pass):
             else:
                 ctx.disable(ctx.CULL_FACE)
             self.geometry.commands.draw_batch(batch, prog)
-            frame.count("draw_calls", batch.count)
-            frame.count("instances_drawn", batch.instances)
+            drawn["draw_calls"] += batch.count
+            drawn["instances_drawn"] += batch.instances
         ctx.front_face = "ccw"
         ctx.disable(ctx.CULL_FACE)
         if self.geometry.points.clouds:
-            self._points(frame, view, materials, outputs + (["WRITE_INDEX"] if index else []))
-        coverage.mglo.end()
-        ctx.disable(ctx.DEPTH_TEST)
-        self.depth.far_clip(False)
+            draws, points = self._points(frame, view, materials, defines)
+            drawn["draw_calls"] += draws
+            drawn["points_drawn"] += points
+        return drawn
 
     def _points(self, frame, view, materials, defines):
         """Points prims: spheres facing the camera (points.vert), depth-tested with
-        the meshes."""
+        the meshes. Returns (draw calls, points drawn)."""
         def setup(prog, cloud):
             set_camera_facing(prog, view)
             mat = materials[cloud.material]
             set_material(prog, mat, self.textures, mat.opacity_threshold, frame.supersample == 1)
 
-        draws, points = self.geometry.points.draw(
+        return self.geometry.points.draw(
             self.programs, "gbuffer", setup, lambda lo, hi: not view.outside(lo[None], hi[None])[0],
             defines)
-        frame.count("draw_calls", draws)
-        frame.count("points_drawn", points)
 
 
 def set_material(prog, mat, textures, threshold, pixel_filter=False):
