@@ -40,6 +40,8 @@ CANDIDATES = {
     "low, AO every pixel": ("low", dict(ao_block=1)),
     "medium, AO every pixel": ("medium", dict(ao_block=1)),
     "high, AO in 2x2 blocks": ("high", dict(ao_block=2)),
+    "high, no edge samples": ("high", dict(edge_samples=False)),
+    "ultra, no edge samples": ("ultra", dict(edge_samples=False)),
 }
 
 
