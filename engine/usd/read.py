@@ -173,12 +173,15 @@ class FirstRead:
 
     def _world(self, prim_path: str) -> np.ndarray:
         """The prim's local-to-world at this time; all NaN when an op of it or of an
-        ancestor is not finite (USD composes a NaN quaternion as the identity, which
-        would hide it)."""
+        ancestor is not finite. Composition makes every such op's matrix non-finite
+        but a quaternion's (it takes that as the identity), so only quaternions are
+        read op by op; the culprit is named where a transform is refused (_bad_op)."""
         prim = self.stage.GetPrimAtPath(prim_path)
-        if self._bad_op(prim) is not None:
+        world = gf_to_np(self._xcache.GetLocalToWorldTransform(prim))
+        if not np.isfinite(world).all() or \
+                first_bad_op(prim, self._t, self._orient_memo, orient_only=True) is not None:
             return np.full((4, 4), np.nan)
-        return gf_to_np(self._xcache.GetLocalToWorldTransform(prim))
+        return world
 
     def _bad_op(self, prim):
         return first_bad_op(prim, self._t, self._op_memo)

@@ -75,7 +75,7 @@ class StageReader(FirstRead, InstancerReading, ShadingReading, EditTracking, Tim
         self._built = set()
         t = time_code(frame)
         self._xcache = UsdGeom.XformCache(t)
-        self._op_memo = {}
+        self._op_memo, self._orient_memo = {}, {}
         self._t = t
         if not self._synced:
             self.tracker.take()

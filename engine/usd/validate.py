@@ -30,20 +30,25 @@ def check_binding(prim, warnings):
                             f"using the default material")
 
 
-def first_bad_op(prim, time, memo: dict):
+def first_bad_op(prim, time, memo: dict, orient_only: bool = False):
     """'<prim path>.<op>' of the first non-finite xform op at or above `prim` at
-    `time`, or None; `memo` (prim path -> answer) holds for one time."""
+    `time`, or None; `memo` (prim path -> answer) holds for one time and one
+    `orient_only`. orient_only: only quaternion ops, the ones composition hides (it
+    takes a non-finite quaternion as the identity; any other op's non-finite value
+    makes the world matrix non-finite)."""
     path = str(prim.GetPath())
     if path not in memo:
         bad = None
         xf = UsdGeom.Xformable(prim)
         for op in (xf.GetOrderedXformOps() if xf else []):
+            if orient_only and op.GetOpType() != UsdGeom.XformOp.TypeOrient:
+                continue
             v = op.Get(time)
             if v is not None and not finite_value(v):
                 bad = f"{path}.{op.GetOpName()}"
                 break
         parent = prim.GetParent()
         if bad is None and parent and not parent.IsPseudoRoot():
-            bad = first_bad_op(parent, time, memo)
+            bad = first_bad_op(parent, time, memo, orient_only)
         memo[path] = bad
     return memo[path]
