@@ -39,6 +39,7 @@ from .resources import TargetPool, Uploads
 from .stencil import Stencil
 from .textures import MaterialTextures
 
+
 def shadow_ratio(sums: np.ndarray) -> np.ndarray:
     """The Shadow pass from its sums (light with shadows, without): their ratio, grey,
     1 where no light reaches."""
