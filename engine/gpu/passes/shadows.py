@@ -147,12 +147,11 @@ class ShadowPass(Pass):
         if see_through != self._see_through:
             self._drop(list(self.maps))  # a cut-out or blended material changed: all again
             self._see_through = see_through
-        for path in [p for p in self.maps if p not in scene.lights or p in frame.changes.lights]:
-            self._drop([path])           # stale: drawn again below if it still casts
         out, used = {}, 0
         casting = list(self.lights.casting)       # worked out once per light change
         kept = set(casting)
-        self._drop([p for p in self.maps if p not in kept])
+        # A light that no longer casts, or changed (stale: drawn again below).
+        self._drop([p for p in self.maps if p not in kept or p in frame.changes.lights])
         casting.sort(key=lambda p: -importance(scene.lights[p], view.origin))
         for n, path in enumerate(casting):
             light, R = scene.lights[path], self.lights.ranges[path]
