@@ -90,26 +90,22 @@ class GBufferPass(Pass):
             (("g_index",) if wants_ids(frame.aovs) else ()) + \
             (("edge_depth",) if edges else ())
 
-    def program_args(self, mat, outputs, index):
-        """ProgramCache.get's arguments for `mat`'s variant, with these optional
-        outputs (OUTPUT_DEFINES' values) and the index render passes or not."""
-        defines = map_defines(mat) + self.geometry.commands.object_defines() + \
-            list(outputs) + (["WRITE_INDEX"] if index else [])
+    def program_args(self, mat, defines):
+        """ProgramCache.get's arguments for `mat`'s variant, with these defines (the
+        optional outputs': OUTPUT_DEFINES' values and WRITE_INDEX; or DEPTH_ONLY)."""
+        defines = map_defines(mat) + self.geometry.commands.object_defines() + list(defines)
         return "gbuffer.vert", "gbuffer.frag", defines, (), False, material_variant(mat)
 
     def frame_program_args(self, frame, mat):
         """program_args as this frame will draw `mat` (its targets: wanted, aov_targets)."""
         wanted = self.wanted(frame)
-        return self.program_args(mat, [d for n, d in OUTPUT_DEFINES.items() if n in wanted],
-                                 "g_index" in wanted + self.aov_targets(frame))
+        return self.program_args(mat, output_defines(wanted + self.aov_targets(frame)))
 
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]
-        index = "g_index" in board
-        extra = [n for n in OUTPUT_DEFINES if n in board]
-        colors = [board[n] for n in TARGETS[:4] + tuple(extra)] + \
-            ([board["g_index"]] if index else [])
-        outputs = [OUTPUT_DEFINES[n] for n in extra] + (["WRITE_INDEX"] if index else [])
+        colors = [board[n] for n in TARGETS[:4] + tuple(OUTPUT_DEFINES) + ("g_index",)
+                  if n in board]
+        outputs = output_defines(board)
         cam = view.camera
         batches, culled = self.geometry.commands.view_batches(
             view.boxes, cam.position, cam.forward, view.outside)
@@ -149,7 +145,7 @@ class GBufferPass(Pass):
             threshold = mat.gbuffer_threshold
             if threshold is None:
                 continue                   # wholly see-through: the transparency pass's
-            prog = self.programs.get(*self.program_args(mat, defines, False))
+            prog = self.programs.get(*self.program_args(mat, defines))
             set_uniform(prog, "view_proj", view.view_proj)
             set_uniform(prog, "u_far", view.far_clip)
             view.set_origin(prog)
@@ -183,6 +179,12 @@ class GBufferPass(Pass):
         return self.geometry.points.draw(
             self.programs, "gbuffer", setup, lambda lo, hi: not view.outside(lo[None], hi[None])[0],
             defines)
+
+
+def output_defines(targets) -> list:
+    """The defines of the optional outputs among `targets` (names), in their order."""
+    return [d for n, d in OUTPUT_DEFINES.items() if n in targets] + \
+        (["WRITE_INDEX"] if "g_index" in targets else [])
 
 
 def set_material(prog, mat, textures, threshold, pixel_filter=False):
