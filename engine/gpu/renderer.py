@@ -19,7 +19,7 @@ from .framegraph import Frame, FrameGraph
 from .geometry import Geometry
 from .lights import LightTable
 from .passes.ambient import AmbientPass
-from .passes.antialias import DATA_PASSES, SupersamplePass, centre_samples, downsample
+from .passes.antialias import SupersamplePass, centre_samples, downsample, filtered
 from .passes.ao import AoPass
 from .passes.aovs import AovPass
 from .passes.cryptomatte import CryptomattePass
@@ -189,8 +189,8 @@ class Renderer:
         # keeps the centre sub-pixel.
         # Cryptomatte's pass ranked its sub-pixels itself, at the image's size.
         edges = board.get("edge_marks")
-        board["aovs"] = {name: (a if PASSES[name].matte else centre_samples(a, k)
-                                if name in DATA_PASSES else downsample(a, k, edges))
+        board["aovs"] = {name: (downsample(a, k, edges) if filtered(name) else
+                                a if PASSES[name].matte else centre_samples(a, k))
                          for name, a in board["aovs"].items()}
         if "Shadow" in board["aovs"]:
             board["aovs"]["Shadow"] = shadow_ratio(board["aovs"]["Shadow"])

@@ -49,6 +49,13 @@ from ..screen import run_screen, screen_program
 FILTER_WIDTH = 1.5          # pixels, Cycles' default (Film > Pixel Filter > Width)
 # Render passes that are data, not light: never filtered (centre_samples).
 DATA_PASSES = {"Depth", "Normal", "IndexOB", "IndexMA"}
+
+
+def filtered(name: str) -> bool:
+    """Whether render pass `name`, read back at a supersampled size, is light filtered
+    as the image is (downsample): not data (centre_samples), nor a matte (Cryptomatte
+    ranks its own sub-pixels)."""
+    return not PASSES[name].matte and name not in DATA_PASSES
 MAX_TAPS = 64               # shaders/post.glsl POST_DOWNSAMPLE
 
 
@@ -231,7 +238,7 @@ class SupersamplePass(Pass):
         pixels.use(UNITS["edge_pixels"])
         separable.use(UNITS["separable"])
         run_screen(ctx, self.programs, self.pool, prog, [out], compute)
-        if any(not PASSES[name].matte and name not in DATA_PASSES for name in frame.aovs):
+        if any(filtered(name) for name in frame.aovs):
             # Light render passes are filtered on the CPU after the frame (downsample):
             # they take their edges from the same marks.
             board["edge_marks"] = (np.frombuffer(marks.read(), np.float32).reshape(
