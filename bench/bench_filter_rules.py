@@ -15,7 +15,7 @@ import argparse
 
 import numpy as np
 
-from lantern.engine.gpu.passes.antialias import FILTER_WIDTH, blackman_harris
+from lantern.engine.gpu.passes.antialias import FILTER_WIDTH, blackman_harris, downsample_taps
 from lantern.engine.textures import srgb_to_linear
 
 FINE = np.linspace(-FILTER_WIDTH, FILTER_WIDTH, 3001)
@@ -55,12 +55,10 @@ def gauss(n):
 
 
 def sub_samples(k):
-    """high (k = 2) and ultra (3): one point a sub-pixel, weighted by the filter."""
-    reach = int(np.ceil(FILTER_WIDTH * k))
-    o = (np.arange(-reach, reach) + 0.5) / k if k % 2 == 0 else np.arange(-reach, reach + 1) / k
-    w = blackman_harris(o)
-    keep = w > 0
-    return o[keep], w[keep] / w[keep].sum()
+    """high (k = 2) and ultra (3): one point a sub-pixel, weighted by the filter
+    (the supersample reduction's own taps)."""
+    offsets, weights = downsample_taps(k)
+    return (offsets + 0.5) / k - 0.5, weights
 
 
 def rms_error(rule, texels_per_pixel, kind, rng, trials=400):
