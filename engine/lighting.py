@@ -49,7 +49,7 @@ DEFAULT_DOME_RADIANCE = 0.2
 def _far_intensity(light: Light):
     """(I_max in W/sr, the light's extent in m) of a local light; a sun's E (W/m2)
     reflects E / pi at any distance, as a light of I = E does at 1 m."""
-    c = float(np.max(light.color)) * max(light.diffuse, light.specular, 0.0)
+    c = max(map(float, light.color)) * max(light.diffuse, light.specular, 0.0)
     if light.kind in (RECT, DISK):
         area = light.width * light.height if light.kind == RECT else math.pi * light.radius ** 2
         c *= area

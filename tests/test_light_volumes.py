@@ -69,3 +69,33 @@ def test_a_preset_change_repacks_the_light_table_only_for_disk_lights():
         table.update(scene, set(), 32)
         table.update(scene, set(), 16)
         assert uploads.writes - 1 == 2 * repacked, kinds
+
+
+def test_the_light_table_packs_each_light_as_it_would_alone():
+    """The table's rows are filled a column at a time for all lights: each row is the
+    one its light gets packed alone, and holds the light's own numbers."""
+    import math
+    from lantern.core.lights import DISK, POINT, RECT, SPOT, SUN
+    from lantern.engine.gpu.lights import pack_rows
+    from lantern.engine.lighting import headlight
+    from lantern.engine.scene import Light
+
+    rng = np.random.default_rng(3)
+    lights = [headlight()]
+    for i, kind in enumerate([POINT, SPOT, SUN, RECT, DISK] * 3):
+        lights.append(Light(kind=kind, name=f"/{kind}{i}", color=rng.uniform(0, 5, 3),
+                            position=rng.uniform(-1e4, 1e4, 3), axis=rng.normal(size=3),
+                            x_axis=np.array([1.0, 0, 0]), y_axis=np.array([0, 1.0, 0]),
+                            radius=float(rng.uniform(0, 1)), width=1.5, height=0.5,
+                            cone_angle=float(rng.uniform(5, 200)), soft_falloff=bool(i % 2),
+                            diffuse=0.5, specular=2.0))
+    ranges = rng.uniform(1, 20, len(lights))
+    rows = pack_rows(lights, ranges, 16)
+    for row, light, reach in zip(rows, lights, ranges):
+        assert np.array_equal(row, pack_rows([light], [reach], 16)[0]), light.name
+        assert np.allclose(row[0, :3].astype(np.float64) + row[7, :3], light.position, rtol=1e-12)
+        assert row[0, 3] == np.float32(reach)
+        assert np.array_equal(row[1, :3], light.color.astype(np.float32))
+        assert np.allclose(row[2, :3], light.direction, atol=1e-7)
+        assert row[2, 3] == np.float32(math.cos(math.radians(min(light.cone_angle, 180.0))))
+        assert row[6, 0] == {RECT: 4, DISK: 16}.get(light.kind, 0)

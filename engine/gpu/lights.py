@@ -35,29 +35,47 @@ ROW_TEXELS = 8 + MAX_POLY
 LIGHTS_PER_LINE = 64        # rows per texture line: shaders/light_table.glsl
 
 
-def pack(light, R: float, disk_sides: int) -> np.ndarray:
-    row = np.zeros((ROW_TEXELS, 4))
-    hi, lo = split_double(light.position)
-    row[0] = [*hi, R]
-    row[7, :3] = lo
-    row[1] = [*np.asarray(light.color, float), light.radius]
-    row[2] = [*light.direction, light.cos_half]
-    flags = (1 if light.soft_falloff else 0) | (2 if light.kind == SPOT else 0) | \
+def pack_rows(lights, ranges, disk_sides: int) -> np.ndarray:
+    """(len(lights), ROW_TEXELS, 4) float32 rows of `lights` with their volume radii
+    `ranges`: each column filled for all lights at once (a stage of 16,384 lights
+    took 0.3 s packed light by light), then the polygons of the area lights."""
+    n = len(lights)
+    rows = np.zeros((n, ROW_TEXELS, 4), np.float32)
+    if n == 0:
+        return rows
+    hi, lo = split_double([light.position for light in lights])
+    rows[:, 0, :3], rows[:, 0, 3], rows[:, 7, :3] = hi, ranges, lo
+    rows[:, 1, :3] = [light.color for light in lights]
+    rows[:, 1, 3] = [light.radius for light in lights]
+    axes = np.array([light.axis for light in lights], np.float64)
+    rows[:, 2, :3] = axes / np.maximum(np.linalg.norm(axes, axis=1), 1e-30)[:, None]
+    rows[:, 2, 3] = np.cos(np.radians(np.minimum([light.cone_angle for light in lights], 180.0)))
+    rows[:, 3] = [(light.cone_softness, light.diffuse, light.specular, _flags(light))
+                  for light in lights]
+    for row, light in zip(rows, lights):
+        if light.kind in (RECT, DISK):
+            _pack_polygon(row, light, disk_sides)
+    return rows
+
+
+def _flags(light) -> int:
+    return (1 if light.soft_falloff else 0) | (2 if light.kind == SPOT else 0) | \
         (4 if light.kind == DISK else 0) | (8 if light.headlight else 0) | \
         (16 if light.kind == SUN else 0)
-    row[3] = [light.cone_softness, light.diffuse, light.specular, flags]
-    if light.kind in (RECT, DISK):
-        if light.kind == RECT:
-            verts = rect_polygon(light)
-            half, area = (light.width / 2, light.height / 2), light.width * light.height
-        else:
-            verts = disk_polygon(light, disk_sides)
-            half, area = (light.radius, 0.0), math.pi * light.radius ** 2
-        row[4] = [*light.x_axis, half[0]]
-        row[5] = [*light.y_axis, half[1]]
-        row[6] = [len(verts), area, 0.0, 0.0]
-        row[8:8 + len(verts), :3] = verts - np.asarray(light.position, np.float64)
-    return row.astype(np.float32)
+
+
+def _pack_polygon(row, light, disk_sides: int):
+    """An area light's axes, half sizes and polygon (texels 4-6 and 8..)."""
+    if light.kind == RECT:
+        verts = rect_polygon(light)
+        half, area = (light.width / 2, light.height / 2), light.width * light.height
+    else:
+        verts = disk_polygon(light, disk_sides)
+        half, area = (light.radius, 0.0), math.pi * light.radius ** 2
+    row[4] = [*light.x_axis, half[0]]
+    row[5] = [*light.y_axis, half[1]]
+    row[6] = [len(verts), area, 0.0, 0.0]
+    row[8:8 + len(verts), :3] = verts - np.asarray(light.position, np.float64)
 
 
 class LightTable:
@@ -105,8 +123,8 @@ class LightTable:
             self.ranges = {p: volume_radius(scene.lights[p], threshold) for p in paths}
             lines = max(-(-len(paths) // LIGHTS_PER_LINE), 1)
             rows = np.zeros((lines * LIGHTS_PER_LINE, ROW_TEXELS, 4), np.float32)
-            for p, i in self.index.items():
-                rows[i] = pack(scene.lights[p], self.ranges[p], self.disk_sides)
+            rows[:len(paths)] = pack_rows([scene.lights[p] for p in paths],
+                                          [self.ranges[p] for p in paths], self.disk_sides)
             self.texture = self.uploads.rewrite_float_texture(
                 self.texture, rows.reshape(lines, LIGHTS_PER_LINE * ROW_TEXELS, 4), kind="lights")
             return
@@ -115,7 +133,8 @@ class LightTable:
                 i = self.index[p]
                 self.ranges[p] = volume_radius(scene.lights[p], threshold)
                 self.uploads.write_texture(
-                    self.texture, pack(scene.lights[p], self.ranges[p], self.disk_sides),
+                    self.texture,
+                    pack_rows([scene.lights[p]], [self.ranges[p]], self.disk_sides)[0],
                     kind="lights", viewport=((i % LIGHTS_PER_LINE) * ROW_TEXELS,
                                              i // LIGHTS_PER_LINE, ROW_TEXELS, 1))
 
