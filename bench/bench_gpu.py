@@ -132,7 +132,9 @@ def measure(name, stage, size, preset, images, image_sizes, form="compute"):
     changes = _changes(name, stage)
     settings = RenderSettings(width=size[0], height=size[1], preset=preset, **FORMS[form])
     with Session(stage, settings) as s:
-        _render(s, changes[0])
+        t0 = time.perf_counter()
+        first = _render(s, changes[0])
+        first_ms, first_load_ms = (time.perf_counter() - t0) * 1e3, first.timings["load"] * 1e3
         walls, results = [], []
         for change in changes[1:]:
             t0 = time.perf_counter()
@@ -162,6 +164,7 @@ def measure(name, stage, size, preset, images, image_sizes, form="compute"):
     return {
         "scene": name, "size": list(size), "preset": preset, "supersample": k, "form": form,
         "image": last.rgba,
+        "first_frame_ms": first_ms, "first_load_ms": first_load_ms,
         "frame_ms": med(walls) * 1e3,
         "frame_into_buffer_ms": med(into) * 1e3,
         "readback_ms": med(r.timings["readback"] for r in results) * 1e3,
@@ -270,7 +273,9 @@ def many_lights(folder, forms):
             print(f"  {count:>6} lights {form:<8} frame {row['frame_into_buffer_ms']:8.1f} ms "
                   f"({row['times_one']:5.2f} x one light) | light cull + lights GPU "
                   f"{lights_ms:8.1f} ms | error max {100 * row['error_max']:.3f}%, mean "
-                  f"{100 * row['error_mean']:.4f}%", flush=True)
+                  f"{100 * row['error_mean']:.4f}% | a new Session's first frame "
+                  f"{row['first_frame_ms']:7.0f} ms, its stage read {row['first_load_ms']:7.0f} ms",
+                  flush=True)
     return out
 
 
