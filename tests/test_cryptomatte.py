@@ -114,7 +114,7 @@ def test_ultra_coverage_is_the_share_of_each_objects_samples(ultra):
     within 1/9 of it, and a pixel's ranks sum to the share of its samples that see any
     surface. Also printed: how far the beauty's filter (Blackman-Harris, 1.5 px) would
     put the coverage from that share, had it weighted the samples instead."""
-    from lantern.engine.gpu.passes.antialias import downsample
+    from image_metrics import downsample
     result, index = ultra
     total = np.zeros((H, W))
     worst, worst_filter = 0.0, 0.0

@@ -173,7 +173,7 @@ def box_stage():
 def test_supersampling_filters_as_the_numpy_filter():
     """The GPU's down-sample of a 2x image equals Cycles' filter applied in numpy to
     the same 2x image (float16 light: 1e-3 relative)."""
-    from lantern.engine.gpu.passes.antialias import downsample
+    from image_metrics import downsample
     stage = box_stage()
     big = render_stage(stage, RenderSettings(width=96, height=54, supersample=1, fxaa=False)).rgba
     small = render_stage(stage, RenderSettings(width=48, height=27, supersample=2)).rgba
@@ -256,8 +256,8 @@ def test_bad_settings_are_refused(bad):
 
 @pytest.mark.parametrize("preset", ["medium", "high"])
 def test_lighting_passes_add_up_to_the_image(preset):
-    """Also at high, where the light passes take their edges from the image's edge
-    samples (passes/antialias.py downsample)."""
+    """Also at high, where the light passes are reduced as the image is, edge samples
+    included (passes/antialias.py SupersamplePass)."""
     stage = box_stage()
     UsdLux.DomeLight.Define(stage, "/root/dome").CreateIntensityAttr(0.3)
     names = ["DiffDir", "GlossDir", "Env", "Emit", "Shadow", "AO"]
@@ -267,7 +267,8 @@ def test_lighting_passes_add_up_to_the_image(preset):
     assert np.allclose(total, r.rgba[..., :3], rtol=2e-3, atol=1e-4)
     shadow, ao = r.passes["Shadow"], r.passes["AO"]
     assert shadow.min() == 0.0 and shadow.max() == 1.0 and (shadow[..., 0] < 0.5).sum() > 10
-    assert 0.0 < ao.min() < 0.8 and ao.max() == 1.0
+    # Filtered in float32 on the GPU, as the image is: 1 within its rounding.
+    assert 0.0 < ao.min() < 0.8 and abs(ao.max() - 1.0) < 1e-6
     # Asking for them changes nothing in the image.
     plain = render_stage(stage, RenderSettings(width=64, height=36, fxaa=False,
                                                preset=preset)).rgba

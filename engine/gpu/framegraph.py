@@ -80,6 +80,8 @@ class Frame:
     preset: object
     transparent: bool = False
     aovs: frozenset = frozenset()  # render passes asked for (core/passes.py names)
+    aov_targets: dict = field(default_factory=dict)  # each asked-for one's (target,
+                                                     # first channel), set by the graph
     camera: object = None          # None: the view pass frames the default view
     options: RenderSettings = field(default_factory=RenderSettings)  # shading and post
     # Anti-aliasing (passes/antialias.py): drawn `supersample` times wider and taller
@@ -208,6 +210,7 @@ class FrameGraph:
         board = {}
         live, writes, last_use = plan or self._plan(frame)
         frame.stats["passes"] = [p.name for p in live]
+        frame.aov_targets = {aov: self.producers[aov][0].aovs[aov] for aov in frame.aovs}
         stamps = frame.stamps = self.timer.begin()
         try:
             for i, p in enumerate(live):
@@ -227,7 +230,7 @@ class FrameGraph:
                 frame.timings[p.name] = frame.timings.get(p.name, 0.0) + time.perf_counter() - t0
                 for name in [n for n, last in last_use.items() if last == i and n in board]:
                     self.pool.release(board.pop(name))
-            board["aovs"] = {aov: self._read_back(board, *self.producers[aov][0].aovs[aov], aov)
+            board["aovs"] = {aov: self._read_back(board, *frame.aov_targets[aov], aov)
                              for aov in sorted(frame.aovs)}
         finally:
             for name in [n for n in board if n in TARGETS]:

@@ -19,7 +19,7 @@ from .framegraph import Frame, FrameGraph
 from .geometry import Geometry
 from .lights import LightTable
 from .passes.ambient import AmbientPass
-from .passes.antialias import SupersamplePass, centre_samples, downsample, filtered
+from .passes.antialias import SupersamplePass, centre_samples, filtered
 from .passes.ao import AoPass
 from .passes.aovs import AovPass
 from .passes.cryptomatte import CryptomattePass
@@ -184,13 +184,12 @@ class Renderer:
         finally:
             self.depth.end()
         self._drawn = dict(frame.scene.materials)
-        # Render passes were drawn at the supersampled size too: light is filtered as
-        # the image is (its edge samples included), data (depth, normals, indices)
-        # keeps the centre sub-pixel.
-        # Cryptomatte's pass ranked its sub-pixels itself, at the image's size.
-        edges = board.get("edge_marks")
-        board["aovs"] = {name: (downsample(a, k, edges) if filtered(name) else
-                                a if PASSES[name].matte else centre_samples(a, k))
+        # Render passes of light were filtered as the image was (SupersamplePass);
+        # data (depth, normals, indices), drawn at the supersampled size too, keeps
+        # the centre sub-pixel. Cryptomatte's pass ranked its sub-pixels itself, at
+        # the image's size.
+        board["aovs"] = {name: (a if filtered(name) or PASSES[name].matte else
+                                centre_samples(a, k))
                          for name, a in board["aovs"].items()}
         if "Shadow" in board["aovs"]:
             board["aovs"]["Shadow"] = shadow_ratio(board["aovs"]["Shadow"])

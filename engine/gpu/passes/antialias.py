@@ -30,12 +30,15 @@ sub-pixel with a sample on another surface than its centre's, the neighbouring
 sub-pixel each sample takes its colour from; EDGE_PIXELS marks the pixels holding one;
 EDGE_GATHER, near those, takes each such sub-pixel out of the filter at its centre and
 puts it back in as its samples, each at its place. Shading stays once a sub-pixel; only
-edges move, and off them the image is the separable filter's. Light render passes,
-filtered on the CPU, take the same marks (downsample).
+edges move, and off them the image is the separable filter's.
 
-reads: hdr (k x the image size), g_depth, edge_depth (optional)
-writes: hdr (the image size; later passes draw at it); edge_marks (read back, for the
-        render passes, in frames that ask for light passes)
+Render passes of light (filtered) go through the same reduction, marks included, so
+they add up to the image as they did at k = 1; data passes keep their centre
+sub-pixel (centre_samples, after the read-back).
+
+reads: hdr (k x the image size), g_depth, edge_depth (optional), the frame's filtered
+       render-pass targets
+writes: hdr and those targets, at the image size (later passes draw at it)
 """
 from __future__ import annotations
 
@@ -52,10 +55,19 @@ DATA_PASSES = {"Depth", "Normal", "IndexOB", "IndexMA"}
 
 
 def filtered(name: str) -> bool:
-    """Whether render pass `name`, read back at a supersampled size, is light filtered
-    as the image is (downsample): not data (centre_samples), nor a matte (Cryptomatte
+    """Whether render pass `name`, drawn at a supersampled size, is light, filtered as
+    the image is (SupersamplePass): not data (centre_samples), nor a matte (Cryptomatte
     ranks its own sub-pixels)."""
     return not PASSES[name].matte and name not in DATA_PASSES
+
+
+def filtered_targets(frame, board) -> tuple:
+    """The targets of the frame's filtered render passes, as the graph names them
+    (Frame.aov_targets)."""
+    return tuple(sorted({frame.aov_targets[name][0] for name in frame.aovs
+                         if filtered(name) and frame.aov_targets[name][0] in board}))
+
+
 MAX_TAPS = 64               # shaders/post.glsl POST_DOWNSAMPLE
 
 
@@ -99,57 +111,6 @@ def edge_taps(k: int, sample_at) -> tuple:
     return int(span[keep][0]), centre[keep], at[0][keep], at[1][keep]
 
 
-def downsample(image: np.ndarray, k: int, edges=None) -> np.ndarray:
-    """The same filter on the CPU, for render passes read back at the larger size (row
-    0 = top); `edges`: the frame's edge samples (SupersamplePass hands them on as
-    board["edge_marks"]), whose gather the filter then does as the image's did."""
-    if k == 1:
-        return image
-    offsets, weights = downsample_taps(k)
-    out = image.astype(np.float64)
-    for axis in (0, 1):
-        n = out.shape[axis] // k
-        idx = np.clip(np.arange(n)[:, None] * k + offsets[None, :], 0, out.shape[axis] - 1)
-        out = np.tensordot(np.take(out, idx, axis=axis), weights, axes=([axis + 1], [0]))
-    if edges is not None:
-        out = _edge_gather(image, out, k, *edges)
-    return out.astype(np.float32)
-
-
-def _edge_gather(image, separable, k, marks, sample_at):
-    """shaders/edge_samples.glsl EDGE_GATHER on the CPU: `separable` with each crossed
-    cell (`marks`, EDGE_MARK's output as GL holds it, row 0 = bottom) within a pixel's
-    reach taken out at its centre and put in as its samples."""
-    big, sep = image[::-1].astype(np.float64), separable[::-1]     # GL's rows, as the marks
-    first, centre, at_x, at_y = edge_taps(k, sample_at)
-    n = len(centre)
-    (hk, wk), (h, w) = marks.shape, sep.shape[:2]
-    # Crossed cells, and the places beyond the border that read them (the filter's
-    # cells are clamped to the image).
-    vy, vx = np.nonzero(np.pad(marks, n, mode="edge"))
-    vy, vx = vy - n, vx - n
-    cy, cx = np.clip(vy, 0, hk - 1), np.clip(vx, 0, wk - 1)
-    code = marks[cy, cx].astype(np.int64) - 1
-    taken = [big[cy + f // 3 - 1, cx + f % 3 - 1]                   # each sample's colour
-             for f in ((code >> (4 * s)) & 15 for s in range(4))]
-    add, total = np.zeros_like(sep), np.zeros(sep.shape[:2])
-    # A cell is the i-th of pixel p's reach where k p + first + i is its place.
-    for my in range(3):
-        j = (vy - first) % k + my * k
-        py = (vy - first - j) // k
-        for mx in range(3):
-            i = (vx - first) % k + mx * k
-            px = (vx - first - i) // k
-            ok = (i < n) & (j < n) & (px >= 0) & (px < w) & (py >= 0) & (py < h)
-            ii, jj, at = i[ok], j[ok], (py[ok], px[ok])
-            own = centre[ii] * centre[jj]
-            quarter = 0.25 * at_x[ii] * at_y[jj]
-            np.add.at(add, at, sum(quarter[:, s, None] * taken[s][ok] for s in range(4))
-                      - own[:, None] * big[cy[ok], cx[ok]])
-            np.add.at(total, at, quarter.sum(1) - own)
-    return ((sep + add) / (1.0 + total)[..., None])[::-1]
-
-
 def centre_samples(image: np.ndarray, k: int) -> np.ndarray:
     """The sub-pixel nearest each pixel centre: for render passes that are data
     (depth, normals, indices), which a filter would blend into values no surface has."""
@@ -173,31 +134,41 @@ class SupersamplePass(Pass):
         return frame.supersample > 1
 
     def execute(self, frame, board):
-        ctx, k = self.ctx, frame.supersample
-        ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
-        big_w, big_h = frame.size
-        w, h = frame.output_size
+        self.ctx.disable(self.ctx.BLEND | self.ctx.DEPTH_TEST | self.ctx.CULL_FACE)
+        edges = None
+        if "edge_depth" in board and self._sample_places(board["edge_depth"]):
+            edges = self._edge_marks(frame, board)
+        for name in ("hdr",) + filtered_targets(frame, board):
+            board[name] = self._reduce(frame, board[name], edges)
+        for texture in edges or ():
+            self.pool.release(texture)
+        frame.size = frame.output_size          # what the passes after this one draw
+
+    def _reduce(self, frame, image, edges):
+        """`image` (given back) filtered to the image size: separably, then with the
+        edge samples' gather where `edges` (EDGE_MARK's and EDGE_PIXELS' targets)."""
+        k, compute = frame.supersample, frame.compute
+        (w, h), big_h = frame.output_size, image.size[1]
         offsets, weights = downsample_taps(k)
-        prog = screen_program(self.programs, "post", ["POST_DOWNSAMPLE"], frame.compute)
+        prog = screen_program(self.programs, "post", ["POST_DOWNSAMPLE"], compute)
         set_uniform(prog, "factor", k)
         set_uniform(prog, "taps", len(offsets))
         taps = np.zeros((MAX_TAPS, 2), np.float32)
         taps[:len(offsets)] = np.stack([offsets, weights], -1)
         set_uniform(prog, "tap", taps)
-        image = source = board["hdr"]
+        source = image
         for axis, size in ((0, (w, big_h)), (1, (w, h))):
             target = self.pool.acquire(size, TARGETS["hdr"])
             source.use(UNITS["post_src"])
             set_uniform(prog, "axis", axis)
-            run_screen(ctx, self.programs, self.pool, prog, [target], frame.compute)
+            run_screen(self.ctx, self.programs, self.pool, prog, [target], compute)
             if source is not image:
                 self.pool.release(source)
             source = target
-        if "edge_depth" in board and self._sample_places(board["edge_depth"]):
-            source = self._edges(frame, board, image, source)
+        if edges is not None:
+            source = self._gather(frame, image, source, *edges)
         self.pool.release(image)
-        board["hdr"] = source
-        frame.size = (w, h)          # what the passes after this one draw
+        return source
 
     def _sample_places(self, edge_depth) -> bool:
         """Whether the driver gave edge_depth four samples a texel (it may give more
@@ -206,22 +177,26 @@ class SupersamplePass(Pass):
             self._sample_at = self.depth.sample_positions(self.pool.framebuffer(depth=edge_depth))
         return len(self._sample_at) == 4
 
-    def _edges(self, frame, board, image, separable):
-        """EDGE_MARK at the sub-pixels, then EDGE_GATHER at the pixels (module
-        docstring): the image with its edges where the edge samples put them.
-        `separable` is given back."""
+    def _edge_marks(self, frame, board) -> tuple:
+        """(EDGE_MARK at the sub-pixels, EDGE_PIXELS at the pixels): the targets the
+        gather of every reduction this frame reads (module docstring)."""
         ctx, compute = self.ctx, frame.compute
-        edge_depth = board["edge_depth"]
-        marks = self.pool.acquire(image.size, "r32f")
+        marks = self.pool.acquire(frame.size, "r32f")
         prog = screen_program(self.programs, "edge_samples", ["EDGE_MARK"], compute)
         board["g_depth"].use(UNITS["g_depth"])
-        edge_depth.use(UNITS["edge_depth"])
+        board["edge_depth"].use(UNITS["edge_depth"])
         run_screen(ctx, self.programs, self.pool, prog, [marks], compute)
-        pixels = self.pool.acquire(separable.size, "r32f")
+        pixels = self.pool.acquire(frame.output_size, "r32f")
         prog = screen_program(self.programs, "edge_samples", ["EDGE_PIXELS"], compute)
         set_uniform(prog, "factor", frame.supersample)
         marks.use(UNITS["edge_marks"])
         run_screen(ctx, self.programs, self.pool, prog, [pixels], compute)
+        return marks, pixels
+
+    def _gather(self, frame, image, separable, marks, pixels):
+        """EDGE_GATHER: `separable` (given back) with the image's edges where the
+        edge samples put them."""
+        compute = frame.compute
         out = self.pool.acquire(separable.size, TARGETS["hdr"])
         first, centre, at_x, at_y = edge_taps(frame.supersample, self._sample_at)
         # The cells a pixel's filter reaches along each axis, a constant of the
@@ -237,13 +212,7 @@ class SupersamplePass(Pass):
         marks.use(UNITS["edge_marks"])
         pixels.use(UNITS["edge_pixels"])
         separable.use(UNITS["separable"])
-        run_screen(ctx, self.programs, self.pool, prog, [out], compute)
-        if any(filtered(name) for name in frame.aovs):
-            # Light render passes are filtered on the CPU after the frame (downsample):
-            # they take their edges from the same marks.
-            board["edge_marks"] = (np.frombuffer(marks.read(), np.float32).reshape(
-                marks.height, marks.width), np.asarray(self._sample_at))
-        self.pool.release(pixels)
-        self.pool.release(marks)
+        run_screen(self.ctx, self.programs, self.pool, prog, [out], compute)
         self.pool.release(separable)
         return out
+
