@@ -92,6 +92,11 @@ def _length(v) -> float:
     return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
 
 
+def _axis_lengths(m) -> tuple:
+    """The lengths of a world matrix's (nested lists, m[row][column]) three axes."""
+    return tuple(_length((m[0][j], m[1][j], m[2][j])) for j in range(3))
+
+
 def _unit(v) -> tuple:
     n = _length(v)
     return (v[0] / n, v[1] / n, v[2] / n) if n > 1e-30 else tuple(v)
@@ -157,7 +162,7 @@ def _read_light(prim, path, world, values, warnings):
     if tname == "DomeLight":
         return read_dome(prim, world, np.array(s), values, warnings)
     x_col, y_col, z_col, pos = ((m[0][j], m[1][j], m[2][j]) for j in range(4))
-    scale = (_length(x_col), _length(y_col), _length(z_col))
+    scale = _axis_lengths(m)
     common = dict(name=path, position=np.array(pos), axis=np.array(_unit([-v for v in z_col])),
                   x_axis=np.array(_unit(x_col)), y_axis=np.array(_unit(y_col)),
                   diffuse=_number(values, "inputs:diffuse"),
@@ -203,8 +208,7 @@ def _read_light(prim, path, world, values, warnings):
 
 def read_dome(prim, world, radiance, values, warnings) -> Dome:
     path = str(prim.GetPath())
-    lengths = np.sqrt(np.einsum("ij,ij->j", world[:3, :3], world[:3, :3]))
-    rot = world[:3, :3] / np.maximum(lengths, 1e-30)
+    rot = world[:3, :3] / np.maximum(_axis_lengths(world.tolist()), 1e-30)
     tex = None
     asset = values.get("inputs:texture:file")
     if asset is not None and asset.path:
