@@ -61,11 +61,11 @@ def filtered(name: str) -> bool:
     return not PASSES[name].matte and name not in DATA_PASSES
 
 
-def filtered_targets(frame, board) -> tuple:
+def filtered_targets(frame) -> tuple:
     """The targets of the frame's filtered render passes, as the graph names them
-    (Frame.aov_targets)."""
+    (Frame.aov_targets); their passes all run before the reduction."""
     return tuple(sorted({frame.aov_targets[name][0] for name in frame.aovs
-                         if filtered(name) and frame.aov_targets[name][0] in board}))
+                         if filtered(name)}))
 
 
 MAX_TAPS = 64               # shaders/post.glsl POST_DOWNSAMPLE
@@ -138,7 +138,7 @@ class SupersamplePass(Pass):
         edges = None
         if "edge_depth" in board and self._sample_places(board["edge_depth"]):
             edges = self._edge_marks(frame, board)
-        for name in ("hdr",) + filtered_targets(frame, board):
+        for name in ("hdr",) + filtered_targets(frame):
             board[name] = self._reduce(frame, board[name], edges)
         for texture in edges or ():
             self.pool.release(texture)
