@@ -160,6 +160,44 @@ def test_rational_nurbs_circle_is_round():
     assert np.allclose(lines.points[0], lines.points[-1])
 
 
+def _nurbs_without_knots(stage, path, points, counts):
+    """A NurbsCurves prim as OpenUSD's imaging tests author them: points and counts,
+    no order or knots."""
+    from pxr import Gf, UsdGeom
+    c = UsdGeom.NurbsCurves.Define(stage, path)
+    c.CreatePointsAttr([Gf.Vec3f(*p) for p in points])
+    c.CreateCurveVertexCountsAttr(list(counts))
+    c.CreateWidthsAttr([0.3])
+    return c.GetPrim()
+
+
+ZIGZAG = [(-3, -2, 0), (-1, 1, 0), (1, -1, 0), (3, 2, 0), (-3, 3, 0), (3, 3.5, 0)]
+
+
+def test_nurbs_curves_without_order_or_knots_are_drawn_through_their_control_points():
+    """As Storm draws them: straight through their control points, each curve on its
+    own; drawn exactly as the linear BasisCurves of the same points."""
+    from pxr import Gf, UsdGeom
+    stage = _stage()
+    prim = _nurbs_without_knots(stage, "/N", ZIGZAG, [4, 2])
+    lines = _lines(prim)
+    assert np.allclose(lines.points, ZIGZAG) and list(lines.starts) == [0, 4, 6]
+    cam = UsdGeom.Camera.Define(stage, "/Cam")
+    cam.AddTranslateOp().Set(Gf.Vec3d(0, 0.5, 10))
+    cam.CreateProjectionAttr("orthographic")
+    cam.CreateHorizontalApertureAttr(80.0)
+    cam.CreateVerticalApertureAttr(80.0)
+    nurbs = _render(stage, transparent=True)
+    stage.RemovePrim("/N")
+    _curves(stage, "/B", ZIGZAG, [4, 2], kind="linear", widths=[0.3], interp="constant")
+    linear = _render(stage, transparent=True)
+    assert not nurbs.warnings, nurbs.warnings
+    covered = nurbs.rgba[..., 3] > 0.5
+    assert covered.sum() > 150                       # three zigzag pieces and a bar
+    assert np.array_equal(covered, linear.rgba[..., 3] > 0.5)
+    assert np.abs(nurbs.rgba - linear.rgba).max() < 1e-6
+
+
 def test_widths_by_every_interpolation_and_malformed_curves_warn():
     from lantern.engine import RenderSettings, Session
     stage = _stage()

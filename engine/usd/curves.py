@@ -6,7 +6,8 @@ cubic bezier, bspline and catmullRom (each segment as its Bezier control points)
 the nonperiodic, periodic and pinned wraps (pinned adds UsdGeomBasisCurves' phantom
 points, 2 P0 - P1 and 2 Pn-1 - Pn-2, so the curve starts and ends on its end points);
 NurbsCurves of any order by Cox-de Boor over their knots, rational where pointWeights
-are authored, each curve over its `ranges`. Each cubic span is cut into straight
+are authored, each curve over its `ranges` (without order or knots: straight through
+their control points, as Storm draws every NurbsCurves). Each cubic span is cut into straight
 pieces until the polyline is within TOLERANCE of the prim's size from the curve (at
 most MAX_PIECES a span). Widths (constant, uniform, vertex, varying; one value is
 constant whatever its interpolation) and normals are interpolated as USD says: vertex
@@ -205,10 +206,11 @@ def _pad(values, offsets, n, padded):
     return out, at
 
 
-def basis_curves(prim, time, points=None) -> Polylines:
+def basis_curves(prim, time, points=None, shape=None) -> Polylines:
     """The samples of a BasisCurves prim (of `points` in place of its own: skinned
-    ones); ValueError naming a defect."""
-    curves = UsdGeom.BasisCurves(prim)
+    ones); ValueError naming a defect. `shape`: (type, basis, wrap) in place of the
+    prim's own (a NurbsCurves prim drawn through its control points)."""
+    curves = UsdGeom.Curves(prim)
     pts = _array(curves.GetPointsAttr(), time) if points is None else points
     counts = _array(curves.GetCurveVertexCountsAttr(), time, np.int64)
     if pts is None or counts is None or not len(pts) or not len(counts):
@@ -217,9 +219,11 @@ def basis_curves(prim, time, points=None) -> Polylines:
     if (counts < 1).any() or counts.sum() != len(pts):
         raise ValueError(f"curveVertexCounts add up to {counts.sum()} for {len(pts)} points")
     finite(pts, "points")
-    kind = curves.GetTypeAttr().Get(time) or "cubic"
-    basis = curves.GetBasisAttr().Get(time) or "bezier"
-    wrap = curves.GetWrapAttr().Get(time) or "nonperiodic"
+    if shape is None:
+        own = UsdGeom.BasisCurves(prim)
+        shape = (own.GetTypeAttr().Get(time) or "cubic", own.GetBasisAttr().Get(time) or
+                 "bezier", own.GetWrapAttr().Get(time) or "nonperiodic")
+    kind, basis, wrap = shape
     if kind not in ("linear", "cubic") or basis not in _TO_BEZIER or basis == "linear" or \
             wrap not in ("nonperiodic", "periodic", "pinned"):
         raise ValueError(f"type {kind}, basis {basis}, wrap {wrap} is not one USD defines")
@@ -310,14 +314,18 @@ def _join(curves) -> Polylines:
 
 def nurbs_curves(prim, time, points=None) -> Polylines:
     """The samples of a NurbsCurves prim (order, knots, ranges, pointWeights); widths
-    and normals by vertex are weighted by the same basis functions."""
+    and normals by vertex are weighted by the same basis functions. Without order or
+    knots no curve is defined: straight lines through the control points, as Storm
+    draws every NurbsCurves."""
     curves = UsdGeom.NurbsCurves(prim)
-    pts = _array(curves.GetPointsAttr(), time) if points is None else points
-    counts = _array(curves.GetCurveVertexCountsAttr(), time, np.int64)
     order = _array(curves.GetOrderAttr(), time, np.int64)
     knots = _array(curves.GetKnotsAttr(), time)
-    if pts is None or counts is None or order is None or knots is None or not len(counts):
-        raise ValueError("no points, curveVertexCounts, order or knots")
+    if order is None or knots is None or not len(order) or not len(knots):
+        return basis_curves(prim, time, points, shape=("linear", "bezier", "nonperiodic"))
+    pts = _array(curves.GetPointsAttr(), time) if points is None else points
+    counts = _array(curves.GetCurveVertexCountsAttr(), time, np.int64)
+    if pts is None or counts is None or not len(counts):
+        raise ValueError("no points or curveVertexCounts")
     pts = pts.reshape(-1, 3)
     if (counts < 1).any() or counts.sum() != len(pts):
         raise ValueError(f"curveVertexCounts add up to {counts.sum()} for {len(pts)} points")
