@@ -27,18 +27,6 @@ def _volume(stage, path):
     vol.CreateFieldRelationship("density", field.GetPath())
 
 
-def _nurbs_patch(stage, path):
-    from pxr import Gf, UsdGeom
-    patch = UsdGeom.NurbsPatch.Define(stage, path)
-    patch.CreatePointsAttr([Gf.Vec3f(x, y, 0) for y in range(2) for x in range(2)])
-    patch.CreateUVertexCountAttr(2)
-    patch.CreateVVertexCountAttr(2)
-    patch.CreateUOrderAttr(2)
-    patch.CreateVOrderAttr(2)
-    patch.CreateUKnotsAttr([0, 0, 1, 1])
-    patch.CreateVKnotsAttr([0, 0, 1, 1])
-
-
 def _tet_mesh(stage, path):
     from pxr import Gf, UsdGeom
     tet = UsdGeom.TetMesh.Define(stage, path)
@@ -61,7 +49,6 @@ def _unknown(stage, path):
 
 KINDS = {
     "Volume": (_volume, "Lantern draws no volumes"),
-    "NurbsPatch": (_nurbs_patch, "Lantern does not tessellate NURBS patches"),
     "TetMesh": (_tet_mesh, "Lantern draws no tetrahedral meshes"),
     "HermiteCurves": (_hermite, "Lantern does not draw Hermite curves"),
     "Teapot (unknown type)": (_unknown, "no schema defines the type"),

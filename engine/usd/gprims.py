@@ -3,8 +3,9 @@
 
 Drawn: Mesh; the implicit surfaces (shapes.py, as meshes); BasisCurves and
 NurbsCurves (curves.py: round tubes, or oriented ribbons where normals are
-authored); Points. A PointInstancer is not a gprim: it draws its prototypes.
-Every other gprim type (Volume, NurbsPatch, TetMesh, HermiteCurves, a codeless or
+authored); NurbsPatch (patches.py: its control hull, as a mesh); Points. A
+PointInstancer is not a gprim: it draws its prototypes.
+Every other gprim type (Volume, TetMesh, HermiteCurves, a codeless or
 plugin type) and every prim of a type no schema defines is counted by type, and
 each type is one warning: "3 Volume prims are not drawn (...): /a, /b and 1 more"."""
 from __future__ import annotations
@@ -13,6 +14,7 @@ from pxr import Usd, UsdGeom
 
 from .curve_shapes import ribbon_surface
 from .curves import has_normals
+from .patches import hull_surface, is_patch
 from .shapes import is_implicit, parameters, segments_for
 from .shapes import surface as shape_surface
 
@@ -21,7 +23,6 @@ CURVES = ("BasisCurves", "NurbsCurves")
 # Why a gprim type is not drawn (the warning's reason); any other: "not a type Lantern draws".
 NOT_DRAWN = {
     "Volume": "Lantern draws no volumes",
-    "NurbsPatch": "Lantern does not tessellate NURBS patches",
     "TetMesh": "Lantern draws no tetrahedral meshes",
     "HermiteCurves": "Lantern does not draw Hermite curves",
 }
@@ -30,9 +31,10 @@ NAMED = 3                  # prims a warning names
 
 def kind_of(prim) -> str | None:
     """How a prim is drawn: 'mesh' (MeshData: a Mesh, an implicit surface, curves
-    with authored normals as oriented ribbons), 'points' (PointCloud: Points, and
-    curves as round tubes), or None when it draws nothing by itself."""
-    if prim.IsA(UsdGeom.Mesh) or is_implicit(prim):
+    with authored normals as oriented ribbons, a NURBS patch's hull), 'points'
+    (PointCloud: Points, and curves as round tubes), or None when it draws nothing
+    by itself."""
+    if prim.IsA(UsdGeom.Mesh) or is_implicit(prim) or is_patch(prim):
         return "mesh"
     if is_curves(prim):
         return "mesh" if has_normals(prim) else "points"
@@ -48,11 +50,13 @@ def is_curves(prim) -> bool:
 def source_key(prim, time, instances=1):
     """What 'mesh' kind prims share their MeshData by: an implicit surface's type and
     sizes and its sides around (fewer when a PointInstancer draws it `instances`
-    times); a Mesh's (or ribbons') strongest `points` opinion."""
+    times); a Mesh's (or ribbons', or a patch hull's) strongest `points` opinion."""
     if is_implicit(prim):
         return parameters(prim, time) + (segments_for(instances),)
     spec = strongest_spec(UsdGeom.PointBased(prim).GetPointsAttr())
-    return ("ribbons", spec) if is_curves(prim) else spec
+    if is_curves(prim):
+        return ("ribbons", spec)
+    return ("hull", spec) if is_patch(prim) else spec
 
 
 def made_surface(prim, time, warnings, instances=1, points=None):
@@ -62,6 +66,8 @@ def made_surface(prim, time, warnings, instances=1, points=None):
         return shape_surface(parameters(prim, time), segments_for(instances))
     if is_curves(prim):
         return ribbon_surface(prim, time, warnings, points)
+    if is_patch(prim):
+        return hull_surface(prim, time)
     return None
 
 
