@@ -7,14 +7,17 @@ where protoXform is the prototype root's own local transform (IncludeProtoXform)
 orientations are `orientationsf` (float) when authored, else the half `orientations`.
 `invisibleIds` and `inactiveIds` mask instances out (ComputeMaskAtTime). A mesh
 inside a prototype is drawn at  instancer world . instance i . (mesh relative to
-the prototype root). Velocities and accelerations are not applied (instances sit at
-their authored samples). What cannot be drawn is a warning naming the instancer:
+the prototype root); a PointInstancer inside a prototype draws its own prototypes
+there, its instance matrices composed with the outer ones. Velocities and
+accelerations are not applied (instances sit at their authored samples). What cannot be drawn is a warning naming the instancer:
 no prototypes, protoIndices out of range, non-finite positions, orientations or
 scales, arrays whose lengths do not match; those instances are skipped.
 
 Points: positions, per-point (or constant) widths (default 1, as Storm), per-point
 or constant displayColor."""
 from __future__ import annotations
+
+from dataclasses import dataclass, field
 
 import numpy as np
 from pxr import Usd, UsdGeom
@@ -142,20 +145,36 @@ def points_data(prim, time):
     return p, radii, colours
 
 
-def prototype_meshes(stage, proto_path, time):
-    """[(mesh prim, its placement in an instance, column-vector)] of the drawable
-    meshes in a prototype (Mesh prims, implicit surfaces, ribbons: gprims.kind_of
-    'mesh'; instance proxies included; invisible, proxy and guide prims skipped), and
-    what is found and not drawn: nested PointInstancers, Points and curves drawn as
-    tubes. The placement is the prototype root's own transform (IncludeProtoXform)
-    times the mesh's transform relative to the root."""
+@dataclass
+class Prototype:
+    """What a prototype draws: `meshes` [(mesh prim, its placements in an instance
+    (k, 4, 4), column-vector)]; `undrawn`: the Points and curve tubes found in it
+    (not drawn); `instancers`: the PointInstancer prims nested in it and `protos`
+    their prototypes' paths, at any depth (what an edit of re-reads the instancer)."""
+    meshes: list = field(default_factory=list)
+    undrawn: list = field(default_factory=list)
+    instancers: list = field(default_factory=list)
+    protos: list = field(default_factory=list)
+
+
+def prototype_meshes(stage, proto_path, time, warnings, within=()) -> Prototype:
+    """The drawable meshes in a prototype (Mesh prims, implicit surfaces, ribbons,
+    patch hulls: gprims.kind_of 'mesh'; instance proxies included; invisible, proxy
+    and guide prims skipped), each placed at the prototype root's own transform
+    (IncludeProtoXform) times its transform relative to the root. A PointInstancer
+    inside (the root itself, too) draws its own prototypes there, at every one of its
+    instances: placed at the root's own transform . the nested instancer's relative
+    to the root . its instance matrix . what its prototype places, to any depth, as
+    Storm draws nested instancers. `within`: the instancers this prototype is drawn
+    inside; one found again inside its own prototype is a warning, not drawn again."""
+    out = Prototype()
     root = stage.GetPrimAtPath(proto_path)
     if not root:
-        return [], []
+        return out
     cache = UsdGeom.XformCache(time)
     xf = UsdGeom.Xformable(root)
     proto_xform = np.array(xf.GetLocalTransformation(time), np.float64).T if xf else np.eye(4)
-    meshes, nested = [], []
+    placements = {}                     # mesh path -> (prim, [placements])
     # Prototypes usually sit under a class prim (abstract, which the default predicate
     # would skip) or an `over` (undefined, so that they draw only as instances): each
     # prim needs a defining specifier of its own, not its ancestors'.
@@ -168,18 +187,53 @@ def prototype_meshes(stage, proto_path, time):
         if p != root and img and img.GetVisibilityAttr().Get() == UsdGeom.Tokens.invisible:
             it.PruneChildren()
             continue
+        kind = kind_of(p)
         if p.IsA(UsdGeom.PointInstancer):                # the root itself, too
-            nested.append(str(p.GetPath()))
             it.PruneChildren()
-        elif kind_of(p) == "points":
-            nested.append(str(p.GetPath()))
-        elif kind_of(p) == "mesh":
+            if str(p.GetPath()) in within:
+                warnings.append(f"{p.GetPath()}: a PointInstancer inside its own prototype; "
+                                f"not drawn again there")
+                continue
+            place = proto_xform @ _relative(cache, p, root)
+            _nested(stage, p, place, time, warnings, within, out, placements)
+        elif kind == "points":
+            out.undrawn.append(str(p.GetPath()))
+        elif kind == "mesh":
             if img.ComputePurpose() in (UsdGeom.Tokens.proxy, UsdGeom.Tokens.guide):
                 continue
-            if p == root:
-                rel = np.eye(4)
-            else:
-                m, _ = cache.ComputeRelativeTransform(p, root)
-                rel = np.array(m, np.float64).T
-            meshes.append((p, proto_xform @ rel))
-    return meshes, nested
+            placements.setdefault(str(p.GetPath()), (p, []))[1].append(
+                (proto_xform @ _relative(cache, p, root))[None])
+    out.meshes = [(prim, np.concatenate(mats)) for prim, mats in placements.values()]
+    return out
+
+
+def _relative(cache, prim, root):
+    if prim == root:
+        return np.eye(4)
+    m, _ = cache.ComputeRelativeTransform(prim, root)
+    return np.array(m, np.float64).T
+
+
+def _nested(stage, instancer, place, time, warnings, within, out, placements):
+    """Adds what a PointInstancer inside a prototype draws (placed at `place`) to
+    `out` and `placements`."""
+    path = str(instancer.GetPath())
+    out.instancers.append(instancer)
+    protos, indices, mats, keep = instance_matrices(instancer, time, warnings)
+    for k, proto in enumerate(protos):
+        sel = keep & (indices == k)
+        out.protos.append(proto)
+        if not sel.any():
+            continue
+        if not stage.GetPrimAtPath(proto):
+            warnings.append(f"{path}: prototype {proto} does not exist; its "
+                            f"{int(sel.sum())} instances are skipped")
+            continue
+        inner = prototype_meshes(stage, proto, time, warnings, within + (path,))
+        out.undrawn += inner.undrawn
+        out.instancers += inner.instancers
+        out.protos += inner.protos
+        placed = place @ mats[sel]
+        for prim, rel in inner.meshes:
+            placements.setdefault(str(prim.GetPath()), (prim, []))[1].append(
+                (placed[:, None] @ rel[None]).reshape(-1, 4, 4))

@@ -46,7 +46,7 @@ class InstancerReading:
             warnings.append(f"{path}: its world transform is not finite "
                             f"({self._bad_op(prim) or path}); nothing drawn")
             keep = np.zeros(len(indices), bool)
-        nested_warned = False
+        undrawn_warned = False
         for k, proto in enumerate(protos):
             sel = keep & (indices == k)
             proto_prim = self.stage.GetPrimAtPath(proto)
@@ -57,14 +57,17 @@ class InstancerReading:
                 continue
             if not sel.any():
                 continue
-            meshes, nested = prototype_meshes(self.stage, proto, self._t)
-            if nested and not nested_warned:
-                nested_warned = True
-                warnings.append(f"{path}: nested PointInstancers, Points and curve tubes "
-                                f"in prototypes ({nested[0]}) are not drawn")
+            inside = prototype_meshes(self.stage, proto, self._t, warnings, (path,))
+            if inside.undrawn and not undrawn_warned:
+                undrawn_warned = True
+                warnings.append(f"{path}: Points and curve tubes in prototypes "
+                                f"({inside.undrawn[0]}) are not drawn")
+            state.protos += tuple(inside.protos)
+            state.varies |= any(self._xform_varies(p) or mesh_attributes_vary(p)
+                                for p in inside.instancers)
             placed = world @ mats[sel]
-            for mesh_prim, rel in meshes:
-                worlds = placed @ rel
+            for mesh_prim, rel in inside.meshes:
+                worlds = (placed[:, None] @ rel[None]).reshape(-1, 4, 4)
                 state.varies |= mesh_attributes_vary(mesh_prim)
                 mirrored = np.linalg.det(worlds[:, :3, :3]) < 0
                 for sign, part in (("", ~mirrored), ("-", mirrored)):

@@ -290,3 +290,104 @@ def test_instancer_and_points_edits_and_frames_equal_fresh_renders():
         edited = session.render(frame=2.0)                     # prototype geometry edited
         assert edited.stats["meshes_uploaded"] >= 1
         assert np.abs(edited.rgba - fresh(2.0)).max() == 0.0
+
+
+OUTER = [((-2.0, -1.0, 0.0), (0, 0), (1, 1, 1)),          # position, rotation, scale
+         ((1.5, 1.0, 0.2), (40, 0), (1, 1, 1)),
+         ((1.0, -2.0, 0.0), (0, 15), (1.5, 1.5, 1.5))]
+INNER = [(0.0, 0.0, 0.0), (0.6, 0.0, 0.0), (1.2, 0.0, 0.3), (1.8, 0.0, 0.0)]
+
+
+def _nested():
+    """A PointInstancer whose prototype (an Xform with a box of its own) holds another
+    PointInstancer, turned and lifted, whose prototype (under it) is a smaller box:
+    3 outer instances x 3 inner ones (one of 4 invisible), and the 3 outer boxes."""
+    stage = _base()
+    UsdGeom.Scope.Define(stage, "/root/_protos").GetPrim().SetSpecifier(Sdf.SpecifierClass)
+    row = UsdGeom.Xform.Define(stage, "/root/_protos/row")
+    row.AddTranslateOp().Set(Gf.Vec3d(0, 0, 0.3))
+    S.add_box(stage, (0, 0, 0), 0.5, "_protos/row/base")
+    inner = UsdGeom.PointInstancer.Define(stage, "/root/_protos/row/inner")
+    inner.AddTranslateOp().Set(Gf.Vec3d(0, 0.2, 0.5))
+    inner.AddRotateZOp().Set(30.0)
+    S.add_box(stage, (0, 0, 0), 0.25, "_protos/row/inner/protos/cube")
+    inner.CreatePrototypesRel().SetTargets(["/root/_protos/row/inner/protos/cube"])
+    inner.CreateProtoIndicesAttr([0] * len(INNER))
+    inner.CreatePositionsAttr([Gf.Vec3f(*p) for p in INNER])
+    inner.CreateInvisibleIdsAttr([2])
+    outer = UsdGeom.PointInstancer.Define(stage, "/root/rows")
+    outer.AddTranslateOp().Set(Gf.Vec3d(0.2, 0.1, 0.0))
+    outer.CreatePrototypesRel().SetTargets(["/root/_protos/row"])
+    outer.CreateProtoIndicesAttr([0] * len(OUTER))
+    outer.CreatePositionsAttr([Gf.Vec3f(*o[0]) for o in OUTER])
+    outer.CreateOrientationsfAttr([_quat(*o[1]) for o in OUTER])   # unit to float precision
+    outer.CreateScalesAttr([Gf.Vec3f(*o[2]) for o in OUTER])
+    return stage
+
+
+def _expected_worlds(stage):
+    """{mesh: [world, row-vector]} by USD's own instance transforms, composed: mesh in
+    its prototype . inner instance . inner instancer in the row . outer instance .
+    outer instancer's world."""
+    t = Usd.TimeCode.Default()
+    outer = UsdGeom.PointInstancer(stage.GetPrimAtPath("/root/rows"))
+    inner = UsdGeom.PointInstancer(stage.GetPrimAtPath("/root/_protos/row/inner"))
+    world = UsdGeom.XformCache(t).GetLocalToWorldTransform(outer.GetPrim())
+    inner_local = UsdGeom.Xformable(inner).GetLocalTransformation(t)
+    outers = [m * world for m in outer.ComputeInstanceTransformsAtTime(t, t)]
+    inners = inner.ComputeInstanceTransformsAtTime(t, t)      # the invisible id left out
+    assert len(inners) == len(INNER) - 1
+    return {"/root/_protos/row/base": outers,
+            "/root/_protos/row/inner/protos/cube": [j * inner_local * o for o in outers
+                                                    for j in inners]}
+
+
+def _one_by_one(worlds):
+    stage = _base()
+    for k, (mesh, matrices) in enumerate(sorted(worlds.items())):
+        size = 0.5 if mesh.endswith("base") else 0.25
+        for i, m in enumerate(matrices):
+            UsdGeom.Xform.Define(stage, f"/root/m{k}_{i}").AddTransformOp().Set(m)
+            S.add_box(stage, (0, 0, 0), size, f"m{k}_{i}/box")
+    return stage
+
+
+def test_a_point_instancer_inside_a_prototype_draws_its_instances_there(hard_case):
+    """As Storm draws nested instancers: every inner instance at every outer one, the
+    transforms composed (USD's own ComputeInstanceTransformsAtTime at each level), and
+    the image of the same boxes authored one by one."""
+    stage = _nested()
+    expected = _expected_worlds(stage)
+    with Session(stage, RenderSettings(width=W, height=H)) as session:
+        nested = session.render()
+        drawn = {}
+        for inst in session.scene.instances.values():
+            if inst.worlds is not None:
+                mesh = inst.path.split("{", 1)[1].rstrip("}-")
+                drawn.setdefault(mesh, []).extend(inst.worlds)
+        inner = UsdGeom.PointInstancer(stage.GetPrimAtPath("/root/_protos/row/inner"))
+        inner.GetPositionsAttr().Set([Gf.Vec3f(p[0], p[1] + 0.4, p[2]) for p in INNER])
+        edited = session.render()                 # the inner instancer edited
+    assert not nested.warnings, nested.warnings
+    assert nested.stats["instances_drawn"] == 3 + 3 * 3
+    for mesh, matrices in expected.items():
+        want = sorted((np.array(m).T for m in matrices), key=lambda m: tuple(m[:3, 3]))
+        got = sorted(drawn[mesh], key=lambda m: tuple(m[:3, 3]))
+        assert len(got) == len(want)
+        assert np.abs(np.array(got) - np.array(want)).max() < 1e-5
+    alone = _render(_one_by_one(expected))
+    diff = np.abs(nested.rgba - alone.rgba)[..., :3].max(axis=-1)
+    hard_case("nested PointInstancer (3 x 3 inner instances, 3 outer meshes) vs the same "
+              "boxes one by one: pixels differing by > 1e-3", int((diff > 1e-3).sum()), 5, "px")
+    assert np.abs(edited.rgba - _render(stage).rgba).max() == 0.0
+    assert np.abs(edited.rgba - nested.rgba).max() > 0.1
+
+
+def test_an_instancer_inside_its_own_prototype_is_drawn_once_with_a_warning():
+    stage = _nested()
+    inner = UsdGeom.PointInstancer(stage.GetPrimAtPath("/root/_protos/row/inner"))
+    inner.CreatePrototypesRel().SetTargets(["/root/_protos/row"])
+    result = _render(stage)
+    assert result.warnings == ["/root/_protos/row/inner: a PointInstancer inside its own "
+                               "prototype; not drawn again there"]
+    assert result.stats["instances_drawn"] == 3 + 3 * 3     # the row's box at each level
