@@ -28,7 +28,8 @@ def add_parser(commands, parents):
                         help="an .exr (scene linear) or .png (sRGB); for --frames, a name "
                              "with '####' or $F4 (the frame) or a .gif; for several scenes, "
                              "a folder (outputs named after the inputs; for one, end it "
-                             "with /). Default: the stage's RenderProducts")
+                             "with /). The one output, the plain image (or --passes'): the stage's "
+                             "RenderProducts are rendered only without -o")
     render.add_argument("--format", choices=("png", "exr"), default="png",
                         help="image format of the outputs written into a folder (default png)")
     render.add_argument("--timings", action="store_true",
@@ -381,9 +382,10 @@ def _render_frame(args, is_blend, phases):
                 overlay))
             phases.mark("encode and write")
             height_px, width_px = result.rgba.shape[:2]
-            layers = f", {len(result.passes)} passes" if result.passes else ""
-            print(f"{args.scene} -> {path} ({width_px}x{height_px}{layers}, "
-                  f"{result.timings.get('total', 0.0) * 1000:.1f} ms)")
+            holds = f"{len(result.passes)} passes" if result.passes else \
+                "Combined layer" if output.layered else "plain RGBA"
+            print(f"{args.scene} -> {path} ({output.origin}: {width_px}x{height_px}, "
+                  f"{holds}, {result.timings.get('total', 0.0) * 1000:.1f} ms)")
             first = first or result
     finally:
         session.close()
