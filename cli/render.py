@@ -342,7 +342,8 @@ def _render_frame(args, is_blend, phases):
                 overlay))
             phases.mark("encode and write")
             height_px, width_px = result.rgba.shape[:2]
-            holds = f"{len(result.passes)} passes" if result.passes else \
+            count = len(result.passes)
+            holds = f"{count} pass{'es' * (count != 1)}" if count else \
                 "Combined layer" if output.layered else "plain RGBA"
             print(f"{args.scene} -> {path} ({output.origin}: {width_px}x{height_px}, "
                   f"{holds}, {result.timings.get('total', 0.0) * 1000:.1f} ms)")

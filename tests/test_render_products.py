@@ -213,7 +213,7 @@ def test_without_o_the_products_are_rendered(tmp_path):
     np.testing.assert_allclose(read_parts(out)["ViewLayer.Depth"][H // 2, W // 2], DISTANCE,
                                rtol=1e-5)
     line = _render_line(proc, out)
-    assert f"(RenderProduct /Render/Products/frames: {W}x{H}, 1 passes," in line, line
+    assert f"(RenderProduct /Render/Products/frames: {W}x{H}, 1 pass," in line, line
 
 
 def test_one_frame_of_two_products(tmp_path):
