@@ -1,15 +1,16 @@
 """`lantern render`'s outputs: what each file holds and where it goes.
 
-- `--passes depth,normal,...` (or `all`): -o gets those render passes, a multi-layer
-  EXR under Blender's layer names (engine/image_io.py write_layers).
-- Without --passes, the stage's RenderSettings (`--settings PRIM`, else its
-  `renderSettingsPrimPath`) names the outputs: each RenderProduct is one file,
-  `productName` (relative to the working folder, with `$F4`-style frame tokens, as
-  `husk` reads them), at its resolution, through its camera, its RenderVars the
-  file's layers. A RenderVar Lantern cannot make is one warning; the rest are
-  written. `-o` wins over the first product's name, as `husk -o` does; --size and
-  --camera over every product's.
-- Otherwise -o is the one output, the Combined image.
+- `-o` is the one output, whatever products the stage names: the plain RGBA image
+  (Combined), or with `--passes depth,normal,...` (or `all`) those render passes, a
+  multi-layer EXR under Blender's layer names (engine/image_io.py write_layers), at
+  the resolution and through the camera of the RenderSettings (`--settings PRIM`,
+  else the stage's `renderSettingsPrimPath`).
+- Without -o, the stage's RenderSettings (`--settings PRIM`, else its
+  `renderSettingsPrimPath`) names the outputs, as `husk` renders them: each
+  RenderProduct is one file, `productName` (relative to the working folder, with
+  `$F4`-style frame tokens), at its resolution, through its camera, its RenderVars
+  the file's layers. A RenderVar Lantern cannot make is one warning; the rest are
+  written. --size and --camera override every product's.
 """
 import argparse
 import os
@@ -85,9 +86,8 @@ def frame_pattern(name: str) -> str:
 
 def plan(args, stage, warn) -> list:
     """The outputs of a render of `stage`, as farm/options.py Products: names still
-    with their frame patterns ('#'), products' names made absolute."""
-    if args.passes:
-        return [Product(args.output, args.size, args.camera, args.passes)]
+    with their frame patterns ('#'), products' names made absolute. The stage's
+    products only when there is no -o."""
     from ..engine.usd.render_products import (RenderSettingsError, read_settings,
                                               settings_path)
     try:
@@ -96,26 +96,27 @@ def plan(args, stage, warn) -> list:
         raise (usage if args.settings else CommandError)(f"{args.scene}: {error}")
     record, warnings = read_settings(stage, path) if path else (None, [])
     warn([f"{args.scene}: {w}" for w in warnings])
+    if args.output is not None:     # the image, and --passes' passes
+        if record is None:          # the engine reads /Render/Settings, if any
+            return [Product(args.output, args.size, args.camera, args.passes or ())]
+        return [Product(args.output, args.size or record.resolution,
+                        args.camera or _camera(stage, record.camera, path, warn),
+                        args.passes or ())]
     products = []
     for p in record.products if record else ():
         if p.product_type != "raster":
             warn([f"{p.path}: productType {p.product_type!r} is not made (only raster "
                   "images); skipped"])
-        elif not p.name and not (args.output and not products):
+        elif not p.name:
             warn([f"{p.path}: no productName; skipped"])
         else:
             products.append(p)
     if not products:
-        if args.output is None:
-            raise usage(f"{args.scene}: no -o, and the stage names no RenderProducts "
-                        f"({'RenderSettings ' + path if path else 'no RenderSettings'})")
-        if not args.settings:       # the engine reads the stage's own settings
-            return [Product(args.output, args.size, args.camera)]
-        return [Product(args.output, args.size or record.resolution,
-                        args.camera or _camera(stage, record.camera, path, warn))]
+        raise usage(f"{args.scene}: no -o, and the stage names no RenderProducts "
+                    f"({'RenderSettings ' + path if path else 'no RenderSettings'})")
     outputs = []
-    for i, p in enumerate(products):
-        name = args.output if i == 0 and args.output else os.path.abspath(frame_pattern(p.name))
+    for p in products:
+        name = os.path.abspath(frame_pattern(p.name))
         passes = []
         for var in p.vars:
             made = table.resolve(var.source) if var.source_type in ("raw", "intrinsic") \
@@ -132,7 +133,7 @@ def plan(args, stage, warn) -> list:
         outputs.append(Product(name, args.size or p.resolution,
                                args.camera or _camera(stage, p.camera, p.path, warn),
                                tuple(sorted(set(passes), key=list(table.PASSES).index)),
-                               p.view_layer, multilayer=exr))
+                               p.view_layer, multilayer=exr, product=p.path))
     return outputs
 
 

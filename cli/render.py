@@ -12,6 +12,8 @@ from .common import (EXIT_STATUSES, FAILED, IMAGE_SUFFIXES, MAX_SIDE, RENDER_PRO
                      check_folder, check_output, check_preset, fail, internal_error,
                      make_folder, number, parse_frames, parse_size, print_warnings,
                      status_writer, usage, write_output)
+from .gpu import add_option as add_gpu_option
+from .gpu import check_gpu, gl_line
 from .products import add_options as add_product_options
 from .products import check as check_product
 from .products import frame_pattern, parse_passes, plan
@@ -28,7 +30,8 @@ def add_parser(commands, parents):
                         help="an .exr (scene linear) or .png (sRGB); for --frames, a name "
                              "with '####' or $F4 (the frame) or a .gif; for several scenes, "
                              "a folder (outputs named after the inputs; for one, end it "
-                             "with /). Default: the stage's RenderProducts")
+                             "with /). The one output, the plain image (or --passes'): the stage's "
+                             "RenderProducts are rendered only without -o")
     render.add_argument("--format", choices=("png", "exr"), default="png",
                         help="image format of the outputs written into a folder (default png)")
     render.add_argument("--timings", action="store_true",
@@ -61,10 +64,7 @@ def add_parser(commands, parents):
                         help="worker processes for a sequence on this machine "
                              f"(default {RENDER_PROCESSES}); worker k draws on GPU k mod "
                              "the number of GPUs")
-    render.add_argument("--gpu", action=GPUAction, default=None, metavar="N|list",
-                        help="draw on EGL device N, and stop if it is a software "
-                             "rasteriser (default: $LANTERN_GPU, else the first GPU); "
-                             "'list' prints the devices")
+    add_gpu_option(render)
     add_subdivision_option(render, " of a .blend input")
     from .overlays import add_options as add_overlay_options
     add_overlay_options(render)
@@ -131,48 +131,9 @@ def run(args):
     return _render_sequence(stage, args, runner, text)
 
 
-class GPUAction(argparse.Action):
-    """--gpu N, or --gpu list: print this machine's devices and exit (like --version,
-    before the other arguments are checked)."""
-
-    def __call__(self, parser, namespace, values, option_string=None):
-        if values != "list":
-            setattr(namespace, self.dest, values)
-            return
-        from ..engine.gpu.devices import table
-        lines = table()
-        print("\n".join(lines) if lines else "no EGL devices (lantern draws on the "
-                                              "platform's default GL context)")
-        parser.exit()
-
-
-def _check_gpu(args):
-    """--gpu N, or LANTERN_GPU: a device of this machine (else a usage error naming
-    them), passed on as LANTERN_GPU to the engine and to local workers. Dask workers
-    elsewhere take their own LANTERN_GPU where they start."""
-    given = args.gpu
-    if given is not None and args.scheduler not in (None, "local"):
-        raise usage(f"--gpu {given}: chooses this machine's GPU; a Dask worker takes the "
-                     "LANTERN_GPU set where it starts")
-    text = given if given is not None else os.environ.get("LANTERN_GPU", "").strip()
-    if not text or (given is None and args.scheduler not in (None, "local")):
-        return
-    name = f"--gpu {text}" if given is not None else f"LANTERN_GPU={text}"
-    if not text.isdigit():
-        raise usage(f"{name}: must be a device number or 'list'")
-    from ..engine.gpu.devices import DeviceError, check_exists, egl_devices
-    if not egl_devices():
-        raise usage(f"{name}: this machine lists no EGL devices to choose from")
-    try:
-        check_exists(int(text), name)
-    except DeviceError as error:
-        raise usage(str(error))
-    os.environ["LANTERN_GPU"] = str(int(text))
-
-
 def _check_render_options(args):
     check_farm(args)
-    _check_gpu(args)
+    check_gpu(args)
     if args.timings and args.frames is not None:
         raise usage("--timings is for single frames, not --frames")
     if args.frames is None and (args.scheduler is not None or args.collect or args.resume
@@ -381,14 +342,16 @@ def _render_frame(args, is_blend, phases):
                 overlay))
             phases.mark("encode and write")
             height_px, width_px = result.rgba.shape[:2]
-            layers = f", {len(result.passes)} passes" if result.passes else ""
-            print(f"{args.scene} -> {path} ({width_px}x{height_px}{layers}, "
-                  f"{result.timings.get('total', 0.0) * 1000:.1f} ms)")
+            count = len(result.passes)
+            holds = f"{count} pass{'es' * (count != 1)}" if count else \
+                "Combined layer" if output.layered else "plain RGBA"
+            print(f"{args.scene} -> {path} ({output.origin}: {width_px}x{height_px}, "
+                  f"{holds}, {result.timings.get('total', 0.0) * 1000:.1f} ms)")
             first = first or result
     finally:
         session.close()
     if args.debug:
-        print(_gl_line(first.stats))
+        print(gl_line(first.stats))
     if args.timings:
         phases.report(args.scene, first)
     return 0
@@ -411,20 +374,6 @@ def _outputs(args, stage, sequence):
 def _plain_output(args):
     from ..farm.options import Product
     return Product(args.output, args.size, args.camera, args.passes or ())
-
-
-def _gl_line(stats) -> str:
-    """--debug: the GL the engine got, on which device, and the paths it took."""
-    from ..engine.gpu.budget import gib
-    device = stats.get("gpu_device")
-    where = "" if device is None else f" on EGL device {device} of {stats.get('gpu_devices')}"
-    free, total = stats.get("gpu_memory_free"), stats.get("gpu_memory_total")
-    memory = "" if free is None else (
-        f"; memory: {gib(free)} free" + (f" of {gib(total)}" if total else "")
-        + f" ({stats.get('gpu_memory_source')})")
-    return (f"  GL: {stats.get('gl_renderer')}, {stats.get('gl_version')} (asked for "
-            f"{stats.get('gl_requested', 0) / 100:.1f}){where}{memory}; "
-            f"paths: {stats.get('gl_path')}")
 
 
 def _render_sequence(stage, args, runner, stage_text):

@@ -36,11 +36,18 @@ class Product:
     passes: tuple = ()              # render passes (core/passes.py names)
     layer: str = "ViewLayer"        # the view layer its layers are named after
     multilayer: bool = False        # a multi-layer EXR even with no passes (a RenderProduct)
+    product: str | None = None      # the RenderProduct prim it renders; None: -o's image
 
     @property
     def layered(self) -> bool:
         """Written as a multi-layer EXR (engine/image_io.py write_layers)."""
         return bool(self.passes) or self.multilayer
+
+    @property
+    def origin(self) -> str:
+        """Where it comes from, for the lines printed: the stage's RenderProduct, or
+        the command line's -o."""
+        return "-o" if self.product is None else f"RenderProduct {self.product}"
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -769,6 +769,32 @@ def build_interpolation(interpolation):
 INTERPOLATIONS = ("Linear", "Closest", "Cubic", "Smart")
 
 
+def _mapped_image(interpolation, u0, v0, size):
+    """The image through a Mapping node that changes nothing (the exporter writes a
+    network for it, as for any Mapping), the quad's UVs as _straight_image's."""
+    def build(tree, bsdf):
+        mapping = _uv_mapping(tree, "POINT", (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
+        image = _pixel_art(tree, interpolation)
+        tree.links.new(mapping.outputs[0], image.inputs["Vector"])
+        _to_base(tree, bsdf, image.outputs["Color"])
+    build.mesh = _uv_square(u0, v0, size)
+    return build
+
+
+def build_interpolation_paths(interpolation):
+    """One interpolation both ways, side by side: the image straight on Base Color (a
+    UsdUVTexture) and in a network (behind a Mapping node that changes nothing), the
+    same UVs, magnified (top row) and minified (bottom row). No Cycles reference: the
+    two columns should be the same picture."""
+    def build(workdir=None):
+        return _grid(f"paths_{interpolation.lower()}", [
+            ("straight_magnified", _straight_image(interpolation, 0.3, 0.45, 0.25)),
+            ("network_magnified", _mapped_image(interpolation, 0.3, 0.45, 0.25)),
+            ("straight_minified", _straight_image(interpolation, 0.1, 0.2, 3.0)),
+            ("network_minified", _mapped_image(interpolation, 0.1, 0.2, 3.0))], columns=2)
+    return build
+
+
 def _height(kind, scale):
     """A height for the Bump node: Noise's Fac, Wave bands' Fac or a linear Gradient, on
     the UV coordinates."""

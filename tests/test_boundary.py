@@ -21,6 +21,8 @@ and the engine's layering.
   few modules PXR_ELSEWHERE names with the reason; no module imports another package's
   private (`_`) names; the modules import one another without cycles (an AST walk,
   module to module, lazy imports included); only `__main__` imports the CLI.
+- Modules of `engine/` and `cli/` stay at MODULE_LINES lines or fewer: one past it is
+  split by job.
 """
 import ast
 import functools
@@ -438,3 +440,30 @@ def test_every_module_says_what_it_is_for():
     missing = [str(path.relative_to(REPO)) for path in _package_files_under(REPO)
                if not ast.get_docstring(ast.parse(path.read_text()))]
     assert not missing, missing
+
+
+# The house's size for a module of the engine and the command line.
+MODULE_LINES = 450
+SIZED_FOLDERS = ("engine", "cli")
+
+
+def _long_modules(root):
+    """'path: N lines' of each module of SIZED_FOLDERS under `root` longer than
+    MODULE_LINES."""
+    return [f"{path.relative_to(root)}: {n} lines" for folder in SIZED_FOLDERS
+            for path in sorted((root / folder).rglob("*.py"))
+            if (n := len(path.read_text().splitlines())) > MODULE_LINES]
+
+
+def test_engine_and_cli_modules_stay_small():
+    long = _long_modules(REPO)
+    assert not long, f"past {MODULE_LINES} lines, split by job: {long}"
+
+
+def test_the_size_guard_can_fail(tmp_path):
+    for folder in SIZED_FOLDERS:
+        (tmp_path / folder / "deep").mkdir(parents=True)
+        (tmp_path / folder / "deep" / "fits.py").write_text("x = 1\n" * MODULE_LINES)
+        (tmp_path / folder / "deep" / "long.py").write_text("x = 1\n" * (MODULE_LINES + 1))
+    assert _long_modules(tmp_path) == [f"{folder}/deep/long.py: {MODULE_LINES + 1} lines"
+                                       for folder in SIZED_FOLDERS]

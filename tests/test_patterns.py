@@ -446,6 +446,33 @@ def test_the_interpolation_is_written_where_the_stage_can_say_it():
     assert _filtertypes(stage, "image_linear_network_minified") == ([], ["linear"])
 
 
+@pytest.mark.parametrize("interpolation", pattern_scenes.INTERPOLATIONS)
+def test_a_networks_image_draws_as_the_image_straight_on_the_input(interpolation):
+    """One lookup for both (material.glsl sample_map: the Map's filtertype, the
+    program's FILTER_ defines from every image it binds): the image in a network,
+    behind a Mapping node that changes nothing, gives the pixels the same image gives
+    straight on Base Color, magnified 8 times and minified 1.5 times (64 x 64 medium:
+    each quad 32 pixels)."""
+    import bpy
+    from lantern.engine import RenderSettings, render_stage
+    from lantern.exporters import stage_from_depsgraph
+    name, kind = f"paths_{interpolation.lower()}", interpolation.lower()
+    pattern_scenes.build_interpolation_paths(interpolation)()
+    stage, report = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+    assert not report.warnings, report.warnings
+    assert _filtertypes(stage, f"{name}_straight_magnified") == \
+        ([None if kind == "linear" else kind], [])
+    assert _filtertypes(stage, f"{name}_network_magnified") == ([], [kind])
+    result = render_stage(stage, RenderSettings(width=64, height=64, preset="medium"))
+    assert not result.warnings, result.warnings
+    for scale, rows in (("magnified", slice(2, 30)), ("minified", slice(34, 62))):
+        straight, network = result.rgba[rows, 2:30, :3], result.rgba[rows, 34:62, :3]
+        worst = float(np.abs(network - straight).max())
+        print(f"{interpolation} {scale}: network against straight, max |difference| "
+              f"{worst:.2e} (the image's own contrast {np.ptp(straight):.2f})")
+        assert worst <= 2e-3, (interpolation, scale)
+
+
 def test_an_unknown_interpolation_warns_and_reads_as_linear():
     """A filter type the engine does not know, on a UsdUVTexture and on a network's
     image: one warning each naming the prim and the value, and the image drawn as

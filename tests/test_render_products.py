@@ -151,21 +151,87 @@ def test_the_farm_writes_the_same(tmp_path):
     _check_products(tmp_path)
 
 
-def test_one_frame_and_o_wins(tmp_path):
-    """One frame: the tokens take the frame rendered. -o names the first product's
-    file, as husk's -o; the others keep their productNames."""
+def _channels(path) -> list:
+    """Each part's channel names, as a reader that looks for R, G, B, A sees them."""
+    import OpenImageIO as oiio
+    image = oiio.ImageInput.open(str(path))
+    assert image is not None, oiio.geterror()
+    parts, subimage = [], 0
+    while image.seek_subimage(subimage, 0):
+        parts.append(list(image.spec().channelnames))
+        subimage += 1
+    image.close()
+    return parts
+
+
+def _render_line(proc, path):
+    lines = [line for line in proc.stdout.splitlines() if f"-> {path} (" in line]
+    assert len(lines) == 1, proc.stdout
+    return lines[0]
+
+
+def depth_product_stage(path):
+    """The exporter's layout for Blender's default view layer: one RenderProduct whose
+    vars are Combined and Depth, the file Blender's Render Animation writes."""
+    stage = _stage()
+    settings = UsdRender.Settings.Define(stage, "/Render/rendersettings")
+    settings.CreateResolutionAttr(Gf.Vec2i(W, H))
+    settings.CreateCameraRel().SetTargets(["/root/cam"])
+    product = UsdRender.Product.Define(stage, "/Render/Products/frames")
+    product.CreateProductNameAttr("frames/shot_$F4.exr")
+    product.CreateOrderedVarsRel().SetTargets([_var(stage, "color", "color"),
+                                               _var(stage, "depth", "Depth")])
+    settings.CreateProductsRel().SetTargets([product.GetPath()])
+    stage.SetMetadata("renderSettingsPrimPath", "/Render/rendersettings")
+    stage.GetRootLayer().Export(str(path))
+    return path
+
+
+def test_o_is_the_plain_image_whatever_products_the_stage_names(tmp_path):
+    """-o without --passes: one part, channels R, G, B, A, at the settings' size, and
+    no product's file; the line printed says so."""
+    stage = depth_product_stage(tmp_path / "shot.usda")
+    out = tmp_path / "out.exr"
+    proc = lantern("render", stage, "--frame", "2", "-o", out, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert _channels(out) == [["R", "G", "B", "A"]]
+    from lantern.engine.image_io import read_exr
+    assert read_exr(str(out)).shape == (H, W, 4)
+    assert not (tmp_path / "frames").exists()
+    assert f"(-o: {W}x{H}, plain RGBA," in _render_line(proc, out)
+
+
+def test_without_o_the_products_are_rendered(tmp_path):
+    """No -o: the product's file, named by its productName, holds Combined and Depth
+    under Blender's layer names; the line printed names the RenderProduct."""
+    stage = depth_product_stage(tmp_path / "shot.usda")
+    proc = lantern("render", stage, "--frame", "2", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    out = tmp_path / "frames" / "shot_0002.exr"
+    assert _channels(out) == [[f"ViewLayer.Combined.{c}" for c in "RGBA"],
+                              ["ViewLayer.Depth.Z"]]
+    np.testing.assert_allclose(read_parts(out)["ViewLayer.Depth"][H // 2, W // 2], DISTANCE,
+                               rtol=1e-5)
+    line = _render_line(proc, out)
+    assert f"(RenderProduct /Render/Products/frames: {W}x{H}, 1 pass," in line, line
+
+
+def test_one_frame_of_two_products(tmp_path):
+    """One frame: the tokens take the frame rendered. With -o, the one plain image and
+    no product's file."""
     stage = products_stage(tmp_path / "shot.usda")
     proc = lantern("render", stage, "--frame", "2", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     _check_products(tmp_path, frames=(2,))
     proc = lantern("render", stage, "--frame", "3", "-o", tmp_path / "mine.exr", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
-    assert read_parts(tmp_path / "mine.exr")["ViewLayer.Combined"].shape == (H, W, 4)
+    assert _channels(tmp_path / "mine.exr") == [["R", "G", "B", "A"]]
     assert not (tmp_path / "beauty.0003.exr").exists()
-    assert (tmp_path / "aux" / "data.0003.exr").exists()
-    # A .gif preview is one output: with two products it is refused before any render.
+    assert not (tmp_path / "aux" / "data.0003.exr").exists()
+    # A .gif preview is one output: with -o the products do not apply.
     gif = lantern("render", stage, "--frames", "1:2", "-o", tmp_path / "a.gif", cwd=tmp_path)
-    assert gif.returncode == 2 and "RenderProducts" in gif.stderr
+    assert gif.returncode == 0, gif.stderr
+    assert (tmp_path / "a.gif").exists() and not (tmp_path / "beauty.0001.exr").exists()
 
 
 def test_a_product_in_a_folder_that_cannot_be_written(tmp_path):
