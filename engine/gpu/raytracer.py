@@ -1,0 +1,292 @@
+"""The ray tracer's data on the GPU: the scene's triangles, a bottom-level BVH per mesh
+in its object space, and a top-level BVH over the instances placed in the world
+(engine/bvh.py builds them; shaders/raytrace.glsl walks them in compute shaders).
+
+Made only when something asks for rays (Renderer.raytracer), then kept up with the
+scene by `update`, which builds only what changed:
+- a mesh's tree is built when its record is new (the reader replaces a record whose
+  prim changed), and refitted when the skinning pass deformed it again (its deformed
+  vertices read from the dynamic store: SkinningPass.read);
+- the instances of one mesh (Mesh prims sharing its data, a PointInstancer's
+  instances) share its tree; the top tree is built again when an instance moved, came
+  or went, or a mesh's box changed.
+
+Triangles of a subdivision surface tessellated on the GPU are its patches' corners,
+two a patch (the limit surface at the cage refined `levels` times, engine/scene.py
+PatchData): the tessellation the passes draw depends on the view, a tree must not.
+
+Buffers (shaders/raytrace.glsl declares them at these bindings; `bind` binds them):
+  nodes      every bottom tree, NODE_FLOATS floats a node, miss links absolute
+  triangles  3 vec4 each: corners in object space; v0.w the material (an index into
+             `materials`), v1.w the triangle's index in its mesh, as int bits
+  instances  INSTANCE_VEC4 vec4 each: world to object rows, object to world rows,
+             (root node, first triangle, triangles, object id) as int bits
+  top        the top tree (its root's miss link 0 when there is no instance)"""
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...core.transforms import transform_aabbs
+from .. import bvh
+from .programs import set_uniform
+
+BINDINGS = {"nodes": 10, "triangles": 11, "instances": 12, "top": 13}
+INSTANCE_VEC4 = 7
+FAR = 3.0e38                      # shaders/raytrace.glsl RT_FAR
+GROUP, MAX_GROUPS = 64, 65535     # shaders/trace.comp's local size; groups per dimension
+SHADER_STORAGE_BARRIER_BIT, BUFFER_UPDATE_BARRIER_BIT = 0x2000, 0x200
+# The top tree's boxes are tested in world space, the triangles in object space after
+# a float32 transform of the ray: widened by this share of their coordinates' size,
+# a box never loses a ray that its instance's triangles hit.
+TOP_PAD = 1.0e-5
+# Mesh keys whose corners move under a fixed topology (engine/usd/read.py): refitted.
+DEFORMED = ("skinned", "varying")
+
+
+@dataclass
+class Bottom:
+    """One mesh's tree and triangles, and where they lie in the buffers."""
+    mesh: object                  # the MeshData record it was built from
+    tree: bvh.Tree
+    triangles: np.ndarray         # (T, 3, 4) float32 as uploaded
+    first_node: int = 0
+    first_triangle: int = 0
+    poses: int = 0                # SkinningPass.poses when its corners were read
+
+
+@dataclass
+class Hits:
+    """Traced rays: t (-1 where nothing was hit), instance (index into
+    Raytracer.instances, -1: none), triangle (index into the triangle buffer) and the
+    barycentric weights (n, 2) of its v1 and v2."""
+    t: np.ndarray
+    instance: np.ndarray
+    triangle: np.ndarray
+    barycentric: np.ndarray
+    local: np.ndarray             # the triangle's index in its mesh (-1: none)
+
+
+class Raytracer:
+    def __init__(self, ctx, uploads, programs, geometry, skinning):
+        self.ctx, self.uploads, self.programs = ctx, uploads, programs
+        self.geometry, self.skinning = geometry, skinning
+        self.bottoms = {}             # mesh key -> Bottom
+        self.materials = []           # material names, by the index triangles carry
+        self.instances = []           # (instance path, k-th of its worlds) per record
+        self._first = np.zeros(0, np.int64)   # each record's first triangle
+        self.warnings = []            # what is not traced, one line each
+        self.counts = Counter()       # bottom_builds, refits, top_builds
+        self.buffers = {name: None for name in BINDINGS}
+        self._placed = None           # what the top tree was built from
+        self._top_lo = self._top_hi = None
+
+    # --- keeping up with the scene -------------------------------------------------
+    def update(self, scene):
+        """Brings the trees up to `scene` as the GPU draws it: called after the frame's
+        skinning pass (and Geometry.update: object ids come from its draws)."""
+        used = {inst.mesh_key for inst in scene.instances.values()}
+        for key in [k for k in self.bottoms if k not in used]:
+            del self.bottoms[key]
+            self._placed = None
+        self.warnings = []
+        moved = rebuilt = False
+        for key in sorted(used, key=repr):
+            mesh = scene.meshes[key]
+            old = self.bottoms.get(key)
+            poses = self.skinning.poses.get(key, 0)
+            if old is not None and old.mesh is mesh and old.poses == poses:
+                continue
+            corners = self._corners(mesh)
+            if corners is None:
+                rebuilt |= self.bottoms.pop(key, None) is not None
+                continue
+            if old is not None and key[0] in DEFORMED and len(corners) == len(old.triangles):
+                # Posed again, or a time-sampled mesh at a new time: the same tree refitted.
+                old.mesh, old.poses = mesh, poses
+                old.triangles = self._triangles(mesh, corners)
+                bvh.refit(old.tree, *bvh.triangle_boxes(corners.astype(np.float64)))
+                self._write_bottom(old)
+                self.counts["refits"] += 1
+                moved = True
+                continue
+            self.bottoms[key] = Bottom(mesh, bvh.build(*bvh.triangle_boxes(
+                corners.astype(np.float64))), self._triangles(mesh, corners), poses=poses)
+            self.counts["bottom_builds"] += 1
+            rebuilt = True
+        if rebuilt:
+            self._pack()
+        self._place(scene, force=moved or rebuilt)
+
+    def _corners(self, mesh):
+        """(T, 3, 3) float32 corners of a mesh's triangles as drawn, or None (nothing
+        to trace; a skinned cage is named in `warnings`)."""
+        patches = mesh.patches
+        if patches is not None:
+            if patches.stencils is not None:
+                self.warnings.append(f"{mesh.key[1] if len(mesh.key) > 1 else mesh.key}: a "
+                                     f"skinned subdivision surface is not ray traced")
+                return None
+            c = patches.control
+            quads = np.stack([c[:, 0], c[:, 3], c[:, 15], c[:, 12]], axis=1)
+            return np.ascontiguousarray(quads[:, [0, 1, 2, 0, 2, 3]].reshape(-1, 3, 3),
+                                        np.float32)
+        if not len(mesh.indices):
+            return None
+        points = mesh.vertices[:, :3]
+        if mesh.skin is not None and mesh.key in self.skinning.poses:
+            points = self.skinning.read(mesh.key)[:, :3]
+        return np.ascontiguousarray(points[mesh.indices.reshape(-1, 3)], np.float32)
+
+    def _triangles(self, mesh, corners) -> np.ndarray:
+        """(T, 3, 4) float32: the corners, each triangle's material and index."""
+        out = np.zeros((len(corners), 3, 4), np.float32)
+        out[:, :, :3] = corners
+        material = np.zeros(len(corners), np.int32)
+        per = 2 if mesh.patches is not None else 3       # patches: 2 triangles each
+        ranges = mesh.patches.ranges if mesh.patches is not None else mesh.ranges
+        for mi, first, count in ranges:
+            first, count = (first * 2, count * 2) if per == 2 else (first // 3, count // 3)
+            material[first:first + count] = self._material(mesh.materials[mi])
+        out[:, 0, 3] = material.view(np.float32)
+        out[:, 1, 3] = np.arange(len(corners), dtype=np.int32).view(np.float32)
+        return out
+
+    def _material(self, name) -> int:
+        if name not in self.materials:
+            self.materials.append(name)
+        return self.materials.index(name)
+
+    def _pack(self):
+        """Every bottom tree and its triangles into the buffers, one after another."""
+        node = tri = 0
+        for b in self.bottoms.values():
+            b.first_node, b.first_triangle = node, tri
+            node += b.tree.size
+            tri += len(b.triangles)
+        nodes = np.zeros((max(node, 1), bvh.NODE_FLOATS), np.float32)
+        triangles = np.zeros((max(tri, 1), 3, 4), np.float32)
+        for b in self.bottoms.values():
+            nodes[b.first_node:b.first_node + b.tree.size] = b.tree.packed(b.first_node)
+            triangles[b.first_triangle:b.first_triangle + len(b.triangles)] = b.triangles
+        self._upload("nodes", nodes)
+        self._upload("triangles", triangles)
+        self._placed = None
+
+    def _write_bottom(self, b):
+        """A refitted tree and its triangles, in place."""
+        self.uploads.write(self.buffers["nodes"], b.tree.packed(b.first_node), kind="raytrace",
+                           offset=b.first_node * bvh.NODE_FLOATS * 4)
+        self.uploads.write(self.buffers["triangles"], b.triangles, kind="raytrace",
+                           offset=b.first_triangle * 48)
+
+    def _place(self, scene, force: bool):
+        """The instance records and the top tree, built again when an instance moved,
+        came or went, or a tree's box changed (`force`)."""
+        placed = [(path, inst.mesh_key, inst.world if inst.worlds is None else inst.worlds)
+                  for path, inst in sorted(scene.instances.items())
+                  if inst.mesh_key in self.bottoms]
+        if not force and self._placed is not None and len(placed) == len(self._placed) and \
+                all(a[:2] == b[:2] and np.array_equal(a[2], b[2])
+                    for a, b in zip(placed, self._placed)):
+            return
+        self._placed = placed
+        records, firsts, lo, hi, self.instances = [], [], [], [], []
+        for path, key, worlds in placed:
+            b = self.bottoms[key]
+            worlds = np.asarray(worlds, np.float64).reshape(-1, 4, 4)
+            oid = self.geometry.draws[path].oid
+            det = np.linalg.det(worlds[:, :3, :3])
+            for k in np.nonzero(np.abs(det) > 1e-30)[0]:
+                inverse = np.linalg.inv(worlds[k])
+                record = np.empty(INSTANCE_VEC4 * 4, np.float32)
+                record[:12], record[12:24] = inverse[:3].ravel(), worlds[k][:3].ravel()
+                record[24:] = np.array([b.first_node, b.first_triangle, len(b.triangles),
+                                        oid + k], np.int32).view(np.float32)
+                records.append(record)
+                firsts.append(b.first_triangle)
+                self.instances.append((path, int(k)))
+            if (np.abs(det) <= 1e-30).any():
+                self.warnings.append(f"{path}: {int((np.abs(det) <= 1e-30).sum())} instance(s) "
+                                     f"of zero scale not ray traced")
+            root_lo = b.tree.lo[0].astype(np.float64)[None].repeat(len(worlds), 0)
+            root_hi = b.tree.hi[0].astype(np.float64)[None].repeat(len(worlds), 0)
+            wlo, whi = transform_aabbs(root_lo, root_hi, worlds)
+            keep = np.abs(det) > 1e-30
+            lo.append(wlo[keep])
+            hi.append(whi[keep])
+        self._first = np.array(firsts, np.int64)
+        if records:
+            lo, hi = np.concatenate(lo), np.concatenate(hi)
+            pad = TOP_PAD * (np.maximum(np.abs(lo), np.abs(hi)) + (hi - lo))
+            top = bvh.build(lo - pad, hi + pad).packed()
+            self._upload("instances", np.array(records, np.float32))
+        else:
+            top = np.zeros((1, bvh.NODE_FLOATS), np.float32)     # miss link 0: empty
+            self._upload("instances", np.zeros(INSTANCE_VEC4 * 4, np.float32))
+        self._upload("top", top)
+        self.counts["top_builds"] += 1
+
+    def _upload(self, name, data):
+        data = np.ascontiguousarray(data, np.float32)
+        old = self.buffers[name]
+        if old is not None and old.size >= data.nbytes:
+            self.uploads.write(old, data, kind="raytrace")
+            return
+        if old is not None:
+            old.release()
+        self.buffers[name] = self.uploads.buffer(data, kind="raytrace")
+
+    # --- using it ------------------------------------------------------------------
+    def bind(self):
+        """Binds the buffers where shaders/raytrace.glsl reads them."""
+        for name, binding in BINDINGS.items():
+            self.buffers[name].bind_to_storage_buffer(binding)
+
+    @property
+    def triangle_count(self) -> int:
+        return sum(len(b.triangles) for b in self.bottoms.values())
+
+    def trace(self, origins, directions, tmin=0.0, tmax=FAR, any_hit=False,
+              brute_force=False) -> Hits:
+        """Traces rays (n, 3) from `origins` along `directions` (shaders/trace.comp);
+        `brute_force` tests every triangle instead of walking the trees (the trees'
+        reference, for tests and the bench)."""
+        origins = np.asarray(origins, np.float32).reshape(-1, 3)
+        n = len(origins)
+        rays = np.zeros((n, 2, 4), np.float32)
+        rays[:, 0, :3], rays[:, 0, 3] = origins, tmin
+        rays[:, 1, :3], rays[:, 1, 3] = np.asarray(directions, np.float32).reshape(-1, 3), tmax
+        defines = ["ANY_HIT"] * any_hit + ["BRUTE_FORCE"] * brute_force
+        prog = self.programs.get("trace.comp", None, defines, compute=True)
+        ray_buffer = self.uploads.buffer(rays, kind="raytrace")
+        hit_buffer = self.uploads.buffer(reserve=n * 32, kind="raytrace")
+        try:
+            self.bind()
+            ray_buffer.bind_to_storage_buffer(0)
+            hit_buffer.bind_to_storage_buffer(1)
+            set_uniform(prog, "u_rays", n)
+            set_uniform(prog, "u_instances", len(self.instances))
+            groups = max(-(-n // GROUP), 1)
+            across = min(groups, MAX_GROUPS)
+            prog.run(across, -(-groups // across))
+            self.ctx.memory_barrier(SHADER_STORAGE_BARRIER_BIT | BUFFER_UPDATE_BARRIER_BIT)
+            out = np.frombuffer(hit_buffer.read(), np.float32).reshape(n, 2, 4)
+        finally:
+            ray_buffer.release()
+            hit_buffer.release()
+        instance = out[:, 0, 1].view(np.int32).copy()
+        triangle = out[:, 0, 2].view(np.int32).copy()
+        hit = instance >= 0
+        local = np.full(n, -1, np.int64)
+        local[hit] = triangle[hit] - self._first[instance[hit]]
+        return Hits(out[:, 0, 0].copy(), instance, triangle, out[:, 1, :2].copy(), local)
+
+    def release(self):
+        for name, buffer in self.buffers.items():
+            if buffer is not None:
+                buffer.release()
+            self.buffers[name] = None
+        self.bottoms.clear()
