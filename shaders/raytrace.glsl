@@ -39,10 +39,12 @@ struct RtHit {
     vec2 barycentric;  // weights of the triangle's v1 and v2
 };
 
-// A ray prepared for the watertight triangle test (Woop, Benthin and Wald 2013): its
-// largest axis kz, the shear that takes its direction to +z, and the box test's
-// inverse direction.
-struct RtRay { vec3 origin; vec3 inv_dir; ivec3 k; vec3 shear; };
+// A ray prepared for the watertight triangle test (Woop, Benthin and Wald 2013): the
+// shear that takes its direction to +z along its largest axis kz, as three rows, so a
+// corner's sheared coordinates are three dot products (a lane-varying index into a
+// vector, a[kx], costs llvmpipe a trip through memory); and the box test's inverse
+// direction.
+struct RtRay { vec3 origin; vec3 inv_dir; vec3 row_x; vec3 row_y; vec3 row_z; };
 
 RtRay rt_ray(vec3 origin, vec3 dir) {
     vec3 a = abs(dir);
@@ -50,10 +52,14 @@ RtRay rt_ray(vec3 origin, vec3 dir) {
     int kx = kz == 2 ? 0 : kz + 1;
     int ky = kx == 2 ? 0 : kx + 1;
     if (dir[kz] < 0.0) { int s = kx; kx = ky; ky = s; }   // keeps the winding
+    vec3 ex = vec3(equal(ivec3(0, 1, 2), ivec3(kx))), ey = vec3(equal(ivec3(0, 1, 2), ivec3(ky)));
+    vec3 ez = vec3(equal(ivec3(0, 1, 2), ivec3(kz)));
     RtRay r;
     r.origin = origin;
-    r.k = ivec3(kx, ky, kz);
-    r.shear = vec3(dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]);
+    // ax = a[kx] - (d[kx] / d[kz]) a[kz], ay likewise, az = a[kz] / d[kz].
+    r.row_x = ex - (dot(dir, ex) / dot(dir, ez)) * ez;
+    r.row_y = ey - (dot(dir, ey) / dot(dir, ez)) * ez;
+    r.row_z = ez / dot(dir, ez);
     // A zero component would make 0 * inf (NaN) where the origin lies on a slab.
     vec3 safe = mix(dir, vec3(1.0e-30), lessThan(a, vec3(1.0e-30)));
     r.inv_dir = 1.0 / safe;
@@ -77,11 +83,10 @@ bool rt_box(RtRay r, vec3 lo, vec3 hi, float tmin, float tmax) {
 // double, as the paper does. t in (tmin, tmax].
 bool rt_triangle(RtRay r, vec3 p0, vec3 p1, vec3 p2, float tmin, float tmax,
                  out float t, out vec2 barycentric) {
-    int kx = r.k.x, ky = r.k.y, kz = r.k.z;
     precise vec3 a = p0 - r.origin, b = p1 - r.origin, c = p2 - r.origin;
-    precise float ax = a[kx] - r.shear.x * a[kz], ay = a[ky] - r.shear.y * a[kz];
-    precise float bx = b[kx] - r.shear.x * b[kz], by = b[ky] - r.shear.y * b[kz];
-    precise float cx = c[kx] - r.shear.x * c[kz], cy = c[ky] - r.shear.y * c[kz];
+    precise float ax = dot(a, r.row_x), ay = dot(a, r.row_y);
+    precise float bx = dot(b, r.row_x), by = dot(b, r.row_y);
+    precise float cx = dot(c, r.row_x), cy = dot(c, r.row_y);
     precise float u = cx * by - cy * bx;
     precise float v = ax * cy - ay * cx;
     precise float w = bx * ay - by * ax;
@@ -95,8 +100,7 @@ bool rt_triangle(RtRay r, vec3 p0, vec3 p1, vec3 p2, float tmin, float tmax,
     if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return false;
     float det = u + v + w;
     if (det == 0.0) return false;                 // seen edge on, or degenerate
-    precise float tt = (u * (r.shear.z * a[kz]) + v * (r.shear.z * b[kz]) +
-                        w * (r.shear.z * c[kz])) / det;
+    precise float tt = (u * dot(a, r.row_z) + v * dot(b, r.row_z) + w * dot(c, r.row_z)) / det;
     if (!(tt > tmin && tt <= tmax)) return false;
     t = tt;
     barycentric = vec2(v, w) / det;

@@ -69,6 +69,14 @@ class Hits:
     local: np.ndarray             # the triangle's index in its mesh (-1: none)
 
 
+def patch_triangles(patches) -> np.ndarray:
+    """(2P, 3, 3) float32: two triangles a Bezier patch, over its corners (which lie on
+    the limit surface), in the order and winding of its u and v."""
+    c = patches.control
+    quads = np.stack([c[:, 0], c[:, 3], c[:, 15], c[:, 12]], axis=1)
+    return np.ascontiguousarray(quads[:, [0, 1, 2, 0, 2, 3]].reshape(-1, 3, 3), np.float32)
+
+
 class Raytracer:
     def __init__(self, ctx, uploads, programs, geometry, skinning):
         self.ctx, self.uploads, self.programs = ctx, uploads, programs
@@ -118,6 +126,7 @@ class Raytracer:
             rebuilt = True
         if rebuilt:
             self._pack()
+        self.counts["triangles"] = self.triangle_count
         self._place(scene, force=moved or rebuilt)
 
     def _corners(self, mesh):
@@ -129,10 +138,7 @@ class Raytracer:
                 self.warnings.append(f"{mesh.key[1] if len(mesh.key) > 1 else mesh.key}: a "
                                      f"skinned subdivision surface is not ray traced")
                 return None
-            c = patches.control
-            quads = np.stack([c[:, 0], c[:, 3], c[:, 15], c[:, 12]], axis=1)
-            return np.ascontiguousarray(quads[:, [0, 1, 2, 0, 2, 3]].reshape(-1, 3, 3),
-                                        np.float32)
+            return patch_triangles(patches)
         if not len(mesh.indices):
             return None
         points = mesh.vertices[:, :3]
