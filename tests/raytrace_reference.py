@@ -34,7 +34,7 @@ def closest_hits(triangles, origins, directions):
         ti, ri = ti[keep], ri[keep]
         keep = _passes_pairs(centre[ti], radius[ti], ob[ri], dn[ri])
         ti, ri = ti[keep], ri[keep]
-        t, u, v = _moller_trumbore(tri[ti], ob[ri], db[ri])
+        t, u, v = moller_trumbore(tri[ti], ob[ri], db[ri])
         hit = t > 0
         ti, ri, t, u, v = ti[hit], ri[hit] + start, t[hit], u[hit], v[hit]
         order = np.lexsort((ti, t, ri))                         # by ray, then t, then triangle
@@ -92,7 +92,7 @@ def _passes_pairs(centre, radius, o, dn):
     return (dist2 - along * along <= radius * radius * (1 + 1e-9) + 1e-12) & (along >= -radius)
 
 
-def _moller_trumbore(tri, o, d):
+def moller_trumbore(tri, o, d):
     """(t, u, v) of rays against triangles, pairwise; t nan where they miss."""
     e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
     p = np.cross(d, e2)

@@ -57,7 +57,7 @@ def assert_matches_reference(hits, triangles, first, origins, directions, what):
     close_call = ref_hit & ((margin < 1e-5) | (second - t_ref <= tol))
     # A hit that is not the reference's lies on its own triangle, as near as the reference's.
     other = np.nonzero(~same & hit)[0]
-    t64, u, v = raytrace_reference._moller_trumbore(
+    t64, u, v = raytrace_reference.moller_trumbore(
         triangles[tri[other]], origins[other].astype(np.float64), directions[other])
     on_it = np.abs(t64 - hits.t[other]) <= tol[other] * 10
     as_near = ~ref_hit[other] | (hits.t[other] <= t_ref[other] + tol[other])

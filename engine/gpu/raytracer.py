@@ -24,6 +24,7 @@ Buffers (shaders/raytrace.glsl declares them at these bindings; `bind` binds the
   top        the top tree (its root's miss link 0 when there is no instance)"""
 from __future__ import annotations
 
+import time
 from collections import Counter
 from dataclasses import dataclass
 
@@ -86,7 +87,8 @@ class Raytracer:
         self.instances = []           # (instance path, k-th of its worlds) per record
         self._first = np.zeros(0, np.int64)   # each record's first triangle
         self.warnings = []            # what is not traced, one line each
-        self.counts = Counter()       # bottom_builds, refits, top_builds
+        self.counts = Counter()       # bottom_builds, refits, top_builds; triangles
+        self.seconds = Counter()      # the same work's CPU seconds (uploads included); trace
         self.buffers = {name: None for name in BINDINGS}
         self._placed = None           # what the top tree was built from
         self._top_lo = self._top_hi = None
@@ -107,6 +109,7 @@ class Raytracer:
             poses = self.skinning.poses.get(key, 0)
             if old is not None and old.mesh is mesh and old.poses == poses:
                 continue
+            t0 = time.perf_counter()                     # the corners' read-back included
             corners = self._corners(mesh)
             if corners is None:
                 rebuilt |= self.bottoms.pop(key, None) is not None
@@ -118,14 +121,18 @@ class Raytracer:
                 bvh.refit(old.tree, *bvh.triangle_boxes(corners.astype(np.float64)))
                 self._write_bottom(old)
                 self.counts["refits"] += 1
+                self.seconds["refits"] += time.perf_counter() - t0
                 moved = True
                 continue
             self.bottoms[key] = Bottom(mesh, bvh.build(*bvh.triangle_boxes(
                 corners.astype(np.float64))), self._triangles(mesh, corners), poses=poses)
             self.counts["bottom_builds"] += 1
+            self.seconds["bottom_builds"] += time.perf_counter() - t0
             rebuilt = True
         if rebuilt:
+            t0 = time.perf_counter()
             self._pack()
+            self.seconds["bottom_builds"] += time.perf_counter() - t0
         self.counts["triangles"] = self.triangle_count
         self._place(scene, force=moved or rebuilt)
 
@@ -199,6 +206,7 @@ class Raytracer:
                     for a, b in zip(placed, self._placed)):
             return
         self._placed = placed
+        t0 = time.perf_counter()
         records, firsts, lo, hi, self.instances = [], [], [], [], []
         for path, key, worlds in placed:
             b = self.bottoms[key]
@@ -234,6 +242,7 @@ class Raytracer:
             self._upload("instances", np.zeros(INSTANCE_VEC4 * 4, np.float32))
         self._upload("top", top)
         self.counts["top_builds"] += 1
+        self.seconds["top_builds"] += time.perf_counter() - t0
 
     def _upload(self, name, data):
         data = np.ascontiguousarray(data, np.float32)
@@ -277,8 +286,12 @@ class Raytracer:
             set_uniform(prog, "u_instances", len(self.instances))
             groups = max(-(-n // GROUP), 1)
             across = min(groups, MAX_GROUPS)
+            self.ctx.finish()
+            t0 = time.perf_counter()
             prog.run(across, -(-groups // across))
             self.ctx.memory_barrier(SHADER_STORAGE_BARRIER_BIT | BUFFER_UPDATE_BARRIER_BIT)
+            self.ctx.finish()
+            self.seconds["trace"] = time.perf_counter() - t0          # the last batch's
             out = np.frombuffer(hit_buffer.read(), np.float32).reshape(n, 2, 4)
         finally:
             ray_buffer.release()
