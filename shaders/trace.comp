@@ -6,7 +6,8 @@
 // all triangles is one loop of that many iterations, so at most 65,535 on llvmpipe).
 layout(local_size_x = 64) in;
 layout(std430, binding = 0) readonly buffer Rays { vec4 rays[]; };   // origin, tmin; direction, tmax
-layout(std430, binding = 1) writeonly buffer Hits { vec4 hits[]; };  // t, instance, triangle; barycentric
+// Per ray: t (-1: none), instance, triangle, object id; barycentric, material; normal.
+layout(std430, binding = 1) writeonly buffer Hits { vec4 hits[]; };
 uniform int u_rays;
 uniform int u_instances;
 
@@ -56,7 +57,10 @@ void main() {
 #else
     bool found = rt_walk(a.xyz, b.xyz, a.w, b.w, any, hit);
 #endif
-    hits[2 * ray] = vec4(found ? hit.t : -1.0, intBitsToFloat(hit.instance),
-                         intBitsToFloat(hit.triangle), 0.0);
-    hits[2 * ray + 1] = vec4(hit.barycentric, 0.0, 0.0);
+    hits[3 * ray] = vec4(found ? hit.t : -1.0, intBitsToFloat(hit.instance),
+                         intBitsToFloat(hit.triangle),
+                         intBitsToFloat(found ? rt_hit_object(hit) : RT_NO_HIT));
+    hits[3 * ray + 1] = vec4(hit.barycentric, intBitsToFloat(found ? rt_hit_material(hit)
+                                                                  : RT_NO_HIT), 0.0);
+    hits[3 * ray + 2] = vec4(found ? rt_hit_normal(hit) : vec3(0.0), 0.0);
 }

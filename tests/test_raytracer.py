@@ -21,16 +21,23 @@ def random_rays(lo, hi, n=RAYS, seed=1):
 
 
 def world_triangles(session, instances, frame):
-    """(T, 3, 3) float64 world triangles of the tracer's instances in its order, and
-    each instance's first triangle among them: from the scene's records (skinned
-    meshes from the skinning pass's points, read back: Session.skinned_points)."""
+    """(T, 3, 3) float64 world triangles of the tracer's instances in its order, each
+    instance's first triangle among them, and each triangle's material: from the
+    scene's records (skinned meshes from the skinning pass's points, read back:
+    Session.skinned_points)."""
     scene = session.scene
     skinned = session.skinned_points(frame)
-    out, first = [], []
+    out, first, materials = [], [], []
     for path, k in instances:
         inst = scene.instances[path]
         mesh = scene.meshes[inst.mesh_key]
         first.append(sum(len(t) for t in out))
+        per, ranges = (2, mesh.patches.ranges) if mesh.patches is not None else (1, [
+            (m, f // 3, c // 3) for m, f, c in mesh.ranges])
+        named = np.empty(sum(c for _, _, c in ranges) * per, object)
+        for m, f, c in ranges:
+            named[f * per:(f + c) * per] = mesh.materials[m]
+        materials.append(named)
         if mesh.patches is not None:
             local = patch_triangles(mesh.patches).astype(np.float64)
         elif mesh.skin is not None:
@@ -41,7 +48,7 @@ def world_triangles(session, instances, frame):
             local = mesh.vertices[:, :3].astype(np.float64)[mesh.indices.reshape(-1, 3)]
         world = inst.world if inst.worlds is None else inst.worlds[k]
         out.append(local @ world[:3, :3].T + world[:3, 3])
-    return np.concatenate(out), np.array(first)
+    return np.concatenate(out), np.array(first), np.concatenate(materials)
 
 
 def assert_matches_reference(hits, triangles, first, origins, directions, what):
@@ -95,7 +102,7 @@ def test_the_crowd_hits_as_brute_force():
         hits, instances, counts = session.trace(origins, directions, frame=2.0)
         brute, _, _ = session.trace(origins, directions, frame=2.0, brute_force=True)
         anyhit, _, _ = session.trace(origins, directions, frame=2.0, any_hit=True)
-        triangles, first = world_triangles(session, instances, 2.0)
+        triangles, first, materials = world_triangles(session, instances, 2.0)
     assert counts["bottom_builds"] == 3 and counts["triangles"] == len(triangles) == 74
     assert_same_hits(hits, brute, "crowd, trees against brute force")
     assert np.array_equal(anyhit.t >= 0, hits.t >= 0)
@@ -110,9 +117,13 @@ def test_the_demo_hits_as_brute_force():
     origins, directions = random_rays((-6, -6, -1), (6, 6, 4))
     with Session(test_looks.stage_of("demo"), SETTINGS) as session:
         hits, instances, counts = session.trace(origins, directions, frame=13.0)
-        triangles, first = world_triangles(session, instances, 13.0)
+        triangles, first, materials = world_triangles(session, instances, 13.0)
     assert counts["triangles"] == len(triangles) > 15_000
     assert_matches_reference(hits, triangles, first, origins, directions, "demo")
+    hit = np.nonzero(hits.t >= 0)[0]
+    expected = materials[first[hits.instance[hit]] + hits.local[hit]]
+    assert [hits.material[i] for i in hit] == list(expected)
+    assert {m.rsplit("/", 1)[-1] for m in expected} >= {"Clay", "Gold", "Checker", "Bumpy"}
 
 
 # --- keeping up with the scene -------------------------------------------------------------
@@ -131,6 +142,22 @@ def test_a_refit_after_the_rig_moves_hits_as_a_fresh_build():
         built, _, fresh = session.trace(origins, directions, frame=3.0)
     assert fresh["bottom_builds"] == 3 and not fresh.get("refits")
     assert_same_hits(refitted, built, "refitted against built")
+    assert np.count_nonzero(before.t != refitted.t) > 100
+
+
+def test_a_time_sampled_mesh_is_refitted():
+    """A mesh whose points are sampled in time, traced at frame 1 then 4, is refitted
+    and hits what a fresh build at frame 4 hits."""
+    import session_scenes
+    stage = session_scenes.time_sampled_mesh_stage(frames=5, grid=40)
+    origins, directions = random_rays((-2, -2, 0), (2, 2, 1.5), n=20_000, seed=5)
+    with Session(stage, SETTINGS) as session:
+        before, _, _ = session.trace(origins, directions, frame=1.0)
+        refitted, _, counts = session.trace(origins, directions, frame=4.0)
+    with Session(stage, SETTINGS) as session:
+        built, _, fresh = session.trace(origins, directions, frame=4.0)
+    assert counts["refits"] == 1 and counts["bottom_builds"] == fresh["bottom_builds"]
+    assert_same_hits(refitted, built, "time-sampled mesh, refitted against built")
     assert np.count_nonzero(before.t != refitted.t) > 100
 
 
@@ -172,10 +199,19 @@ def test_instances_share_their_prototypes_tree():
     origins, directions = random_rays((-9, -9, -9), (9, 9, 9), n=20_000, seed=4)
     with Session(stage, SETTINGS) as session:
         hits, instances, counts = session.trace(origins, directions)
-        triangles, first = world_triangles(session, instances, 1.0)
+        triangles, first, materials = world_triangles(session, instances, 1.0)
     assert counts["bottom_builds"] == 1 and counts["triangles"] == 12
     assert len(instances) == 40 and len(set(hits.instance[hits.instance >= 0])) == 40
     assert_matches_reference(hits, triangles, first, origins, directions, "instances")
+    # What a shader reads at a hit: the object table's id (an instance's, consecutive
+    # in the batch) and the world normal of the triangle's winding.
+    hit = hits.instance >= 0
+    k = np.array([instances[i][1] for i in hits.instance[hit]])
+    assert len(set(hits.object[hit] - k)) == 1
+    tri = triangles[first[hits.instance[hit]] + hits.local[hit]]
+    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    assert np.abs(hits.normal[hit] - normal).max() < 1e-4
 
 
 def test_nothing_is_built_until_rays_are_asked_for():

@@ -60,14 +60,18 @@ class Bottom:
 
 @dataclass
 class Hits:
-    """Traced rays: t (-1 where nothing was hit), instance (index into
-    Raytracer.instances, -1: none), triangle (index into the triangle buffer) and the
-    barycentric weights (n, 2) of its v1 and v2."""
+    """Traced rays, as shaders/raytrace.glsl gives them: t (-1 where nothing was hit),
+    instance (index into Raytracer.instances, -1: none), triangle (index into the
+    triangle buffer), the barycentric weights (n, 2) of its v1 and v2, and what
+    rt_hit_object, rt_hit_material (the name, None: no hit) and rt_hit_normal say."""
     t: np.ndarray
     instance: np.ndarray
     triangle: np.ndarray
     barycentric: np.ndarray
     local: np.ndarray             # the triangle's index in its mesh (-1: none)
+    object: np.ndarray
+    material: list
+    normal: np.ndarray
 
 
 def patch_triangles(patches) -> np.ndarray:
@@ -277,7 +281,7 @@ class Raytracer:
         defines = ["ANY_HIT"] * any_hit + ["BRUTE_FORCE"] * brute_force
         prog = self.programs.get("trace.comp", None, defines, compute=True)
         ray_buffer = self.uploads.buffer(rays, kind="raytrace")
-        hit_buffer = self.uploads.buffer(reserve=n * 32, kind="raytrace")
+        hit_buffer = self.uploads.buffer(reserve=n * 48, kind="raytrace")
         try:
             self.bind()
             ray_buffer.bind_to_storage_buffer(0)
@@ -292,7 +296,7 @@ class Raytracer:
             self.ctx.memory_barrier(SHADER_STORAGE_BARRIER_BIT | BUFFER_UPDATE_BARRIER_BIT)
             self.ctx.finish()
             self.seconds["trace"] = time.perf_counter() - t0          # the last batch's
-            out = np.frombuffer(hit_buffer.read(), np.float32).reshape(n, 2, 4)
+            out = np.frombuffer(hit_buffer.read(), np.float32).reshape(n, 3, 4)
         finally:
             ray_buffer.release()
             hit_buffer.release()
@@ -301,7 +305,9 @@ class Raytracer:
         hit = instance >= 0
         local = np.full(n, -1, np.int64)
         local[hit] = triangle[hit] - self._first[instance[hit]]
-        return Hits(out[:, 0, 0].copy(), instance, triangle, out[:, 1, :2].copy(), local)
+        material = [self.materials[m] if m >= 0 else None for m in out[:, 1, 2].view(np.int32)]
+        return Hits(out[:, 0, 0].copy(), instance, triangle, out[:, 1, :2].copy(), local,
+                    out[:, 0, 3].view(np.int32).copy(), material, out[:, 2, :3].copy())
 
     def release(self):
         for name, buffer in self.buffers.items():
