@@ -290,3 +290,20 @@ def test_degenerate_triangles_and_rays_along_a_face():
     assert counts["triangles"] == 6
     assert np.allclose(closest.t, [3, 3, 3, 5, 7, 2, 2]), closest.t
     assert np.isfinite(closest.barycentric).all() and (anyhit.t > 0).all()
+
+
+def test_an_instance_of_zero_scale_is_left_out_with_a_warning():
+    from pxr import Gf, UsdGeom
+    stage = _stage()
+    pi = UsdGeom.PointInstancer.Define(stage, "/PI")
+    _mesh(stage, "/PI/Protos/Cube", CUBE_POINTS, CUBE_FACES)
+    pi.CreatePrototypesRel().SetTargets(["/PI/Protos/Cube"])
+    pi.CreateProtoIndicesAttr([0, 0, 0])
+    pi.CreatePositionsAttr([Gf.Vec3f(0, 0, 0), Gf.Vec3f(3, 0, 0), Gf.Vec3f(6, 0, 0)])
+    pi.CreateScalesAttr([Gf.Vec3f(1, 1, 1), Gf.Vec3f(0, 1, 1), Gf.Vec3f(1, 1, 1)])
+    with Session(stage, SETTINGS) as session:
+        hits, instances, _ = session.trace([(-5, 0, 0)] * 2, [(1, 0, 0), (-1, 0, 0)])
+        warnings = session.render().warnings
+    assert [k for _, k in instances] == [0, 2]
+    assert hits.t[0] == pytest.approx(4.0) and hits.t[1] < 0
+    assert any("1 instance(s) of zero scale not ray traced" in w for w in warnings), warnings

@@ -306,10 +306,12 @@ class Renderer:
 
     def warnings(self) -> list:
         """What the GL side could not use (images it could not read) and the last
-        render's non-finite pixels, named by the prims they lie on; and, once per
-        process, that it draws on the CPU (engine/gpu/devices.py)."""
+        render's non-finite pixels, named by the prims they lie on; what the ray tracer
+        leaves out; and, once per process, that it draws on the CPU
+        (engine/gpu/devices.py)."""
+        traced = self._raytracer.warnings if self._raytracer is not None else []
         return self.gl.take_notices() + list(self.textures.failed.values()) + \
-            self.resolve.warnings
+            self.resolve.warnings + traced
 
     def tracer(self, scene) -> Raytracer:
         """The session's ray tracer (engine/gpu/raytracer.py), made on the first ask
