@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...core.transforms import transform_aabbs
+from ...core.transforms import SINGULAR, affine_inverse, cross, transform_aabbs
 from .. import bvh
 from .programs import set_uniform
 
@@ -90,7 +90,7 @@ class Raytracer:
         self.materials = []           # material names, by the index triangles carry
         self.instances = []           # (instance path, k-th of its worlds) per record
         self._first = np.zeros(0, np.int64)   # each record's first triangle
-        self.warnings = []            # what is not traced, one line each
+        self._left_out = {"meshes": [], "instances": []}   # what is not traced, a line each
         self.counts = Counter()       # bottom_builds, refits, top_builds; triangles
         self.seconds = Counter()      # the same work's CPU seconds (uploads included); trace
         self.buffers = {name: None for name in BINDINGS}
@@ -105,7 +105,7 @@ class Raytracer:
         for key in [k for k in self.bottoms if k not in used]:
             del self.bottoms[key]
             self._placed = None
-        self.warnings = []
+        self._left_out["meshes"] = []
         moved = rebuilt = False
         for key in sorted(used, key=repr):
             mesh = scene.meshes[key]
@@ -146,8 +146,9 @@ class Raytracer:
         patches = mesh.patches
         if patches is not None:
             if patches.stencils is not None:
-                self.warnings.append(f"{mesh.key[1] if len(mesh.key) > 1 else mesh.key}: a "
-                                     f"skinned subdivision surface is not ray traced")
+                self._left_out["meshes"].append(
+                    f"{mesh.key[1] if len(mesh.key) > 1 else mesh.key}: a skinned subdivision "
+                    f"surface is not ray traced")
                 return None
             return patch_triangles(patches)
         if not len(mesh.indices):
@@ -212,35 +213,40 @@ class Raytracer:
         self._placed = placed
         t0 = time.perf_counter()
         records, firsts, lo, hi, self.instances = [], [], [], [], []
+        self._left_out["instances"] = []
         for path, key, worlds in placed:
             b = self.bottoms[key]
             worlds = np.asarray(worlds, np.float64).reshape(-1, 4, 4)
-            oid = self.geometry.draws[path].oid
-            det = np.linalg.det(worlds[:, :3, :3])
-            for k in np.nonzero(np.abs(det) > 1e-30)[0]:
-                inverse = np.linalg.inv(worlds[k])
-                record = np.empty(INSTANCE_VEC4 * 4, np.float32)
-                record[:12], record[12:24] = inverse[:3].ravel(), worlds[k][:3].ravel()
-                record[24:] = np.array([b.first_node, b.first_triangle, len(b.triangles),
-                                        oid + k], np.int32).view(np.float32)
-                records.append(record)
-                firsts.append(b.first_triangle)
-                self.instances.append((path, int(k)))
-            if (np.abs(det) <= 1e-30).any():
-                self.warnings.append(f"{path}: {int((np.abs(det) <= 1e-30).sum())} instance(s) "
-                                     f"of zero scale not ray traced")
-            root_lo = b.tree.lo[0].astype(np.float64)[None].repeat(len(worlds), 0)
-            root_hi = b.tree.hi[0].astype(np.float64)[None].repeat(len(worlds), 0)
-            wlo, whi = transform_aabbs(root_lo, root_hi, worlds)
-            keep = np.abs(det) > 1e-30
-            lo.append(wlo[keep])
-            hi.append(whi[keep])
+            a = worlds[:, :3, :3]
+            det = np.sum(a[:, 0] * cross(a[:, 1], a[:, 2]), axis=1)
+            keep = np.abs(det) > SINGULAR * np.abs(a).max(axis=(1, 2)) ** 3
+            if not keep.all():
+                self._left_out["instances"].append(
+                    f"{path}: {int((~keep).sum())} instance(s) of zero scale not ray traced")
+            ks = np.nonzero(keep)[0]
+            kept = worlds[ks]
+            record = np.empty((len(ks), INSTANCE_VEC4 * 4), np.float32)
+            record[:, :12] = affine_inverse(kept)[:, :3].reshape(-1, 12)
+            record[:, 12:24] = kept[:, :3].reshape(-1, 12)
+            info = np.empty((len(ks), 4), np.int32)
+            info[:] = (b.first_node, b.first_triangle, len(b.triangles), 0)
+            info[:, 3] = self.geometry.draws[path].oid + ks
+            record[:, 24:] = info.view(np.float32)
+            records.append(record)
+            firsts += [b.first_triangle] * len(ks)
+            self.instances += [(path, int(k)) for k in ks]
+            root = np.repeat(b.tree.lo[:1].astype(np.float64), len(ks), 0), \
+                np.repeat(b.tree.hi[:1].astype(np.float64), len(ks), 0)
+            wlo, whi = transform_aabbs(*root, kept)
+            lo.append(wlo)
+            hi.append(whi)
         self._first = np.array(firsts, np.int64)
-        if records:
+        records = np.concatenate(records) if records else []
+        if len(records):
             lo, hi = np.concatenate(lo), np.concatenate(hi)
             pad = TOP_PAD * (np.maximum(np.abs(lo), np.abs(hi)) + (hi - lo))
             top = bvh.build(lo - pad, hi + pad).packed()
-            self._upload("instances", np.array(records, np.float32))
+            self._upload("instances", records)
         else:
             top = np.zeros((1, bvh.NODE_FLOATS), np.float32)     # miss link 0: empty
             self._upload("instances", np.zeros(INSTANCE_VEC4 * 4, np.float32))
@@ -263,6 +269,11 @@ class Raytracer:
         """Binds the buffers where shaders/raytrace.glsl reads them."""
         for name, binding in BINDINGS.items():
             self.buffers[name].bind_to_storage_buffer(binding)
+
+    @property
+    def warnings(self) -> list:
+        """What the tracer leaves out, one line each."""
+        return self._left_out["meshes"] + self._left_out["instances"]
 
     @property
     def triangle_count(self) -> int:
