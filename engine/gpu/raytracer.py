@@ -212,42 +212,43 @@ class Raytracer:
             return
         self._placed = placed
         t0 = time.perf_counter()
-        records, firsts, lo, hi, self.instances = [], [], [], [], []
         self._left_out["instances"] = []
-        for path, key, worlds in placed:
-            b = self.bottoms[key]
-            worlds = np.asarray(worlds, np.float64).reshape(-1, 4, 4)
+        worlds = np.zeros((0, 4, 4))
+        if placed:
+            # Every instance at once: one row per world matrix, `owner` its entry.
+            worlds = [np.asarray(w, np.float64).reshape(-1, 4, 4) for _, _, w in placed]
+            sizes = np.array([len(w) for w in worlds])
+            owner = np.repeat(np.arange(len(placed)), sizes)
+            k = np.arange(len(owner)) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+            worlds = np.concatenate(worlds)
             a = worlds[:, :3, :3]
             det = np.sum(a[:, 0] * cross(a[:, 1], a[:, 2]), axis=1)
             keep = np.abs(det) > SINGULAR * np.abs(a).max(axis=(1, 2)) ** 3
-            if not keep.all():
+            for e in np.unique(owner[~keep]):
                 self._left_out["instances"].append(
-                    f"{path}: {int((~keep).sum())} instance(s) of zero scale not ray traced")
-            ks = np.nonzero(keep)[0]
-            kept = worlds[ks]
-            record = np.empty((len(ks), INSTANCE_VEC4 * 4), np.float32)
-            record[:, :12] = affine_inverse(kept)[:, :3].reshape(-1, 12)
-            record[:, 12:24] = kept[:, :3].reshape(-1, 12)
-            info = np.empty((len(ks), 4), np.int32)
-            info[:] = (b.first_node, b.first_triangle, len(b.triangles), 0)
-            info[:, 3] = self.geometry.draws[path].oid + ks
-            record[:, 24:] = info.view(np.float32)
-            records.append(record)
-            firsts += [b.first_triangle] * len(ks)
-            self.instances += [(path, int(k)) for k in ks]
-            root = np.repeat(b.tree.lo[:1].astype(np.float64), len(ks), 0), \
-                np.repeat(b.tree.hi[:1].astype(np.float64), len(ks), 0)
-            wlo, whi = transform_aabbs(*root, kept)
-            lo.append(wlo)
-            hi.append(whi)
-        self._first = np.array(firsts, np.int64)
-        records = np.concatenate(records) if records else []
-        if len(records):
-            lo, hi = np.concatenate(lo), np.concatenate(hi)
+                    f"{placed[e][0]}: {int(np.sum(~keep & (owner == e)))} instance(s) of zero "
+                    f"scale not ray traced")
+            owner, k, worlds = owner[keep], k[keep], worlds[keep]
+        if len(worlds):
+            bottoms = [self.bottoms[key] for _, key, _ in placed]
+            info = np.array([(b.first_node, b.first_triangle, len(b.triangles),
+                              self.geometry.draws[path].oid)
+                             for b, (path, _, _) in zip(bottoms, placed)], np.int32)[owner]
+            info[:, 3] += k.astype(np.int32)
+            records = np.empty((len(worlds), INSTANCE_VEC4 * 4), np.float32)
+            records[:, :12] = affine_inverse(worlds)[:, :3].reshape(-1, 12)
+            records[:, 12:24] = worlds[:, :3].reshape(-1, 12)
+            records[:, 24:] = info.view(np.float32)
+            self._first = info[:, 1].astype(np.int64)
+            self.instances = [(placed[e][0], int(i)) for e, i in zip(owner, k)]
+            root_lo = np.array([b.tree.lo[0] for b in bottoms], np.float64)[owner]
+            root_hi = np.array([b.tree.hi[0] for b in bottoms], np.float64)[owner]
+            lo, hi = transform_aabbs(root_lo, root_hi, worlds)
             pad = TOP_PAD * (np.maximum(np.abs(lo), np.abs(hi)) + (hi - lo))
             top = bvh.build(lo - pad, hi + pad).packed()
             self._upload("instances", records)
         else:
+            self._first, self.instances = np.zeros(0, np.int64), []
             top = np.zeros((1, bvh.NODE_FLOATS), np.float32)     # miss link 0: empty
             self._upload("instances", np.zeros(INSTANCE_VEC4 * 4, np.float32))
         self._upload("top", top)
