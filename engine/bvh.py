@@ -15,9 +15,10 @@ that enters goes to the next node, so the GPU walks the tree without a stack, on
 iteration a node (llvmpipe ends an invocation's loops after 65,535 iterations,
 docs/status.md), and a two-level walk is one loop.
 
-Refit: the leaves take their boxes' new bounds, then each level from the deepest up
-the union of its two children; the order (and so the tree's quality) stays the
-build's. The tree stays exact: every node bounds its boxes, whatever moved."""
+Refit: the leaves take their boxes' new bounds, then each inner node, by height from
+the leaves up, the union of its two children (several trees at once: one numpy pass a
+height over all of them); the order (and so the tree's quality) stays the build's.
+The tree stays exact: every node bounds its boxes, whatever moved."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -34,13 +35,14 @@ class Tree:
     """A built tree of n boxes: 2n - 1 nodes in preorder. lo, hi (nodes, 3) float32;
     miss (nodes,) the node after each one's subtree; prim (nodes,) a leaf's box index,
     -1 for an inner node; right (nodes,) an inner node's right child (-1 for a leaf);
-    levels: the inner nodes by depth, deepest first (the refit's order)."""
+    heights: the inner nodes by height (1: over leaves only), the refit's order, in
+    which several trees are refitted together (refit_many)."""
     lo: np.ndarray
     hi: np.ndarray
     miss: np.ndarray
     prim: np.ndarray
     right: np.ndarray
-    levels: list
+    heights: list
 
     @property
     def size(self) -> int:
@@ -88,8 +90,14 @@ def build(lo: np.ndarray, hi: np.ndarray) -> Tree:
         right[node] = node + 2 * (split - first + 1)
         node = np.concatenate([node + 1, right[node]])
         first, last = np.concatenate([first, split + 1]), np.concatenate([split, last])
+    height = np.zeros(size, np.int64)
+    for node in levels[::-1]:                       # deepest first
+        height[node] = np.maximum(height[node + 1], height[right[node]]) + 1
+    inner = np.nonzero(prim < 0)[0]
+    by_height = inner[np.argsort(height[inner], kind="stable")]
+    cuts = np.searchsorted(height[by_height], np.arange(1, height.max() + 1), side="right")
     tree = Tree(np.zeros((size, 3), np.float32), np.zeros((size, 3), np.float32),
-                miss, prim, right, levels[::-1])
+                miss, prim, right, np.split(by_height, cuts)[:-1])
     refit(tree, lo, hi)
     return tree
 
@@ -109,13 +117,26 @@ def _split(keys, first, last) -> np.ndarray:
 def refit(tree: Tree, lo: np.ndarray, hi: np.ndarray):
     """The tree's boxes again from its boxes' new bounds (lo, hi) (n, 3), in place.
     Bounds are rounded outwards to float32, so a node never shrinks below its boxes."""
-    leaves = tree.prim >= 0
-    tree.lo[leaves] = _outward(np.asarray(lo)[tree.prim[leaves]], -np.inf)
-    tree.hi[leaves] = _outward(np.asarray(hi)[tree.prim[leaves]], np.inf)
-    for node in tree.levels:
-        r = tree.right[node]
-        tree.lo[node] = np.minimum(tree.lo[node + 1], tree.lo[r])
-        tree.hi[node] = np.maximum(tree.hi[node + 1], tree.hi[r])
+    refit_many([tree], [0], tree.lo, tree.hi, [lo], [hi])
+
+
+def refit_many(trees, offsets, node_lo, node_hi, lo, hi):
+    """Several trees refitted at once, in place: their nodes lie in node_lo, node_hi
+    (N, 3) float32 from `offsets`, and lo[i], hi[i] are tree i's boxes' new bounds.
+    One numpy pass a height over all of them, not one a level of each."""
+    leaves = [np.nonzero(t.prim >= 0)[0] for t in trees]
+    at = np.concatenate([off + leaf for off, leaf in zip(offsets, leaves)])
+    node_lo[at] = _outward(np.concatenate([np.asarray(b)[t.prim[leaf]] for b, t, leaf
+                                           in zip(lo, trees, leaves)]), -np.inf)
+    node_hi[at] = _outward(np.concatenate([np.asarray(b)[t.prim[leaf]] for b, t, leaf
+                                           in zip(hi, trees, leaves)]), np.inf)
+    for h in range(max(len(t.heights) for t in trees)):
+        level = [(off + t.heights[h], off + t.right[t.heights[h]])
+                 for off, t in zip(offsets, trees) if h < len(t.heights)]
+        node = np.concatenate([n for n, _ in level])
+        r = np.concatenate([r for _, r in level])
+        node_lo[node] = np.minimum(node_lo[node + 1], node_lo[r])
+        node_hi[node] = np.maximum(node_hi[node + 1], node_hi[r])
 
 
 def _outward(values: np.ndarray, towards: float) -> np.ndarray:

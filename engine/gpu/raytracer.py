@@ -95,7 +95,7 @@ class Raytracer:
         self.seconds = Counter()      # the same work's CPU seconds (uploads included); trace
         self.buffers = {name: None for name in BINDINGS}
         self._placed = None           # what the top tree was built from
-        self._top_lo = self._top_hi = None
+        self._lo = self._hi = None    # every bottom tree's boxes (_pack)
 
     # --- keeping up with the scene -------------------------------------------------
     def update(self, scene):
@@ -106,7 +106,7 @@ class Raytracer:
             del self.bottoms[key]
             self._placed = None
         self._left_out["meshes"] = []
-        moved = rebuilt = False
+        rebuilt, refits = False, []
         for key in sorted(used, key=repr):
             mesh = scene.meshes[key]
             old = self.bottoms.get(key)
@@ -119,26 +119,34 @@ class Raytracer:
                 rebuilt |= self.bottoms.pop(key, None) is not None
                 continue
             if old is not None and key[0] in DEFORMED and len(corners) == len(old.triangles):
-                # Posed again, or a time-sampled mesh at a new time: the same tree refitted.
+                # Posed again, or a time-sampled mesh at a new time: the same tree
+                # refitted, with the others below.
                 old.mesh, old.poses = mesh, poses
                 old.triangles = self._triangles(mesh, corners)
-                bvh.refit(old.tree, *bvh.triangle_boxes(corners.astype(np.float64)))
-                self._write_bottom(old)
-                self.counts["refits"] += 1
+                refits.append((old, bvh.triangle_boxes(corners.astype(np.float64))))
                 self.seconds["refits"] += time.perf_counter() - t0
-                moved = True
                 continue
             self.bottoms[key] = Bottom(mesh, bvh.build(*bvh.triangle_boxes(
                 corners.astype(np.float64))), self._triangles(mesh, corners), poses=poses)
             self.counts["bottom_builds"] += 1
             self.seconds["bottom_builds"] += time.perf_counter() - t0
             rebuilt = True
+        if refits:
+            t0 = time.perf_counter()
+            bvh.refit_many([b.tree for b, _ in refits], [b.first_node for b, _ in refits],
+                           self._lo, self._hi, [box[0] for _, box in refits],
+                           [box[1] for _, box in refits])
+            if not rebuilt:                  # else every tree goes up below
+                for b, _ in refits:
+                    self._write_bottom(b)
+            self.counts["refits"] += len(refits)
+            self.seconds["refits"] += time.perf_counter() - t0
         if rebuilt:
             t0 = time.perf_counter()
             self._pack()
             self.seconds["bottom_builds"] += time.perf_counter() - t0
         self.counts["triangles"] = self.triangle_count
-        self._place(scene, force=moved or rebuilt)
+        self._place(scene, force=bool(refits) or rebuilt)
 
     def _corners(self, mesh):
         """(T, 3, 3) float32 corners of a mesh's triangles as drawn, or None (nothing
@@ -186,8 +194,13 @@ class Raytracer:
             tri += len(b.triangles)
         nodes = np.zeros((max(node, 1), bvh.NODE_FLOATS), np.float32)
         triangles = np.zeros((max(tri, 1), 3, 4), np.float32)
+        # Every tree's boxes become views of one pair of arrays: refit_many's.
+        self._lo, self._hi = np.zeros((node, 3), np.float32), np.zeros((node, 3), np.float32)
         for b in self.bottoms.values():
-            nodes[b.first_node:b.first_node + b.tree.size] = b.tree.packed(b.first_node)
+            span = slice(b.first_node, b.first_node + b.tree.size)
+            self._lo[span], self._hi[span] = b.tree.lo, b.tree.hi
+            b.tree.lo, b.tree.hi = self._lo[span], self._hi[span]
+            nodes[span] = b.tree.packed(b.first_node)
             triangles[b.first_triangle:b.first_triangle + len(b.triangles)] = b.triangles
         self._upload("nodes", nodes)
         self._upload("triangles", triangles)
