@@ -2,7 +2,7 @@
 in its object space, and a top-level BVH over the instances placed in the world
 (engine/bvh.py builds them; shaders/raytrace.glsl walks them in compute shaders).
 
-Made only when something asks for rays (Renderer.raytracer), then kept up with the
+Made only when something asks for rays (Renderer.tracer), then kept up with the
 scene by `update`, which builds only what changed:
 - a mesh's tree is built when its record is new (the reader replaces a record whose
   prim changed), and refitted when the skinning pass deformed it again (its deformed
@@ -123,11 +123,11 @@ class Raytracer:
                 # refitted, with the others below.
                 old.mesh, old.poses = mesh, poses
                 old.triangles = self._triangles(mesh, corners)
-                refits.append((old, bvh.triangle_boxes(corners.astype(np.float64))))
+                refits.append((old, bvh.triangle_boxes(corners)))
                 self.seconds["refits"] += time.perf_counter() - t0
                 continue
-            self.bottoms[key] = Bottom(mesh, bvh.build(*bvh.triangle_boxes(
-                corners.astype(np.float64))), self._triangles(mesh, corners), poses=poses)
+            self.bottoms[key] = Bottom(mesh, bvh.build(*bvh.triangle_boxes(corners)),
+                                       self._triangles(mesh, corners), poses=poses)
             self.counts["bottom_builds"] += 1
             self.seconds["bottom_builds"] += time.perf_counter() - t0
             rebuilt = True
