@@ -74,11 +74,21 @@ class Hits:
     normal: np.ndarray
 
 
-def patch_triangles(patches) -> np.ndarray:
+def patch_triangles(patches, cage=None) -> np.ndarray:
     """(2P, 3, 3) float32: two triangles a Bezier patch, over its corners (which lie on
-    the limit surface), in the order and winding of its u and v."""
-    c = patches.control
-    quads = np.stack([c[:, 0], c[:, 3], c[:, 15], c[:, 12]], axis=1)
+    the limit surface), in the order and winding of its u and v. `cage`: a skinned
+    cage's points as posed, which the patches' stencils carry to the corners (else the
+    patches' own control points)."""
+    rows = (np.arange(len(patches.control))[:, None] * 16 + np.array([0, 3, 15, 12])).ravel()
+    if cage is None:
+        corners = patches.control.reshape(-1, 3)[rows]
+    else:
+        indptr, points, weights = patches.stencils
+        start, count = indptr[rows], indptr[rows + 1] - indptr[rows]
+        first = np.cumsum(count) - count          # each corner's first term, gathered
+        at = np.repeat(start - first, count) + np.arange(count.sum())
+        corners = np.add.reduceat(weights[at, None] * cage[points[at]], first)
+    quads = corners.reshape(-1, 4, 3)
     return np.ascontiguousarray(quads[:, [0, 1, 2, 0, 2, 3]].reshape(-1, 3, 3), np.float32)
 
 
@@ -90,7 +100,7 @@ class Raytracer:
         self.materials = []           # material names, by the index triangles carry
         self.instances = []           # (instance path, k-th of its worlds) per record
         self._first = np.zeros(0, np.int64)   # each record's first triangle
-        self._left_out = {"meshes": [], "instances": []}   # what is not traced, a line each
+        self._left_out = []           # instances not traced, a line each
         self.counts = Counter()       # bottom_builds, refits, top_builds; triangles
         self.seconds = Counter()      # the same work's CPU seconds (uploads included); trace
         self.buffers = {name: None for name in BINDINGS}
@@ -105,7 +115,6 @@ class Raytracer:
         for key in [k for k in self.bottoms if k not in used]:
             del self.bottoms[key]
             self._placed = None
-        self._left_out["meshes"] = []
         rebuilt, refits = False, []
         for key in sorted(used, key=repr):
             mesh = scene.meshes[key]
@@ -141,7 +150,7 @@ class Raytracer:
                     self._write_bottom(b)
             self.counts["refits"] += len(refits)
             self.seconds["refits"] += time.perf_counter() - t0
-        if rebuilt:
+        if rebuilt or self.buffers["nodes"] is None:     # (empty buffers: nothing traced)
             t0 = time.perf_counter()
             self._pack()
             self.seconds["bottom_builds"] += time.perf_counter() - t0
@@ -149,20 +158,19 @@ class Raytracer:
         self._place(scene, force=bool(refits) or rebuilt)
 
     def _corners(self, mesh):
-        """(T, 3, 3) float32 corners of a mesh's triangles as drawn, or None (nothing
-        to trace; a skinned cage is named in `warnings`)."""
-        patches = mesh.patches
-        if patches is not None:
-            if patches.stencils is not None:
-                self._left_out["meshes"].append(
-                    f"{mesh.key[1] if len(mesh.key) > 1 else mesh.key}: a skinned subdivision "
-                    f"surface is not ray traced")
-                return None
-            return patch_triangles(patches)
+        """(T, 3, 3) float32 corners of a mesh's triangles as drawn (a skinned mesh as
+        the skinning pass left it), or None (no triangles)."""
+        posed = mesh.skin is not None and mesh.key in self.skinning.poses
+        if mesh.patches is not None:
+            cage = None
+            if posed and mesh.patches.stencils is not None:    # a skinned cage, as posed
+                cage = np.zeros((mesh.skin.n_points, 3), np.float32)
+                cage[mesh.point_of_vertex] = self.skinning.read(mesh.key)[:, :3]
+            return patch_triangles(mesh.patches, cage)
         if not len(mesh.indices):
             return None
         points = mesh.vertices[:, :3]
-        if mesh.skin is not None and mesh.key in self.skinning.poses:
+        if posed:
             points = self.skinning.read(mesh.key)[:, :3]
         return np.ascontiguousarray(points[mesh.indices.reshape(-1, 3)], np.float32)
 
@@ -225,7 +233,7 @@ class Raytracer:
             return
         self._placed = placed
         t0 = time.perf_counter()
-        self._left_out["instances"] = []
+        self._left_out = []
         worlds = np.zeros((0, 4, 4))
         if placed:
             # Every instance at once: one row per world matrix, `owner` its entry.
@@ -238,7 +246,7 @@ class Raytracer:
             det = np.sum(a[:, 0] * cross(a[:, 1], a[:, 2]), axis=1)
             keep = np.abs(det) > SINGULAR * np.abs(a).max(axis=(1, 2)) ** 3
             for e in np.unique(owner[~keep]):
-                self._left_out["instances"].append(
+                self._left_out.append(
                     f"{placed[e][0]}: {int(np.sum(~keep & (owner == e)))} instance(s) of zero "
                     f"scale not ray traced")
             owner, k, worlds = owner[keep], k[keep], worlds[keep]
@@ -287,7 +295,7 @@ class Raytracer:
     @property
     def warnings(self) -> list:
         """What the tracer leaves out, one line each."""
-        return self._left_out["meshes"] + self._left_out["instances"]
+        return list(self._left_out)
 
     @property
     def triangle_count(self) -> int:

@@ -307,8 +307,8 @@ class Renderer:
     def warnings(self) -> list:
         """What the GL side could not use (images it could not read) and the last
         render's non-finite pixels, named by the prims they lie on; what the ray tracer
-        leaves out; and, once per process, that it draws on the CPU
-        (engine/gpu/devices.py)."""
+        leaves out (instances of zero scale); and, once per process, that it draws on
+        the CPU (engine/gpu/devices.py)."""
         traced = self._raytracer.warnings if self._raytracer is not None else []
         return self.gl.take_notices() + list(self.textures.failed.values()) + \
             self.resolve.warnings + traced
