@@ -40,6 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.lights import POINT
+from ..core.morton import morton_order
 from .view import split_double
 
 ERROR_CONSTANT = 1.5         # above the measured 1.3 of the corrected group's error
@@ -69,17 +70,6 @@ def group_distance(radius, spread, error: float) -> np.ndarray:
         hi = np.where(ok, mid, hi)
         lo = np.where(ok, lo, mid)
     return np.minimum(hi, NEVER)
-
-
-def morton_order(points: np.ndarray) -> np.ndarray:
-    """Indices of `points` (n, 3) along a 3D Morton curve over their box (10 bits an axis)."""
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    q = ((points - lo) / np.maximum(hi - lo, 1e-30) * 1023.0).astype(np.uint64)
-    code = np.zeros(len(points), np.uint64)
-    for bit in range(10):
-        for axis in range(3):
-            code |= ((q[:, axis] >> np.uint64(bit)) & np.uint64(1)) << np.uint64(3 * bit + axis)
-    return np.argsort(code, kind="stable")
 
 
 @dataclass

@@ -201,6 +201,23 @@ class Session:
         scene = self._reader.scene
         return run_gl(lambda gl: self._renderer.skinned_points(scene, changes, self.settings))
 
+    def trace(self, origins, directions, frame=None, **options):
+        """Rays (n, 3) traced against the stage's triangles at `frame` (None: as
+        render() takes it), skinned meshes posed: (Hits, the Raytracer's instances
+        [(instance path, k-th of its worlds)] that Hits.instance indexes, its counts
+        and their "seconds": Raytracer.counts and .seconds).
+        `options`: Raytracer.trace's (tmin, tmax, any_hit, brute_force). For tests,
+        benches and tools; passes use Renderer.tracer."""
+        self._check_open()
+        changes = self._reader.sync(self._frame(frame))
+        scene = self._reader.scene
+
+        def trace(gl):
+            hits, tracer = self._renderer.trace(scene, changes, self.settings, origins,
+                                                directions, **options)
+            return hits, list(tracer.instances), {**tracer.counts, "seconds": dict(tracer.seconds)}
+        return run_gl(trace)
+
     def _frame(self, frame):
         if frame is not None:
             return float(frame)

@@ -34,6 +34,7 @@ from .passes.skinning import SkinningPass
 from .passes.tessellation import TessellationPass
 from .passes.transparency import TransparencyPass
 from .passes.view import ViewPass
+from .raytracer import Raytracer
 from .readback import Readback, ReadbackRequest, read_mode
 from .resources import TargetPool, Uploads
 from .stencil import Stencil
@@ -132,6 +133,7 @@ class Renderer:
             self.resolve,
         ], gl.proc)
         self._cull_backfaces = None
+        self._raytracer = None      # made by the first ask for rays (tracer)
 
     def update(self, scene, changes, cull_backfaces: bool) -> int:
         """Uploads what the sync changed; returns the number of meshes uploaded."""
@@ -304,22 +306,51 @@ class Renderer:
 
     def warnings(self) -> list:
         """What the GL side could not use (images it could not read) and the last
-        render's non-finite pixels, named by the prims they lie on; and, once per
-        process, that it draws on the CPU (engine/gpu/devices.py)."""
+        render's non-finite pixels, named by the prims they lie on; what the ray tracer
+        leaves out (instances of zero scale); and, once per process, that it draws on
+        the CPU (engine/gpu/devices.py)."""
+        traced = self._raytracer.warnings if self._raytracer is not None else []
         return self.gl.take_notices() + list(self.textures.failed.values()) + \
-            self.resolve.warnings
+            self.resolve.warnings + traced
+
+    def tracer(self, scene) -> Raytracer:
+        """The session's ray tracer (engine/gpu/raytracer.py), made on the first ask
+        and brought up to `scene` as drawn: ask after this frame's skinning pass. Bind
+        it (Raytracer.bind) for a compute shader that includes shaders/raytrace.glsl."""
+        if not self.features.compute:
+            v = self.features.version
+            raise ValueError(f"ray tracing needs compute shaders (GL 4.3); this context "
+                             f"is GL {v // 100}.{v // 10 % 10}")
+        if self._raytracer is None:
+            self._raytracer = Raytracer(self.ctx, self.uploads, self.programs,
+                                        self.geometry, self.skinning)
+        self._raytracer.update(scene)
+        return self._raytracer
+
+    def _posed(self, scene, changes, settings):
+        """Uploads what the sync changed and runs the skinning pass, outside a frame."""
+        self.update(scene, changes, bool(self._cull_backfaces))
+        frame = Frame(scene=scene, changes=changes, size=(1, 1), preset=self.preset,
+                      options=settings or RenderSettings())
+        frame.compute, frame.lighting = self._forms(frame.options)
+        if self.skinning.needed(frame):
+            self.skinning.execute(frame, {})
+
+    def trace(self, scene, changes, settings, origins, directions, **options):
+        """Rays traced against the scene at this sync's time (Raytracer.trace's Hits,
+        with `options` its), and the tracer that traced them."""
+        self._posed(scene, changes, settings)
+        tracer = self.tracer(scene)
+        hits = tracer.trace(origins, directions, **options)
+        self.uploads.take()
+        self._restore_state()
+        return hits, tracer
 
     def skinned_points(self, scene, changes, settings=None) -> dict:
         """{mesh path: (points, normals)} of every skinned mesh at this sync's time,
         world space, one row per mesh point (normals as drawn), deformed in the form
         `settings` give a frame (compute or transform feedback)."""
-        self.update(scene, changes, bool(self._cull_backfaces))
-        frame = Frame(scene=scene, changes=changes, size=(1, 1), preset=self.preset,
-                      options=settings or RenderSettings())
-        frame.compute, frame.lighting = self._forms(frame.options)
-        board = {}
-        if self.skinning.needed(frame):
-            self.skinning.execute(frame, board)
+        self._posed(scene, changes, settings)
         out = {}
         for path, inst in scene.instances.items():
             mesh = scene.meshes[inst.mesh_key]
@@ -347,6 +378,8 @@ class Renderer:
         ctx.scissor = None
 
     def release(self):
+        if self._raytracer is not None:
+            self._raytracer.release()
         self.graph.release()
         self.readback.release()
         self.textures.release()

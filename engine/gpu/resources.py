@@ -14,7 +14,8 @@ from collections import Counter
 
 import numpy as np
 
-KINDS = ("mesh", "objects", "commands", "joints", "shapes", "lights", "textures", "overlays")
+KINDS = ("mesh", "objects", "commands", "joints", "shapes", "lights", "textures", "overlays",
+         "raytrace")
 
 
 class Uploads:

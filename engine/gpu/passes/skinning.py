@@ -107,6 +107,7 @@ class SkinningPass(Pass):
         self.inputs = {}               # mesh key -> _Input
         self.joints = {}               # skel key -> texture
         self._fresh = set()            # mesh keys whose output is stale
+        self.poses = {}                # mesh key -> times deformed (the ray tracer refits)
         self._scratch = None           # surface normals: (vertex copy, its texture)
         self._align = self._block = None
         if compute:                    # the shader storage binding limits of the context
@@ -128,6 +129,7 @@ class SkinningPass(Pass):
             if key not in scene.meshes or key in changes.meshes:
                 self.inputs.pop(key).release()
                 self._fresh.discard(key)
+                self.poses.pop(key, None)
         for key in changes.meshes:
             mesh = scene.meshes.get(key)
             if mesh is not None and mesh.skin is not None:
@@ -212,6 +214,7 @@ class SkinningPass(Pass):
         a mesh fits a storage block, else by transform feedback."""
         dispatched = []
         for mesh in meshes:
+            self.poses[mesh.key] = self.poses.get(mesh.key, 0) + 1
             if compute and self._fits(mesh):
                 self._skin_compute(mesh)
                 dispatched.append(mesh)
