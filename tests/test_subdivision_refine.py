@@ -52,6 +52,19 @@ def _max_nearest(a, b):
     return max(cKDTree(b).query(a)[0].max(), cKDTree(a).query(b)[0].max())
 
 
+def test_a_cages_edges_are_its_distinct_vertex_pairs_in_order():
+    """The edges a cage's rules run over (found as one integer per pair): each distinct
+    pair of neighbouring corners once, lower vertex first, in the pairs' order, on
+    polygons of mixed sizes over vertex numbers far apart, and on no faces at all."""
+    counts = np.array([3, 4, 5, 4])
+    indices = np.array([7, 900000, 3, 3, 900000, 12, 5, 5, 12, 8, 2, 40, 7, 3, 5, 2])
+    pairs = np.sort(np.stack([indices, indices[[1, 2, 0, 4, 5, 6, 3, 8, 9, 10, 11, 7,
+                                                13, 14, 15, 12]]], 1), axis=1)
+    points = np.zeros((900001, 3))
+    assert np.array_equal(cage(points, counts, indices).edges, np.unique(pairs, axis=0))
+    assert cage(points, np.zeros(0, np.int64), np.zeros(0, np.int64)).edges.shape == (0, 2)
+
+
 @pytest.mark.parametrize("levels", [1, 2])
 def test_cube_matches_blender(empty_scene, levels):
     ob = cube_object("Cube")
