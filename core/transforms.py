@@ -85,11 +85,18 @@ def affine_inverse(m: np.ndarray) -> np.ndarray:
 
 
 def normal_matrix(m: np.ndarray) -> np.ndarray:
-    """The inverse transpose of a 4x4's upper 3x3, which carries normals; a singular
-    matrix (a flattened object) keeps its own 3x3 rather than dividing by zero."""
-    m3 = np.asarray(m, np.float64)[:3, :3]
-    det = np.linalg.det(m3)
-    return np.linalg.inv(m3).T if abs(det) > 1e-30 else m3
+    """The inverse transposes of (..., 4, 4) or (..., 3, 3) matrices' upper 3x3s, which
+    carry normals: the cofactor matrix over the determinant, without a LAPACK call
+    (numpy's costs microseconds a matrix, milliseconds on a loaded machine where its
+    threads wait, and the skinning pass asks each frame). A singular matrix (a
+    flattened object) keeps its own 3x3 rather than dividing by zero."""
+    a = np.asarray(m, np.float64)[..., :3, :3]
+    cof = np.stack([np.cross(a[..., 1, :], a[..., 2, :]),
+                    np.cross(a[..., 2, :], a[..., 0, :]),
+                    np.cross(a[..., 0, :], a[..., 1, :])], axis=-2)
+    det = np.sum(a[..., 0, :] * cof[..., 0, :], axis=-1)
+    ok = np.abs(det) > 1e-30
+    return np.where(ok[..., None, None], cof / np.where(ok, det, 1.0)[..., None, None], a)
 
 
 def look_at(eye, target, up) -> np.ndarray:

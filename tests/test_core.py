@@ -45,6 +45,10 @@ def test_affine_inverse_and_normal_matrix():
     assert np.allclose(n, np.linalg.inv(m[0][:3, :3]).T)
     flat = np.diag([1.0, 1.0, 0.0, 1.0])           # singular: kept, never a division by 0
     assert np.array_equal(transforms.normal_matrix(flat), flat[:3, :3])
+    both = np.concatenate([m, flat[None]])          # a batch: each matrix as alone
+    batch = transforms.normal_matrix(both)
+    assert np.abs(batch[:-1] - np.linalg.inv(m[:, :3, :3]).transpose(0, 2, 1)).max() < 1e-9
+    assert np.array_equal(batch[-1], flat[:3, :3])
 
 
 def test_transformed_boxes_hold_every_transformed_corner():

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...core.transforms import normal_matrix
 from ..view import split_double
 from .stores import Arena
 
@@ -63,7 +64,7 @@ class ObjectTable:
         texels[:, :4] = worlds.transpose(0, 2, 1)          # columns
         hi, lo = split_double(worlds[:, :3, 3])
         texels[:, 3, :3] = hi
-        texels[:, 4:7, :3] = normal_matrices(worlds).transpose(0, 2, 1)
+        texels[:, 4:7, :3] = normal_matrix(worlds).transpose(0, 2, 1)
         texels[:, 7, :3] = lo
         texels[:, 4, 3] = pass_index                       # render pass IndexOB
         flat = self.data.reshape(-1, 4)
@@ -91,14 +92,3 @@ class ObjectTable:
     def release(self):
         if self.texture is not None:
             self.texture.release()
-
-
-def normal_matrices(worlds) -> np.ndarray:
-    """(n, 3, 3) inverse transposes of the worlds' 3x3s (a singular one keeps its own,
-    as core.transforms.normal_matrix)."""
-    m3 = worlds[:, :3, :3]
-    out = m3.copy()
-    ok = np.abs(np.linalg.det(m3)) > 1e-30
-    if ok.any():
-        out[ok] = np.linalg.inv(m3[ok]).transpose(0, 2, 1)
-    return out

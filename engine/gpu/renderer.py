@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 
 from ...core.passes import PASSES
+from ...core.transforms import normal_matrix
 from . import budget
 from .context import Features
 from .depth import DepthConvention
@@ -362,9 +363,7 @@ class Renderer:
             pts[mesh.point_of_vertex] = data[:, :3]
             nrm[mesh.point_of_vertex] = data[:, 3:6]
             w = inst.world
-            m3 = w[:3, :3]
-            out[path] = (pts @ m3.T + w[:3, 3],
-                         nrm @ (np.linalg.inv(m3).T if abs(np.linalg.det(m3)) > 1e-30 else m3).T)
+            out[path] = (pts @ w[:3, :3].T + w[:3, 3], nrm @ normal_matrix(w).T)
         self.uploads.take()
         self._restore_state()
         return out

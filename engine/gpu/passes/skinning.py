@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ....core.transforms import transform_aabbs
+from ....core.transforms import normal_matrix, transform_aabbs
 from ...skin import (active_texels, defines, flat_texels, incidence_texels, joint_texels,
                      local_bounds, shape_texels)
 from ..framegraph import Pass
@@ -330,9 +330,7 @@ class SkinningPass(Pass):
                 inp.influences.use(UNITS["u_influences"])
             set_uniform(prog, "u_influence_groups", int(skin.joints.shape[1] // 4))
             set_uniform(prog, "u_geom_bind", skin.geom_bind)
-            g3 = skin.geom_bind[:3, :3]
-            set_uniform(prog, "u_geom_bind_normal", np.linalg.inv(g3).T
-                        if abs(np.linalg.det(g3)) > 1e-30 else g3)
+            set_uniform(prog, "u_geom_bind_normal", normal_matrix(skin.geom_bind))
         if inp.shapes is not None:
             inp.shapes.use(UNITS["u_shape_offsets"])
             inp.active.use(UNITS["u_shape_active"])
