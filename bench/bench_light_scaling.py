@@ -52,6 +52,7 @@ def stage_with_lights(positions, power, shadows):
     shader.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set((0.8, 0.8, 0.8))
     material.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
     plane = UsdGeom.Mesh.Define(stage, "/root/plane")
+    plane.CreateSubdivisionSchemeAttr("none")
     h = 12.0
     plane.CreatePointsAttr([(-h, -h, 0), (h, -h, 0), (h, h, 0), (-h, h, 0)])
     plane.CreateFaceVertexCountsAttr([4])

@@ -65,6 +65,7 @@ def add_character(stage, k, n_verts, offset, normals=False):
     a = (r * cols + c).ravel()
     quads = np.stack([a, a + 1, a + cols + 1, a + cols], 1)
     mesh = UsdGeom.Mesh.Define(stage, f"/c{k}/mesh")
+    mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(pts.astype(np.float32)))
     mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(quads), 4, np.int32)))
     mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(quads.ravel().astype(np.int32)))

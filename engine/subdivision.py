@@ -53,13 +53,12 @@ def _edges(counts, indices):
     starts = np.repeat(np.cumsum(counts) - counts, counts)
     local = np.arange(len(indices)) - starts
     nxt = indices[starts + (local + 1) % np.repeat(counts, counts)]
-    low, high = np.minimum(indices, nxt), np.maximum(indices, nxt)
-    # One integer per pair, ordered as the pairs are: np.unique of rows (axis=0) sorts
-    # them as opaque bytes, several times slower (it was most of a subdivision
-    # surface's first read).
-    base = int(high.max(initial=0)) + 1
-    keys, corner_edge = np.unique(low * base + high, return_inverse=True)
-    edges = np.stack([keys // base, keys % base], axis=1)
+    pairs = np.sort(np.stack([indices, nxt], axis=1), axis=1)
+    # One int64 key per pair: np.unique of rows (axis=0) sorts them as bytes, 100 times
+    # slower. The keys sort as the pairs do, lexicographically.
+    n = np.int64(max(int(indices.max(initial=0)) + 1, 1))
+    keys, corner_edge = np.unique(pairs[:, 0] * n + pairs[:, 1], return_inverse=True)
+    edges = np.stack([keys // n, keys % n], axis=1)
     return edges, corner_edge.reshape(-1)
 
 

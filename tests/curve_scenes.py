@@ -106,6 +106,7 @@ def write_stage(path):
             c.SetNormalsInterpolation(UsdGeom.Tokens.constant)
         UsdShade.MaterialBindingAPI.Apply(c.GetPrim()).Bind(hair)
     ground = UsdGeom.Mesh.Define(stage, "/root/Ground")
+    ground.CreateSubdivisionSchemeAttr("none")
     w, h = CELL[0] * 2.6, CELL[1] * 2.2
     ground.CreatePointsAttr([(-w, -h, GROUND), (w, -h, GROUND), (w, h, GROUND), (-w, h, GROUND)])
     ground.CreateFaceVertexCountsAttr([4])

@@ -68,6 +68,7 @@ def sphere_mesh(stage, path, centre, material, segments=96, rings=48):
             indices += [a, a + segments, b + segments, b]
             counts.append(4)
     mesh = UsdGeom.Mesh.Define(stage, path)
+    mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreatePointsAttr([Gf.Vec3f(*(np.asarray(centre) + q)) for q in n])
     mesh.CreateNormalsAttr([Gf.Vec3f(*q) for q in n])
     mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)

@@ -95,6 +95,7 @@ def _mesh(stage, path, type_name, attrs, segments):
     params = (type_name,) + tuple(attrs[k] for k in shapes.SHAPES[type_name])
     surface = shapes.surface(params, segments)
     mesh = UsdGeom.Mesh.Define(stage, path)
+    mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(surface.points.astype("float32")))
     mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(surface.counts.astype("int32")))
     mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(surface.indices.astype("int32")))

@@ -36,6 +36,7 @@ def skel_stage(n_joints=3, method=None, scale=None, influences=2, grid=6, rot_de
     UsdSkel.BindingAPI.Apply(root.GetPrim()).CreateSkeletonRel().SetTargets([skel.GetPath()])
 
     mesh = UsdGeom.Mesh.Define(stage, "/root/mesh")
+    mesh.CreateSubdivisionSchemeAttr("none")
     xs, ys = np.linspace(0, length, grid), np.linspace(-0.5, 0.5, 3)
     pts = np.array([(x, y, 0.2 * np.sin(x)) for y in ys for x in xs])
     faces = [(r * grid + c, r * grid + c + 1, (r + 1) * grid + c + 1, (r + 1) * grid + c)
@@ -65,6 +66,7 @@ def crowd_stage():
     stage = skel_stage(4, influences=2, grid=10, rot_deg=80)
     src = stage.GetPrimAtPath("/root/mesh")
     second = UsdGeom.Mesh.Define(stage, "/root/mesh2")
+    second.CreateSubdivisionSchemeAttr("none")
     for name in ("points", "faceVertexCounts", "faceVertexIndices", "doubleSided"):
         second.GetPrim().CreateAttribute(name, src.GetAttribute(name).GetTypeName()).Set(
             src.GetAttribute(name).Get())
@@ -82,6 +84,7 @@ def crowd_stage():
     for t, w in ((1, 0.0), (2, 0.7), (3, 1.0)):
         anim.CreateBlendShapeWeightsAttr().Set(Vt.FloatArray([w]), t)
     floor = UsdGeom.Mesh.Define(stage, "/floor")
+    floor.CreateSubdivisionSchemeAttr("none")
     floor.CreatePointsAttr([(-6, -6, -1.5), (10, -6, -1.5), (10, 6, -1.5), (-6, 6, -1.5)])
     floor.CreateFaceVertexCountsAttr([4])
     floor.CreateFaceVertexIndicesAttr([0, 1, 2, 3])

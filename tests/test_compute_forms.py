@@ -35,6 +35,7 @@ def quads_stage(quads):
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     for path, (z, half) in quads.items():
         quad = UsdGeom.Mesh.Define(stage, path)
+        quad.CreateSubdivisionSchemeAttr("none")
         quad.CreatePointsAttr([(-half, -half, z), (half, -half, z), (half, half, z),
                                (-half, half, z)])
         quad.CreateFaceVertexCountsAttr([4])

@@ -40,6 +40,7 @@ def _box(stage, parent, centre, size, turn, material, index):
                                  custom=True).Set(index)
     s = size / 2
     mesh = UsdGeom.Mesh.Define(stage, f"{parent}/box")
+    mesh.CreateSubdivisionSchemeAttr("none")
     corners = [(x, y, z) for z in (-s, s) for y in (-s, s) for x in (-s, s)]
     mesh.CreatePointsAttr(corners)
     mesh.CreateFaceVertexCountsAttr([4] * 6)

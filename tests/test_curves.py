@@ -249,6 +249,7 @@ def _render(stage, **settings):
 def _quad(stage, path, x0, x1, y0, y1, z):
     from pxr import UsdGeom
     m = UsdGeom.Mesh.Define(stage, path)
+    m.CreateSubdivisionSchemeAttr("none")
     m.CreatePointsAttr([(x0, y0, z), (x1, y0, z), (x1, y1, z), (x0, y1, z)])
     m.CreateFaceVertexCountsAttr([4])
     m.CreateFaceVertexIndicesAttr([0, 1, 2, 3])

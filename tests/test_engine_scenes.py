@@ -12,9 +12,13 @@ from lantern.engine.gpu.context import run_gl
 W, H = 64, 48
 
 
-def cube(stage, path, size=1.0):
+def cube(stage, path, size=1.0, scheme="none"):
+    """A cube Mesh; `scheme` is the subdivisionScheme authored (None: none authored, so
+    the schema's fallback, catmullClark)."""
     s = size / 2
     mesh = UsdGeom.Mesh.Define(stage, path)
+    if scheme is not None:
+        mesh.CreateSubdivisionSchemeAttr(scheme)
     mesh.CreatePointsAttr([(x, y, z) for z in (-s, s) for y in (-s, s) for x in (-s, s)])
     mesh.CreateFaceVertexCountsAttr([4] * 6)
     mesh.CreateFaceVertexIndicesAttr([0, 2, 3, 1, 4, 5, 7, 6, 0, 1, 5, 4,
@@ -124,14 +128,23 @@ def test_gl_runs_on_its_own_thread_and_errors_propagate():
 
 
 
-def test_subdivision_cage_without_a_level_warns_and_is_drawn_as_is():
-    stage = new_stage()
-    cube(stage, "/root/cage/mesh").CreateSubdivisionSchemeAttr("catmullClark")
-    cube(stage, "/root/plain/mesh").CreateSubdivisionSchemeAttr("none")
-    res = render_stage(stage, RenderSettings(width=16, height=16))
-    assert [w for w in res.warnings if "subdivisionScheme" in w] == \
-        ["/root/cage/mesh: subdivisionScheme catmullClark without "
-         "lantern:subdivisionRenderLevel; drawn as its cage"]
+@pytest.mark.parametrize("tessellation_px", [4.0, 0.0])    # GPU patches, CPU refinement
+def test_a_mesh_without_a_scheme_is_a_subdivision_surface(tessellation_px):
+    """subdivisionScheme's fallback is catmullClark: a cube that authors no scheme is
+    drawn as one that authors catmullClark (both without Lantern's render level, so at
+    the default level), smooth: it shrinks towards a sphere and covers fewer pixels
+    than its cage. One that authors none stays its polygon cage. No warnings."""
+    images = {}
+    for scheme in (None, "catmullClark", "none"):
+        stage = new_stage()
+        cube(stage, "/root/c/mesh", size=1.5, scheme=scheme)
+        res = render_stage(stage, RenderSettings(width=W, height=H, transparent=True,
+                                                 tessellation_px=tessellation_px))
+        assert not [w for w in res.warnings if "subdivision" in w], res.warnings
+        images[scheme] = res.rgba
+    assert np.array_equal(images[None], images["catmullClark"])
+    coverage = {k: v[..., 3].sum() for k, v in images.items()}
+    assert 0 < coverage[None] < 0.9 * coverage["none"]
 
 
 def test_subdivision_cage_is_refined_to_its_render_level():

@@ -123,6 +123,7 @@ def add_cube(stage, path, at, material=None):
     xf = UsdGeom.Xform.Define(stage, path)
     xf.AddTranslateOp().Set(Gf.Vec3d(*at))
     mesh = UsdGeom.Mesh.Define(stage, path + "/mesh")
+    mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreatePointsAttr([tuple(p) for p in scenes.CUBE_POINTS * 0.6])
     mesh.CreateFaceVertexCountsAttr([4] * 6)
     mesh.CreateFaceVertexIndicesAttr(scenes.CUBE_INDICES)
@@ -314,6 +315,7 @@ def test_flat_plane_without_camera_fills_the_view(normal):
     u /= np.linalg.norm(u)
     v = np.cross(n, u)
     mesh = UsdGeom.Mesh.Define(stage, "/plane")
+    mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreatePointsAttr([tuple(2 * (a * u + b * v)) for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1))])
     mesh.CreateFaceVertexCountsAttr([4])
     mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3])   # single-sided by USD's default

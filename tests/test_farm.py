@@ -57,6 +57,7 @@ def skinned_scene(path, frames=24, joints=8, grid=16):
     a = (r * grid + c).ravel()
     quads = np.stack([a, a + 1, a + grid + 1, a + grid], 1)
     mesh = UsdGeom.Mesh.Define(stage, "/root/mesh")
+    mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points))
     mesh.CreateFaceVertexCountsAttr([4] * len(quads))
     mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(quads.ravel().astype(np.int32)))
@@ -69,6 +70,7 @@ def skinned_scene(path, frames=24, joints=8, grid=16):
     binding.CreateJointWeightsPrimvar(False, 2).Set(Vt.FloatArray.FromNumpy(weights.ravel()))
 
     ground = UsdGeom.Mesh.Define(stage, "/ground")
+    ground.CreateSubdivisionSchemeAttr("none")
     ground.CreatePointsAttr([(-3, -3, 0), (7, -3, 0), (7, 3, 0), (-3, 3, 0)])
     ground.CreateFaceVertexCountsAttr([4])
     ground.CreateFaceVertexIndicesAttr([0, 1, 2, 3])

@@ -25,6 +25,7 @@ def _cube(stage, path, n=100, offset=0.0):
     xf = UsdGeom.Xform.Define(stage, path)
     xf.AddTranslateOp().Set(Gf.Vec3d(offset, 0, 0))
     mesh = UsdGeom.Mesh.Define(stage, path + "/mesh")
+    mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.random.default_rng(1).random((n, 3), np.float32)))
     mesh.CreateFaceVertexCountsAttr([3])
     mesh.CreateFaceVertexIndicesAttr([0, 1, 2])

@@ -86,6 +86,7 @@ def plane_stage(positions, power, extent=EXTENT):
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     UsdGeom.Xform.Define(stage, "/root")
     plane = UsdGeom.Mesh.Define(stage, "/root/plane")
+    plane.CreateSubdivisionSchemeAttr("none")
     h = extent
     plane.CreatePointsAttr([(-h, -h, 0), (h, -h, 0), (h, h, 0), (-h, h, 0)])
     plane.CreateFaceVertexCountsAttr([4])
@@ -242,6 +243,7 @@ def test_a_frame_in_which_no_light_changed_asks_nothing_of_each_light(monkeypatc
     # And one light with a shadow, over a caster: the shadow pass runs every frame.
     add_sphere_lights(stage, "/root", [(0.0, 0.0, 2.0)], {"intensity": 1.0}, True)  # light_0
     caster = UsdGeom.Mesh.Define(stage, "/root/caster")
+    caster.CreateSubdivisionSchemeAttr("none")
     caster.CreatePointsAttr([(-0.2, -0.2, 1.0), (0.2, -0.2, 1.0), (0.2, 0.2, 1.0), (-0.2, 0.2, 1.0)])
     caster.CreateFaceVertexCountsAttr([4])
     caster.CreateFaceVertexIndicesAttr([0, 1, 2, 3])

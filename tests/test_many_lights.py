@@ -23,6 +23,7 @@ def many_lights_stage(positions, shadows):
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     UsdGeom.Xform.Define(stage, "/root")
     plane = UsdGeom.Mesh.Define(stage, "/root/plane")
+    plane.CreateSubdivisionSchemeAttr("none")
     h = 50.0
     plane.CreatePointsAttr([(-h, -h, 0), (h, -h, 0), (h, h, 0), (-h, h, 0)])
     plane.CreateFaceVertexCountsAttr([4])

@@ -181,6 +181,7 @@ def _grown_stores_stage():
     a = (rows * grid + cols).ravel()
     quads = np.stack([a, a + 1, a + grid + 1, a + grid], 1)
     mesh = UsdGeom.Mesh.Define(stage, "/root/dense")
+    mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreateFaceVertexCountsAttr(np.full(len(quads), 4, np.int32))
     mesh.CreateFaceVertexIndicesAttr(quads.ravel().astype(np.int32))
     z = 0.3 * np.sin(3 * xs) * np.cos(2 * ys) + 0.5

@@ -32,6 +32,7 @@ def animated_stage():
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     cube = UsdGeom.Cube.Define(stage, "/box")  # not a Mesh: ignored by the engine
     mesh = UsdGeom.Mesh.Define(stage, "/plane")
+    mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreatePointsAttr([(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)])
     mesh.CreateFaceVertexCountsAttr([4])
     mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3])

@@ -190,6 +190,7 @@ def edge_stage(n, width_m, edge_col, edge_row):
     UsdGeom.Xform.Define(stage, "/root")
     xe, ye = (edge_col / n - 0.5) * width_m, (0.5 - edge_row / n) * width_m
     mesh = UsdGeom.Mesh.Define(stage, "/root/plane")
+    mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreatePointsAttr([(-10, -10, 0), (xe, -10, 0), (xe, ye, 0), (-10, ye, 0)])
     mesh.CreateFaceVertexCountsAttr([4])
     mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3])

@@ -23,6 +23,7 @@ def _stage():
     anim.CreateRotationsAttr(Vt.QuatfArray(2))
     anim.CreateScalesAttr(Vt.Vec3hArray(2))
     mesh = UsdGeom.Mesh.Define(stage, "/Root/Mesh")
+    mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreatePointsAttr(Vt.Vec3fArray(3))
     binding = UsdSkel.BindingAPI.Apply(mesh.GetPrim())
     binding.CreateSkeletonRel().SetTargets([skel.GetPath()])

@@ -48,6 +48,7 @@ def material(stage, name, diffuse=(0, 0, 0), emissive=(0, 0, 0), opacity=1.0,
 def quad(stage, path, x, y, z, mat, normal=(0, 0, 1)):
     """An axis-aligned rectangle [x0, x1] x [y0, y1] at height z, double-sided."""
     mesh = UsdGeom.Mesh.Define(stage, path)
+    mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreatePointsAttr([Gf.Vec3f(x[0], y[0], z), Gf.Vec3f(x[1], y[0], z),
                            Gf.Vec3f(x[1], y[1], z), Gf.Vec3f(x[0], y[1], z)])
     mesh.CreateFaceVertexCountsAttr([4])

@@ -122,7 +122,12 @@ class Geometry:
         for name, values in mesh.streams.items():   # not deformed: once, skinned or not
             store.write_stream(slot, name, values)
         store.write_indices(slot, indices)
-        self._tessellated.pop(mesh.key, None)     # rebuilt patches: drawn once tessellated
+        # Rebuilt patches are drawn once tessellated; until then a patch mesh has no
+        # triangles, but the tessellation pass cuts them before any pass draws.
+        if mesh.patches is not None:
+            self._tessellated[mesh.key] = []
+        else:
+            self._tessellated.pop(mesh.key, None)
         if old is not None:
             for path, d in self.draws.items():   # rebuilt data: same key, maybe new ranges
                 if d.mesh_key == mesh.key:
@@ -277,7 +282,11 @@ class Geometry:
         return self.points.path_of(oid)
 
     def has_casters(self) -> bool:
-        return any(d.ranges for d in self.draws.values()) or bool(self.points.clouds)
+        """Whether anything casts this frame: an object with triangles, or one whose
+        patches the tessellation pass cuts before the shadows (in a session's first
+        frame they have none yet)."""
+        return any(d.ranges or d.mesh_key in self._tessellated for d in self.draws.values()) \
+            or bool(self.points.clouds)
 
     def release(self):
         self.points.release()

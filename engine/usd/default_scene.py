@@ -86,6 +86,7 @@ def feature_scene(texture: str):
 def _cube(s, path, offset=0.0):
     """Blender's default cube at `path`, moved `offset` along y."""
     cube = UsdGeom.Mesh.Define(s, path)
+    cube.CreateSubdivisionSchemeAttr("none")
     cube.CreatePointsAttr([Gf.Vec3f(x, y + offset, z) for x, y, z in CUBE_POINTS])
     cube.CreateFaceVertexCountsAttr([4] * 6)
     cube.CreateFaceVertexIndicesAttr(CUBE_FACES)
@@ -107,6 +108,7 @@ def _skinned_quad(s, path):
         [animation.GetPath()])
     UsdSkel.BindingAPI.Apply(root.GetPrim()).CreateSkeletonRel().SetTargets([skeleton.GetPath()])
     mesh = UsdGeom.Mesh.Define(s, f"{path}/Mesh")
+    mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreatePointsAttr([Gf.Vec3f(x, y, 2.0) for x, y in ((0, 0), (1, 0), (1, 1), (0, 1))])
     mesh.CreateFaceVertexCountsAttr([4])
     mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3])

@@ -3,8 +3,10 @@ its points moved onto the limit surface (unless the stage says Use Limit Surface
 or its limit surface's patches for the GPU (and, for a skinned cage, the patches as
 weighted sums of its points).
 
-The level is the exporter's `lantern:subdivisionRenderLevel`; without it (a stage from
-elsewhere) the cage is drawn, with a warning. A skinned cage is refined after its
+A Mesh that does not author its subdivisionScheme has the schema's fallback,
+catmullClark: it is a subdivision surface (files from other tools often leave it
+unauthored). The level is the exporter's `lantern:subdivisionRenderLevel`; without it
+(a stage from elsewhere) DEFAULT_RENDER_LEVEL. A skinned cage is refined after its
 skinning by the GPU only; on the CPU path it is drawn unrefined, with a warning.
 """
 import numpy as np
@@ -20,24 +22,24 @@ LIMIT_ATTR = "lantern:subdivisionLimitSurface"   # written only when false
 # the patches around them small. At 2, Blender's level-5 limit points lie within
 # 1.3e-3 of the bounding-box diagonal there (at 1: 4.5e-3), docs/subdivision.md.
 PATCH_LEVELS = 2
+# The render level of a catmullClark mesh without LEVEL_ATTR: Blender's Subdivision
+# Surface's default Render level, the one Lantern's own stages mostly carry.
+DEFAULT_RENDER_LEVEL = 2
 
 
 def subdivision_level(prim, warnings):
     """Levels to refine `prim` by (0: draw the points as they are)."""
-    mesh = UsdGeom.Mesh(prim)
-    scheme = mesh.GetSubdivisionSchemeAttr()
-    if not scheme.HasAuthoredValue() or scheme.Get() == UsdGeom.Tokens.none:
+    # Get() answers the schema's fallback, catmullClark, where nothing is authored.
+    scheme = UsdGeom.Mesh(prim).GetSubdivisionSchemeAttr().Get()
+    if scheme == UsdGeom.Tokens.none:
         return 0
-    path = prim.GetPath()
-    if scheme.Get() != UsdGeom.Tokens.catmullClark:
-        _warn(warnings, f"{path}: subdivisionScheme {scheme.Get()} is not refined; "
+    if scheme != UsdGeom.Tokens.catmullClark:
+        _warn(warnings, f"{prim.GetPath()}: subdivisionScheme {scheme} is not refined; "
                         "drawn as its cage")
         return 0
     level_attr = prim.GetAttribute(LEVEL_ATTR)
     if not level_attr or not level_attr.HasValue():
-        _warn(warnings, f"{path}: subdivisionScheme catmullClark without {LEVEL_ATTR}; "
-                        "drawn as its cage")
-        return 0
+        return DEFAULT_RENDER_LEVEL
     return max(0, int(level_attr.Get()))
 
 

@@ -28,6 +28,7 @@ def material(stage, name, color, **inputs):
 
 def quad(stage, path, corners, mat=None, normal=None):
     mesh = UsdGeom.Mesh.Define(stage, path)
+    mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreatePointsAttr([Gf.Vec3f(*c) for c in corners])
     mesh.CreateFaceVertexCountsAttr([4])
     mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3])

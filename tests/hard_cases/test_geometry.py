@@ -209,6 +209,7 @@ def _polygon_stage(points, counts, indices):
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     mesh = UsdGeom.Mesh.Define(stage, "/Shape")
+    mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.asarray(points, np.float32)))
     mesh.CreateFaceVertexCountsAttr(Vt.IntArray([int(c) for c in counts]))
     mesh.CreateFaceVertexIndicesAttr(Vt.IntArray([int(i) for i in indices]))

@@ -190,6 +190,7 @@ def _sphere_mesh(stage, path, center, radius, n=96):
         faces += [last, 1 + (rows - 1) * n + (j + 1) % n, 1 + (rows - 1) * n + j]
         counts.append(3)
     mesh = UsdGeom.Mesh.Define(stage, path)
+    mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy((pts * radius + center).astype(np.float32)))
     mesh.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(pts.astype(np.float32)))
     mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)

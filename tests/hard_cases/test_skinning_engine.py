@@ -146,6 +146,7 @@ def _blend_shaped_grid():
     a = (r * n + c).ravel()
     quads = np.stack([a, a + 1, a + n + 1, a + n], 1)
     mesh = UsdGeom.Mesh.Define(stage, "/Root/Grid")
+    mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points.astype(np.float32)))
     mesh.CreateFaceVertexCountsAttr([4] * len(quads))
     mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(quads.ravel().astype(np.int32)))

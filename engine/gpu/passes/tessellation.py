@@ -35,6 +35,10 @@ from ..stores import VERTEX_BYTES
 
 VARYINGS = ("out_pos", "out_normal", "out_uv", "out_tangent")
 PATCH_VERTICES = 16
+# A curved patch edge is cut into pieces that turn by at most this much (and are no
+# shorter than a pixel), within the mesh's cap: shading interpolates normals across
+# each triangle (shaders/tessellate.tesc).
+MAX_TURN_RADIANS = np.radians(5.0)
 
 GL_TRIANGLES, GL_PATCHES, GL_PATCH_VERTICES = 0x0004, 0x000E, 0x8E72
 GL_RASTERIZER_DISCARD, GL_TRANSFORM_FEEDBACK_BUFFER = 0x8C89, 0x8C8E
@@ -135,6 +139,7 @@ class TessellationPass(Pass):
             set_uniform(prog, "u_half_size", (w / 2.0, h / 2.0))
             set_uniform(prog, "u_target_px", target)
             set_uniform(prog, "u_cap", float(mesh.patches.cap))
+            set_uniform(prog, "u_turn", float(MAX_TURN_RADIANS))
             self.geometry.set_ranges(key, self._cut(prog, mesh, patches))
             patches.cut_for = cut_for
             frame.count("meshes_tessellated")
