@@ -4,8 +4,9 @@ wide orthographic view), 320x180 medium, AO and FXAA off; against one light of t
 total power at the patch's centre. Every pixel under the patch has every light within
 a few metres: the light tree's hardest case (engine/light_tree.py). Prints the warm
 frame time and CPU time of each, the light passes' GPU time, the light tree's steps
-per pixel (stats light_tree_steps over light_tree_pixels) and the error against numpy's exact inverse-square sum on a
-grid of plane pixels. Asserts nothing. Runs without Blender (usd-core).
+per pixel (stats light_tree_steps over light_tree_pixels) and the error against
+numpy's exact inverse-square sum on a grid of plane pixels. Asserts nothing. Runs
+without Blender (usd-core).
 
     python bench/bench_dense_lights.py [--runs N]
 """
@@ -74,8 +75,9 @@ def main():
         gpu = result.gpu_timings
         light_ms = 1000 * (gpu.get("lights", 0.0) + gpu.get("light_cull", 0.0))
         steps = result.stats.get("light_tree_steps")
+        pixels = result.stats.get("light_tree_pixels", 0)
         per_pixel = "" if steps is None else \
-            f" | light tree steps per pixel {steps / max(result.stats['light_tree_pixels'], 1):.1f}" \
+            f" | light tree steps per pixel {steps / max(pixels, 1):.1f}" \
             f" (most {result.stats['light_tree_steps_max']})"
         print(f"  {name:<6} frame {1000 * seconds:8.1f} ms, CPU {1000 * cpu:8.1f} ms | "
               f"light cull + lights GPU "

@@ -8,7 +8,7 @@ uniform float light_error;          // the bound (RenderSettings.light_error)
 const int NODE_TEXELS = 8;
 const int NODES_PER_LINE = 256;
 const float ERROR_CONSTANT = 1.5;   // engine/light_tree.py
-const float MIN_GROUP_RADII = 2.5;
+const float MIN_GROUP_RADII = 2.0;
 
 vec4 node_texel(int i, int k) {
     return texelFetch(u_tree, ivec2(k + (i % NODES_PER_LINE) * NODE_TEXELS, i / NODES_PER_LINE), 0);
@@ -94,8 +94,8 @@ int tree_next(int i, int root) {
 // A lower bound of the diffuse light (irradiance per channel) that root's subtree sends
 // onto s: a coarse cut, each group at least MIN_GROUP_RADII radii away with all of its
 // lights above the horizon counted as its power times its lights' least n.u over their
-// greatest distance cubed, each other light on its own (below the horizon: nothing).
-// Adds the nodes visited to steps.
+// greatest distance cubed (a leaf: radius 0, its own light), below the horizon
+// nothing. Adds the nodes visited to steps.
 vec3 tree_lower_bound(Surface s, int root, inout uint steps) {
     vec3 total = vec3(0.0);
     int i = root;
@@ -104,20 +104,14 @@ vec3 tree_lower_bound(Surface s, int root, inout uint steps) {
         bool down = false;
         if (node_count(i) > 0.0) {
             vec3 centre = node_centre(i);
-            vec3 u = centre - s.p;
-            float d = length(u);
-            if (node_is_leaf(i)) {
-                total += node_texel(i, 2).rgb * max(dot(s.n, u), 0.0) / (d * d * d);
+            float d = length(centre - s.p), r = node_radius(i);
+            vec2 horizon = node_horizon(i, centre, s.p, s.n);
+            if (horizon.y <= 0.0) {
+                // every light below the horizon: nothing
+            } else if (horizon.x > 0.0 && d >= MIN_GROUP_RADII * r) {
+                total += node_texel(i, 2).rgb * horizon.x / ((d + r) * (d + r) * (d + r));
             } else {
-                vec2 horizon = node_horizon(i, centre, s.p, s.n);
-                float far = d + node_radius(i);
-                if (horizon.y <= 0.0) {
-                    // every light below the horizon: nothing
-                } else if (horizon.x > 0.0 && d >= MIN_GROUP_RADII * node_radius(i)) {
-                    total += node_texel(i, 2).rgb * horizon.x / (far * far * far);
-                } else {
-                    down = true;
-                }
+                down = !node_is_leaf(i);
             }
         }
         i = down ? 2 * i + 1 : tree_next(i, root);

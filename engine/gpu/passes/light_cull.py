@@ -14,13 +14,13 @@ then shades per pixel.
 
 Lists go into one pool of items, each cluster taking its place with an atomic add.
 A cluster whose list does not fit is marked and walks every light when shaded (never
-dropped). The light pass adds to the same counts the pixels that walked the light
-tree and their steps (nodes visited): stats light_tree_pixels, light_tree_steps (all
-of them), light_tree_steps_max (one pixel's most). The first frame after the lights, the error bound or the grid changed reads
+dropped). The first frame after the lights, the error bound or the grid changed reads
 how many items were asked for at once and culls again into a pool of that size (one
 wait on the GPU, then never again for them); later frames read it with their pixels
 and grow the pool for the next frame (stats light_items, clusters_overflowed), so a
-moving view never waits mid-frame.
+moving view never waits mid-frame. The light pass adds to the same counts the pixels
+that walked the light tree and their steps (nodes visited): stats light_tree_pixels,
+light_tree_steps (all of them) and light_tree_steps_max (one pixel's most).
 
 Lights whose shadows have a map this frame are not listed: each is a pass of its own
 with its map, a dispatch over its screen rectangle (passes/clustered.py) or, where the
