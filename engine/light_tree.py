@@ -33,8 +33,8 @@ and a pixel shades a group as one light where either
     within reach of every pixel, it keeps a pixel's walk to about a hundred nodes).
 The pixel finds T first (shaders/light_tree.glsl tree_lower_bound): a coarse cut, each
 group at least MIN_GROUP_RADII radii away and above the horizon counted as its power
-times its lights' least n.u over its greatest distance cubed, every other light on its
-own. A cluster of pixels (passes/light_cull.py) lists a group whole where some pixel
+times its lights' least n.u over its box's greatest distance cubed, every other light
+on its own. A cluster of pixels (passes/light_cull.py) lists a group whole where some pixel
 of it may use it (list_distance: the nearer of group_distance, where the first test
 holds for a surface facing the group, and MIN_GROUP_RADII radii); a pixel opens it
 where its own surface fails both tests. The specular lobe of a group is a sphere light

@@ -91,10 +91,17 @@ int tree_next(int i, int root) {
     return findMSB(k) <= findMSB(root + 1) ? -1 : k;  // its right sibling, 0-based
 }
 
+// The greatest distance from p to node i's box of lights (centre: its camera-relative
+// centroid); at most its distance plus its radius.
+float node_farthest(int i, vec3 centre, vec3 p) {
+    vec3 q = p - centre;
+    return length(max(abs(node_texel(i, 6).xyz - q), abs(node_texel(i, 7).xyz - q)));
+}
+
 // A lower bound of the diffuse light (irradiance per channel) that root's subtree sends
 // onto s: a coarse cut, each group at least MIN_GROUP_RADII radii away with all of its
-// lights above the horizon counted as its power times its lights' least n.u over their
-// greatest distance cubed (a leaf: radius 0, its own light), below the horizon
+// lights above the horizon counted as its power times its lights' least n.u over
+// their box's greatest distance cubed (a leaf: its own light), below the horizon
 // nothing. Adds the nodes visited to steps.
 vec3 tree_lower_bound(Surface s, int root, inout uint steps) {
     vec3 total = vec3(0.0);
@@ -109,7 +116,8 @@ vec3 tree_lower_bound(Surface s, int root, inout uint steps) {
             if (horizon.y <= 0.0) {
                 // every light below the horizon: nothing
             } else if (horizon.x > 0.0 && d >= MIN_GROUP_RADII * r) {
-                total += node_texel(i, 2).rgb * horizon.x / ((d + r) * (d + r) * (d + r));
+                float far = node_farthest(i, centre, s.p);
+                total += node_texel(i, 2).rgb * horizon.x / (far * far * far);
             } else {
                 down = !node_is_leaf(i);
             }
