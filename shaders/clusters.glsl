@@ -14,7 +14,13 @@ layout(std430, binding = 4) buffer TileBounds { vec4 tile_bounds[]; };
 // (lights.comp then walks every light).
 layout(std430, binding = 5) buffer ClusterRanges { uvec4 cluster_ranges[]; };
 layout(std430, binding = 6) buffer ClusterItems { uint cluster_items[]; };
-layout(std430, binding = 7) buffer CullCounts { uint items_asked; uint clusters_overflowed; };
+// The frame's counts: items the lists asked for, clusters whose list did not fit, and
+// of the light tree (lights.comp) the pixels that walked it, the most steps (nodes
+// visited) of one pixel, and the steps of all, in two words (low, high).
+layout(std430, binding = 7) buffer CullCounts {
+    uint items_asked; uint clusters_overflowed;
+    uint tree_pixels; uint tree_steps_max; uint tree_steps_low; uint tree_steps_high;
+};
 uniform ivec2 cluster_tiles;        // tiles across, down
 
 // Where depth z lies in a tile's range [b.x, b.y]: 0 at b.x, 1 at b.y.

@@ -4,11 +4,11 @@
 #include "light_tree.glsl"
 #include "clusters.glsl"
 // One invocation a cluster, in two dispatches (CULL_WRITE the second): the lights that
-// reach its box (view space, from its tile's
-// corner rays between its slice's depths), as items of its list. Tree nodes go in whole
-// where the box is at least their group distance away (one group for every pixel in it:
-// lights.comp may still open a group whose lights straddle a pixel's horizon), leaves as
-// themselves; at error 0 (tree_exact) only leaves, where their volumes reach. Lights shaded
+// reach its box (view space, from its tile's corner rays between its slice's depths), as
+// items of its list. Tree nodes go in whole where the box is at least their list
+// distance away (engine/light_tree.py: from there a pixel may shade the group as one
+// light; lights.comp opens it where its own surface does not), leaves as themselves;
+// at error 0 (tree_exact) only leaves, where their volumes reach. Lights shaded
 // one by one (exact_rows: spots, area lights, suns, point lights whose shadows have no
 // map this frame) go in first, where their volume reaches. A list is counted and its
 // place taken within its work group's, which takes its place with one atomic add (the
@@ -59,7 +59,7 @@ uvec2 visit(bool write, uint first) {
         if (node_count(i) > 0.0) {
             float d = box_distance(world_to_view * node_centre(i));
             if (!(tree_exact && d > node_reach(i))) {
-                if (node_is_leaf(i) || d >= node_group_distance(i)) {
+                if (node_is_leaf(i) || d >= node_list_distance(i)) {
                     if (write) cluster_items[first + n] = uint(i);
                     ++n;
                 } else {

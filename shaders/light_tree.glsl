@@ -1,31 +1,38 @@
 // The light tree (engine/light_tree.py builds it and documents the node): many point
 // lights as groups, a group shaded as one light where it stands for its lights within
 // the bound. Include after lights.glsl.
-layout(std430, binding = 3) readonly buffer LightTree { vec4 tree_nodes[]; };
+uniform sampler2D u_tree;           // NODES_PER_LINE nodes a line (engine/gpu/lights.py)
 uniform int tree_leaves;            // 0: no tree
 uniform bool tree_exact;            // error 0: every light on its own, within its volume
 uniform float light_error;          // the bound (RenderSettings.light_error)
 const int NODE_TEXELS = 8;
+const int NODES_PER_LINE = 256;
 const float ERROR_CONSTANT = 1.5;   // engine/light_tree.py
+const float MIN_GROUP_RADII = 2.0;
 
-vec4 node_texel(int i, int k) { return tree_nodes[i * NODE_TEXELS + k]; }
+vec4 node_texel(int i, int k) {
+    return texelFetch(u_tree, ivec2(k + (i % NODES_PER_LINE) * NODE_TEXELS, i / NODES_PER_LINE), 0);
+}
 bool node_is_leaf(int i) { return i >= tree_leaves - 1; }
 // Camera-relative centroid of node i.
 vec3 node_centre(int i) { return rebase(node_texel(i, 0).xyz, node_texel(i, 1).xyz); }
-float node_group_distance(int i) { return node_texel(i, 0).w; }
+float node_list_distance(int i) { return node_texel(i, 0).w; }
 float node_radius(int i) { return node_texel(i, 1).w; }
 float node_count(int i) { return node_texel(i, 2).w; }
 float node_reach(int i) { return node_texel(i, 3).w; }
 int node_light_row(int i) { return int(node_texel(i, 5).w); }
 float node_spread(int i) { return node_texel(i, 6).w; }
 
-// Whether group i stands for its lights at a surface facing n, u = centre - p, d = |u|
-// (light_tree.py: within light_error of its irradiance there; its lights all above
-// the horizon is the caller's test).
-bool group_holds(int i, vec3 u, float d, vec3 n) {
+// Whether group i stands for its lights at a surface facing n, u = centre - p, d = |u|,
+// whose light from the tree is at least `total` (light_tree.py: its error bound within
+// light_error of its own irradiance there, or, from MIN_GROUP_RADII radii, of `total`;
+// its lights all above the horizon is the caller's test).
+bool group_holds(int i, vec3 u, float d, vec3 n, vec3 total) {
     float r = node_radius(i);
-    return !tree_exact && ERROR_CONSTANT * r * r * r / (d * d) + 3.0 * node_spread(i)
-                          <= light_error * dot(n, u);
+    float bound = ERROR_CONSTANT * r * r * r / (d * d) + 3.0 * node_spread(i);
+    return !tree_exact && (bound <= light_error * dot(n, u)
+        || (d >= MIN_GROUP_RADII * r
+            && all(lessThanEqual(node_texel(i, 2).rgb * bound, light_error * d * d * d * total))));
 }
 
 // The range of n.(x - p) over node i's box of lights, for a surface at p facing n
@@ -84,15 +91,54 @@ int tree_next(int i, int root) {
     return findMSB(k) <= findMSB(root + 1) ? -1 : k;  // its right sibling, 0-based
 }
 
-// What node i's lights send from s, added to sum_d and sum_g; view_forward: the
-// camera's axis (a headlight's direction). Walking down its subtree: a group as one
-// light where it is far enough and above the horizon, else its parts the same way, and
-// each leaf as its light. Every step shades at most one emitter, a leaf or a group,
-// through one point_reflected: llvmpipe runs every branch of a shader, masked, so a
-// step costs one BRDF however the tree is walked.
-void shade_node(Surface s, int root, vec3 view_forward, inout vec3 sum_d, inout vec3 sum_g) {
+// The greatest distance from p to node i's box of lights (centre: its camera-relative
+// centroid); at most its distance plus its radius.
+float node_farthest(int i, vec3 centre, vec3 p) {
+    vec3 q = p - centre;
+    return length(max(abs(node_texel(i, 6).xyz - q), abs(node_texel(i, 7).xyz - q)));
+}
+
+// A lower bound of the diffuse light (irradiance per channel) that root's subtree sends
+// onto s: a coarse cut, each group at least MIN_GROUP_RADII radii away with all of its
+// lights above the horizon counted as its power times its lights' least n.u over
+// their box's greatest distance cubed (a leaf: its own light), below the horizon
+// nothing. Adds the nodes visited to steps.
+vec3 tree_lower_bound(Surface s, int root, inout uint steps) {
+    vec3 total = vec3(0.0);
     int i = root;
     while (i >= 0) {
+        ++steps;
+        bool down = false;
+        if (node_count(i) > 0.0) {
+            vec3 centre = node_centre(i);
+            float d = length(centre - s.p), r = node_radius(i);
+            vec2 horizon = node_horizon(i, centre, s.p, s.n);
+            if (horizon.y <= 0.0) {
+                // every light below the horizon: nothing
+            } else if (horizon.x > 0.0 && d >= MIN_GROUP_RADII * r) {
+                float far = node_farthest(i, centre, s.p);
+                total += node_texel(i, 2).rgb * horizon.x / (far * far * far);
+            } else {
+                down = !node_is_leaf(i);
+            }
+        }
+        i = down ? 2 * i + 1 : tree_next(i, root);
+    }
+    return total;
+}
+
+// What node i's lights send from s, added to sum_d and sum_g; view_forward: the
+// camera's axis (a headlight's direction); total: a lower bound of s's light from the
+// tree (tree_lower_bound). Walking down its subtree: a group as one light where it
+// holds (group_holds) and is above the horizon, else its parts the same way, and each
+// leaf as its light. Every step shades at most one emitter, a leaf or a group, through
+// one point_reflected: llvmpipe runs every branch of a shader, masked, so a step costs
+// one BRDF however the tree is walked. Adds the nodes visited to steps.
+void shade_node(Surface s, int root, vec3 view_forward, vec3 total, inout vec3 sum_d,
+                inout vec3 sum_g, inout uint steps) {
+    int i = root;
+    while (i >= 0) {
+        ++steps;
         bool down = false, emits = false;
         vec3 l, Ed, Es;
         float widen;
@@ -108,7 +154,7 @@ void shade_node(Surface s, int root, vec3 view_forward, inout vec3 sum_d, inout 
             vec2 horizon = node_horizon(i, centre, s.p, s.n);
             if ((tree_exact && d > node_reach(i)) || horizon.y <= 0.0) {
                 // out of reach, or every light below the horizon: nothing
-            } else if (horizon.x > 0.0 && group_holds(i, centre - s.p, d, s.n)) {
+            } else if (horizon.x > 0.0 && group_holds(i, centre - s.p, d, s.n, total)) {
                 emits = group_emitter(s, i, centre, l, Ed, Es, widen);
             } else {
                 down = true;

@@ -47,24 +47,25 @@ bool reaches(vec3 p) {
     return dot(normalize(p - apex), light_axis) >= cos_half - 1e-5;
 }
 
-void main() {
-    ivec2 px = ivec2(gl_GlobalInvocationID.xy) + u_offset;
-    if (any(greaterThanEqual(px, imageSize(hdr_image)))) return;
+// Shades pixel px; returns the light tree's steps (nodes visited) for it.
+uint shade_pixel(ivec2 px) {
+    if (any(greaterThanEqual(px, imageSize(hdr_image)))) return 0u;
     shaded_pixel = vec2(px) + 0.5;
     float depth = texelFetch(g_depth, px, 0).r;
-    if (is_background(depth)) return;
+    if (is_background(depth)) return 0u;
     vec3 p = position_from_depth(shaded_pixel / vec2(textureSize(g_depth, 0)), depth,
                                  inv_view_proj);
     vec3 sum_d = vec3(0.0), sum_g = vec3(0.0);
     float lit = 1.0;
+    uint steps = 0u;
     Surface s;
 #ifdef SINGLE_LIGHT
     load_light(light_index, cam_forward);
-    if (!reaches(p)) return;
+    if (!reaches(p)) return 0u;
     s = gbuffer_surface(px, depth);
     add_light(s, sum_d, sum_g);
     vec3 radiance = sum_d + sum_g;
-    if (max(radiance.r, max(radiance.g, radiance.b)) <= 0.0) return;
+    if (max(radiance.r, max(radiance.g, radiance.b)) <= 0.0) return 0u;
 #ifdef HAS_SHADOW
     lit = light_shadow(s.p, s.n, dot(s.p, cam_forward));
 #endif
@@ -74,7 +75,7 @@ void main() {
     uvec4 range = cluster_ranges[cluster_of(px, dot(p, cam_forward))];
     bool overflow = range.w != 0u;
     uint exact = overflow ? uint(n_exact) : range.y;
-    if (exact + range.z == 0u && !overflow) return;
+    if (exact + range.z == 0u && !overflow) return 0u;
     s = gbuffer_surface(px, depth);
 #ifdef HAS_EXACT
     for (uint k = 0u; k < exact; ++k) {
@@ -83,14 +84,19 @@ void main() {
     }
 #endif
 #ifdef HAS_TREE
-    // One walk, from the root where the list did not fit (one inlined walk: llvmpipe
-    // runs a second under its mask even where no pixel takes it).
+    // The list's nodes, from the root where it did not fit: first a lower bound of the
+    // pixel's light from them (the groups' test is against it), then their light (one
+    // inlined walk each: llvmpipe runs a second under its mask even where no pixel
+    // takes it).
     uint nodes = overflow ? 1u : range.z;
-    for (uint k = 0u; k < nodes; ++k) {
-        int node = 0;
-        if (!overflow) node = int(cluster_items[range.x + range.y + k]);
-        shade_node(s, node, cam_forward, sum_d, sum_g);
-    }
+    uint first = range.x + range.y;
+    vec3 total = vec3(0.0);
+    if (!tree_exact)
+        for (uint k = 0u; k < nodes; ++k)
+            total += tree_lower_bound(s, overflow ? 0 : int(cluster_items[first + k]), steps);
+    for (uint k = 0u; k < nodes; ++k)
+        shade_node(s, overflow ? 0 : int(cluster_items[first + k]), cam_forward, total,
+                   sum_d, sum_g, steps);
 #endif
     vec3 radiance = sum_d + sum_g;
 #endif
@@ -103,4 +109,34 @@ void main() {
     imageStore(aov_shadow_image, px,
                imageLoad(aov_shadow_image, px) + vec4(luminance * lit, luminance, 0.0, 0.0));
 #endif
+    return steps;
 }
+
+#ifdef SINGLE_LIGHT
+void main() { shade_pixel(ivec2(gl_GlobalInvocationID.xy) + u_offset); }
+#else
+// The light tree's steps and the pixels that took one, summed in the work group, then
+// added to the frame's counts with one atomic add each (a carry into the high word where
+// the low one wraps: passes/light_cull.py reads them).
+shared uint group_steps;
+shared uint group_pixels;
+shared uint group_max;
+
+void main() {
+    if (gl_LocalInvocationIndex == 0u) group_steps = group_pixels = group_max = 0u;
+    barrier();
+    uint steps = shade_pixel(ivec2(gl_GlobalInvocationID.xy) + u_offset);
+    if (steps > 0u) {
+        atomicAdd(group_steps, steps);
+        atomicAdd(group_pixels, 1u);
+        atomicMax(group_max, steps);
+    }
+    barrier();
+    if (gl_LocalInvocationIndex == 0u && group_pixels > 0u) {
+        atomicAdd(tree_pixels, group_pixels);
+        atomicMax(tree_steps_max, group_max);
+        uint before = atomicAdd(tree_steps_low, group_steps);
+        if (before + group_steps < before) atomicAdd(tree_steps_high, 1u);
+    }
+}
+#endif

@@ -10,15 +10,16 @@ import pytest
 from pxr import Gf, Usd, UsdGeom, UsdLux
 
 from lantern.engine import RenderSettings, render_stage
-from lantern.engine.light_tree import ERROR_CONSTANT, build, group_irradiance
+from lantern.engine.light_tree import ERROR_CONSTANT, MIN_GROUP_RADII, build, group_irradiance
 from lantern.engine.scene import Light
 from light_grids import add_sphere_lights
 
 
 def test_a_corrected_group_is_within_its_bound_of_its_lights():
     """Random groups (boxes, plates, lines of 2 to 64 lights) seen from random surfaces
-    with every light above the horizon: the group's irradiance (centroid plus the
-    second-order term) is within ERROR_CONSTANT (r/d)^3 / cos of the lights' sum,
+    with every light above the horizon, from MIN_GROUP_RADII radii or further: the
+    group's irradiance (centroid plus the second-order term) is within
+    ERROR_CONSTANT (r/d)^3 / cos of the lights' sum,
     the test the shader makes (shaders/light_tree.glsl group_holds); without the term
     it is not."""
     rng = np.random.default_rng(7)
@@ -33,7 +34,7 @@ def test_a_corrected_group_is_within_its_bound_of_its_lights():
         mu = np.average(x, axis=0, weights=w)
         r = np.linalg.norm(x - mu, axis=1).max()
         M = np.einsum("k,ki,kj->ij", w, x - mu, x - mu) / w.sum()
-        d = r / rng.uniform(0.02, 0.4)
+        d = r / rng.uniform(0.02, 1.0 / MIN_GROUP_RADII)
         direction = rng.normal(size=3)
         p = mu - direction / np.linalg.norm(direction) * d
         n = rng.normal(size=3)
@@ -262,3 +263,61 @@ def test_a_frame_in_which_no_light_changed_asks_nothing_of_each_light(monkeypatc
         asked.clear()
         again = session.render().rgba
     assert asked == [] and np.array_equal(first, again)
+
+
+# --- Many lights close together -------------------------------------------------------
+DENSE_SIDE, DENSE_PITCH, DENSE_HEIGHT = 128, 0.03, 0.3     # 16,384 lights, 3.84 m across
+DENSE_EXTENT = 8.0                                           # metres across the view
+
+
+def dense_patch():
+    g = (np.arange(DENSE_SIDE) - (DENSE_SIDE - 1) / 2) * DENSE_PITCH
+    return [(float(x), float(y), DENSE_HEIGHT) for y in g for x in g]
+
+
+def dense_stage(positions, power, width, height):
+    """plane_stage's plane and lights under a view DENSE_EXTENT wide of width:height."""
+    stage = plane_stage(positions, power, DENSE_EXTENT)
+    camera = UsdGeom.Camera.Get(stage, "/root/camera")
+    camera.GetVerticalApertureAttr().Set(DENSE_EXTENT * 10 * height / width)
+    return stage
+
+
+def wide_pixel_points(extent, width, height):
+    """The plane points at the pixel centres of dense_stage's view (rows top down)."""
+    x = ((np.arange(width) + 0.5) / width - 0.5) * extent
+    y = -((np.arange(height) + 0.5) / height - 0.5) * extent * height / width
+    return np.meshgrid(x, y)
+
+
+def test_lights_close_together_take_a_short_cut_within_the_bound():
+    """16,384 lights 3 cm apart, 0.3 m over a plane: near the patch every light is
+    within reach of every pixel, so a group's error bounded against its own light
+    (the pixel's first test) opens almost every node. Against the pixel's light (the
+    second), each pixel takes a few dozen groups: the light tree's steps (nodes
+    visited) stay few, the clusters list few nodes, and the light stays within the
+    bound (1%) of numpy's exact sum at every plane pixel (the single light of their
+    total power at the patch's centre gives the plane's radiance per irradiance)."""
+    from lantern.engine import Session
+    w, h = 160, 90
+    many = dense_patch()
+    points = wide_pixel_points(DENSE_EXTENT, w, h)
+    expected = irradiance(points, many) / (len(many) * irradiance(points, [(0, 0, DENSE_HEIGHT)]))
+    settings = RenderSettings(width=w, height=h, preset="low", lighting="clustered",
+                              ambient_occlusion=False, fxaa=False, supersample=1)
+    with Session(dense_stage(many, 0.002, w, h), settings) as lots, \
+            Session(dense_stage([(0.0, 0.0, DENSE_HEIGHT)], 0.002 * len(many), w, h),
+                    settings) as one:
+        image, single = lots.render(), one.render()
+    ratio = image.rgba[..., 0].astype(np.float64) / single.rgba[..., 0]
+    error = np.abs(ratio / expected - 1)
+    assert error.max() <= 0.01, error.max()
+    stats = image.stats
+    assert stats["clusters_overflowed"] == 0
+    # One slice a tile (the plane seen from above): nodes listed per cluster.
+    tiles = -(-w // 16) * -(-h // 16)
+    assert stats["light_items"] / tiles <= 80, stats
+    # Every pixel walks: a plane pixel's cut, under the patch and beside it.
+    assert stats["light_tree_pixels"] == w * h
+    assert stats["light_tree_steps"] / stats["light_tree_pixels"] <= 160, stats
+    assert stats["light_tree_steps_max"] <= 320, stats

@@ -46,6 +46,8 @@ UNITS = {name: unit for unit, name in enumerate((
     "sheen_lut"))}
 UNITS.update(zip(("u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences",
                   "u_deformed", "u_incidence"), range(UNITS["t_diffuse"], UNITS["t_diffuse"] + 6)))
+# The light tree's nodes: read by the clustered light passes only, which read no material.
+UNITS.update(u_tree=UNITS["t_diffuse"])
 UNITS.update(t_pattern5=UNITS["radiance"], t_pattern6=UNITS["overlay_image"],
              t_pattern7=UNITS["overlay_atlas"])
 # The Cryptomatte pass samples nothing else (passes/cryptomatte.py).

@@ -63,7 +63,8 @@ COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "meshes
             "light_volumes", "stencil_marks", "batched_lights", "instances_drawn",
             "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws",
             "pattern_bytes", "programs_pending", "light_clusters", "light_items",
-            "clusters_overflowed", "ao_searches")
+            "clusters_overflowed", "light_tree_pixels", "light_tree_steps", "light_tree_steps_max",
+            "ao_searches")
 
 
 def _shape(material):

@@ -58,8 +58,8 @@ class ClusteredLightPass(Pass):
         self.table.texture.use(UNITS["u_lights"])
         self.environment.lut.use(UNITS["dfg_lut"])
         self.environment.bind_sheen(frame.scene.materials.values())
-        tree, tree_buffer = self.table.tree_for(frame.scene, clusters.error)
-        self.cull.bind(tree_buffer, clusters.counts)
+        tree, tree_texture = self.table.tree_for(frame.scene, clusters.error)
+        self.cull.bind(tree_texture, clusters.counts)
         defines = (["WRITE_AOVS"] if aovs else []) + surface_defines(frame, board)
         w, h = frame.size
 

@@ -18,7 +18,9 @@ dropped). The first frame after the lights, the error bound or the grid changed 
 how many items were asked for at once and culls again into a pool of that size (one
 wait on the GPU, then never again for them); later frames read it with their pixels
 and grow the pool for the next frame (stats light_items, clusters_overflowed), so a
-moving view never waits mid-frame.
+moving view never waits mid-frame. The light pass adds to the same counts the pixels
+that walked the light tree and their steps (nodes visited): stats light_tree_pixels,
+light_tree_steps (all of them) and light_tree_steps_max (one pixel's most).
 
 Lights whose shadows have a map this frame are not listed: each is a pass of its own
 with its map, a dispatch over its screen rectangle (passes/clustered.py) or, where the
@@ -39,7 +41,7 @@ from ...view import relative_view
 TILE = 16            # shaders/clusters.glsl
 SLICES = 8
 ITEMS_PER_CLUSTER = 16   # the pool's first size, per cluster
-TILE_TEXELS, RANGE_BYTES, COUNT_BYTES = 16, 16, 8
+TILE_TEXELS, RANGE_BYTES, COUNT_BYTES = 16, 16, 24
 
 
 @dataclass
@@ -89,7 +91,7 @@ class LightCullPass(Pass):
         n_clusters = tiles[0] * tiles[1] * SLICES
         self._size_buffers(tiles, n_clusters)
         error = float(frame.options.light_error)
-        tree, tree_buffer = self.table.tree_for(frame.scene, error)
+        tree, tree_texture = self.table.tree_for(frame.scene, error)
         exact, mapped = light_kinds(self.table, board.get("shadow_maps", {}))
         rows = np.array([self.table.index[p] for p in exact] or [0], np.int32)
         if self._exact is None or not np.array_equal(self._exact[0], rows):
@@ -103,7 +105,7 @@ class LightCullPass(Pass):
         frame.stats["light_clusters"] = n_clusters
         if not exact and tree is None:
             return                  # every light has its map: nothing to list
-        self.bind(tree_buffer, counts)
+        self.bind(tree_texture, counts)
         board["g_depth"].use(UNITS["g_depth"])
 
         prog = self.programs.get("light_tiles.comp", compute=True)
@@ -123,7 +125,7 @@ class LightCullPass(Pass):
             asked = int(np.frombuffer(counts.read(), np.uint32)[0])
             if asked > self.capacity:
                 self._grow(asked + asked // 4)
-                self.bind(tree_buffer, counts)
+                self.bind(tree_texture, counts)
                 counts.clear()
                 set_uniform(count, "items_capacity", self.capacity)
                 count.run(groups)
@@ -144,22 +146,27 @@ class LightCullPass(Pass):
         set_uniform(prog, "n_exact", len(exact))
         return prog
 
-    def bind(self, tree_buffer, counts):
-        """The culling's buffers at the binding points the shaders name."""
+    def bind(self, tree_texture, counts):
+        """The culling's buffers at the binding points the shaders name, and the light
+        tree's texture at its unit."""
         self._tiles.bind_to_storage_buffer(4)
         self._ranges.bind_to_storage_buffer(5)
         self._items.bind_to_storage_buffer(6)
         counts.bind_to_storage_buffer(7)
         self._exact[1].bind_to_storage_buffer(8)
-        if tree_buffer is not None:
-            tree_buffer.bind_to_storage_buffer(3)
+        if tree_texture is not None:
+            tree_texture.use(UNITS["u_tree"])
 
     def finish(self, frame, clusters):
-        """Reads a frame's item count (its pixels are in host memory, so this waits on
+        """Reads a frame's counts (its pixels are in host memory, so this waits on
         nothing) into its stats, and grows the pool when its lists did not fit."""
-        asked, overflowed = (int(v) for v in np.frombuffer(clusters.counts.read(), np.uint32))
+        asked, overflowed, pixels, most, low, high = (
+            int(v) for v in np.frombuffer(clusters.counts.read(), np.uint32))
         frame.stats["light_items"] = asked
         frame.stats["clusters_overflowed"] = overflowed
+        frame.stats["light_tree_pixels"] = pixels
+        frame.stats["light_tree_steps"] = (high << 32) + low
+        frame.stats["light_tree_steps_max"] = most
         if asked > self.capacity:
             self._grow(asked + asked // 4)
 
