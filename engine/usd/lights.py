@@ -39,6 +39,7 @@ from pxr import Usd, UsdLux
 from ...core.lights import DISK, POINT, RECT, SPOT, SUN, kind_of_usd
 from ..lighting import uniform_sh
 from ..scene import Dome, Light
+from .validate import NOT_FINITE, fits
 
 
 def is_light(prim: Usd.Prim) -> bool:
@@ -106,11 +107,12 @@ class _Bad(ValueError):
     """A light value no light can have: the light is dropped with a warning."""
 
 
-def _valid(value, what, ok="finite", positive=False, nonneg=False):
-    """value (float or sequence) if finite (and > 0 / >= 0 as asked), else _Bad."""
+def _valid(value, what, positive=False, nonneg=False):
+    """value (float or sequence) if finite in float32 (validate.py; and > 0 / >= 0 as
+    asked), else _Bad."""
     items = (float(value),) if isinstance(value, (int, float)) else tuple(map(float, value))
-    if not all(map(math.isfinite, items)):
-        raise _Bad(f"{what} is {_show(value)}")
+    if not all(map(fits, items)):
+        raise _Bad(f"{what} is {_show(value)}, {NOT_FINITE}")
     if positive and not all(v > 0 for v in items):
         raise _Bad(f"{what} is {_show(value)}, not positive")
     if nonneg and not all(v >= 0 for v in items):
@@ -133,9 +135,25 @@ def _scale(intensity, exposure, color) -> tuple:
     except OverflowError:
         gain = math.inf
     s = tuple(intensity * gain * c for c in color)
-    if not all(map(math.isfinite, s)):
-        raise _Bad(f"inputs:intensity {intensity:g} x 2^inputs:exposure {exposure:g} overflows")
+    if not all(map(fits, s)):
+        raise _Bad(f"inputs:intensity {intensity:g} x 2^inputs:exposure {exposure:g} x "
+                   f"inputs:color is {NOT_FINITE}")
     return s
+
+
+def _times(s, k) -> tuple:
+    """s * k in Python floats: an overflow is Inf, refused by _light, not numpy's warning."""
+    return (s[0] * k, s[1] * k, s[2] * k)
+
+
+def _light(**fields) -> Light:
+    """A Light record, once the numbers made from its inputs and transform (its
+    radiometric colour, its sizes times its scale) are finite in float32 too."""
+    for name in ("color", "radius", "width", "height"):
+        if name in fields:
+            _valid(fields[name], f"its {name} after its transform and normalization")
+    fields["color"] = np.array(fields["color"])
+    return Light(**fields)
 
 
 def read_light(prim: Usd.Prim, world: np.ndarray, values: dict, warnings: list):
@@ -156,8 +174,8 @@ def _read_light(prim, path, world, values, warnings):
     color = tuple(map(float, _get(values, "inputs:color")))
     normalize = bool(_get(values, "inputs:normalize"))
     m = world.tolist()
-    if not all(map(math.isfinite, m[0] + m[1] + m[2] + m[3])):
-        raise _Bad("its transform is not finite")
+    if not all(map(fits, m[0] + m[1] + m[2] + m[3])):
+        raise _Bad(f"its transform is {NOT_FINITE}")
     s = _scale(intensity, exposure, color)
     if tname == "DomeLight":
         return read_dome(prim, world, np.array(s), values, warnings)
@@ -174,34 +192,35 @@ def _read_light(prim, path, world, values, warnings):
     if shaped:
         _valid(cone, "inputs:shaping:cone:angle", positive=True)
     kind = kind_of_usd(tname, spot=shaped and cone < 90.0)
-    s = np.array(s)
 
     if kind in (POINT, SPOT):
         radius = _number(values, "inputs:radius", nonneg=True) * (sum(scale) / 3)
         point = bool(_get(values, "treatAsPoint")) or radius <= 0
         if normalize:
-            I = s / 4.0
+            I = _times(s, 0.25)
         else:
-            I = s if point else s * math.pi * radius * radius
+            I = s if point else _times(s, math.pi * radius * radius)
         soft = _number(values, "inputs:shaping:cone:softness")
-        return Light(kind=kind, color=I, radius=0.0 if point else radius,
-                     soft_falloff=bool(_get(values, "lantern:softFalloff")),
-                     cone_angle=cone, cone_softness=max(soft, 0.0), **common)
+        return _light(kind=kind, color=I, radius=0.0 if point else radius,
+                      soft_falloff=bool(_get(values, "lantern:softFalloff")),
+                      cone_angle=cone, cone_softness=max(soft, 0.0), **common)
     if kind == SUN:
         angle = _number(values, "inputs:angle", nonneg=True)
-        return Light(kind=SUN, color=s, angle=angle, **common)
+        return _light(kind=SUN, color=s, angle=angle, **common)
     if kind == RECT:
         w = _number(values, "inputs:width", positive=True)
         h = _number(values, "inputs:height", positive=True)
         w, h = w * scale[0], h * scale[1]
         if not w * h > 0:
             raise _Bad("its transform scales it to no area")
-        return Light(kind=RECT, color=s / (w * h) if normalize else s, width=w, height=h, **common)
+        return _light(kind=RECT, color=_times(s, 1.0 / (w * h)) if normalize else s,
+                      width=w, height=h, **common)
     if kind == DISK:
         r = _number(values, "inputs:radius", positive=True) * ((scale[0] + scale[1]) / 2)
         if not r > 0:
             raise _Bad("its transform scales it to no area")
-        return Light(kind=DISK, color=s / (math.pi * r * r) if normalize else s, radius=r, **common)
+        return _light(kind=DISK, color=_times(s, 1.0 / (math.pi * r * r)) if normalize else s,
+                      radius=r, **common)
     warnings.append(f"{path}: light type {tname or 'untyped'} is not supported; skipped")
     return None
 

@@ -18,7 +18,7 @@ from .skel import (SkelBindings, attach_skin, blend_weights, check_unbound, pose
                    skel_key, skeleton_warnings, skinned_points, weights_might_vary)
 from .skel import pose as skeleton_pose
 from .timeline import Dynamic, mesh_attributes_vary
-from .validate import first_bad_op
+from .validate import NOT_FINITE, first_bad_op, unfit_items
 
 
 @dataclass
@@ -172,13 +172,14 @@ class FirstRead:
                 self._read_instance(prim, changes, rebuild=True)
 
     def _world(self, prim_path: str) -> np.ndarray:
-        """The prim's local-to-world at this time; all NaN when an op of it or of an
-        ancestor is not finite. Composition makes every such op's matrix non-finite
-        but a quaternion's (it takes that as the identity), so only quaternions are
-        read op by op; the culprit is named where a transform is refused (_bad_op)."""
+        """The prim's local-to-world at this time; all NaN when it is not finite in
+        float32 (validate.py), or an op of it or of an ancestor is not. Composition
+        makes every such op's matrix non-finite but a quaternion's (it takes that as
+        the identity), so only quaternions are read op by op; the culprit is named
+        where a transform is refused (_bad_op)."""
         prim = self.stage.GetPrimAtPath(prim_path)
         world = gf_to_np(self._xcache.GetLocalToWorldTransform(prim))
-        if not np.isfinite(world).all() or \
+        if unfit_items(world).any() or \
                 first_bad_op(prim, self._t, self._orient_memo, orient_only=True) is not None:
             return np.full((4, 4), np.nan)
         return world
@@ -296,12 +297,12 @@ class FirstRead:
         return key
 
     def _non_finite_world(self, path, dyn, changes):
-        """A mesh whose world transform is NaN or Inf at this time: skipped with a
-        warning, and read again at the next time if its transform varies."""
+        """A mesh whose world transform is not finite in float32 at this time: skipped
+        with a warning, and read again at the next time if its transform varies."""
         when = "" if self._t.IsDefault() else f" at time {self._t.GetValue():g}"
         prim = self.stage.GetPrimAtPath(dyn.world_prim)
         culprit = (self._bad_op(prim) if prim else None) or dyn.world_prim
-        warning = f"{path}: its world transform is not finite{when} ({culprit}); skipped"
+        warning = f"{path}: its world transform is {NOT_FINITE}{when} ({culprit}); skipped"
         warnings = self.scene.warnings.setdefault(path, [])
         if warning not in warnings:
             warnings.append(warning)
