@@ -32,6 +32,8 @@ def kind_of(prim) -> str | None:
     """How a prim is drawn: 'mesh' (MeshData: a Mesh, an implicit surface, curves
     with authored normals as oriented ribbons), 'points' (PointCloud: Points, and
     curves as round tubes), or None when it draws nothing by itself."""
+    if not prim.IsA(UsdGeom.Gprim):            # lights, Xforms, shaders: one call
+        return None
     if prim.IsA(UsdGeom.Mesh) or is_implicit(prim):
         return "mesh"
     if is_curves(prim):

@@ -103,13 +103,18 @@ class ShadingReading:
             if p:
                 self._read_instance(p, changes, rebuild=True)
 
-    def _read_light(self, prim, changes: Changes):
-        path = str(prim.GetPath())
+    def _read_light(self, prim, changes: Changes, path: str | None = None):
+        """(Re)reads a UsdLux prim (`path`: its path, where the caller has it). It is
+        read again at a new time when an input or xform op of its own may vary (its
+        authored attributes say so: light_values), or an ancestor's transform may."""
+        path = path or str(prim.GetPath())
         self._read.add(path)
         warnings = self.scene.warnings[path] = []
-        values, varies = light_values(prim, self._t)
-        self._light_prims[path] = varies or self._xform_varies(prim)
-        rec = read_light(prim, self._world(path), values, warnings)
+        values, varies, ops = light_values(prim, self._t)
+        parent = prim.GetParent()
+        self._light_prims[path] = varies or (not parent.IsPseudoRoot() and
+                                             self._xform_varies(parent))
+        rec = read_light(prim, path, self._world(path, prim, ops), values, warnings)
         if isinstance(rec, Dome):
             self._domes[path] = rec
             changes.dome = True

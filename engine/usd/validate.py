@@ -12,6 +12,7 @@ from pxr import UsdGeom, UsdShade
 
 FLOAT32_MAX = float(np.finfo(np.float32).max)
 NOT_FINITE = "not finite in float32"        # the reason given for every such value
+ORIENT_OP = "xformOp:orient"                 # the quaternion ops' attribute names
 
 
 def fits(x: float) -> bool:
