@@ -58,24 +58,30 @@ FALLBACKS = {
 }
 
 
-def light_values(prim: Usd.Prim, time) -> tuple[dict, bool, list]:
-    """({input name: value} of the light's authored inputs at `time`; whether any of
-    them or of its own xform ops may change over time; the names of its authored xform
-    ops, for the reader, whose concern its transform is): one pass over its authored
-    attributes, so a stage of many lights costs a few calls a light."""
-    values, varies, ops = {}, False, []
+INPUTS = set(FALLBACKS) | {"inputs:texture:file"}          # what a light reads
+
+
+def light_values(prim: Usd.Prim, time) -> tuple[dict, list]:
+    """({input name: value} of the light's authored inputs at `time`, the names of its
+    authored xform ops, for the reader, whose concern its transform is): one pass over
+    its authored attributes, so a stage of many lights costs a few calls a light."""
+    values, ops = {}, []
     for attr in prim.GetAuthoredAttributes():
         name = attr.GetName()
         if name.startswith("xformOp:"):
             ops.append(name)
-        elif name not in FALLBACKS and name != "inputs:texture:file":
-            continue
-        else:
+        elif name in INPUTS:
             value = attr.Get(time)
             if value is not None:
                 values[name] = value
-        varies = varies or attr.ValueMightBeTimeVarying()
-    return values, varies, ops
+    return values, ops
+
+
+def light_varies(prim: Usd.Prim) -> bool:
+    """Whether an input the light reads, or an xform op of its own, may change over
+    time (its ancestors' transforms are the reader's concern)."""
+    return any(attr.ValueMightBeTimeVarying() for attr in prim.GetAuthoredAttributes()
+               if attr.GetName().startswith("xformOp:") or attr.GetName() in INPUTS)
 
 
 def _number(values, name, **checks) -> float:
