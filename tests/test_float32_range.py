@@ -99,3 +99,20 @@ def test_float32_max_itself_is_kept():
     reader.sync(None)
     assert TRI in reader.scene.instances
     reader.close()
+
+
+def test_a_light_whose_normalization_overflows_float32_is_left_out():
+    """Numbers the reader makes from valid inputs count too: a normalized 1e30 W/sr
+    rect light of 1e-10 x 1e-10 has a radiance of 1e50."""
+    stage = _scene()
+    rect = UsdLux.RectLight.Define(stage, "/root/tiny")
+    rect.CreateIntensityAttr(1e30)
+    rect.CreateWidthAttr(1e-10)
+    rect.CreateHeightAttr(1e-10)
+    rect.CreateNormalizeAttr(True)
+    reader = StageReader(stage)
+    reader.sync(None)
+    assert "/root/tiny" not in reader.scene.lights and "/root/point" in reader.scene.lights
+    named = reader.scene.warnings["/root/tiny"]
+    assert len(named) == 1 and "its color" in named[0] and "float32" in named[0], named
+    reader.close()
