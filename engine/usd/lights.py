@@ -166,12 +166,16 @@ def _times(s, k) -> tuple:
     return (s[0] * k, s[1] * k, s[2] * k)
 
 
+MADE = ("color", "radius", "width", "height")    # a Light's numbers made from others
+
+
 def _light(**fields) -> Light:
     """A Light record, once the numbers made from its inputs and transform (its
     radiometric colour, its sizes times its scale) are finite in float32 too."""
-    for name in ("color", "radius", "width", "height"):
-        if name in fields:
-            _valid(fields[name], f"its {name} after its transform and normalization")
+    if not all(map(fits, (*fields["color"], *(fields.get(n, 0.0) for n in MADE[1:])))):
+        for name in MADE:                 # name the first that is not
+            if name in fields:
+                _valid(fields[name], f"its {name} after its transform and normalization")
     fields["color"] = np.array(fields["color"])
     return Light(**fields)
 

@@ -32,6 +32,7 @@ class SkeletonState:
 
 
 PASS_INDEX = "lantern:passIndex"
+VISIBILITY = UsdGeom.Tokens.visibility
 
 
 def pass_index(prim) -> int:
@@ -123,12 +124,12 @@ class FirstRead:
 
     def _invisible(self, prim, ancestors: bool) -> bool:
         """Invisible at this time (and remembered if its visibility may vary)."""
+        if not ancestors and not prim.GetAttribute(VISIBILITY).HasAuthoredValue():
+            return False                       # most prims: two calls
         img = UsdGeom.Imageable(prim)
         if not img:
             return False
         attr = img.GetVisibilityAttr()
-        if not ancestors and not attr.HasAuthoredValue():    # most prims: one call
-            return False
         if attr and attr.ValueMightBeTimeVarying():
             self._visibility[str(prim.GetPath())] = attr.Get(self._t)
         if ancestors:
