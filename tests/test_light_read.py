@@ -1,12 +1,14 @@
 """The stage reader's light records stay what they were when its reading of light
 prims was made cheaper: every record (Light and Dome fields, warnings, which lights
 are read again at a new time) on stages with every light type, transforms (an orient
-op, scales, a time-sampled parent), hidden and time-varying visibility, invalid
-values, references with an override, a variant, a sublayer and instance proxies,
-equal to the last bit to those in tests/references/light_records.json, written by the reader
-before that change (`python tests/test_light_read.py --write` writes it again).
-Read at the default time, frame 1 and frame 2, in one reader (the re-read at a new
-time included)."""
+op, scales, a time-sampled parent), sizes whose quotients round, hidden and
+time-varying visibility, invalid values, references with an override, a variant, a
+sublayer and instance proxies, equal to the last bit to those in
+tests/references/light_records.json. That file holds what the reader gave before
+(2026-11-28), with the warnings' wording of the float32 check ("not finite in
+float32") since; `python tests/test_light_read.py --write` writes it again. Read at
+the default time, frame 1 and frame 2, in one reader (the re-read at a new time
+included)."""
 import dataclasses
 import json
 import pathlib
@@ -69,6 +71,18 @@ def _kinds(stage, root="/kinds"):
     disk.CreateIntensityAttr(3.0)
     disk.CreateEnableColorTemperatureAttr(True)     # read by nothing: the record is the same
     disk.AddRotateXOp().Set(90.0)
+    # Normalized and unnormalized sizes that round (a quotient or product of three).
+    for name, kind, normalize in (("sphere_raw", UsdLux.SphereLight, False),
+                                  ("disk_norm", UsdLux.DiskLight, True),
+                                  ("rect_norm", UsdLux.RectLight, True)):
+        light = kind.Define(stage, f"{root}/{name}")
+        light.CreateIntensityAttr(3.7)
+        light.CreateColorAttr((0.3, 0.7, 0.11))
+        light.CreateNormalizeAttr(normalize)
+        light.GetPrim().CreateAttribute("inputs:radius", Sdf.ValueTypeNames.Float).Set(0.37)
+        light.GetPrim().CreateAttribute("inputs:width", Sdf.ValueTypeNames.Float).Set(0.3)
+        light.GetPrim().CreateAttribute("inputs:height", Sdf.ValueTypeNames.Float).Set(0.7)
+        light.AddScaleOp().Set((1.3, 1.1, 0.9))
     sun = UsdLux.DistantLight.Define(stage, f"{root}/sun")
     sun.CreateIntensityAttr(2.5)
     sun.CreateAngleAttr(1.0)

@@ -161,9 +161,9 @@ def _scale(values) -> tuple:
     return s
 
 
-def _times(s, k) -> tuple:
-    """s * k in Python floats: an overflow is Inf, refused by _light, not numpy's warning."""
-    return (s[0] * k, s[1] * k, s[2] * k)
+def _over(s, d) -> tuple:
+    """s / d in Python floats: an overflow is Inf, refused by _light, not numpy's warning."""
+    return (s[0] / d, s[1] / d, s[2] / d)
 
 
 MADE = ("color", "radius", "width", "height")    # a Light's numbers made from others
@@ -220,9 +220,9 @@ def _read_light(prim, path, world, values, warnings):
         radius = _number(values, "inputs:radius", nonneg=True) * (sum(scale) / 3)
         point = bool(v["treatAsPoint"]) or radius <= 0
         if normalize:
-            I = _times(s, 0.25)
+            I = _over(s, 4.0)
         else:
-            I = s if point else _times(s, math.pi * radius * radius)
+            I = s if point else tuple(c * math.pi * radius * radius for c in s)
         soft = _number(values, "inputs:shaping:cone:softness")
         return _light(kind=kind, color=I, radius=0.0 if point else radius,
                       soft_falloff=bool(v["lantern:softFalloff"]),
@@ -236,13 +236,13 @@ def _read_light(prim, path, world, values, warnings):
         w, h = w * scale[0], h * scale[1]
         if not w * h > 0:
             raise _Bad("its transform scales it to no area")
-        return _light(kind=RECT, color=_times(s, 1.0 / (w * h)) if normalize else s,
+        return _light(kind=RECT, color=_over(s, w * h) if normalize else s,
                       width=w, height=h, **common)
     if kind == DISK:
         r = _number(values, "inputs:radius", positive=True) * ((scale[0] + scale[1]) / 2)
         if not r > 0:
             raise _Bad("its transform scales it to no area")
-        return _light(kind=DISK, color=_times(s, 1.0 / (math.pi * r * r)) if normalize else s,
+        return _light(kind=DISK, color=_over(s, math.pi * r * r) if normalize else s,
                       radius=r, **common)
     warnings.append(f"{path}: light type {tname or 'untyped'} is not supported; skipped")
     return None
