@@ -12,6 +12,7 @@ from pxr import Sdf, Usd, UsdGeom, UsdRender
 
 from ...core.transforms import frustum, ortho
 from ..view import camera, conform
+from .validate import NOT_FINITE, unfit_items
 
 DEFAULT_SIZE = (640, 360)
 RENDER_SETTINGS = "/Render/Settings"
@@ -40,8 +41,8 @@ def camera_from_usd(prim: Usd.Prim, time, aspect: float, xcache=None):
                           f"(perspective or orthographic)")
     gfcam = camera_schema.GetCamera(time)
     world = gf_to_np(xcache.GetLocalToWorldTransform(prim)) if xcache else gf_to_np(gfcam.transform)
-    if not np.isfinite(world).all():
-        raise CameraError(f"{path}: its transform is not finite")
+    if unfit_items(world).any():
+        raise CameraError(f"{path}: its transform is {NOT_FINITE}")
     if abs(np.linalg.det(world[:3, :3])) <= 1e-300:
         raise CameraError(f"{path}: its transform is singular (a zero scale)")
     h_ap, v_ap = gfcam.horizontalAperture, gfcam.verticalAperture

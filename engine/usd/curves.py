@@ -25,6 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 from pxr import UsdGeom
 
+from .validate import check_items
+
 TOLERANCE = 2.5e-4             # polyline to curve, over the prim's bounding-box diagonal
 MAX_PIECES = 64                # straight pieces per cubic span at most
 DEFAULT_WIDTH = 1.0            # unauthored widths, as Storm
@@ -85,12 +87,8 @@ def _array(attr, time, dtype=np.float64):
 
 
 def finite(values, what):
-    """ValueError naming how many values are NaN or Inf."""
-    bad = ~np.isfinite(values)
-    if bad.ndim > 1:
-        bad = bad.any(axis=1)
-    if bad.any():
-        raise ValueError(f"{int(bad.sum())} of {len(bad)} {what} are not finite")
+    """ValueError naming how many values are not finite in float32 (validate.py)."""
+    check_items(values, what)
 
 
 # Cubic bases as Bezier control points of the segment on P0..P3 (rows: b0..b3); a

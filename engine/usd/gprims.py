@@ -34,6 +34,8 @@ def kind_of(prim) -> str | None:
     with authored normals as oriented ribbons, a NURBS patch's hull), 'points'
     (PointCloud: Points, and curves as round tubes), or None when it draws nothing
     by itself."""
+    if not prim.IsA(UsdGeom.Gprim):            # lights, Xforms, shaders: one call
+        return None
     if prim.IsA(UsdGeom.Mesh) or is_implicit(prim) or is_patch(prim):
         return "mesh"
     if is_curves(prim):

@@ -23,6 +23,7 @@ import numpy as np
 from pxr import Usd, UsdGeom
 
 from .gprims import kind_of
+from .validate import NOT_FINITE, check_items, unfit_items
 
 
 def _array(attr, time, dtype=np.float64):
@@ -96,10 +97,10 @@ def instance_matrices(prim, time, warnings):
     if bad_index.any():
         warnings.append(f"{path}: {int(bad_index.sum())} of {n} protoIndices are out of range "
                         f"(0..{len(protos) - 1}); those instances are skipped")
-    finite = np.isfinite(m).all(axis=(1, 2))
+    finite = ~unfit_items(m)
     if not finite.all():
-        warnings.append(f"{path}: {int((~finite).sum())} of {n} instances have non-finite "
-                        f"positions, orientations or scales; skipped")
+        warnings.append(f"{path}: {int((~finite).sum())} of {n} instances have positions, "
+                        f"orientations or scales {NOT_FINITE}; skipped")
     keep &= ~bad_index & finite
     mask = pi.ComputeMaskAtTime(time)
     if mask is not None and len(mask) == n:
@@ -116,9 +117,7 @@ def points_data(prim, time):
         raise ValueError("no points")
     p = p.reshape(-1, 3)
     n = len(p)
-    bad = ~np.isfinite(p).all(axis=1)
-    if bad.any():
-        raise ValueError(f"{int(bad.sum())} of {n} points are not finite")
+    check_items(p, "points")
     w = _array(pts.GetWidthsAttr(), time)
     if w is None or not len(w):
         radii = np.full(n, 0.5)
@@ -128,8 +127,9 @@ def points_data(prim, time):
         radii = w / 2
     else:
         raise ValueError(f"{len(w)} widths for {n} points")
-    if not np.isfinite(radii).all() or (radii < 0).any():
-        raise ValueError("widths are not finite and non-negative")
+    check_items(radii, "widths")
+    if (radii < 0).any():
+        raise ValueError("widths are negative")
     colours = None
     pv = UsdGeom.PrimvarsAPI(prim).GetPrimvar("displayColor")
     if pv and pv.HasValue():
@@ -140,8 +140,8 @@ def points_data(prim, time):
                 colours = c
             elif len(c) == 1:
                 colours = np.repeat(c, n, axis=0)
-            if colours is not None and not np.isfinite(colours).all():
-                raise ValueError("displayColor is not finite")
+            if colours is not None:
+                check_items(colours, "displayColor values")
     return p, radii, colours
 
 

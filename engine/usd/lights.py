@@ -39,6 +39,7 @@ from pxr import Usd, UsdLux
 from ...core.lights import DISK, POINT, RECT, SPOT, SUN, kind_of_usd
 from ..lighting import uniform_sh
 from ..scene import Dome, Light
+from .validate import NOT_FINITE, fits
 
 
 def is_light(prim: Usd.Prim) -> bool:
@@ -57,25 +58,30 @@ FALLBACKS = {
 }
 
 
-def light_values(prim: Usd.Prim, time) -> tuple[dict, bool]:
-    """({input name: value} of the light's authored values at `time`, whether any may
-    change over time): one pass over its authored attributes (its transform is the
-    reader's concern), so a stage of many lights costs a few calls a light."""
-    values, varies = {}, False
+INPUTS = set(FALLBACKS) | {"inputs:texture:file"}          # what a light reads
+
+
+def light_values(prim: Usd.Prim, time) -> tuple[dict, list]:
+    """({input name: value} of the light's authored inputs at `time`, the names of its
+    authored xform ops, for the reader, whose concern its transform is): one pass over
+    its authored attributes, so a stage of many lights costs a few calls a light."""
+    values, ops = {}, []
     for attr in prim.GetAuthoredAttributes():
         name = attr.GetName()
-        if name.startswith("xformOp"):
-            continue
-        varies = varies or attr.ValueMightBeTimeVarying()
-        if name in FALLBACKS or name == "inputs:texture:file":
+        if name.startswith("xformOp:"):
+            ops.append(name)
+        elif name in INPUTS:
             value = attr.Get(time)
             if value is not None:
                 values[name] = value
-    return values, varies
+    return values, ops
 
 
-def _get(values, name):
-    return values.get(name, FALLBACKS[name])
+def light_varies(prim: Usd.Prim) -> bool:
+    """Whether an input the light reads, or an xform op of its own, may change over
+    time (its ancestors' transforms are the reader's concern)."""
+    return any(attr.ValueMightBeTimeVarying() for attr in prim.GetAuthoredAttributes()
+               if attr.GetName().startswith("xformOp:") or attr.GetName() in INPUTS)
 
 
 def _number(values, name, **checks) -> float:
@@ -92,13 +98,21 @@ def _length(v) -> float:
     return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
 
 
+def _columns(m) -> tuple:
+    """A world matrix's (nested lists, m[row][column]) four columns: its axes and its
+    position."""
+    (a, b, c, d), (e, f, g, h), (i, j, k, l) = m[0], m[1], m[2]
+    return (a, e, i), (b, f, j), (c, g, k), (d, h, l)
+
+
 def _axis_lengths(m) -> tuple:
-    """The lengths of a world matrix's (nested lists, m[row][column]) three axes."""
-    return tuple(_length((m[0][j], m[1][j], m[2][j])) for j in range(3))
+    """The lengths of a world matrix's three axes."""
+    x, y, z, _ = _columns(m)
+    return _length(x), _length(y), _length(z)
 
 
-def _unit(v) -> tuple:
-    n = _length(v)
+def _unit(v, n) -> tuple:
+    """v over its length n (v itself when that is 0)."""
     return (v[0] / n, v[1] / n, v[2] / n) if n > 1e-30 else tuple(v)
 
 
@@ -106,14 +120,15 @@ class _Bad(ValueError):
     """A light value no light can have: the light is dropped with a warning."""
 
 
-def _valid(value, what, ok="finite", positive=False, nonneg=False):
-    """value (float or sequence) if finite (and > 0 / >= 0 as asked), else _Bad."""
+def _valid(value, what, positive=False, nonneg=False):
+    """value (float or sequence) if finite in float32 (validate.py; and > 0 / >= 0 as
+    asked), else _Bad."""
     items = (float(value),) if isinstance(value, (int, float)) else tuple(map(float, value))
-    if not all(map(math.isfinite, items)):
-        raise _Bad(f"{what} is {_show(value)}")
-    if positive and not all(v > 0 for v in items):
+    if not all(map(fits, items)):
+        raise _Bad(f"{what} is {_show(value)}, {NOT_FINITE}")
+    if positive and min(items) <= 0:          # no NaN past the line above
         raise _Bad(f"{what} is {_show(value)}, not positive")
-    if nonneg and not all(v >= 0 for v in items):
+    if nonneg and min(items) < 0:
         raise _Bad(f"{what} is {_show(value)}, negative")
     return value
 
@@ -123,25 +138,51 @@ def _show(value):
     return f"{arr[0]:g}" if arr.size == 1 else "(" + ", ".join(f"{v:g}" for v in arr) + ")"
 
 
-def _scale(intensity, exposure, color) -> tuple:
-    """intensity * 2^exposure * color, or _Bad when it overflows."""
-    _valid(intensity, "inputs:intensity", nonneg=True)
-    _valid(exposure, "inputs:exposure")
-    _valid(color, "inputs:color", nonneg=True)
+def _scale(values) -> tuple:
+    """intensity * 2^exposure * color of the light's authored `values` (the checks of
+    _number where authored), or _Bad when it overflows."""
+    intensity = float(values.get("inputs:intensity", 1.0) or 0.0)
+    exposure = float(values.get("inputs:exposure", 0.0) or 0.0)
+    color = tuple(map(float, values.get("inputs:color", (1.0, 1.0, 1.0))))
+    if "inputs:intensity" in values:
+        _valid(intensity, "inputs:intensity", nonneg=True)
+    if "inputs:exposure" in values:
+        _valid(exposure, "inputs:exposure")
+    if "inputs:color" in values:
+        _valid(color, "inputs:color", nonneg=True)
     try:
         gain = 2.0 ** exposure
     except OverflowError:
         gain = math.inf
     s = tuple(intensity * gain * c for c in color)
-    if not all(map(math.isfinite, s)):
-        raise _Bad(f"inputs:intensity {intensity:g} x 2^inputs:exposure {exposure:g} overflows")
+    if not all(map(fits, s)):
+        raise _Bad(f"inputs:intensity {intensity:g} x 2^inputs:exposure {exposure:g} x "
+                   f"inputs:color is {NOT_FINITE}")
     return s
 
 
-def read_light(prim: Usd.Prim, world: np.ndarray, values: dict, warnings: list):
+def _over(s, d) -> tuple:
+    """s / d in Python floats: an overflow is Inf, refused by _light, not numpy's warning."""
+    return (s[0] / d, s[1] / d, s[2] / d)
+
+
+MADE = ("color", "radius", "width", "height")    # a Light's numbers made from others
+
+
+def _light(**fields) -> Light:
+    """A Light record, once the numbers made from its inputs and transform (its
+    radiometric colour, its sizes times its scale) are finite in float32 too."""
+    if not all(map(fits, (*fields["color"], *(fields.get(n, 0.0) for n in MADE[1:])))):
+        for name in MADE:                 # name the first that is not
+            if name in fields:
+                _valid(fields[name], f"its {name} after its transform and normalization")
+    fields["color"] = np.array(fields["color"])
+    return Light(**fields)
+
+
+def read_light(prim: Usd.Prim, path: str, world: np.ndarray, values: dict, warnings: list):
     """A Light record, a Dome, or None (unsupported or invalid, with a warning), from
-    the light's authored `values` (light_values)."""
-    path = str(prim.GetPath())
+    the light's authored `values` (light_values); `path`: the prim's."""
     try:
         return _read_light(prim, path, world, values, warnings)
     except _Bad as bad:
@@ -151,57 +192,58 @@ def read_light(prim: Usd.Prim, world: np.ndarray, values: dict, warnings: list):
 
 def _read_light(prim, path, world, values, warnings):
     tname = prim.GetTypeName()
-    intensity = float(_get(values, "inputs:intensity") or 0.0)
-    exposure = float(_get(values, "inputs:exposure") or 0.0)
-    color = tuple(map(float, _get(values, "inputs:color")))
-    normalize = bool(_get(values, "inputs:normalize"))
-    m = world.tolist()
-    if not all(map(math.isfinite, m[0] + m[1] + m[2] + m[3])):
-        raise _Bad("its transform is not finite")
-    s = _scale(intensity, exposure, color)
+    v = {**FALLBACKS, **values}
+    normalize = bool(v["inputs:normalize"])
+    if not fits(float(np.abs(world).max())):             # NaN (all of it), Inf, too large
+        raise _Bad(f"its transform is {NOT_FINITE}")
+    s = _scale(values)
     if tname == "DomeLight":
         return read_dome(prim, world, np.array(s), values, warnings)
-    x_col, y_col, z_col, pos = ((m[0][j], m[1][j], m[2][j]) for j in range(4))
-    scale = _axis_lengths(m)
-    common = dict(name=path, position=np.array(pos), axis=np.array(_unit([-v for v in z_col])),
-                  x_axis=np.array(_unit(x_col)), y_axis=np.array(_unit(y_col)),
+    x_col, y_col, z_col, pos = _columns(world.tolist())
+    scale = (_length(x_col), _length(y_col), _length(z_col))
+    common = dict(name=path, position=np.array(pos),
+                  axis=np.array(_unit((-z_col[0], -z_col[1], -z_col[2]), scale[2])),
+                  x_axis=np.array(_unit(x_col, scale[0])),
+                  y_axis=np.array(_unit(y_col, scale[1])),
                   diffuse=_number(values, "inputs:diffuse"),
                   specular=_number(values, "inputs:specular"),
-                  shadow=bool(_get(values, "inputs:shadow:enable")),
-                  shadow_resolution=int(_get(values, "lantern:shadowResolution") or 0))
-    shaped = prim.HasAPI(UsdLux.ShapingAPI)
-    cone = float(_get(values, "inputs:shaping:cone:angle"))
+                  shadow=bool(v["inputs:shadow:enable"]),
+                  shadow_resolution=int(v["lantern:shadowResolution"] or 0))
+    # Only an authored cone angle (below 90) can make a spot: the API is asked then.
+    shaped = "inputs:shaping:cone:angle" in values and prim.HasAPI(UsdLux.ShapingAPI)
+    cone = float(v["inputs:shaping:cone:angle"])
     if shaped:
         _valid(cone, "inputs:shaping:cone:angle", positive=True)
     kind = kind_of_usd(tname, spot=shaped and cone < 90.0)
-    s = np.array(s)
 
     if kind in (POINT, SPOT):
         radius = _number(values, "inputs:radius", nonneg=True) * (sum(scale) / 3)
-        point = bool(_get(values, "treatAsPoint")) or radius <= 0
+        point = bool(v["treatAsPoint"]) or radius <= 0
         if normalize:
-            I = s / 4.0
+            I = _over(s, 4.0)
         else:
-            I = s if point else s * math.pi * radius * radius
+            I = s if point else tuple(c * math.pi * radius * radius for c in s)
         soft = _number(values, "inputs:shaping:cone:softness")
-        return Light(kind=kind, color=I, radius=0.0 if point else radius,
-                     soft_falloff=bool(_get(values, "lantern:softFalloff")),
-                     cone_angle=cone, cone_softness=max(soft, 0.0), **common)
+        return _light(kind=kind, color=I, radius=0.0 if point else radius,
+                      soft_falloff=bool(v["lantern:softFalloff"]),
+                      cone_angle=cone, cone_softness=max(soft, 0.0), **common)
     if kind == SUN:
         angle = _number(values, "inputs:angle", nonneg=True)
-        return Light(kind=SUN, color=s, angle=angle, **common)
+        return _light(kind=SUN, color=s, angle=angle, **common)
     if kind == RECT:
         w = _number(values, "inputs:width", positive=True)
         h = _number(values, "inputs:height", positive=True)
         w, h = w * scale[0], h * scale[1]
         if not w * h > 0:
             raise _Bad("its transform scales it to no area")
-        return Light(kind=RECT, color=s / (w * h) if normalize else s, width=w, height=h, **common)
+        return _light(kind=RECT, color=_over(s, w * h) if normalize else s,
+                      width=w, height=h, **common)
     if kind == DISK:
         r = _number(values, "inputs:radius", positive=True) * ((scale[0] + scale[1]) / 2)
         if not r > 0:
             raise _Bad("its transform scales it to no area")
-        return Light(kind=DISK, color=s / (math.pi * r * r) if normalize else s, radius=r, **common)
+        return _light(kind=DISK, color=_over(s, math.pi * r * r) if normalize else s,
+                      radius=r, **common)
     warnings.append(f"{path}: light type {tname or 'untyped'} is not supported; skipped")
     return None
 
@@ -218,7 +260,7 @@ def read_dome(prim, world, radiance, values, warnings) -> Dome:
         else:
             warnings.append(f"{path}: dome texture {asset.path!r} not found; "
                             f"using the uniform colour")
-    distance = _get(values, "lantern:aoDistance")
+    distance = values.get("lantern:aoDistance")
     if distance is not None and not (math.isfinite(float(distance)) and float(distance) > 0):
         warnings.append(f"{path}: lantern:aoDistance {distance!r} is not a positive number; "
                         f"using the default")

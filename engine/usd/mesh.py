@@ -18,6 +18,7 @@ from ...core.pattern_nodes import attribute_opacity
 from ..scene import STREAM_WIDTHS, MeshData, PatchData
 from ..vertex_attributes import compute_tangents, generated_coordinates, index_corners, smooth_normals
 from .subdivision import RefinedCage, limit_surface, skinned_cage_unrefined, subdivision_level
+from .validate import check_items
 
 
 class MeshError(ValueError):
@@ -100,14 +101,11 @@ def _pick_uv(mesh, wanted, time):
     return None, None
 
 
-def _finite(values, what, n_items=None):
-    """MeshError naming how many values are NaN or Inf (the prim is then skipped: a
-    non-finite vertex would smear NaN over every pixel it touches)."""
-    bad = ~np.isfinite(values)
-    if bad.ndim > 1:
-        bad = bad.any(axis=tuple(range(1, bad.ndim)))
-    if bad.any():
-        raise MeshError(f"{int(bad.sum())} of {len(bad)} {what} are not finite")
+def _finite(values, what):
+    """MeshError naming how many values are not finite in float32 (validate.py; the
+    prim is then skipped: a non-finite vertex would smear NaN over every pixel it
+    touches)."""
+    check_items(values, what, MeshError)
 
 
 def build_mesh(prim, time, materials, subsets, key, warnings=None, tessellate=False,

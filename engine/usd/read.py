@@ -18,7 +18,7 @@ from .skel import (SkelBindings, attach_skin, blend_weights, check_unbound, pose
                    skel_key, skeleton_warnings, skinned_points, weights_might_vary)
 from .skel import pose as skeleton_pose
 from .timeline import Dynamic, mesh_attributes_vary
-from .validate import first_bad_op
+from .validate import NOT_FINITE, ORIENT_OP, first_bad_op, fits
 
 
 @dataclass
@@ -32,6 +32,7 @@ class SkeletonState:
 
 
 PASS_INDEX = "lantern:passIndex"
+VISIBILITY = UsdGeom.Tokens.visibility
 
 
 def pass_index(prim) -> int:
@@ -80,6 +81,7 @@ class FirstRead:
         self.scene.up_axis = str(UsdGeom.GetStageUpAxis(self.stage))
         self.skel = SkelBindings(self.stage)
         self._read_subtree("/", changes, rebuild=False)
+        self._lights_moved = False    # read in traversal order: no order to restore
         self._synced = True
 
     def _read_subtree(self, root: str, changes: Changes, rebuild: bool = True):
@@ -102,7 +104,7 @@ class FirstRead:
             if kind is not None:
                 self._gprims[path] = str(p.GetTypeName())
             if is_light(p):
-                self._read_light(p, changes)
+                self._read_light(p, changes, path)
             elif p.IsA(UsdGeom.PointInstancer):
                 # Its prototypes are drawn per instance, never on their own.
                 it.PruneChildren()
@@ -122,6 +124,8 @@ class FirstRead:
 
     def _invisible(self, prim, ancestors: bool) -> bool:
         """Invisible at this time (and remembered if its visibility may vary)."""
+        if not ancestors and not prim.GetAttribute(VISIBILITY).HasAuthoredValue():
+            return False                       # most prims: two calls
         img = UsdGeom.Imageable(prim)
         if not img:
             return False
@@ -171,14 +175,21 @@ class FirstRead:
             if not under(path, root) and prim:
                 self._read_instance(prim, changes, rebuild=True)
 
-    def _world(self, prim_path: str) -> np.ndarray:
-        """The prim's local-to-world at this time; all NaN when an op of it or of an
-        ancestor is not finite. Composition makes every such op's matrix non-finite
-        but a quaternion's (it takes that as the identity), so only quaternions are
-        read op by op; the culprit is named where a transform is refused (_bad_op)."""
-        prim = self.stage.GetPrimAtPath(prim_path)
+    def _world(self, prim_path: str, prim=None, ops=None) -> np.ndarray:
+        """The prim's local-to-world at this time; all NaN when it is not finite in
+        float32 (validate.py), or an op of it or of an ancestor is not. Composition
+        makes every such op's matrix non-finite but a quaternion's (it takes that as
+        the identity), so only quaternions are read op by op; the culprit is named
+        where a transform is refused (_bad_op). `prim`: the prim, where the caller has
+        it; `ops`: its authored xform op names, where the caller has them (its own ops
+        are then read only if one is a quaternion; its ancestors' are read)."""
+        prim = prim or self.stage.GetPrimAtPath(prim_path)
         world = gf_to_np(self._xcache.GetLocalToWorldTransform(prim))
-        if not np.isfinite(world).all() or \
+        if not fits(float(np.abs(world).max())):             # NaN, Inf or too large
+            return np.full((4, 4), np.nan)
+        if ops is not None and not any(op.startswith(ORIENT_OP) for op in ops):
+            prim = prim.GetParent()
+        if prim and not prim.IsPseudoRoot() and \
                 first_bad_op(prim, self._t, self._orient_memo, orient_only=True) is not None:
             return np.full((4, 4), np.nan)
         return world
@@ -296,12 +307,12 @@ class FirstRead:
         return key
 
     def _non_finite_world(self, path, dyn, changes):
-        """A mesh whose world transform is NaN or Inf at this time: skipped with a
-        warning, and read again at the next time if its transform varies."""
+        """A mesh whose world transform is not finite in float32 at this time: skipped
+        with a warning, and read again at the next time if its transform varies."""
         when = "" if self._t.IsDefault() else f" at time {self._t.GetValue():g}"
         prim = self.stage.GetPrimAtPath(dyn.world_prim)
         culprit = (self._bad_op(prim) if prim else None) or dyn.world_prim
-        warning = f"{path}: its world transform is not finite{when} ({culprit}); skipped"
+        warning = f"{path}: its world transform is {NOT_FINITE}{when} ({culprit}); skipped"
         warnings = self.scene.warnings.setdefault(path, [])
         if warning not in warnings:
             warnings.append(warning)

@@ -13,6 +13,7 @@ from .instancers import instance_matrices, points_data, prototype_meshes
 from .read import asset_path
 from .skel import pose_might_vary, skinned_points
 from .timeline import NOT_GEOMETRY, Dynamic, mesh_attributes_vary
+from .validate import NOT_FINITE
 
 
 @dataclass
@@ -43,7 +44,7 @@ class InstancerReading:
             a.ValueMightBeTimeVarying() for a in prim.GetAuthoredAttributes()
             if not a.GetName().startswith(NOT_GEOMETRY))
         if not np.isfinite(world).all():
-            warnings.append(f"{path}: its world transform is not finite "
+            warnings.append(f"{path}: its world transform is {NOT_FINITE} "
                             f"({self._bad_op(prim) or path}); nothing drawn")
             keep = np.zeros(len(indices), bool)
         undrawn_warned = False
@@ -122,7 +123,7 @@ class InstancerReading:
         world = self._world(placed_by)
         try:
             if not np.isfinite(world).all():
-                raise ValueError(f"its world transform is not finite ({self._bad_op(prim)})")
+                raise ValueError(f"its world transform is {NOT_FINITE} ({self._bad_op(prim)})")
             segments = None
             if is_curves(prim):
                 points, radii, colours, segments = tubes(prim, self._t, warnings, skinned)

@@ -8,7 +8,7 @@ from pxr import UsdGeom, UsdShade
 
 from ..lighting import default_dome, headlight
 from ..scene import Changes
-from .lights import Dome, light_values, read_light
+from .lights import Dome, light_values, light_varies, read_light
 from .materials import default_material, read_material
 from .materials import might_vary as material_might_vary
 from .paths import traversal_order
@@ -103,13 +103,16 @@ class ShadingReading:
             if p:
                 self._read_instance(p, changes, rebuild=True)
 
-    def _read_light(self, prim, changes: Changes):
-        path = str(prim.GetPath())
+    def _read_light(self, prim, changes: Changes, path: str | None = None):
+        """(Re)reads a UsdLux prim (`path`: its path, where the caller has it). Whether
+        it may vary in time is asked at the next new time (_light_varies), not here:
+        an image at one time never needs it, and it was a quarter of a light's read."""
+        path = path or str(prim.GetPath())
         self._read.add(path)
         warnings = self.scene.warnings[path] = []
-        values, varies = light_values(prim, self._t)
-        self._light_prims[path] = varies or self._xform_varies(prim)
-        rec = read_light(prim, self._world(path), values, warnings)
+        values, ops = light_values(prim, self._t)
+        self._light_prims[path] = None
+        rec = read_light(prim, path, self._world(path, prim, ops), values, warnings)
         if isinstance(rec, Dome):
             self._domes[path] = rec
             changes.dome = True
@@ -119,6 +122,15 @@ class ShadingReading:
             changes.lights.add(path)
         else:
             self._drop_light(path, changes, keep_prim=True)
+
+    def _light_varies(self, path) -> bool:
+        """Whether the light must be read again at a new time: an input or xform op of
+        its own may vary, or an ancestor's transform may."""
+        prim = self.stage.GetPrimAtPath(path)
+        if not prim:
+            return False
+        parent = prim.GetParent()
+        return light_varies(prim) or (not parent.IsPseudoRoot() and self._xform_varies(parent))
 
     def _drop_light(self, path, changes: Changes, keep_prim: bool = False):
         if not keep_prim:

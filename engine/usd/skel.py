@@ -14,6 +14,7 @@ from pxr import Usd, UsdSkel, Vt
 from ..scene import SkelPose, SkinData
 from ..skin import MAX_ATTRIBUTE_INFLUENCES, influence_texels
 from .paths import under
+from .validate import NOT_FINITE, check_items, unfit_items
 
 
 class BindingError(ValueError):
@@ -94,9 +95,7 @@ def _joint_influences(skel_query, sq, n_points, time, path, warnings):
     if ind is None or wts is None:
         raise BindingError("jointIndices or jointWeights has no value")
     ind, wts = np.asarray(ind, np.int64), np.asarray(wts, np.float64)
-    if not np.isfinite(wts).all():
-        raise BindingError(f"{int((~np.isfinite(wts)).sum())} of {len(wts)} jointWeights "
-                           f"are not finite")
+    check_items(wts, "jointWeights", BindingError)
     if len(ind) != len(wts):
         raise BindingError(f"{len(ind)} jointIndices but {len(wts)} jointWeights")
     if k < 1 or len(ind) % k:
@@ -224,8 +223,8 @@ def check_skeleton(skel_query):
         raise BindingError(f"Skeleton {where} has {n_bind} bindTransforms for "
                            f"{len(joints)} joints")
     m = np.array(bind, np.float64).reshape(-1, 4, 4)
-    if not np.isfinite(m).all():
-        raise BindingError(f"Skeleton {where}: bindTransforms are not finite")
+    if unfit_items(m).any():
+        raise BindingError(f"Skeleton {where}: bindTransforms are {NOT_FINITE}")
     det = np.linalg.det(m[:, :3, :3])
     scale = np.abs(m[:, :3, :3]).max(axis=(1, 2))
     singular = np.abs(det) <= 1e-12 * np.maximum(scale, 1e-300) ** 3
@@ -331,12 +330,12 @@ def pose(skel_query, time, dqs, warnings=None) -> SkelPose:
     animation) give the rest pose instead, with a warning naming the animation."""
     n = len(skel_query.GetJointOrder())
     xf = np.array(skel_query.ComputeSkinningTransforms(time), np.float64).reshape(-1, 4, 4)
-    if len(xf) != n or not np.isfinite(xf).all():
+    if len(xf) != n or unfit_items(xf).any():
         anim = skel_query.GetAnimQuery()
         where = anim.GetPrim().GetPath() if anim else skel_query.GetPrim().GetPath()
         when = "" if time.IsDefault() else f" at time {time.GetValue():g}"
         if warnings is not None:
-            warnings.append(f"{where}: joint transforms are not finite{when}; the skeleton "
+            warnings.append(f"{where}: joint transforms are {NOT_FINITE}{when}; the skeleton "
                             f"is drawn in its rest pose")
         xf = _rest_skinning(skel_query)
     xf = np.concatenate([xf.transpose(0, 2, 1), np.eye(4)[None]])

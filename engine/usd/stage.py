@@ -49,7 +49,7 @@ class StageReader(FirstRead, InstancerReading, ShadingReading, EditTracking, Tim
         self._material_varies = {}    # Material prim path -> it may vary in time
         self._skels = {}              # skel key -> SkeletonState (read.py)
         self._shape_queries = {}
-        self._light_prims = {}        # every UsdLux prim -> may vary in time
+        self._light_prims = {}        # every UsdLux prim -> may vary in time (None: not asked yet)
         self._domes = {}              # dome prim path -> Dome
         self._cameras = []            # camera prim paths, traversal order
         self._visibility = {}         # prims whose own visibility may vary -> last value

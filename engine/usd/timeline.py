@@ -100,8 +100,12 @@ class TimeSampling:
                 self.scene.warnings.pop(path, None)
                 self._read_instance(prim, changes, rebuild=False)
         for path, varies in list(self._light_prims.items()):
+            if varies is None:             # read since the last new time: asked now
+                varies = self._light_varies(path)
             if varies and path not in self._read:
                 self._read_light(self.stage.GetPrimAtPath(path), changes)
+            if path in self._light_prims:
+                self._light_prims[path] = varies
         for name, varies in list(self._material_varies.items()):
             if varies and name not in self._read:
                 self._reread_material(name, changes)
