@@ -36,6 +36,22 @@ vec2 pixel_centre() { return shaded_pixel; }
 vec2 pixel_centre() { return gl_FragCoord.xy; }
 #endif
 
+// --- Unit vectors in two unorm channels (octahedral: Cigolle et al., JCGT 2014) --
+vec2 oct_encode(vec3 v) {
+    v /= max(abs(v.x) + abs(v.y) + abs(v.z), 1e-30);
+    vec2 e = v.z >= 0.0 ? v.xy : (1.0 - abs(v.yx)) * vec2(v.x >= 0.0 ? 1.0 : -1.0,
+                                                          v.y >= 0.0 ? 1.0 : -1.0);
+    return e * 0.5 + 0.5;
+}
+
+vec3 oct_decode(vec2 e) {
+    e = e * 2.0 - 1.0;
+    vec3 v = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    float t = max(-v.z, 0.0);
+    v.xy += vec2(v.x >= 0.0 ? -t : t, v.y >= 0.0 ? -t : t);
+    return normalize(v);
+}
+
 // --- BRDF (Filament's model, layered as Cycles' Principled BSDF) ----------------
 // GGX / Trowbridge-Reitz, alpha = roughness^2.
 float d_ggx(float NoH, float a) {

@@ -1,5 +1,7 @@
 #version 330 core
-// Depth only. Radial maps (spot, cube) store distance / far, the same quantity on
+// Depth, and the geometric normal of the surface drawn (octahedral, lib.glsl): the
+// lookup's contact test takes each texel for a piece of its plane (shadow_lookup.glsl).
+// Radial maps (spot, cube) store distance / far, the same quantity on
 // every cube face, so the lookup compares radial distances and PCSS reads blocker
 // distances without un-projecting. Ortho (sun) depth is linear already.
 //
@@ -13,10 +15,11 @@ in vec3 v_world;
 uniform bool radial;
 uniform vec3 light_pos;        // anchor-relative (0 for radial maps)
 uniform float far;
+out vec2 o_normal;
+#include "lib.glsl"
 #ifdef ALPHA_TEST
 in vec2 v_uv;
 uniform int u_object;          // the caster (objects.glsl): its own thresholds
-#include "lib.glsl"
 #include "material.glsl"
 
 // The thresholds of a blended caster: in every 4 x 4 block of map texels, the 16
@@ -50,6 +53,7 @@ void main() {
     float cut = u_opacity_threshold > 0.0 ? u_opacity_threshold : caster_threshold();
     if (alpha < cut) discard;
 #endif
+    o_normal = oct_encode(cross(dFdx(v_world), dFdy(v_world)));
     if (radial) gl_FragDepth = clamp(length(v_world - light_pos) / far, 0.0, 1.0);
     else gl_FragDepth = gl_FragCoord.z;
 }

@@ -10,12 +10,17 @@
 //    depth, so wide kernels on slopes do not self-shadow;
 //  * slope-scaled constant: texel * (1 + tan theta) for the depth quantisation and
 //    the bilinear compare footprint, plus 1e-4 relative for float precision.
+// That bias, and a filter that reaches past an occluder's edge, let light through
+// where an occluder meets the receiver (a wall on a floor, walls at a room's seams,
+// of zero thickness too): contact_shadow below closes those seams first.
 // Soft shadows (PCSS): a blocker search over the region that can occlude the light,
 // then PCF with a kernel of the penumbra width: radius * (d_recv - d_block) / d_block
 // for sphere lights, (d_recv - d_block) * tan(angle / 2) for the sun. Area lights
 // (rect, disk) filter over their own extent: area_shadow_factor below.
 uniform sampler2DShadow shadow_cmp;
 uniform sampler2D shadow_raw;
+uniform sampler2D shadow_normal; // the geometric normal of each texel's surface (oct)
+uniform mat4 shadow_inv[6];     // inverse of shadow_mats: tile uv, depth -> camera-relative
 uniform bool shadow_radial;
 uniform int shadow_tiles;
 uniform mat4 shadow_mats[6];    // camera-relative position -> tile uv, depth in [0, 1]
@@ -53,6 +58,61 @@ bool shadow_uv(vec3 w, vec3 light_pos, int cascade, out vec2 uv, out float z) {
     vec2 t = s.xy;
     uv = shadow_rects[k].xy + t * shadow_rects[k].zw;
     return all(greaterThanEqual(t, vec2(0.0))) && all(lessThanEqual(t, vec2(1.0)));
+}
+
+// The width of the penumbra that an occluder s before the receiver (at distance ref
+// from a radial light, along the sun's ray) casts: PCSS's estimate.
+float penumbra(float s, float ref) {
+    return shadow_radial ? shadow_size * s / max(ref - s, 1e-6) : s * shadow_size;
+}
+
+// Contact shadows. Each map texel is taken for a piece of the plane of the surface it
+// holds (its point, from the map, and its geometric normal, shadow.frag). Among the
+// 2 x 2 texels of the receiver's bilinear footprint, one is an occluder in contact when
+//  * its surface is another one (normals more than ~25 deg apart: not the
+//    receiver's own plane, nor its curvature),
+//  * it lies in front of the receiver's plane (a concave seam: at a convex edge the
+//    other face falls behind it), and
+//  * the ray from q to the light crosses its plane within `reach`: the depth the bias
+//    cannot resolve, and the filter's reach beyond the occluder's edge.
+// A lit concave corner (a floor beside a wall that faces the light) passes the
+// first two but its ray leaves the wall's plane: it stays lit. A texel stands for its
+// plane at most a texel beyond where its surface ends: contact shadows are at most a
+// texel wider, where a depth bias alone left light through the seam.
+bool contact_shadow(vec3 p, vec3 q, vec3 n, vec3 light_pos, vec3 axis, int cascade,
+                    float texel, float bias, float ref) {
+    int k = shadow_radial ? (shadow_tiles == 6 ? cube_face(q - light_pos) : 0) : cascade;
+    vec2 uv;
+    float z;
+    if (!shadow_uv(q, light_pos, cascade, uv, z)) return false;
+    vec2 size = vec2(textureSize(shadow_raw, 0));
+    ivec2 i0 = ivec2(floor(uv * size - 0.5));
+    vec3 to_light = shadow_radial ? normalize(light_pos - q) : -axis;
+    for (int j = 0; j < 4; ++j) {
+        ivec2 i = clamp(i0 + ivec2(j & 1, j >> 1), ivec2(0), ivec2(size) - 1);
+        float r = texelFetch(shadow_raw, i, 0).r;
+        if (r >= 1.0) continue;                            // nothing drawn there
+        vec2 t = ((vec2(i) + 0.5) / size - shadow_rects[k].xy) / shadow_rects[k].zw;
+        if (any(lessThan(t, vec2(0.0))) || any(greaterThan(t, vec2(1.0)))) continue;
+        vec3 m = oct_decode(texelFetch(shadow_normal, i, 0).rg);
+        vec3 x;
+        if (shadow_radial) {
+            vec4 h = shadow_inv[k] * vec4(t, 0.5, 1.0);
+            x = light_pos + normalize(h.xyz / h.w - light_pos) * r * shadow_far;
+        } else {
+            vec4 h = shadow_inv[k] * vec4(t, r, 1.0);
+            x = h.xyz / h.w;
+        }
+        if (dot(x - p, n) <= 1e-3 * texel) continue;
+        float facing = dot(to_light, m);
+        if (abs(facing) < 0.01) continue;                  // edge-on: no plane to cross
+        float s = dot(x - q, m) / facing;
+        if (s <= 0.0 || s >= ref) continue;
+        if (s < bias + 3.0 * texel / abs(facing)) {
+            if (abs(dot(m, n)) < 0.9) return true;
+        } else if (penumbra(s, ref) < 1.5 * texel) return true;
+    }
+    return false;
 }
 
 vec2 vogel(int i, int n, float rot) {
@@ -96,6 +156,7 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
         ref = z * scale;
     }
     float bias = texel * (1.0 + tan_t) + 1e-4 * ref;
+    if (contact_shadow(p, q, n, light_pos, axis, cascade, texel, bias, ref)) return 0.0;
     float inv_NoL = 1.0 / max(NoL, 0.05);
     vec3 t = normalize(cross(axis, abs(axis.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
     vec3 b = cross(axis, t);
