@@ -61,7 +61,7 @@ COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "meshes
             "light_volumes", "stencil_marks", "batched_lights", "instances_drawn",
             "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws",
             "pattern_bytes", "programs_pending", "light_clusters", "light_items",
-            "clusters_overflowed", "ao_searches")
+            "clusters_overflowed", "ao_searches", "area_visibility_passes")
 
 
 def _shape(material):
@@ -123,7 +123,8 @@ class Renderer:
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
                       self.geometry, self.environment),
             self.light_cull,
-            ClusteredLightPass(ctx, programs, self.lights, self.environment, self.light_cull),
+            ClusteredLightPass(ctx, self.pool, programs, self.lights, self.environment,
+                               self.light_cull),
             TransparencyPass(ctx, self.pool, programs, self.geometry, self.textures,
                              self.lights, self.environment, self.depth),
             SupersamplePass(ctx, self.pool, programs, self.depth),
