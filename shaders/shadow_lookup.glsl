@@ -76,11 +76,11 @@ float penumbra(float s, float ref) {
 //    other face falls behind it), and
 //  * the ray from q to the light crosses its plane within `reach`: the depth the bias
 //    cannot resolve, and the filter's reach beyond the occluder's edge.
-// Texels of see-through casters (cut-outs, blended: shadow.frag) stand for no plane:
-// their holes stay open. A lit concave corner (a floor beside a wall that faces the light) passes the
-// first two but its ray leaves the wall's plane: it stays lit. A texel stands for its
-// plane at most a texel beyond where its surface ends: contact shadows are at most a
-// texel wider, where a depth bias alone left light through the seam.
+// A lit concave corner (a floor beside a wall that faces the light) passes the first
+// two but its ray leaves the wall's plane: it stays lit. A texel stands for its plane
+// at most a texel beyond where its surface ends: contact shadows are at most a texel
+// wider, where a depth bias alone left light through the seam. Texels of see-through
+// casters (cut-outs, blended: shadow.frag) stand for no plane: their holes stay open.
 bool contact_shadow(vec3 p, vec3 q, vec3 n, vec3 light_pos, vec3 axis, int cascade,
                     float texel, float bias, float ref) {
     int k = shadow_radial ? (shadow_tiles == 6 ? cube_face(q - light_pos) : 0) : cascade;
@@ -370,12 +370,13 @@ float area_shadow_factor(vec3 p, vec3 n, vec3 c, vec3 x, vec3 y, vec2 half_exten
     return total > 0.0 ? lit / total : 1.0;
 }
 
-// The loaded light's shadow (lights.glsl's globals), of any of the program's kinds
-// (lights.glsl LIGHT_DISTANT, LIGHT_SPHERE, LIGHT_AREA).
 #ifdef AREA_VISIBILITY
 uniform sampler2D area_visibility;  // this light's, filtered (area_visibility.glsl)
 #endif
 
+// The loaded light's shadow (lights.glsl's globals), of any of the program's kinds
+// (lights.glsl LIGHT_DISTANT, LIGHT_SPHERE, LIGHT_AREA); AREA_VISIBILITY: an area
+// light's, filtered, at this pixel (the G-buffer's surfaces only).
 float light_shadow(vec3 p, vec3 n, float view_depth) {
 #ifdef AREA_VISIBILITY
     if (n_poly > 0) return texelFetch(area_visibility, ivec2(pixel_centre()), 0).r;
