@@ -8,12 +8,14 @@ Blackman-Harris 1.5 px; `full` mode keeps a new scene's bounces (max 12, diffuse
 glossy 4, transmission 12), `direct` sets max bounces 0. Each shot in the modes
 shot_scenes.SHOTS lists, at shot_scenes.SIZE (160 x 120).
 
-Samples: SAMPLES (512) per pixel, not the 1,024 the issues name. Measured on this
-machine (2 cores shared with other work, load about 12): the closed box in full mode
-took 8.6 s at 16 spp, so 1,024 spp of all eight cases is about 40 minutes at nice 5 and
-over an hour at nice 19, more than the time there was. At 512 spp the reference's own
-noise is half that of Cycles' 64 spp point in the bench's table, so the 64 spp FLIP there
-reads a little high. `--samples N` renders at N (then say so in docs/compare.md).
+Samples: SAMPLES (512) per pixel, not the 1,024 the issues name: on this machine
+(2 cores shared with other work, load 12 to 16) the eight cases took 17 minutes at
+512 spp and nice 19 on 2026-11-28 (the closed box in full mode 389 s, in direct mode
+99 s; the sunlit room 142 s; the emissive table 138 s and 91 s; the glass sphere 77 s
+and 45 s; the glossy floor 59 s), so 1,024 spp would have taken about 35 minutes, more
+than the time there was. At 512 spp the reference's own noise is a little under half
+that of Cycles' 64 spp in the bench's table (bench/bench_shots.py), whose FLIP it raises
+slightly. `--samples N` renders at N (then say so in docs/compare.md).
 
 Run from the repository root, niced (the cores are shared):
     nice -n 19 .venv/bin/python tests/references/make_shot_references.py [--samples N] [SHOT[:MODE] ...]
