@@ -22,7 +22,7 @@ sys.path.insert(0, str(TESTS / "references"))
 import lantern.exporters  # noqa: F401,E402  (Blender's pxr first)
 import bpy  # noqa: E402
 
-from lantern.compare.blender_render import configure_cycles, render  # noqa: E402
+from lantern.compare.blender_render import configure_cycles, prepare_output, render  # noqa: E402
 from lantern.compare.lantern_timing import time_lantern  # noqa: E402
 from lantern.compare.metrics import score  # noqa: E402
 from lantern.engine import read_exr  # noqa: E402
@@ -58,6 +58,7 @@ def lantern_cells(name, workdir):
 def cycles_images(name, mode, workdir):
     """[(spp, rgba, seconds)] of Cycles in `mode` at CYCLES_SAMPLES."""
     scene = shot_scenes.build(name)
+    prepare_output(scene)               # float EXR of the raw render, as compare writes it
     configure_cycles(scene, 1, 0, mode, False, FILTER_WIDTH)
     render(scene)                       # untimed: kernel loading
     images = []
