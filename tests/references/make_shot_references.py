@@ -8,14 +8,11 @@ Blackman-Harris 1.5 px; `full` mode keeps a new scene's bounces (max 12, diffuse
 glossy 4, transmission 12), `direct` sets max bounces 0. Each shot in the modes
 shot_scenes.SHOTS lists, at shot_scenes.SIZE (160 x 120).
 
-Samples: SAMPLES (512) per pixel, not the 1,024 the issues name: on this machine
-(2 cores shared with other work, load 12 to 16) the eight cases took 17 minutes at
-512 spp and nice 19 on 2026-11-28 (the closed box in full mode 389 s, in direct mode
-99 s; the sunlit room 142 s; the emissive table 138 s and 91 s; the glass sphere 77 s
-and 45 s; the glossy floor 59 s), so 1,024 spp would have taken about 35 minutes, more
-than the time there was. At 512 spp the reference's own noise is a little under half
-that of Cycles' 64 spp in the bench's table (bench/bench_shots.py), whose FLIP it raises
-slightly. `--samples N` renders at N (then say so in docs/compare.md).
+Samples: SAMPLES (1,024) per pixel. On this machine (2 cores shared with other work, load
+6 to 9) the eight cases took 18 minutes at nice 19 on 2026-11-28: the closed box in
+full mode 338 s, in direct mode 89 s; the sunlit room 144 s; the emissive table 178 s
+and 145 s; the glass sphere 67 s and 44 s; the glossy floor 54 s. `--samples N` renders
+at N (then say so in docs/compare.md).
 
 Run from the repository root, niced (the cores are shared):
     nice -n 19 .venv/bin/python tests/references/make_shot_references.py [--samples N] [SHOT[:MODE] ...]
@@ -34,7 +31,7 @@ from lantern.compare.blender_render import configure_cycles  # noqa: E402
 
 import shot_scenes  # noqa: E402
 
-SAMPLES = 512
+SAMPLES = 1024
 FILTER_WIDTH = 1.5   # Cycles' default pixel filter, as compare uses
 
 
