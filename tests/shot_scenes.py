@@ -182,7 +182,6 @@ def build_emissive_table():
 
 
 def build_glass_sphere():
-    import bpy
     scene = _scene()
     rs._world(scene, (0.2, 0.35, 0.8), 1.0)
     checker = rs._lambert("Checker")
@@ -199,7 +198,6 @@ def build_glass_sphere():
     sun = rs._sun(scene, 3.0)
     _aimed(sun, (0.45, 0.55, -0.7))
     rs._camera(scene, (0.0, -3.2, 1.4), (0.0, 0.0, 0.35), lens=45.0)
-    bpy.context.view_layer.update()
     return scene
 
 
