@@ -56,7 +56,7 @@ class ClusteredLightPass(Pass):
         for unit, name in enumerate(IMAGES if aovs else IMAGES[:1]):
             board[name].bind_to_image(unit, read=True, write=True, format=GL_RGBA32F)
         self.table.texture.use(UNITS["u_lights"])
-        self.environment.lut.use(UNITS["dfg_lut"])
+        self.environment.bind_tables()
         self.environment.bind_sheen(frame.scene.materials.values())
         tree, tree_buffer = self.table.tree_for(frame.scene, clusters.error)
         self.cull.bind(tree_buffer, clusters.counts)
