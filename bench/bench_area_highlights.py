@@ -3,7 +3,7 @@ reflecting a rect or a disk light, a gold sphere) at every preset against their
 committed Cycles references (tests/references/highlight/, 1024 spp, bounces 0): mean
 HDR-FLIP and warm render time (median of 3), and Cycles at 1, 4 and 16 samples in the
 same run for scale (`--no-cycles`: Lantern only; `--out DIR`: Lantern's medium images as
-EXR). Asserts nothing."""
+EXR; scene names: those only). Asserts nothing."""
 import pathlib
 import sys
 import time
@@ -39,10 +39,11 @@ def main():
     args = sys.argv[1:]
     with_cycles = "--no-cycles" not in args
     out = pathlib.Path(args[args.index("--out") + 1]) if "--out" in args else None
+    names = [a for a in args if a in highlight_scenes.SCENES] or list(highlight_scenes.SCENES)
     width, height = highlight_scenes.SIZE
     print(f"area-light highlights at {width}x{height} vs Cycles {highlight_scenes.SAMPLES} spp "
           f"({time.strftime('%Y-%m-%d')}, llvmpipe); FLIP (warm ms)")
-    for name in highlight_scenes.SCENES:
+    for name in names:
         reference = read_exr(str(TESTS / "references" / "highlight" / f"{name}.exr"))
         highlight_scenes.build(name)
         stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())

@@ -6,8 +6,10 @@ default pixel filter) and tests/test_area_highlights.py.
 - rect: a dark glossy floor (base 0.05, roughness 0.15) under a 2 x 0.4 m rectangular
   light, a low camera, a gold sphere (metallic, roughness 0.25) lit from behind;
 - disk: the same with a 0.9 m disk light;
-- rect_rough: the rect scene with a floor of roughness 0.4.
-A black world: only the light lights them. Every light casts its shadow."""
+- rect_rough: the rect scene with a floor of roughness 0.4;
+- rect_unshadowed: the rect scene, its light casting no shadow (the highlight alone:
+  the sphere's shadow falls across it in the others).
+A black world: only the light lights them."""
 import reference_scenes as rs
 
 SIZE = (160, 120)
@@ -18,7 +20,9 @@ LIGHTS = {
     "rect": dict(shape='RECTANGLE', size=2.0, size_y=0.4, energy=200.0),
     "disk": dict(shape='DISK', size=0.9, energy=200.0),
 }
-SCENES = {"rect": ("rect", 0.15), "disk": ("disk", 0.15), "rect_rough": ("rect", 0.4)}
+# name: (light, floor roughness, shadow)
+SCENES = {"rect": ("rect", 0.15, True), "disk": ("disk", 0.15, True),
+          "rect_rough": ("rect", 0.4, True), "rect_unshadowed": ("rect", 0.15, False)}
 LIGHT_AT = (0.0, 3.0, 1.5)          # facing straight down, behind the sphere
 CAMERA = ((0.0, -5.0, 0.6), (0.0, 0.0, 0.3))
 
@@ -26,7 +30,7 @@ CAMERA = ((0.0, -5.0, 0.6), (0.0, 0.0, 0.3))
 def build(name, workdir=None):
     """The scene `name` of SCENES, current in this Blender session."""
     import bpy
-    light_kind, roughness = SCENES[name]
+    light_kind, roughness, shadow = SCENES[name]
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     scene.render.resolution_x, scene.render.resolution_y = SIZE
@@ -43,7 +47,7 @@ def build(name, workdir=None):
     data.shape, data.size, data.energy = spec["shape"], spec["size"], spec["energy"]
     if "size_y" in spec:
         data.size_y = spec["size_y"]
-    data.use_shadow = True
+    data.use_shadow = shadow
     light = bpy.data.objects.new("Area", data)
     light.location = LIGHT_AT
     scene.collection.objects.link(light)

@@ -2,7 +2,7 @@
 shaders' share of the GGX lobe that a polygon covers, evaluated in GLSL by a compute
 harness, against the lobe integrated over the polygon by sampling (numpy, 2^20
 directions), at roughness 0.05, 0.15, 0.4 and 1, for several views and placements;
-and the diffuse form factor against its closed form."""
+the diffuse form factor against its closed form; the stored table against the fit."""
 import math
 
 import numpy as np
@@ -154,3 +154,10 @@ def test_form_factor_is_lamberts():
                        (1.0, 1.0, False, upper)])
     assert abs(got[0] - ff) <= 1e-5, (got[0], ff)
     assert abs(got[1] - got[2]) <= 1e-6 and got[1] > 0.01, got
+
+
+def test_stored_table_is_the_fit():
+    """shaders/tables/ltc_ggx.npy is what shaders/tables/fit_ltc.py fits for the lobe as
+    engine/ltc.py evaluates it now (one row, roughness 0.4: the fit is deterministic)."""
+    j = round(0.4 * (ltc.LTC_SIZE - 1))
+    np.testing.assert_allclose(ltc.fit_row(j), ltc.ltc_lut()[j], rtol=1e-4, atol=1e-5)
