@@ -149,17 +149,16 @@ void sphere_light(Surface s, out vec3 diffuse, out vec3 glossy) {
 }
 
 // The loaded area light's polygon about s, in the frame (t, b, n) of s's lobes (lib.glsl
-// Lobe), clipped to s's horizon.
-Polygon area_polygon(Surface s) {
+// Lobe), clipped to s's horizon: ltc_poly (ltc.glsl).
+void area_polygon(Surface s) {
     vec3 t = s.v - s.n * dot(s.n, s.v);
     float len = length(t);
     t = len > 1e-5 ? t / len
                    : normalize(cross(s.n, abs(s.n.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
     mat3 to_frame = transpose(mat3(t, cross(s.n, t), s.n));
-    Polygon p;
-    p.n = n_poly;
-    for (int i = 0; i < n_poly; ++i) p.v[i] = to_frame * (light_poly(i) - s.p);
-    return clip_to_horizon(p);
+    ltc_in_n = n_poly;
+    for (int i = 0; i < n_poly; ++i) ltc_in[i] = to_frame * (light_poly(i) - s.p);
+    set_polygon();
 }
 
 // A polygon light of radiance L: diffuse the exact form factor (Lambert's lobe), the
@@ -171,14 +170,14 @@ void area_light(Surface s, out vec3 diffuse, out vec3 glossy) {
     vec3 rel = s.p - light_pos;
     if (dot(rel, light_axis) <= 0.0) return;   // one-sided
     if (length(rel) > light_range) return;
-    Polygon p = area_polygon(s);
-    if (p.n < 3) return;
+    area_polygon(s);
+    if (ltc_poly_n < 3) return;
     vec3 L = light_color;
     // The bump map correction towards the light's centre for the diffuse integral, and
     // along the mirror direction for the glossy lobes.
     vec3 to_centre = normalize(light_pos - s.p);
     float visible = bump_visible(s, to_centre);
-    vec3 E = L * (PI * form_factor(p)) * light_diffuse * visible;
+    vec3 E = L * (PI * ltc_share(mat3(1.0))) * light_diffuse * visible;
     diffuse = E * brdf_diffuse(s) * bump_shadowing(s, to_centre);
 #ifdef SHEEN
     if (s.sheen_mode == 2) {
@@ -186,12 +185,12 @@ void area_light(Surface s, out vec3 diffuse, out vec3 glossy) {
     } else if (max(s.sheen.r, max(s.sheen.g, s.sheen.b)) > 0.0) {
         mat3 sheen_inverse = mat3(vec3(s.sheen_a, 0.0, 0.0), vec3(0.0, s.sheen_a, 0.0),
                                   vec3(s.sheen_b, 0.0, 1.0));
-        diffuse += L * light_diffuse * visible * s.sheen * s.sheen_albedo * ltc_share(p, sheen_inverse);
+        diffuse += L * light_diffuse * visible * s.sheen * s.sheen_albedo * ltc_share(sheen_inverse);
     }
 #endif
-    vec3 lobes = s.under_coat * s.spec_albedo * ltc_share(p, ltc_inverse(s.NoV, s.roughness));
+    vec3 lobes = s.under_coat * s.spec_albedo * ltc_share(ltc_inverse(s.NoV, s.roughness));
     if (s.coat > 0.0)
-        lobes += vec3(s.coat_albedo * ltc_share(p, ltc_inverse(s.NoV, s.coat_roughness)));
+        lobes += vec3(s.coat_albedo * ltc_share(ltc_inverse(s.NoV, s.coat_roughness)));
     glossy = L * light_specular * bump_visible(s, reflect(-s.v, s.n)) * lobes;
 }
 

@@ -23,11 +23,10 @@ layout(std430, binding = 1) writeonly buffer Shares { float shares[]; };
 void main() {
     int k = int(gl_GlobalInvocationID.x);
     vec4 head = cases[k * 5];
-    Polygon p;
-    p.n = 4;
-    for (int i = 0; i < 4; ++i) p.v[i] = cases[k * 5 + 1 + i].xyz;
-    p = clip_to_horizon(p);
-    shares[k] = head.z > 0.5 ? ltc_share(p, ltc_inverse(head.x, head.y)) : form_factor(p);
+    ltc_in_n = 4;
+    for (int i = 0; i < 4; ++i) ltc_in[i] = cases[k * 5 + 1 + i].xyz;
+    set_polygon();
+    shares[k] = ltc_share(head.z > 0.5 ? ltc_inverse(head.x, head.y) : mat3(1.0));
 }
 """
 
