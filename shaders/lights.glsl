@@ -4,6 +4,7 @@
 // surfaces they light. Include after lib.glsl (Surface, the BRDF).
 #include "origin.glsl"
 #include "light_table.glsl"
+#include "ltc.glsl"
 
 // The light kinds a program shades: those it defines (core/lights.py KINDS' shader
 // defines: LIGHT_DISTANT, LIGHT_SPHERE for points, LIGHT_SPOT for spots, LIGHT_AREA),
@@ -35,7 +36,6 @@ vec3 light_x;
 vec3 light_y;
 vec2 half_size;             // rect half extents; disk: (radius, 0)
 int n_poly;
-float light_area;
 int light_row;
 
 vec4 light_texel(int k) { return light_table(light_row, k); }
@@ -59,7 +59,7 @@ void load_light(int row, vec3 view_forward) {
     vec4 t4 = light_texel(4), t5 = light_texel(5), t6 = light_texel(6);
     light_x = t4.xyz; light_y = t5.xyz;
     half_size = vec2(t4.w, t5.w);
-    n_poly = int(t6.x); light_area = t6.y;
+    n_poly = int(t6.x);
 }
 
 // --- What the loaded light reflects off a surface, unshadowed, as its diffuse and
@@ -67,40 +67,6 @@ void load_light(int row, vec3 view_forward) {
 // call their kind's function; the transparency pass calls light_reflected, any kind
 // by its row. 0 wherever the light adds nothing (beyond its range, behind an area
 // light, below the horizon).
-
-#define MAX_VERTS 32
-
-// Projected solid angle of the polygon seen from p with normal n, after clipping the
-// polygon to the upper hemisphere (Lambert's edge integral): E = L * this.
-float polygon_irradiance_factor(vec3 p, vec3 n) {
-    vec3 clipped[MAX_VERTS + 1];
-    int m = 0;
-    vec3 prev = light_poly(n_poly - 1) - p;
-    float dprev = dot(prev, n);
-    for (int i = 0; i < n_poly; ++i) {
-        vec3 cur = light_poly(i) - p;
-        float dcur = dot(cur, n);
-        if ((dprev >= 0.0) != (dcur >= 0.0)) {
-            float t = dprev / (dprev - dcur);
-            clipped[m++] = mix(prev, cur, t);
-        }
-        if (dcur >= 0.0) clipped[m++] = cur;
-        prev = cur; dprev = dcur;
-    }
-    if (m < 3) return 0.0;
-    float sum = 0.0;
-    for (int i = 0; i < m; ++i) {
-        vec3 a = normalize(clipped[i]);
-        vec3 b = normalize(clipped[(i + 1) % m]);
-        vec3 c = cross(a, b);
-        float len = length(c);
-        if (len > 1e-9) {
-            float theta = acos(clamp(dot(a, b), -1.0, 1.0));
-            sum += theta * dot(n, c / len);
-        }
-    }
-    return abs(0.5 * sum);
-}
 
 // Blender's spot cone, smoothstep over (cos phi - cos(size/2)) / ((1 - cos(size/2)) blend).
 float cone(vec3 from_light) {
@@ -182,43 +148,50 @@ void sphere_light(Surface s, out vec3 diffuse, out vec3 glossy) {
     if (sphere_emitter(s, l, Ed, Es, widen)) point_reflected(s, l, Ed, Es, widen, diffuse, glossy);
 }
 
+// The loaded area light's polygon about s, in the frame (t, b, n) of s's lobes (lib.glsl
+// Lobe), clipped to s's horizon: ltc_poly (ltc.glsl).
+void area_polygon(Surface s) {
+    vec3 t = s.v - s.n * dot(s.n, s.v);
+    float len = length(t);
+    t = len > 1e-5 ? t / len
+                   : normalize(cross(s.n, abs(s.n.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
+    mat3 to_frame = transpose(mat3(t, cross(s.n, t), s.n));
+    ltc_in_n = n_poly;
+    for (int i = 0; i < n_poly; ++i) ltc_in[i] = to_frame * (light_poly(i) - s.p);
+    set_polygon();
+}
+
+// A polygon light of radiance L: diffuse the exact form factor (Lambert's lobe), the
+// base's GGX lobe and the coat's each their share of the polygon by their LTC
+// (ltc.glsl) times their albedo at n.v (their Fresnel averaged over the lobe, as the
+// split-sum's), the microfiber sheen its own LTC exactly (sheen.glsl).
 void area_light(Surface s, out vec3 diffuse, out vec3 glossy) {
     diffuse = glossy = vec3(0.0);
     vec3 rel = s.p - light_pos;
     if (dot(rel, light_axis) <= 0.0) return;   // one-sided
     if (length(rel) > light_range) return;
-    vec3 E = light_color * polygon_irradiance_factor(s.p, s.n);
-    // Specular: a representative point, the reflection ray's hit on the light plane
-    // clamped to the shape, with roughness widened by the light's size.
-    vec3 r = reflect(-s.v, s.n);
-    float denom = dot(r, light_axis);
-    vec3 hit = light_pos;
-    if (denom < -1e-6) {
-        float t = dot(light_pos - s.p, light_axis) / denom;
-        if (t > 0.0) hit = s.p + r * t;
-    }
-    vec2 local = vec2(dot(hit - light_pos, light_x), dot(hit - light_pos, light_y));
-    if (is_disk) {
-        float lr = length(local);
-        if (lr > half_size.x) local *= half_size.x / lr;
-    } else {
-        local = clamp(local, -half_size, half_size);
-    }
-    vec3 q = light_pos + light_x * local.x + light_y * local.y;
-    vec3 lq = q - s.p;
-    float dq = length(lq);
-    vec3 l = dq > 1e-6 ? lq / dq : s.n;
-    float a = ggx_alpha(s.roughness), ac = ggx_alpha(s.coat_roughness);
-    float widen = sqrt(light_area / PI) / max(2.0 * dq, 1e-6);
-    // The bump map correction towards the light's centre for the diffuse integral.
+    area_polygon(s);
+    if (ltc_poly_n < 3) return;
+    vec3 L = light_color;
+    // The bump map correction towards the light's centre for the diffuse integral, and
+    // along the mirror direction for the glossy lobes.
     vec3 to_centre = normalize(light_pos - s.p);
-    diffuse = E * light_diffuse * brdf_diffuse(s) * bump_visible(s, to_centre)
-        * bump_shadowing(s, to_centre);
+    float visible = bump_visible(s, to_centre);
+    vec3 E = L * (PI * ltc_share(mat3(1.0))) * light_diffuse * visible;
+    diffuse = E * brdf_diffuse(s) * bump_shadowing(s, to_centre);
 #ifdef SHEEN
-    diffuse += E * light_diffuse * brdf_sheen(s, to_centre) * bump_visible(s, to_centre);
+    if (s.sheen_mode == 2) {
+        diffuse += E * brdf_sheen(s, to_centre);
+    } else if (max(s.sheen.r, max(s.sheen.g, s.sheen.b)) > 0.0) {
+        mat3 sheen_inverse = mat3(vec3(s.sheen_a, 0.0, 0.0), vec3(0.0, s.sheen_a, 0.0),
+                                  vec3(s.sheen_b, 0.0, 1.0));
+        diffuse += L * light_diffuse * visible * s.sheen * s.sheen_albedo * ltc_share(sheen_inverse);
+    }
 #endif
-    glossy = E * light_specular * step(0.0, dot(s.n, l)) * bump_visible(s, l)
-        * (brdf_specular(s, l, min(1.0, a + widen)) + brdf_coat(s, l, min(1.0, ac + widen)));
+    vec3 lobes = s.under_coat * s.spec_albedo * ltc_share(ltc_inverse(s.NoV, s.roughness));
+    if (s.coat > 0.0)
+        lobes += vec3(s.coat_albedo * ltc_share(ltc_inverse(s.NoV, s.coat_roughness)));
+    glossy = L * light_specular * bump_visible(s, reflect(-s.v, s.n)) * lobes;
 }
 
 // Any of the program's kinds, by the loaded row's flags.

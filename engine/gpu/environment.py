@@ -4,6 +4,8 @@ and kept for the session:
   dfg_lut         the split-sum table (engine/lighting.py dfg_lut, stored in
                   shaders/tables/): every shading program reads its lobes' albedos
                   from it, and the dome's reflections the lobes' moments.
+  ltc_lut         the GGX lobe's linearly transformed cosines (engine/ltc.py, stored
+                  in shaders/tables/): the area lights' glossy light (shaders/ltc.glsl).
   per dome map    - the lat-long image (float32, mipmapped): the background, exactly
                     as UsdLux maps it;
                   - its irradiance harmonics (order 2, numpy, in the dome's frame):
@@ -29,6 +31,7 @@ import math
 import numpy as np
 
 from ..lighting import dfg_lut, latlong_sh, velvet_albedo_lut
+from ..ltc import ltc_lut
 from ..textures import read_image_linear
 from .programs import UNITS, set_uniform
 from .stencil import entry_points
@@ -92,6 +95,7 @@ class Environment:
         # Cube lookups filter across faces (core since GL 3.2; off by default).
         self._fn["glEnable"](GL_TEXTURE_CUBE_MAP_SEAMLESS)
         self.lut = self._table(dfg_lut())
+        self.ltc = self._table(ltc_lut())
         self.map: EnvironmentMap | None = None
         self.failed: dict = {}       # path -> the reason it could not be read
         self.velvet = None           # the velvet sheen's albedo table, made when first drawn
@@ -171,9 +175,14 @@ class Environment:
             self.programs.fullscreen(prog)
 
     # --- shading ---------------------------------------------------------------------
+    def bind_tables(self):
+        """The tables every shading program reads (lib.glsl, ltc.glsl)."""
+        self.lut.use(UNITS["dfg_lut"])
+        self.ltc.use(UNITS["ltc_lut"])
+
     def bind(self, prog, dome, env: EnvironmentMap | None):
         """The dome's light for a shading program (shaders/environment.glsl)."""
-        self.lut.use(UNITS["dfg_lut"])
+        self.bind_tables()
         if dome is None:
             return
         if env is None:
@@ -209,6 +218,7 @@ class Environment:
         if self.velvet is not None:
             self.velvet.release()
         self.lut.release()
+        self.ltc.release()
         if self.map is not None:
             self.map.release()
             self.map = None

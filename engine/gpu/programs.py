@@ -55,6 +55,9 @@ UNITS.update(crypto_ids=UNITS["g_base"], crypto_names=UNITS["g_normal"])
 # Nor do the supersample reduction's edge passes (shaders/edge_samples.glsl).
 UNITS.update(edge_depth=UNITS["g_base"], edge_marks=UNITS["g_normal"], separable=UNITS["g_mat"],
              edge_pixels=UNITS["g_emit"])
+# No shading program reads post-processing's source: the area lights' table takes its
+# unit (shaders/ltc.glsl).
+UNITS.update(ltc_lut=UNITS["post_src"])
 
 
 class ShaderError(RuntimeError):

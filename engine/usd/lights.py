@@ -17,10 +17,10 @@ Light forms evaluated in the shaders (Blender's, exactly):
   sun         E cos(theta).
   rect/disk   diffuse: exact polygon irradiance (Lambert's edge integral, polygon
               clipped to the receiver's upper hemisphere), the disk as an equal-area
-              N-gon. One-sided, emits along the light's -Z. Specular: GGX evaluated
-              towards a representative point (the reflection ray's hit on the light
-              plane, clamped to the shape) with roughness widened by the light's size,
-              times the same irradiance. An approximation, not exact.
+              N-gon. One-sided, emits along the light's -Z. Specular: the GGX lobes'
+              share of the same polygon by linearly transformed cosines
+              (shaders/ltc.glsl, engine/ltc.py) times their albedo: the lobe's shape
+              is fitted, its Fresnel averaged over it.
 
 Dome: uniform colour x intensity, or a lat-long `inputs:texture:file` (times colour x
 intensity). A map's irradiance harmonics and prefiltered reflections are made once

@@ -11,6 +11,9 @@ threshold 0.
 - penumbra (area-light shadows, docs/rendering.md): penumbra_scenes.SCENES (a box under a
   rect and under a disk light, the demo lit by its area light only), 2048 spp,
   near-point pixel filter, penumbra/<scene>.exr;
+- highlight (area-light highlights, docs/rendering.md): highlight_scenes.SCENES (a glossy
+  floor reflecting a rect or a disk light, a gold sphere), highlight_scenes.SAMPLES spp,
+  Cycles' default pixel filter, highlight/<scene>.exr (RGB, half float);
 - clearcoat: a sphere in a white furnace, coat weight x coat roughness x dark and
   bright base (clearcoat_scenes.CASES), clearcoat_scenes.SAMPLES spp, Cycles' default
   pixel filter, clearcoat/<case>.exr (RGB, float32);
@@ -31,7 +34,7 @@ main as it was before the shading work (commit a55bdc4) first on the import path
 and EXPORTER.md with this branch (the exporter half of the shading work, the engine unchanged).
 
 Run from the repository root (no argument: all sets):
-    .venv/bin/python tests/references/make_cycles_references.py [calibration|box|penumbra|clearcoat|looks] [NAME ...]
+    .venv/bin/python tests/references/make_cycles_references.py [calibration|box|penumbra|clearcoat|highlight|looks] [NAME ...]
     .venv/bin/python tests/references/make_cycles_references.py before [--label TEXT] [--out FILE.md] [NAME ...]
 """
 import pathlib
@@ -47,6 +50,7 @@ import bpy  # noqa: E402
 
 import calibration  # noqa: E402
 import clearcoat_scenes  # noqa: E402
+import highlight_scenes  # noqa: E402
 import penumbra_scenes  # noqa: E402
 import reference_scenes  # noqa: E402
 
@@ -117,6 +121,15 @@ def render_clearcoat(name):
     print(f"{name}: {time.perf_counter() - start:.1f} s", flush=True)
 
 
+def render_highlight(name):
+    scene = highlight_scenes.build(name)
+    configure_cycles(scene, highlight_scenes.SAMPLES, point_filter=False)
+    (HERE / "highlight").mkdir(exist_ok=True)
+    start = time.perf_counter()
+    write_exr(scene, HERE / "highlight" / f"{name}.exr", half=True, rgb=True)
+    print(f"{name}: {time.perf_counter() - start:.1f} s", flush=True)
+
+
 def lantern_against_reference(name):
     """(mean HDR-FLIP, PSNR dB, render seconds) of this process's Lantern on `name`."""
     from image_metrics import mean_flip, psnr
@@ -163,7 +176,7 @@ def before(names, label, out="BEFORE.md"):
 
 if __name__ == "__main__":
     args = sys.argv[1:]
-    chosen = [args.pop(0)] if args else list(SETS) + ["clearcoat", "looks"]
+    chosen = [args.pop(0)] if args else list(SETS) + ["clearcoat", "highlight", "looks"]
     if chosen == ["before"]:
         options = {"--label": "Lantern on this import path", "--out": "BEFORE.md"}
         while args[:1] and args[0] in options:
@@ -175,6 +188,10 @@ if __name__ == "__main__":
         if name == "clearcoat":
             for case in args or clearcoat_scenes.CASES:
                 render_clearcoat(case)
+            continue
+        if name == "highlight":
+            for case in args or highlight_scenes.SCENES:
+                render_highlight(case)
             continue
         if name == "looks":
             for look in args or reference_scenes.SCENES:

@@ -56,7 +56,7 @@ class ClusteredLightPass(Pass):
         aovs = lighting_aovs(frame)
         self._bind_targets(board, aovs)
         self.table.texture.use(UNITS["u_lights"])
-        self.environment.lut.use(UNITS["dfg_lut"])
+        self.environment.bind_tables()
         self.environment.bind_sheen(frame.scene.materials.values())
         tree, tree_texture = self.table.tree_for(frame.scene, clusters.error)
         self.cull.bind(tree_texture, clusters.counts)

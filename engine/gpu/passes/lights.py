@@ -160,7 +160,7 @@ class LightPass(Pass):
         ctx.blend_func = ctx.ONE, ctx.ONE
         ctx.blend_equation = ctx.FUNC_ADD
         self.table.texture.use(UNITS["u_lights"])
-        self.environment.lut.use(UNITS["dfg_lut"])
+        self.environment.bind_tables()
         self.environment.bind_sheen(frame.scene.materials.values())
 
         batched = []
