@@ -26,7 +26,7 @@ CASES = (("Combined only", frozenset()),
          ("every pass", frozenset(p.name for p in provided())))
 
 
-def _demo(folder):
+def export_demo(folder):
     """The demo scene exported, in a Blender subprocess (this process never loads bpy)."""
     blend, usd = os.path.join(folder, "demo.blend"), os.path.join(folder, "demo.usdc")
     code = ("import lantern.exporters\nfrom lantern.demo.build_scene import build\n"
@@ -66,7 +66,7 @@ def main(quick=False):
     from lantern.engine.image_io import write_image, write_layers
     from lantern.engine.usd.opening import open_stage
     with tempfile.TemporaryDirectory() as folder:
-        stage = open_stage(_demo(folder))
+        stage = open_stage(export_demo(folder))
         sizes = ((640, 360),) if quick else ((640, 360), (1920, 1080))
         for width, height in sizes:
             for preset in ("medium", "ultra"):

@@ -5,29 +5,17 @@ each pass's GPU time (result.gpu_timings: the lights' pass reads the shadow maps
     PYTHONPATH=<folder holding lantern> python bench/bench_shadow_quality.py
 
 Run it on two checkouts (before and after a change) for docs/rendering.md's figures."""
-import os
-import subprocess
-import sys
 import tempfile
 import time
 
-
-def _demo(folder):
-    """The demo scene exported, in a Blender subprocess (this process never loads bpy)."""
-    blend, usd = os.path.join(folder, "demo.blend"), os.path.join(folder, "demo.usdc")
-    code = ("import lantern.exporters\nfrom lantern.demo.build_scene import build\n"
-            f"build({blend!r})\n")
-    subprocess.run([sys.executable, "-c", code], check=True, capture_output=True)
-    subprocess.run([sys.executable, "-m", "lantern", "export", blend, "-o", usd], check=True,
-                   capture_output=True)
-    return usd
+from bench_passes import export_demo   # the demo exported, in Blender subprocesses
 
 
 def main(repeats=7):
     from lantern.engine import RenderSettings, Session
     from lantern.engine.usd.opening import open_stage
     with tempfile.TemporaryDirectory() as folder:
-        stage = open_stage(_demo(folder))
+        stage = open_stage(export_demo(folder))
         settings = RenderSettings(width=640, height=360, preset="medium", frame=13)
         with Session(stage, settings) as session:
             session.render()                            # programs, uploads, maps
