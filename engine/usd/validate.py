@@ -25,7 +25,7 @@ def unfit_items(values) -> np.ndarray:
     float32."""
     v = np.asarray(values, np.float64)
     ok = np.abs(v) <= FLOAT32_MAX
-    return ~ok.reshape(len(v), -1).all(axis=1) if v.ndim > 1 else ~ok
+    return ~ok.all(axis=tuple(range(1, v.ndim)))     # no items: an empty answer
 
 
 def check_items(values, what, error=ValueError):
