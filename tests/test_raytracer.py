@@ -198,6 +198,7 @@ def _mesh(stage, path, points, faces):
     mesh.CreatePointsAttr([tuple(map(float, p)) for p in points])
     mesh.CreateFaceVertexCountsAttr([len(f) for f in faces])
     mesh.CreateFaceVertexIndicesAttr([int(i) for f in faces for i in f])
+    mesh.CreateSubdivisionSchemeAttr("none")    # a polygon mesh (unauthored: catmullClark)
     return mesh
 
 
