@@ -52,14 +52,11 @@ from ..resources import TEXEL_BYTES
 from .gbuffer import filter_defines, set_material
 from .view import set_origin
 
-# Every shadow map of a frame together (32-bit depth and RG16F normal texels): under
-# llvmpipe they are host memory, and a render must leave a user's machine room. 1 GiB
-# of depth alone measured 1.86 GiB peak resident at 640x360
-# (bench/bench_light_scaling.py), so depth alone was held to 512 MiB; with the normals
-# beside it the same texels take 1 GiB: the demo at ultra keeps all four maps, as it
-# did with depth alone (at 512 MiB with normals, high lost one and ultra three).
-# Medium's point-light cube is 48 MiB with its normals: 21 fit.
-SHADOW_BUDGET_BYTES = 1 << 30
+# Every shadow map of a frame together (32-bit depth texels): under llvmpipe they are
+# host memory, and a render must leave a user's machine room. 1 GiB measured 1.86 GiB
+# peak resident at 640x360 (bench/bench_light_scaling.py): half that leaves room for
+# larger images and supersampling. Medium's point-light cube is 48 MiB with its normals: 10 fit.
+SHADOW_BUDGET_BYTES = 512 << 20
 MAP_TEXEL_BYTES = TEXEL_BYTES["depth"] + TEXEL_BYTES["rg16f"]   # depth and normal
 BUDGET_WARNING = "shadow maps"     # the scene's warnings key for the budget's line
 # GL projection (NDC [-1, 1]) -> texture space [0, 1] (the bias matrix of docs/design.md, "Shadow maps").
