@@ -44,7 +44,6 @@ class ShadowMap:
                  size=0.0, atlas=(0, 0), anchor=(0.0, 0.0, 0.0)):
         self.radial, self.tiles = radial, tiles
         self.mats, self.rects = mats, rects   # GL projections of anchor-relative positions
-        self.inverse = np.linalg.inv(np.asarray(mats, np.float64))   # one call for all tiles
         self.anchor = np.asarray(anchor, np.float64)  # world, what positions are relative to
         self.texel = texel          # radial: world texel per unit distance; ortho: per cascade
         self.far = far
@@ -55,7 +54,6 @@ class ShadowMap:
         self.stochastic = False     # drawn with blended casters (shadow.frag)
         self.footprint = (0.0, 0.0)  # their filter's least width: a screen pixel's (lookup)
         self.texture = self.cmp = self.raw = None
-        self.normals = None         # the casters' geometric normals (shadow.frag)
 
     def same_layout(self, other) -> bool:
         return other is not None and self.atlas == other.atlas and \
@@ -69,8 +67,7 @@ class ShadowMap:
     def adopt(self, old: "ShadowMap"):
         """Takes over an older map's texture and samplers (same atlas size)."""
         self.texture, self.cmp, self.raw = old.texture, old.cmp, old.raw
-        self.normals = old.normals
-        old.texture = old.cmp = old.raw = old.normals = None
+        old.texture = old.cmp = old.raw = None
 
 
 def _scene_far(bounds, origin, fallback):

@@ -14,7 +14,6 @@ uniform mat4 u_window;        // origin-relative -> (x, y, window depth, w)
 #if defined(POINTS_SHADOW)
 uniform bool radial;          // radial map: depth = distance / far from the origin
 uniform float far;
-out vec2 o_normal;            // as shadow.frag's
 #elif defined(POINTS_ID)
 uniform int u_object;
 out int rt_id;
@@ -120,7 +119,6 @@ void main() {
     vec4 w = u_window * vec4(p, 1.0);
 #if defined(POINTS_SHADOW)
     gl_FragDepth = radial ? clamp(length(p) / far, 0.0, 1.0) : clamp(w.z / w.w, 0.0, 1.0);
-    o_normal = oct_encode(normal);
 #elif defined(POINTS_ID)
     gl_FragDepth = w.z / w.w;
     rt_id = u_object + 1;

@@ -1,7 +1,5 @@
 #version 330 core
-// Depth, and the geometric normal of the surface drawn (octahedral, lib.glsl): the
-// lookup's contact test takes each texel for a piece of its plane (shadow_lookup.glsl).
-// Radial maps (spot, cube) store distance / far, the same quantity on
+// Depth only. Radial maps (spot, cube) store distance / far, the same quantity on
 // every cube face, so the lookup compares radial distances and PCSS reads blocker
 // distances without un-projecting. Ortho (sun) depth is linear already.
 //
@@ -15,18 +13,21 @@ in vec3 v_world;
 uniform bool radial;
 uniform vec3 light_pos;        // anchor-relative (0 for radial maps)
 uniform float far;
-out vec2 o_normal;
-#include "lib.glsl"
-#include "shadow_normal.glsl"
 #ifdef ALPHA_TEST
 in vec2 v_uv;
 uniform int u_object;          // the caster (objects.glsl): its own thresholds
+#include "lib.glsl"
 #include "material.glsl"
 
 // The thresholds of a blended caster: in every 4 x 4 block of map texels, the 16
-// levels (k + 0.5) / 16 once each (a Bayer matrix, lib.glsl, so a block passes exactly
+// levels (k + 0.5) / 16 once each (a Bayer matrix, so a block passes exactly
 // round(16 a) texels, spread out), permuted per block and per caster by XOR with a
 // hashed key, so the layers of different casters are independent.
+uint bayer4(uvec2 p) {
+    uint x = p.x & 3u, y = p.y & 3u;
+    return ((x ^ y) & 1u) << 3 | (y & 1u) << 2 | ((x ^ y) & 2u) | (y & 2u) >> 1;
+}
+
 uint hash3(uvec3 v) {
     uint h = v.x * 0x8da6b343u ^ v.y * 0xd8163841u ^ v.z * 0xcb1ab31fu;
     h ^= h >> 16; h *= 0x7feb352du; h ^= h >> 15; h *= 0x846ca68bu; h ^= h >> 16;
@@ -48,11 +49,6 @@ void main() {
     float alpha = material_alpha(v_uv);
     float cut = u_opacity_threshold > 0.0 ? u_opacity_threshold : caster_threshold();
     if (alpha < cut) discard;
-#endif
-#ifdef ALPHA_TEST
-    o_normal = vec2(SEE_THROUGH);   // its texels are samples of a surface with holes
-#else
-    o_normal = oct_encode(cross(dFdx(v_world), dFdy(v_world)));
 #endif
     if (radial) gl_FragDepth = clamp(length(v_world - light_pos) / far, 0.0, 1.0);
     else gl_FragDepth = gl_FragCoord.z;

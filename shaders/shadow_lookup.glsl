@@ -10,18 +10,12 @@
 //    depth, so wide kernels on slopes do not self-shadow;
 //  * slope-scaled constant: texel * (1 + tan theta) for the depth quantisation and
 //    the bilinear compare footprint, plus 1e-4 relative for float precision.
-// That bias, and a filter that reaches past an occluder's edge, let light through
-// where an occluder meets the receiver (a wall on a floor, walls at a room's seams,
-// of zero thickness too): contact_shadow below closes those seams first.
 // Soft shadows (PCSS): a blocker search over the region that can occlude the light,
 // then PCF with a kernel of the penumbra width: radius * (d_recv - d_block) / d_block
 // for sphere lights, (d_recv - d_block) * tan(angle / 2) for the sun. Area lights
 // (rect, disk) filter over their own extent: area_shadow_factor below.
 uniform sampler2DShadow shadow_cmp;
 uniform sampler2D shadow_raw;
-uniform sampler2D shadow_normal; // the geometric normal of each texel's surface (oct)
-#include "shadow_normal.glsl"
-uniform mat4 shadow_inv[6];     // inverse of shadow_mats: tile uv, depth -> camera-relative
 uniform bool shadow_radial;
 uniform int shadow_tiles;
 uniform mat4 shadow_mats[6];    // camera-relative position -> tile uv, depth in [0, 1]
@@ -59,64 +53,6 @@ bool shadow_uv(vec3 w, vec3 light_pos, int cascade, out vec2 uv, out float z) {
     vec2 t = s.xy;
     uv = shadow_rects[k].xy + t * shadow_rects[k].zw;
     return all(greaterThanEqual(t, vec2(0.0))) && all(lessThanEqual(t, vec2(1.0)));
-}
-
-// The width of the penumbra that an occluder s before the receiver (at distance ref
-// from a radial light, along the sun's ray) casts: PCSS's estimate.
-float penumbra(float s, float ref) {
-    return shadow_radial ? shadow_size * s / max(ref - s, 1e-6) : s * shadow_size;
-}
-
-// Contact shadows. Each map texel is taken for a piece of the plane of the surface it
-// holds (its point, from the map, and its geometric normal, shadow.frag). Among the
-// 2 x 2 texels of the receiver's bilinear footprint, one is an occluder in contact when
-//  * its surface is another one (normals more than ~25 deg apart: not the
-//    receiver's own plane, nor its curvature),
-//  * it lies in front of the receiver's plane (a concave seam: at a convex edge the
-//    other face falls behind it), and
-//  * the ray from q to the light crosses its plane within `reach`: the depth the bias
-//    cannot resolve, and the filter's reach beyond the occluder's edge.
-// A lit concave corner (a floor beside a wall that faces the light) passes the first
-// two but its ray leaves the wall's plane: it stays lit. A texel stands for its plane
-// at most a texel beyond where its surface ends: contact shadows are at most a texel
-// wider, where a depth bias alone left light through the seam. Texels of see-through
-// casters (cut-outs, blended: shadow.frag) stand for no plane: their holes stay open.
-bool contact_shadow(vec3 p, vec3 q, vec3 n, vec3 light_pos, vec3 axis, int cascade,
-                    float texel, float bias, float ref) {
-    int k = shadow_radial ? (shadow_tiles == 6 ? cube_face(q - light_pos) : 0) : cascade;
-    vec2 uv;
-    float z;
-    if (!shadow_uv(q, light_pos, cascade, uv, z)) return false;
-    vec2 size = vec2(textureSize(shadow_raw, 0));
-    ivec2 i0 = ivec2(floor(uv * size - 0.5));
-    vec3 to_light = shadow_radial ? normalize(light_pos - q) : -axis;
-    for (int j = 0; j < 4; ++j) {
-        ivec2 i = clamp(i0 + ivec2(j & 1, j >> 1), ivec2(0), ivec2(size) - 1);
-        float r = texelFetch(shadow_raw, i, 0).r;
-        if (r >= 1.0) continue;                            // nothing drawn there
-        vec2 t = ((vec2(i) + 0.5) / size - shadow_rects[k].xy) / shadow_rects[k].zw;
-        if (any(lessThan(t, vec2(0.0))) || any(greaterThan(t, vec2(1.0)))) continue;
-        vec2 code = texelFetch(shadow_normal, i, 0).rg;
-        if (code.x == SEE_THROUGH) continue;   // a cut-out's or a blended caster's: no plane
-        vec3 m = oct_decode(code);
-        vec3 x;
-        if (shadow_radial) {
-            vec4 h = shadow_inv[k] * vec4(t, 0.5, 1.0);
-            x = light_pos + normalize(h.xyz / h.w - light_pos) * r * shadow_far;
-        } else {
-            vec4 h = shadow_inv[k] * vec4(t, r, 1.0);
-            x = h.xyz / h.w;
-        }
-        if (dot(x - p, n) <= 1e-3 * texel) continue;
-        float facing = dot(to_light, m);
-        if (abs(facing) < 0.01) continue;                  // edge-on: no plane to cross
-        float s = dot(x - q, m) / facing;
-        if (s <= 0.0 || s >= ref) continue;
-        if (s < bias + 3.0 * texel / abs(facing)) {
-            if (abs(dot(m, n)) < 0.9) return true;
-        } else if (penumbra(s, ref) < 1.5 * texel) return true;
-    }
-    return false;
 }
 
 vec2 vogel(int i, int n, float rot) {
@@ -160,7 +96,6 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
         ref = z * scale;
     }
     float bias = texel * (1.0 + tan_t) + 1e-4 * ref;
-    if (contact_shadow(p, q, n, light_pos, axis, cascade, texel, bias, ref)) return 0.0;
     float inv_NoL = 1.0 / max(NoL, 0.05);
     vec3 t = normalize(cross(axis, abs(axis.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
     vec3 b = cross(axis, t);
@@ -229,26 +164,10 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
 // Compares are against the receiver's tangent plane along each ray (receiver-plane
 // depth, exact for a planar receiver), never beyond the map's range.
 const float AREA_SEARCH = 1.0;
-// The last area_shadow_factor's penumbra width on the receiver (world; 0 where no
-// blocker was found), the narrowest of the blockers' mean depth's and of what the march
-// found (a contact shadow): how far its filter may blur (area_visibility_blur.glsl).
-float area_penumbra = 0.0;
 const int AREA_MARCH_STEPS = 4;
 
 vec2 lattice(int i, int n, vec2 jitter) {          // [0, 1)^2
     return fract(vec2((float(i) + 0.5) / float(n), float(i) * 0.6180340) + jitter);
-}
-
-// Where a pixel's taps start on the lattice, in [0, 1): AREA_INTERLEAVED (a filtered
-// visibility, area_visibility.glsl), the pixel's cell of its 4 x 4 block, so a block's
-// 16 pixels take 16 evenly spread offsets of the lattice and their blur averages all
-// of them; else interleaved gradient noise (noise, not bands, where nothing filters).
-float tap_phase() {
-#ifdef AREA_INTERLEAVED
-    return (float(bayer4(uvec2(pixel_centre()))) + 0.5) / 16.0;
-#else
-    return fract(52.9829189 * fract(dot(pixel_centre(), vec2(0.06711056, 0.00583715))));
-#endif
 }
 
 vec2 shape_point(vec2 u, bool disk) {              // [-1, 1]^2, or the unit disk
@@ -298,7 +217,6 @@ float map_visible(vec3 w, vec3 q, vec3 n, vec3 c) {
 // axis (the footprint of a map with blended casters).
 float area_shadow_factor(vec3 p, vec3 n, vec3 c, vec3 x, vec3 y, vec2 half_extent,
                          bool disk, vec3 axis, float view_depth) {
-    area_penumbra = 0.0;
     float dist = length(p - c);
     if (dist < 1e-5) return 1.0;
     vec3 dir = (p - c) / dist;
@@ -310,8 +228,8 @@ float area_shadow_factor(vec3 p, vec3 n, vec3 c, vec3 x, vec3 y, vec2 half_exten
     vec3 q = p + n * texel * (0.5 + 1.5 * sin_t);
     float D = length(q - c);
     vec3 ex = x * half_extent.x, ey = y * half_extent.y;
-    float ign = tap_phase();
-    vec2 jitter = vec2(ign / float(blocker_taps), fract(ign * 1.6180340 + 0.5));
+    float ign = fract(52.9829189 * fract(dot(pixel_centre(), vec2(0.06711056, 0.00583715))));
+    vec2 jitter = vec2(ign, fract(ign * 1.6180340 + 0.5));
 
     float blockers = 0.0, block_sum = 0.0, nearest = NO_SURFACE, farthest = 0.0;
     for (int i = 0; i < blocker_taps; ++i) {
@@ -331,14 +249,13 @@ float area_shadow_factor(vec3 p, vec3 n, vec3 c, vec3 x, vec3 y, vec2 half_exten
     // At least a screen pixel's footprint over blended casters (shadow_footprint).
     float least = 0.75 * (shadow_footprint.x * view_depth + shadow_footprint.y);
     k = max(k, least / max(max(half_extent.x, half_extent.y), 1e-9));
-    area_penumbra = 2.0 * k * max(half_extent.x, half_extent.y);
     float lo = 0.9 * nearest, hi = min(1.1 * farthest, 0.99 * D);
     float step = max(hi - lo, 0.0) / float(AREA_MARCH_STEPS);
     float thickness = 1.5 * step;
     float offset = fract(ign * 7.0 + 0.5);
 
     float lit = 0.0, total = 0.0;
-    vec2 jitter2 = vec2(ign / float(pcf_taps), fract(ign * 1.6180340 + 0.5698403));
+    vec2 jitter2 = fract(jitter + vec2(0.7548777, 0.5698403));
     for (int i = 0; i < pcf_taps; ++i) {
         vec2 s = shape_point(lattice(i, pcf_taps, jitter2), disk);
         vec3 e = ex * s.x + ey * s.y;          // the light's point, from its centre
@@ -357,30 +274,17 @@ float area_shadow_factor(vec3 p, vec3 n, vec3 c, vec3 x, vec3 y, vec2 half_exten
             vec3 m = l + (q - l) * ((lo + (float(j) + offset) * step) / D);
             float r = length(m - c);
             float surface = map_distance(m, c);
-            if (surface + shadow_texel * r * (1.0 + tan_t) + 1e-4 * r <= r && r <= surface + thickness) {
+            if (surface + shadow_texel * r * (1.0 + tan_t) + 1e-4 * r <= r && r <= surface + thickness)
                 v = 0.0;
-                // An occluder the blockers' mean depth misses: its own, narrower penumbra.
-                float t = length(m - q);
-                area_penumbra = min(area_penumbra, 2.0 * max(half_extent.x, half_extent.y)
-                                                   * t / max(D - t, 1e-6));
-            }
         }
         lit += wgt * v;
     }
     return total > 0.0 ? lit / total : 1.0;
 }
 
-#ifdef AREA_VISIBILITY
-uniform sampler2D area_visibility;  // this light's, filtered (area_visibility.glsl)
-#endif
-
 // The loaded light's shadow (lights.glsl's globals), of any of the program's kinds
-// (lights.glsl LIGHT_DISTANT, LIGHT_SPHERE, LIGHT_AREA); AREA_VISIBILITY: an area
-// light's, filtered, at this pixel (the G-buffer's surfaces only).
+// (lights.glsl LIGHT_DISTANT, LIGHT_SPHERE, LIGHT_AREA).
 float light_shadow(vec3 p, vec3 n, float view_depth) {
-#ifdef AREA_VISIBILITY
-    if (n_poly > 0) return texelFetch(area_visibility, ivec2(pixel_centre()), 0).r;
-#endif
 #ifdef LIGHT_AREA
     if (n_poly > 0)
         return area_shadow_factor(p, n, light_pos, light_x, light_y,

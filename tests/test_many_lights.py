@@ -112,7 +112,7 @@ def test_lights_past_the_budget_lose_their_shadows_and_the_warning_names_them(mo
 
     from lantern.engine import RenderSettings, Session
     from lantern.engine.gpu.passes import shadows
-    monkeypatch.setattr(shadows, "SHADOW_BUDGET_BYTES", 2 * (3 * 512) * (2 * 512) * shadows.MAP_TEXEL_BYTES)
+    monkeypatch.setattr(shadows, "SHADOW_BUDGET_BYTES", 2 * (3 * 512) * (2 * 512) * 4)
     # Along the view, the nearest first: importance is intensity over squared distance.
     positions = [(0.0, -40.0 + 10.0 * i, 1.0) for i in range(5)]
     stage = many_lights_stage(positions, True)
@@ -123,7 +123,7 @@ def test_lights_past_the_budget_lose_their_shadows_and_the_warning_names_them(mo
         assert result.stats["shadow_maps"] == 2 and result.stats["unshadowed_lights"] == 3
         assert [w for w in result.warnings if "without shadows" in w] == [
             "3 of 5 shadow-casting lights are lit without shadows: their shadow maps would "
-            "pass the 24 MiB shadow memory budget"], result.warnings
+            "pass the 12 MiB shadow memory budget"], result.warnings
         assert set(session._renderer.shadows.maps) == {"/root/light_0", "/root/light_1"}
         with Sdf.ChangeBlock():
             for prim in stage.Traverse():

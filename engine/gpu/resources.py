@@ -92,8 +92,7 @@ def _bytes(data) -> bytes:
 # DEPTH_COMPONENT32F texture (G-buffer depth, shadow maps; engine/gpu/depth.py) and
 # "depth_stencil" a DEPTH32F_STENCIL8 renderbuffer (light volumes).
 COLOR_FORMATS = {"rgba16f": (4, "f2"), "rgba32f": (4, "f4"),
-                 "r32f": (1, "f4"), "rg32f": (2, "f4"),   # render passes (AOVs)
-                 "rg16f": (2, "f2")}                      # shadow maps' normals
+                 "r32f": (1, "f4"), "rg32f": (2, "f4")}   # render passes (AOVs)
 # Bytes per texel of every format (depth_stencil: DEPTH32F_STENCIL8 is stored in 8).
 # depth_ms4: four samples a texel (passes/gbuffer.py, edge samples).
 TEXEL_BYTES = {"depth": 4, "depth_stencil": 8, "depth_ms4": 16,

@@ -48,20 +48,17 @@ from ...shadow_plan import importance, plan, stale_tiles
 from ...view import translate
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
-from ..resources import TEXEL_BYTES
 from .gbuffer import filter_defines, set_material
 from .view import set_origin
 
 # Every shadow map of a frame together (32-bit depth texels): under llvmpipe they are
 # host memory, and a render must leave a user's machine room. 1 GiB measured 1.86 GiB
 # peak resident at 640x360 (bench/bench_light_scaling.py): half that leaves room for
-# larger images and supersampling. Medium's point-light cube is 48 MiB with its normals: 10 fit.
+# larger images and supersampling. Medium's point-light cube is 24 MiB: 21 fit.
 SHADOW_BUDGET_BYTES = 512 << 20
-MAP_TEXEL_BYTES = TEXEL_BYTES["depth"] + TEXEL_BYTES["rg16f"]   # depth and normal
 BUDGET_WARNING = "shadow maps"     # the scene's warnings key for the budget's line
 # GL projection (NDC [-1, 1]) -> texture space [0, 1] (the bias matrix of docs/design.md, "Shadow maps").
 BIAS = np.array([[0.5, 0, 0, 0.5], [0, 0.5, 0, 0.5], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]])
-BIAS_INVERSE = np.array([[2.0, 0, 0, -1], [0, 2.0, 0, -1], [0, 0, 2.0, -1], [0, 0, 0, 1.0]])
 # GL projection -> the same window depth under glClipControl's ZERO_TO_ONE.
 ZERO_TO_ONE = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]])
 
@@ -86,17 +83,13 @@ def set_shadow_uniforms(prog, sm, preset, eye):
     world)."""
     sm.cmp.use(UNITS["shadow_cmp"])
     sm.raw.use(UNITS["shadow_raw"])
-    sm.normals.use(UNITS["shadow_normal"])
     set_uniform(prog, "shadow_radial", sm.radial)
     set_uniform(prog, "shadow_tiles", sm.tiles)
-    mats, inverse = np.zeros((6, 4, 4), "f4"), np.zeros((6, 4, 4), "f4")
-    offset = np.asarray(eye, np.float64) - sm.anchor
-    to_anchor, from_anchor = translate(offset), translate(-offset)
-    for i, (m, m_inv) in enumerate(zip(sm.mats, sm.inverse)):
+    mats = np.zeros((6, 4, 4), "f4")
+    to_anchor = translate(np.asarray(eye, np.float64) - sm.anchor)
+    for i, m in enumerate(sm.mats):
         mats[i] = (BIAS @ m @ to_anchor).T    # column-major, as GLSL reads a mat4
-        inverse[i] = (from_anchor @ m_inv @ BIAS_INVERSE).T  # (map uv, depth) -> camera-relative
     set_uniform(prog, "shadow_mats", mats)
-    set_uniform(prog, "shadow_inv", inverse)
     rects = np.zeros((6, 4), "f4")
     rects[:len(sm.rects)] = sm.rects
     set_uniform(prog, "shadow_rects", rects)
@@ -174,7 +167,7 @@ class ShadowPass(Pass):
                 sm.inputs = (light, bounds)
                 if sm.same_layout(old):
                     old.inputs, sm = sm.inputs, old
-            used += sm.atlas[0] * sm.atlas[1] * MAP_TEXEL_BYTES
+            used += sm.atlas[0] * sm.atlas[1] * 4
             if used > SHADOW_BUDGET_BYTES:
                 self._drop(casting[n:])      # these, and every less important one
                 _budget_warning(scene, len(casting) - n, len(casting))
@@ -209,7 +202,6 @@ class ShadowPass(Pass):
                 self._release_map(old)
             ctx = self.ctx
             sm.texture = self.pool.acquire(sm.atlas, "depth")
-            sm.normals = self.pool.acquire(sm.atlas, "rg16f")
             # Two views of one texture: hardware compare (bilinear PCF), raw depth (PCSS).
             sm.cmp = ctx.sampler(texture=sm.texture, filter=(ctx.LINEAR, ctx.LINEAR),
                                  compare_func="<=", repeat_x=False, repeat_y=False)
@@ -217,7 +209,7 @@ class ShadowPass(Pass):
                                  compare_func="", repeat_x=False, repeat_y=False)
         ctx = self.ctx
         tw, th = sm.atlas
-        fbo = self.pool.framebuffer(colors=[sm.normals], depth=sm.texture)
+        fbo = self.pool.framebuffer(depth=sm.texture)
         ctx.disable(ctx.BLEND | ctx.CULL_FACE)   # single-sided planes cast too
         prog = self.programs.get("shadow.vert", "shadow.frag",
                                  self.geometry.commands.object_defines())
@@ -229,7 +221,7 @@ class ShadowPass(Pass):
             rect = (round(x * tw), round(y * th), round(sx * tw), round(sy * th))
             fbo.viewport = rect
             fbo.use()
-            fbo.clear(0.5, 0.5, 0.0, 0.0, depth=1.0, viewport=rect)
+            fbo.clear(depth=1.0, viewport=rect)
             ctx.scissor = rect
             ctx.enable(ctx.DEPTH_TEST)
             ctx.depth_func = "<"
@@ -286,8 +278,7 @@ class ShadowPass(Pass):
             sm.cmp.release()
             sm.raw.release()
             self.pool.release(sm.texture)
-            self.pool.release(sm.normals)
-            sm.texture = sm.cmp = sm.raw = sm.normals = None
+            sm.texture = sm.cmp = sm.raw = None
 
     def _drop_kept(self):
         for maps, _ in self._kept.values():
