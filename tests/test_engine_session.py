@@ -407,7 +407,7 @@ def test_passes_a_scene_does_not_need_do_not_run():
     with Session(rig, RenderSettings(width=W, height=H)) as session:
         passes = session.render().stats["passes"]
         assert passes[:3] == ["skinning", "view", "shadows"]
-        assert session._renderer.pool.held() == 2          # the spot's kept map: depth, normals
+        assert session._renderer.pool.held() == 1          # the spot's kept shadow map
 
 
 def test_camera_setting_picks_a_camera():
