@@ -13,12 +13,12 @@ sys.path.insert(0, str(TESTS))
 
 import lantern.exporters  # noqa: F401,E402  (Blender's pxr first)
 import bpy  # noqa: E402
-import numpy as np  # noqa: E402
 
 import highlight_scenes  # noqa: E402
+from bench_cycles_shadows import warm_render  # noqa: E402
 from image_metrics import mean_flip  # noqa: E402
 from lantern.core.presets import PRESETS  # noqa: E402
-from lantern.engine import RenderSettings, read_exr, render_stage  # noqa: E402
+from lantern.engine import RenderSettings, read_exr  # noqa: E402
 from lantern.exporters import stage_from_depsgraph  # noqa: E402
 
 
@@ -50,13 +50,8 @@ def main():
         row = f"{name:<11}"
         for preset in PRESETS:
             settings = RenderSettings(width=width, height=height, preset=preset)
-            render_stage(stage, settings)
-            times = []
-            for _ in range(3):
-                start = time.perf_counter()
-                result = render_stage(stage, settings)
-                times.append(time.perf_counter() - start)
-            row += f"  {preset} {mean_flip(result.rgba, reference):.4f} ({np.median(times) * 1000:.0f})"
+            result, ms = warm_render(stage, settings)
+            row += f"  {preset} {mean_flip(result.rgba, reference):.4f} ({ms:.0f})"
             if out is not None and preset == "medium":
                 from lantern.engine.image_io import write_image
                 out.mkdir(parents=True, exist_ok=True)

@@ -20,6 +20,18 @@ from lantern.core.presets import PRESETS  # noqa: E402
 from lantern.exporters import stage_from_depsgraph  # noqa: E402
 
 
+def warm_render(stage, settings, repeats=3):
+    """The last of `repeats` renders after a first one (programs, uploads), and their
+    median time in ms."""
+    render_stage(stage, settings)
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        result = render_stage(stage, settings)
+        times.append(time.perf_counter() - start)
+    return result, float(np.median(times)) * 1000
+
+
 def main():
     width, height = calibration.BOX_SIZE
     print(f"box on plane at {width}x{height} vs Cycles 2048 spp ({time.strftime('%Y-%m-%d')}, llvmpipe)")
@@ -31,13 +43,8 @@ def main():
         row = f"{kind:<7}"
         for preset in PRESETS:
             settings = RenderSettings(width=width, height=height, preset=preset)
-            render_stage(stage, settings)
-            times = []
-            for _ in range(3):
-                start = time.perf_counter()
-                result = render_stage(stage, settings)
-                times.append(time.perf_counter() - start)
-            row += (f"{np.median(times) * 1000:>12.1f}{mean_flip(result.rgba, cycles):>8.4f}"
+            result, ms = warm_render(stage, settings)
+            row += (f"{ms:>12.1f}{mean_flip(result.rgba, cycles):>8.4f}"
                     f"{psnr(result.rgba, cycles):>7.1f}")
         print(row)
 

@@ -7,7 +7,7 @@ import sys
 
 import numpy as np
 import pytest
-from pxr import Gf, Sdf, UsdGeom, UsdRender
+from pxr import Gf, UsdGeom, UsdRender
 
 import shadow_scenes
 from multilayer_exr import read_parts
@@ -46,13 +46,19 @@ def _var(stage, name, source, source_type="raw"):
     return var.GetPath()
 
 
+def _settings(stage):
+    """The stage's RenderSettings: W x H through /root/cam."""
+    settings = UsdRender.Settings.Define(stage, "/Render/rendersettings")
+    settings.CreateResolutionAttr(Gf.Vec2i(W, H))
+    settings.CreateCameraRel().SetTargets(["/root/cam"])
+    return settings
+
+
 def products_stage(path, aux_name="aux/data.$F4.exr"):
     """Two RenderProducts: the beauty at the settings' 64x36, and depth, CryptoObject
     and an LPE Lantern cannot make at half that."""
     stage = _stage()
-    settings = UsdRender.Settings.Define(stage, "/Render/rendersettings")
-    settings.CreateResolutionAttr(Gf.Vec2i(W, H))
-    settings.CreateCameraRel().SetTargets(["/root/cam"])
+    settings = _settings(stage)
     beauty = UsdRender.Product.Define(stage, "/Render/Products/beauty")
     beauty.CreateProductNameAttr("beauty.$F4.exr")
     beauty.CreateOrderedVarsRel().SetTargets([_var(stage, "color", "color")])
@@ -174,9 +180,7 @@ def depth_product_stage(path):
     """The exporter's layout for Blender's default view layer: one RenderProduct whose
     vars are Combined and Depth, the file Blender's Render Animation writes."""
     stage = _stage()
-    settings = UsdRender.Settings.Define(stage, "/Render/rendersettings")
-    settings.CreateResolutionAttr(Gf.Vec2i(W, H))
-    settings.CreateCameraRel().SetTargets(["/root/cam"])
+    settings = _settings(stage)
     product = UsdRender.Product.Define(stage, "/Render/Products/frames")
     product.CreateProductNameAttr("frames/shot_$F4.exr")
     product.CreateOrderedVarsRel().SetTargets([_var(stage, "color", "color"),
