@@ -15,6 +15,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .bounces import Bounces
+
 
 # Floats a vertex of each per-vertex stream (MeshData.streams).
 STREAM_WIDTHS = {"colors": 4, "generated": 3}
@@ -402,6 +404,9 @@ class Scene:
     warnings: dict = field(default_factory=dict)   # prim path -> [message]
     meters_per_unit: float = 1.0
     up_axis: str = "Z"
+    # /Render/Settings' bounces (docs/stage_contract.md); None: the stage names none,
+    # and a render lights it directly, as Storm does.
+    bounces: Bounces | None = None
 
     def warning_list(self) -> list:
         return [w for ws in self.warnings.values() for w in ws]

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.presets import DEFAULT as DEFAULT_PRESET
+from .bounces import DIRECT, Bounces
 
 # The image's formats in host memory (engine/gpu/readback.py maps them to GL's).
 READBACK_FORMATS = ("float32", "half")
@@ -80,6 +81,16 @@ class RenderSettings:
     # are shaded in groups where that stays within it (0: every light on its own, cut
     # where its volume ends, as the volumes do).
     light_error: float = 0.01
+    # How often light bounces (Cycles' Light Paths). None: the stage's /Render/Settings,
+    # else direct light only (a stage that names no bounces, as Storm draws it).
+    bounces: Bounces | None = None
+
+    def bounces_for(self, scene) -> Bounces:
+        """The bounces a render of `scene` takes: these settings', else the stage's,
+        else none."""
+        if self.bounces is not None:
+            return self.bounces
+        return scene.bounces if scene.bounces is not None else DIRECT
 
     def __post_init__(self):
         if self.supersample is not None and (int(self.supersample) != self.supersample
@@ -105,6 +116,8 @@ class RenderSettings:
         if not (0.0 <= self.light_error < 1.0):
             raise ValueError(f"light_error must be a fraction from 0 to below 1, not "
                              f"{self.light_error!r}")
+        if self.bounces is not None and not isinstance(self.bounces, Bounces):
+            raise ValueError(f"bounces must be a Bounces record, not {self.bounces!r}")
         if self.srgb_filtering not in ("encoded", "linear"):
             raise ValueError(f"srgb_filtering must be 'encoded' or 'linear', not "
                              f"{self.srgb_filtering!r}")

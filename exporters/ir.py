@@ -24,6 +24,10 @@ class StageSettings:
     view_transform: str = "Standard"
     look: str | None = None     # Blender's look identifier, e.g. "AgX - Punchy"
     exposure: float = 0.0       # stops
+    # Cycles' Light Paths: Max Bounces, Diffuse and Glossy (Cycles' defaults).
+    max_bounces: int = 12
+    diffuse_bounces: int = 4
+    glossy_bounces: int = 4
     # The view layer's render passes (core/passes.py names): with any, a RenderProduct
     # of them is written, named `output` (Blender's output path as a productName).
     view_layer: str = "ViewLayer"

@@ -11,6 +11,7 @@ import numpy as np
 from pxr import Sdf, Usd, UsdGeom, UsdRender
 
 from ...core.transforms import frustum, ortho
+from ..bounces import Bounces
 from ..view import camera, conform
 from .validate import NOT_FINITE, unfit_items
 
@@ -133,6 +134,33 @@ def view_settings(stage: Usd.Stage) -> dict:
             if attr and attr.HasAuthoredValue():
                 out[key] = attr.Get()
     return out
+
+
+# /Render/Settings' bounces (Cycles' Light Paths, docs/stage_contract.md): attribute,
+# Bounces field.
+BOUNCE_ATTRIBUTES = (("lantern:maxBounces", "total"), ("lantern:diffuseBounces", "diffuse"),
+                     ("lantern:glossyBounces", "glossy"))
+
+
+def bounces(stage: Usd.Stage, warnings: list | None = None):
+    """The bounces /Render/Settings asks for (a Bounces; Cycles' default for any of the
+    three it leaves out), or None when it names none. A value that is not a whole
+    number >= 0 is a warning in `warnings`, and its default is taken."""
+    prim = stage.GetPrimAtPath(RENDER_SETTINGS)
+    if not (prim and prim.IsA(UsdRender.Settings)):
+        return None
+    found = {}
+    for name, field_name in BOUNCE_ATTRIBUTES:
+        attr = prim.GetAttribute(name)
+        if not (attr and attr.HasAuthoredValue()):
+            continue
+        value = attr.Get()
+        if isinstance(value, int) and not isinstance(value, bool) and value >= 0:
+            found[field_name] = value
+        elif warnings is not None:
+            warnings.append(f"{RENDER_SETTINGS}: {name} is {value!r}, not a whole number "
+                            f">= 0; Cycles' default is taken")
+    return Bounces(**found) if found else None
 
 
 def camera_path_problem(stage: Usd.Stage, path: str, scene_name: str):

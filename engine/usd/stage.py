@@ -18,6 +18,7 @@ from __future__ import annotations
 from pxr import Usd, UsdGeom
 
 from ..scene import Changes, Scene
+from . import camera as usd_camera
 from .camera import time_code
 from .changes import ChangeTracker, EditTracking
 from .gprims import undrawn_warnings
@@ -67,6 +68,14 @@ class StageReader(FirstRead, InstancerReading, ShadingReading, EditTracking, Tim
         self.tracker.close()
 
     # --- the one entry point ---------------------------------------------------------
+    def _read_bounces(self):
+        lines = []
+        self.scene.bounces = usd_camera.bounces(self.stage, lines)
+        if lines:
+            self.scene.warnings[usd_camera.RENDER_SETTINGS] = lines
+        else:
+            self.scene.warnings.pop(usd_camera.RENDER_SETTINGS, None)
+
     def sync(self, frame) -> Changes:
         """Brings the scene to `frame` (None: Default time) and the stage's current
         edits; returns what changed."""
@@ -77,7 +86,8 @@ class StageReader(FirstRead, InstancerReading, ShadingReading, EditTracking, Tim
         self._xcache = UsdGeom.XformCache(t)
         self._op_memo, self._orient_memo = {}, {}
         self._t = t
-        if not self._synced:
+        first = not self._synced
+        if first:
             self.tracker.take()
             self._read_all(changes)
         else:
@@ -89,6 +99,8 @@ class StageReader(FirstRead, InstancerReading, ShadingReading, EditTracking, Tim
             if moved_in_time:
                 self._advance(changes)
         self.time = frame
+        if first or self.settings_changed:
+            self._read_bounces()
         self._finish_lights(changes)
         lines = undrawn_warnings(self._undrawn)
         if lines:

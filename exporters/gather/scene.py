@@ -62,7 +62,18 @@ def _settings(scene, warn):
         meters_per_unit=float(scene.unit_settings.scale_length) or 1.0,
         resolution=(max(1, int(r.resolution_x * pct)), max(1, int(r.resolution_y * pct))),
         pixel_aspect=float(r.pixel_aspect_x / r.pixel_aspect_y),
-        view_transform=view_transform, look=look, exposure=exposure)
+        view_transform=view_transform, look=look, exposure=exposure, **light_paths(scene))
+
+
+def light_paths(scene) -> dict:
+    """Cycles' Light Paths bounces (StageSettings fields); Cycles' defaults where the
+    Cycles add-on, which owns them, is not enabled."""
+    cycles = getattr(scene, "cycles", None)
+    if cycles is None:
+        return {}
+    return {"max_bounces": int(cycles.max_bounces),
+            "diffuse_bounces": int(cycles.diffuse_bounces),
+            "glossy_bounces": int(cycles.glossy_bounces)}
 
 
 def product_name(filepath: str) -> str:

@@ -36,6 +36,11 @@ def write_render_settings(stage, settings, camera_path):
                              custom=True).Set(settings.look)
     prim.CreateAttribute("lantern:exposure", Sdf.ValueTypeNames.Float,
                          custom=True).Set(settings.exposure)
+    # Cycles' Light Paths, which the engine's bounced light follows.
+    for name, value in (("lantern:maxBounces", settings.max_bounces),
+                        ("lantern:diffuseBounces", settings.diffuse_bounces),
+                        ("lantern:glossyBounces", settings.glossy_bounces)):
+        prim.CreateAttribute(name, Sdf.ValueTypeNames.Int, custom=True).Set(int(value))
     if settings.render_passes:
         write_render_product(stage, rs, settings)
     stage.SetMetadata("renderSettingsPrimPath", RENDER_SETTINGS)
