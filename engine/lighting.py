@@ -37,7 +37,7 @@ import os
 
 import numpy as np
 
-from ..core.lights import DISK, RECT, SUN
+from ..core.lights import DISK, POLYGON, RECT, SUN
 from .scene import Dome, Light
 
 VOLUME_THRESHOLD = 1e-4
@@ -50,13 +50,27 @@ def _far_intensity(light: Light):
     """(I_max in W/sr, the light's extent in m) of a local light; a sun's E (W/m2)
     reflects E / pi at any distance, as a light of I = E does at 1 m."""
     c = max(map(float, light.color)) * max(light.diffuse, light.specular, 0.0)
-    if light.kind in (RECT, DISK):
-        area = light.width * light.height if light.kind == RECT else math.pi * light.radius ** 2
-        c *= area
-        extent = math.hypot(light.width, light.height) / 2 if light.kind == RECT else light.radius
+    if light.kind in (RECT, DISK, POLYGON):
+        c *= light_area(light)
+        extent = light.radius if light.kind == DISK else math.hypot(light.width, light.height) / 2
     else:
         extent = light.radius
     return c, extent
+
+
+def light_area(light: Light) -> float:
+    """The emitting area of an area light (rect, disk, polygon), m2."""
+    if light.kind == RECT:
+        return light.width * light.height
+    if light.kind == DISK:
+        return math.pi * light.radius ** 2
+    return polygon_area(light.polygon)
+
+
+def polygon_area(corners) -> float:
+    """The area of a planar polygon (its corners in order, (n, 3))."""
+    c = np.asarray(corners, np.float64)
+    return 0.5 * float(np.linalg.norm(np.cross(c, np.roll(c, -1, axis=0)).sum(axis=0)))
 
 
 def volume_threshold(lights) -> float:

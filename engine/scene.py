@@ -94,6 +94,9 @@ class Material:
     sheen_mode: str = ""
     sheen: tuple = (0.0, 0.0, 0.0)
     sheen_roughness: float = 0.5
+    # lantern:emissionSampling: which faces of its meshes light others, Cycles'
+    # Emission Sampling (core/emission.py SAMPLING); "auto" emits from both.
+    emission_sampling: str = "auto"
     pattern: PatternGraph | None = None  # the mtlx network feeding surface inputs
 
     @property
@@ -357,6 +360,11 @@ class Light:
     shadow: bool = True
     shadow_resolution: int = 0     # lantern:shadowResolution; 0 = the preset's
     headlight: bool = False
+    # A polygon (an emissive mesh's, engine/emitters.py): its 3 or 4 corners (world,
+    # (n, 3)); x_axis, y_axis, width and height are its box in its plane, centred on
+    # `position`, and `axis` its front. Two-sided: it emits from both faces.
+    polygon: np.ndarray | None = None
+    two_sided: bool = False
 
     @property
     def direction(self) -> np.ndarray:

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..core.lights import DISK, POINT, SPOT, SUN
 from ..core.transforms import aabb_corners, frustum, look_at, ortho
+from .lighting import light_area
 from .view import boxes_outside, frustum_planes, relative_view
 
 BORDER = 2                 # cube tiles: texels beyond 90 deg on each side
@@ -89,7 +90,7 @@ def plan(light, R, preset, bounds, view):
         return None
     near = far * 1e-4
     size = light.radius if light.kind in (POINT, SPOT, DISK) else \
-        math.sqrt(light.width * light.height / math.pi)
+        math.sqrt(light_area(light) / math.pi)
     if light.kind == SPOT and light.cone_angle <= SPOT_MAX_HALF_ANGLE:
         half = min(math.radians(light.cone_angle) * 1.1 + 0.02, math.radians(80))
         t = math.tan(half) * near

@@ -63,6 +63,7 @@ class MaterialRecord:
     pass_index: int = 0         # Blender's material pass index (render pass IndexMA)
     alpha_mode: str = ""        # "hashed" (Dithered and see-through), else "" (contract)
     bump_correction: bool = True  # Cycles' Bump Map Correction (contract: Material)
+    emission_sampling: str = "auto"  # Cycles' Emission Sampling (core/emission.py token)
     # The base colour comes through an Ambient Occlusion node's Color: times the
     # renderer's ambient occlusion (contract: Material, lantern:baseColorOcclusion).
     base_occlusion: bool = False

@@ -32,6 +32,7 @@ bool soft_falloff;
 bool is_spot;
 bool is_disk;
 bool is_distant;
+bool two_sided;             // an emissive polygon lighting from both faces
 vec3 light_x;
 vec3 light_y;
 vec2 half_size;             // rect half extents; disk: (radius, 0)
@@ -55,6 +56,7 @@ void load_light(int row, vec3 view_forward) {
     is_spot = (flags & 2) != 0;
     is_disk = (flags & 4) != 0;
     is_distant = (flags & 16) != 0;
+    two_sided = (flags & 32) != 0;
     if ((flags & 8) != 0) light_axis = view_forward;   // a headlight follows the view
     vec4 t4 = light_texel(4), t5 = light_texel(5), t6 = light_texel(6);
     light_x = t4.xyz; light_y = t5.xyz;
@@ -161,14 +163,17 @@ void area_polygon(Surface s) {
     set_polygon();
 }
 
-// A polygon light of radiance L: diffuse the exact form factor (Lambert's lobe), the
-// base's GGX lobe and the coat's each their share of the polygon by their LTC
+// A polygon light of radiance L (a rect, a disk's polygon, an emissive polygon):
+// diffuse the exact form factor (Lambert's lobe), the base's GGX lobe and the coat's each their share of the polygon by their LTC
 // (ltc.glsl) times their albedo at n.v (their Fresnel averaged over the lobe, as the
 // split-sum's), the microfiber sheen its own LTC exactly (sheen.glsl).
 void area_light(Surface s, out vec3 diffuse, out vec3 glossy) {
     diffuse = glossy = vec3(0.0);
     vec3 rel = s.p - light_pos;
-    if (dot(rel, light_axis) <= 0.0) return;   // one-sided
+    if (dot(rel, light_axis) <= 0.0) {
+        if (!two_sided) return;                // one-sided
+        light_axis = -light_axis;              // the face s sees (its shadow reads it too)
+    }
     if (length(rel) > light_range) return;
     area_polygon(s);
     if (ltc_poly_n < 3) return;

@@ -9,9 +9,11 @@ Row layout (texels, must match shaders/lights.glsl):
   2 emission direction, cos(cone)    3 cone softness, diffuse, specular, flags
   4 x axis, half width (disk: r)     5 y axis, half height
   6 polygon vertices, area           7 position (lo)
-  8.. polygon vertices about the position (rect 4, disk an N-gon)
+  8.. polygon vertices about the position (rect 4, disk an N-gon, an emissive polygon
+       its 3 or 4 corners; x, y and half sizes are then its box in its plane)
 flags: 1 soft falloff, 2 spot, 4 disk, 8 headlight (shines along the view), 16 distant
-(a sun: shaders/lights.glsl's light_radiance picks the kind by these).
+(a sun: shaders/lights.glsl's light_radiance picks the kind by these), 32 two-sided
+(an emissive polygon lighting from both faces).
 The position is a double split in two floats: shaders make it camera-relative
 (shaders/origin.glsl), so the table does not change when the view does.
 
@@ -24,13 +26,11 @@ faster than it loads from a storage buffer (a dense field of lights' light pass 
 2.6 times the CPU time from a buffer)."""
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from ...core.lights import DISK, RECT, SPOT, SUN
+from ...core.lights import DISK, POLYGON, RECT, SPOT, SUN
 from .. import light_tree
-from ..lighting import disk_polygon, rect_polygon, volume_radius, volume_threshold
+from ..lighting import disk_polygon, light_area, rect_polygon, volume_radius, volume_threshold
 from ..shadow_plan import casts
 from ..view import split_double
 
@@ -58,7 +58,7 @@ def pack_rows(lights, ranges, disk_sides: int) -> np.ndarray:
     rows[:, 3] = [(light.cone_softness, light.diffuse, light.specular, _flags(light))
                   for light in lights]
     for row, light in zip(rows, lights):
-        if light.kind in (RECT, DISK):
+        if light.kind in (RECT, DISK, POLYGON):
             _pack_polygon(row, light, disk_sides)
     return rows
 
@@ -66,17 +66,18 @@ def pack_rows(lights, ranges, disk_sides: int) -> np.ndarray:
 def _flags(light) -> int:
     return (1 if light.soft_falloff else 0) | (2 if light.kind == SPOT else 0) | \
         (4 if light.kind == DISK else 0) | (8 if light.headlight else 0) | \
-        (16 if light.kind == SUN else 0)
+        (16 if light.kind == SUN else 0) | (32 if light.two_sided else 0)
 
 
 def _pack_polygon(row, light, disk_sides: int):
     """An area light's axes, half sizes and polygon (texels 4-6 and 8..)."""
-    if light.kind == RECT:
-        verts = rect_polygon(light)
-        half, area = (light.width / 2, light.height / 2), light.width * light.height
-    else:
+    if light.kind == DISK:
         verts = disk_polygon(light, disk_sides)
-        half, area = (light.radius, 0.0), math.pi * light.radius ** 2
+        half = (light.radius, 0.0)
+    else:
+        verts = rect_polygon(light) if light.kind == RECT else light.polygon
+        half = (light.width / 2, light.height / 2)
+    area = light_area(light)
     row[4] = [*light.x_axis, half[0]]
     row[5] = [*light.y_axis, half[1]]
     row[6] = [len(verts), area, 0.0, 0.0]

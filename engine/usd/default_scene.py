@@ -47,7 +47,7 @@ def feature_scene(texture: str):
     FEATURE_NORMAL_MAPPED to draw without one: a normal map changes every lighting
     program), and a skinned quad. engine/host/warmup.py renders it."""
     s = default_scene()
-    for i, kind in enumerate(KINDS.values()):
+    for i, kind in enumerate(k for k in KINDS.values() if k.usd_schema):
         light = getattr(UsdLux, kind.usd_schema).Define(s, f"/root/Light_{kind.name}")
         light.CreateIntensityAttr(10.0)
         if kind.name == SPOT:

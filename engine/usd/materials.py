@@ -13,6 +13,7 @@ import os
 import numpy as np
 from pxr import Usd, UsdShade
 
+from ...core.emission import SAMPLING
 from ...core.images import DEFAULT_FILTERTYPE, filtertype_of
 from ...core.sheen import MODES as SHEEN_MODES
 from ..scene import Material, TextureRef
@@ -84,6 +85,19 @@ def _uv_name(tex_shader, time):
     return str(v) if v else None
 
 
+def _read_emission_sampling(prim, out: Material, warnings: list):
+    """lantern:emissionSampling (docs/stage_contract.md, "Emission")."""
+    sampling = prim.GetAttribute("lantern:emissionSampling")
+    if not sampling or not sampling.HasAuthoredValue():
+        return
+    value = str(sampling.Get())
+    if value not in SAMPLING:
+        warnings.append(f"{prim.GetPath()}: lantern:emissionSampling {value!r} is not one "
+                        f"of {', '.join(SAMPLING)}; using {out.emission_sampling!r}")
+        return
+    out.emission_sampling = value
+
+
 def _read_sheen(prim, out: Material, time, warnings: list):
     """lantern:sheenMode, sheenColor, sheenRoughness (docs/stage_contract.md, "Sheen")."""
     mode = prim.GetAttribute("lantern:sheenMode")
@@ -119,6 +133,7 @@ def read_material(mat: UsdShade.Material, time, warnings: list) -> Material:
     if occlusion and occlusion.HasAuthoredValue():
         out.base_occlusion = bool(occlusion.Get())
     _read_sheen(mat.GetPrim(), out, time, warnings)
+    _read_emission_sampling(mat.GetPrim(), out, warnings)
     surface = mat.ComputeSurfaceSource()[0]
     if not surface or _shader_id(surface) != "UsdPreviewSurface":
         warnings.append(f"{path}: no UsdPreviewSurface surface; using the default material")

@@ -164,7 +164,7 @@ class ShadingReading:
                 elif path == first and skip in ws:
                     ws.remove(skip)
             self.scene.dome = domes[first] if first is not None else None
-        rig = not self._light_prims
+        rig = not self._light_prims and not self.emitters.lights_of   # emitters light it
         if rig and HEADLIGHT not in self.scene.lights:
             self.scene.lights[HEADLIGHT] = headlight()
             self.scene.dome = default_dome()

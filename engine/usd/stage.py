@@ -6,7 +6,8 @@ also sorts what it read into static and dynamic (timeline.py): a record is read 
 at a new time only when something it depends on may vary in time. Later syncs read
 only the prims that Usd.Notice.ObjectsChanged reported (changes.py) and, at a new
 time, the dynamic records: transforms, time-sampled meshes, skeleton poses,
-blend-shape weights, lights, time-varying materials and visibility. What is read is
+blend-shape weights, lights, time-varying materials and visibility. Meshes whose
+material emits are lights too (engine/emitters.py). What is read is
 checked as it is read (validate.py). Each sync returns `Changes`, what it replaced,
 and counts the prims it read.
 
@@ -17,6 +18,7 @@ from __future__ import annotations
 
 from pxr import Usd, UsdGeom
 
+from ..emitters import Emitters
 from ..scene import Changes, Scene
 from . import camera as usd_camera
 from .camera import time_code
@@ -63,6 +65,7 @@ class StageReader(FirstRead, InstancerReading, ShadingReading, EditTracking, Tim
         self._gprims = {}             # gprim path -> its type, drawn or not
         self._undrawn = {}            # path -> type of the gprims (and unknown types) not drawn
         self.settings_changed = False  # /Render/Settings edited since the last sync
+        self.emitters = Emitters()    # the lights of meshes whose material emits
 
     def close(self):
         self.tracker.close()
@@ -101,6 +104,7 @@ class StageReader(FirstRead, InstancerReading, ShadingReading, EditTracking, Tim
         self.time = frame
         if first or self.settings_changed:
             self._read_bounces()
+        self.emitters.sync(self.scene, changes, everything=first)
         self._finish_lights(changes)
         lines = undrawn_warnings(self._undrawn)
         if lines:

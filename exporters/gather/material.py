@@ -6,6 +6,7 @@ the node, and a constant."""
 import dataclasses
 import math
 
+from ...core.emission import BLENDER as EMISSION_SAMPLING, DEFAULT as DEFAULT_SAMPLING
 from ...core.images import BLENDER_INTERPOLATIONS, WRAP, filtertype_of
 from ...core.sheen import DISTRIBUTIONS
 from ..ir import MaterialRecord, SheenRecord, TexInput, TextureRecord
@@ -617,6 +618,7 @@ def gather_material(material, warn, texture_dir=None):
                           pass_index=int(material.pass_index),
                           alpha_mode=alpha_mode(material, inputs, graph), graph=graph,
                           bump_correction=bump_correction(material),
+                          emission_sampling=emission_sampling(material),
                           base_occlusion=walker is not None and walker.base_occlusion,
                           sheen=walker.sheen if walker is not None else None)
 
@@ -626,6 +628,13 @@ def bump_correction(material) -> bool:
     Cycles add-on's settings, its default."""
     settings = getattr(material, "cycles", None)
     return bool(getattr(settings, "use_bump_map_correction", True))
+
+
+def emission_sampling(material) -> str:
+    """Cycles' Emission Sampling (Material > Settings) as a core/emission.py token;
+    without the Cycles add-on's settings, its default."""
+    settings = getattr(material, "cycles", None)
+    return EMISSION_SAMPLING.get(getattr(settings, "emission_sampling", "AUTO"), DEFAULT_SAMPLING)
 
 
 def alpha_mode(material, inputs, graph=None) -> str:

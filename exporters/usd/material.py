@@ -2,6 +2,7 @@
 pattern graph (if any) as a MaterialX-style network on the `mtlx` render context."""
 from pxr import Gf, Sdf, UsdShade
 
+from ...core.emission import DEFAULT as DEFAULT_SAMPLING
 from ..ir import TexInput
 from .names import primvar_name
 
@@ -17,6 +18,7 @@ MTLX_INPUT_TYPES = {**INPUT_TYPES, "normal": Sdf.ValueTypeNames.Float3}
 # stage contract, "Material"): "hashed" for Blender's Dithered render method.
 ALPHA_MODE = "lantern:alphaMode"
 BUMP_CORRECTION = "lantern:bumpMapCorrection"
+EMISSION_SAMPLING = "lantern:emissionSampling"
 BASE_OCCLUSION = "lantern:baseColorOcclusion"
 # A UsdUVTexture's interpolation, where not linear (contract: "Textures").
 FILTERTYPE = "lantern:filtertype"
@@ -86,6 +88,9 @@ def write_material(stage, path, rec, default_uv, asset_path):
     if not rec.bump_correction:            # authored only where it differs from Cycles' default
         material.GetPrim().CreateAttribute(BUMP_CORRECTION, Sdf.ValueTypeNames.Bool,
                                            custom=True).Set(False)
+    if rec.emission_sampling != DEFAULT_SAMPLING:   # authored only where not Cycles' default
+        material.GetPrim().CreateAttribute(EMISSION_SAMPLING, Sdf.ValueTypeNames.Token,
+                                           custom=True).Set(rec.emission_sampling)
     if rec.base_occlusion:
         material.GetPrim().CreateAttribute(BASE_OCCLUSION, Sdf.ValueTypeNames.Bool,
                                            custom=True).Set(True)

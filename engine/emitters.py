@@ -1,0 +1,202 @@
+"""Meshes whose material emits, as lights: each emitting polygon of a drawn mesh
+becomes a polygon light (core/lights.py POLYGON) in Scene.lights, shaded as an area
+light (shaders/lights.glsl area_light: LTC, diffuse and GGX), with a shadow map of its
+own from its middle, as an area light's. The surface still shows its own emission
+(the G-buffer's emissive channel); these lights are what it sends to the others.
+
+Which faces light: the material's emission sampling (core/emission.py): none, the
+front face (the side the mesh's normals point to), the back face, or both (Cycles'
+Auto). The radiance is the material's emissive colour, W/(sr m2) (the stage contract,
+"Emission"), which a rect light of the same size and power has too; a textured
+emission is its texture's mean (times its scale, plus its bias), a pattern graph's
+its constant: a polygon emits its mean over itself only where the texture is uniform
+over it.
+
+Polygons: the mesh's triangles, world space, a pair that makes a planar convex quad
+(a quad's two triangles, as triangulation leaves them side by side) merged into one.
+Skinned, blend-shaped and GPU-subdivided meshes are not made lights (a warning: their
+triangles are posed on the GPU).
+
+A sync makes lights only for the instances whose mesh, material or placement changed
+(Changes), and reports the lights it added, changed or dropped in Changes.lights."""
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from ..core.emission import SAMPLING
+from ..core.lights import POLYGON
+from .scene import Light
+from .textures import read_image_linear
+
+WARNINGS = "<emitters>"          # Scene.warnings key of the meshes not made lights
+COPLANAR = 1.0 - 1e-6           # cos between the normals of a quad's two triangles
+
+
+@functools.lru_cache(maxsize=64)
+def _texture_mean(path: str, colorspace: str) -> tuple:
+    """The mean linear RGBA of an image file."""
+    return tuple(float(c) for c in read_image_linear(path, colorspace).reshape(-1, 4).mean(axis=0))
+
+
+def radiance(material) -> np.ndarray:
+    """The emitted radiance (rgb, W/(sr m2)) a material's polygons light others with:
+    its emissive colour, or its emission texture's mean."""
+    ref = material.maps.get("emissiveColor")
+    if ref is None:
+        return np.asarray(material.emissive, np.float64)
+    mean = np.asarray(_texture_mean(ref.path, ref.colorspace))
+    value = mean[:3] if ref.channel == "rgb" else np.full(3, mean["rgba".index(ref.channel)])
+    return value * np.asarray(ref.scale[:3]) + np.asarray(ref.bias[:3])
+
+
+def _merge_quad(a, b):
+    """The planar convex quad two front-wound triangles (3, 3) make when they share an
+    edge, its corners in order, or None."""
+    match = [next((i for i in range(3) if np.array_equal(a[i], q)), -1) for q in b]
+    if sorted(m >= 0 for m in match) != [False, True, True]:
+        return None
+    other = b[match.index(-1)]
+    i, j = sorted(m for m in match if m >= 0)
+    # Put the other corner between the shared edge's ends in a's order (after a[2]
+    # for the edge a[2] -> a[0]).
+    corners = [a[0], a[1], a[2]]
+    if (i, j) == (0, 2):
+        corners.append(other)
+    else:
+        corners.insert(j, other)
+    quad = np.array(corners)
+    n = np.cross(a[1] - a[0], a[2] - a[0])
+    edges = np.roll(quad, -1, axis=0) - quad
+    turns = np.cross(edges, np.roll(edges, -1, axis=0)) @ n
+    return quad if np.all(turns > 0) else None
+
+
+def polygons(tris: np.ndarray, normals: np.ndarray) -> list:
+    """Front-wound polygons (each (3 or 4, 3)) of world triangles `tris` (T, 3, 3) whose
+    vertex normals are `normals` (T, 3, 3): degenerate ones dropped, a planar convex
+    quad's two triangles (side by side) merged."""
+    g = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    area2 = np.linalg.norm(g, axis=1)
+    scale = float(np.abs(tris).max()) if len(tris) else 1.0
+    flip = np.einsum("ij,ij->i", g, normals.sum(axis=1)) < 0
+    tris = np.where(flip[:, None, None], tris[:, [0, 2, 1]], tris)
+    g = np.where(flip[:, None], -g, g)
+    keep = area2 > 1e-12 * max(scale, 1.0) ** 2
+    unit = g / np.maximum(area2, 1e-300)[:, None]
+    out, t, n = [], 0, len(tris)
+    while t < n:
+        if not keep[t]:
+            t += 1
+            continue
+        if t + 1 < n and keep[t + 1] and float(unit[t] @ unit[t + 1]) >= COPLANAR:
+            quad = _merge_quad(tris[t], tris[t + 1])
+            if quad is not None:
+                out.append(quad)
+                t += 2
+                continue
+        out.append(tris[t])
+        t += 1
+    return out
+
+
+def polygon_light(name: str, corners: np.ndarray, color, front: bool, back: bool) -> Light:
+    """The light of one front-wound polygon emitting `color` from the given faces: its
+    box in its plane (x along its first edge) centred on `position`."""
+    normal = np.cross(corners[1] - corners[0], corners[2] - corners[0])
+    normal /= np.linalg.norm(normal)
+    x = corners[1] - corners[0]
+    x /= np.linalg.norm(x)
+    y = np.cross(normal, x)
+    rel = corners - corners[0]
+    u, v = rel @ x, rel @ y
+    centre = corners[0] + x * (u.min() + u.max()) / 2 + y * (v.min() + v.max()) / 2
+    return Light(kind=POLYGON, name=name, color=np.array(color, np.float64), position=centre,
+                 axis=normal if front else -normal, x_axis=x, y_axis=y,
+                 width=float(u.max() - u.min()), height=float(v.max() - v.min()),
+                 polygon=corners, two_sided=front and back, soft_falloff=False)
+
+
+def instance_lights(inst, mesh, materials) -> tuple[dict, str | None]:
+    """({light path: Light} of an instance's emitting polygons, a warning or None)."""
+    emitting = []
+    for mat_index, first, count in mesh.ranges:
+        material = materials.get(mesh.materials[mat_index])
+        if material is None:
+            continue
+        front, back = SAMPLING.get(material.emission_sampling, SAMPLING["auto"])
+        color = radiance(material)
+        if (front or back) and float(color.max()) > 0.0:
+            emitting.append((first, count, color, front, back))
+    if not emitting:
+        return {}, None
+    if mesh.skin is not None or mesh.patches is not None:
+        why = "skinned or blend-shaped" if mesh.skin is not None else "subdivided on the GPU"
+        return {}, f"{inst.path}: its emission lights only itself (a {why} mesh's " \
+                   f"emitting faces are not made lights)"
+    worlds = inst.worlds if inst.worlds is not None else [inst.world]
+    points = mesh.vertices[:, :3].astype(np.float64)
+    normals = mesh.vertices[:, 3:6].astype(np.float64)
+    lights = {}
+    for w, world in enumerate(worlds):
+        world = np.asarray(world, np.float64)
+        p = points @ world[:3, :3].T + world[:3, 3]
+        nrm = normals @ np.linalg.inv(world[:3, :3])     # the inverse transpose, row vectors
+        k = 0
+        for first, count, color, front, back in emitting:
+            idx = mesh.indices[first:first + count].reshape(-1, 3)
+            for corners in polygons(p[idx], nrm[idx]):
+                path = f"{inst.path}<emission {w}.{k}>" if len(worlds) > 1 else \
+                    f"{inst.path}<emission {k}>"
+                lights[path] = polygon_light(f"{inst.path} emission", corners, color, front, back)
+                k += 1
+    return lights, None
+
+
+def _same(a: Light, b: Light) -> bool:
+    return all(np.array_equal(getattr(a, f), getattr(b, f)) for f in
+               ("color", "position", "axis", "polygon")) and a.two_sided == b.two_sided
+
+
+class Emitters:
+    """The emitter lights of a Scene, kept current by sync."""
+
+    def __init__(self):
+        self.lights_of = {}       # instance path -> its light paths
+        self.warnings = {}        # instance path -> why its emission lights nothing
+
+    def sync(self, scene, changes, everything: bool):
+        """Makes the lights of the instances `changes` touched (all of them when
+        `everything`), adding their paths to changes.lights."""
+        touched = set(scene.instances) if everything else \
+            set(changes.instances) | set(changes.dropped_instances)
+        if not everything and (changes.meshes or changes.materials):
+            for path, inst in scene.instances.items():
+                mesh = scene.meshes.get(inst.mesh_key)
+                if inst.mesh_key in changes.meshes or (
+                        mesh is not None and not changes.materials.isdisjoint(mesh.materials)):
+                    touched.add(path)
+        for path in touched:
+            inst = scene.instances.get(path)
+            mesh = scene.meshes.get(inst.mesh_key) if inst is not None else None
+            new, warning = instance_lights(inst, mesh, scene.materials) if mesh is not None \
+                else ({}, None)
+            for old in self.lights_of.pop(path, ()):
+                if old not in new:
+                    del scene.lights[old]
+                    changes.lights.add(old)
+            for p, light in new.items():
+                kept = scene.lights.get(p)
+                if kept is None or not _same(kept, light):
+                    scene.lights[p] = light
+                    changes.lights.add(p)
+            if new:
+                self.lights_of[path] = tuple(new)
+            self.warnings.pop(path, None)
+            if warning:
+                self.warnings[path] = warning
+        if self.warnings:
+            scene.warnings[WARNINGS] = list(self.warnings.values())
+        else:
+            scene.warnings.pop(WARNINGS, None)

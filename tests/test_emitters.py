@@ -1,0 +1,166 @@
+"""Meshes whose material emits light other surfaces (engine/emitters.py): an emissive
+quad lights a white Lambert plane as a rect light of the same size and power does
+(radiance L = intensity / area, the stage contract's "Emission" and "Lights"), within
+1%, through both forms of the light pass; the material's emission sampling chooses the
+faces that light (none, front, back, both); an edit moves the lights with the mesh."""
+import math
+
+import numpy as np
+import pytest
+from pxr import Gf, Sdf, UsdGeom, UsdLux, UsdShade
+
+import shadow_scenes
+from lantern.engine import RenderSettings, render_stage
+from lantern.engine.emitters import polygons
+from lantern.engine.usd.stage import StageReader
+
+W, H = 64, 48
+CAM_Z = 4.0
+FOCAL, HAP = 20.0, 36.0
+CENTRE, SIZE, INTENSITY = np.array([0.3, 0.2, 1.5]), (1.2, 0.8), 50.0
+FORMS = {"volumes": dict(lighting="volumes", compute=False),
+         "clustered": dict(lighting="clustered", light_error=0.0)}
+
+
+def stage_with(light: str, sampling: str = "", facing: float = -1.0):
+    """The white plane under a black world, seen straight down, lit by a rect light
+    ("rect"), or by an emissive quad ("quad") of the rect's size and radiance whose
+    normals point along z = `facing`, its material's emission sampling `sampling`
+    (unauthored: Cycles' Auto)."""
+    stage = shadow_scenes.new_stage(20.0)
+    cam = UsdGeom.Camera.Define(stage, "/root/cam")
+    cam.CreateFocalLengthAttr(FOCAL)
+    cam.CreateHorizontalApertureAttr(HAP)
+    cam.CreateVerticalApertureAttr(HAP * H / W)
+    cam.CreateClippingRangeAttr(Gf.Vec2f(0.1, 100.0))
+    cam.AddTranslateOp().Set((0, 0, CAM_Z))
+    UsdLux.DomeLight.Define(stage, "/root/world").CreateColorAttr(Gf.Vec3f(0, 0, 0))
+    w, h = SIZE
+    if light == "rect":
+        rect = UsdLux.RectLight.Define(stage, "/root/rect")
+        rect.CreateIntensityAttr(INTENSITY)
+        rect.CreateNormalizeAttr(True)
+        rect.CreateWidthAttr(w)
+        rect.CreateHeightAttr(h)
+        rect.AddTranslateOp().Set(Gf.Vec3d(*CENTRE))
+        return stage
+    mat = UsdShade.Material.Define(stage, "/root/glow")
+    surface = UsdShade.Shader.Define(stage, "/root/glow/surface")
+    surface.CreateIdAttr("UsdPreviewSurface")
+    surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(0, 0, 0))
+    L = INTENSITY / (w * h)
+    surface.CreateInput("emissiveColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(L, L, L))
+    mat.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
+    if sampling:
+        mat.GetPrim().CreateAttribute("lantern:emissionSampling", Sdf.ValueTypeNames.Token,
+                                      custom=True).Set(sampling)
+    quad = UsdGeom.Mesh.Define(stage, "/root/panel")
+    quad.CreateSubdivisionSchemeAttr("none")
+    corners = [(-w / 2, -h / 2), (w / 2, -h / 2), (w / 2, h / 2), (-w / 2, h / 2)]
+    if facing < 0:
+        corners = corners[::-1]          # wound clockwise from above: facing down
+    quad.CreatePointsAttr([(x, y, 0.0) for x, y in corners])
+    quad.CreateFaceVertexCountsAttr([4])
+    quad.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
+    quad.CreateNormalsAttr([(0, 0, facing)] * 4)
+    quad.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
+    quad.AddTranslateOp().Set(Gf.Vec3d(*CENTRE))
+    UsdShade.MaterialBindingAPI.Apply(quad.GetPrim()).Bind(mat)
+    return stage
+
+
+def plane_mask():
+    """Pixels that see the plane past the quad's place (the quad hides the rest)."""
+    j = (np.arange(W) + 0.5) / W * 2 - 1
+    i = 1 - (np.arange(H) + 0.5) / H * 2
+    X, Y = np.meshgrid(j * (HAP / 2) / FOCAL * CAM_Z, i * (HAP * H / W / 2) / FOCAL * CAM_Z)
+    t = (CAM_Z - CENTRE[2]) / CAM_Z           # where the ray to the plane crosses the quad
+    inside = (np.abs(X * t - CENTRE[0]) < SIZE[0] / 2 + 0.1) & \
+        (np.abs(Y * t - CENTRE[1]) < SIZE[1] / 2 + 0.1)
+    return ~inside
+
+
+def render(stage, form):
+    res = render_stage(stage, RenderSettings(width=W, height=H, **FORMS[form]))
+    assert np.isfinite(res.rgba).all()
+    return res.rgba[..., 0]
+
+
+@pytest.fixture(scope="module")
+def rect_images():
+    return {form: render(stage_with("rect"), form) for form in FORMS}
+
+
+@pytest.mark.parametrize("form", sorted(FORMS))
+def test_emissive_quad_lights_as_a_rect_light_of_its_size_and_power(form, rect_images):
+    rect, quad = rect_images[form], render(stage_with("quad"), form)
+    mask = plane_mask() & (rect > 0.02 * rect.max())
+    assert mask.sum() > 200
+    err = float(np.max(np.abs(quad[mask] - rect[mask]) / rect[mask]))
+    print(f"{form}: worst relative difference {err:.2e}")
+    assert err < 0.01
+
+
+# (emission sampling, the quad's normals along z) -> whether the plane (below) is lit
+SIDES = {("none", -1.0): False, ("front", -1.0): True, ("front", 1.0): False,
+         ("back", 1.0): True, ("back", -1.0): False, ("both", 1.0): True, ("", 1.0): True}
+
+
+@pytest.mark.parametrize("sampling,facing", sorted(SIDES))
+def test_emission_sampling_chooses_the_faces_that_light(sampling, facing, rect_images):
+    quad = render(stage_with("quad", sampling, facing), "volumes")
+    mask = plane_mask()
+    rect = rect_images["volumes"]
+    if SIDES[sampling, facing]:
+        lit = mask & (rect > 0.02 * rect.max())
+        assert float(np.max(np.abs(quad[lit] - rect[lit]) / rect[lit])) < 0.01
+    else:
+        assert float(quad[mask].max()) == 0.0
+
+
+def test_a_moved_emissive_mesh_moves_its_lights_and_nothing_else_is_made():
+    stage = stage_with("quad", "front")
+    reader = StageReader(stage)
+    try:
+        reader.sync(None)
+        lights = reader.scene.lights
+        paths = [p for p in lights if p.startswith("/root/panel")]
+        assert len(paths) == 1                     # the quad's two triangles, merged
+        before = lights[paths[0]]
+        assert np.allclose(before.position, CENTRE)
+        assert math.isclose(before.width * before.height, SIZE[0] * SIZE[1], rel_tol=1e-6)
+        UsdGeom.Xformable(stage.GetPrimAtPath("/root/panel")).GetOrderedXformOps()[0].Set(
+            Gf.Vec3d(*(CENTRE + [1.0, 0.0, 0.0])))
+        assert reader.sync(None).lights == set(paths)
+        assert np.allclose(reader.scene.lights[paths[0]].position, CENTRE + [1, 0, 0])
+        # An edit of the plane (it does not emit) touches no light.
+        stage.GetPrimAtPath("/root/plane").GetAttribute("doubleSided").Set(True)
+        assert reader.sync(None).lights == set()
+        # Its material set to light nothing: its light goes.
+        stage.GetPrimAtPath("/root/glow").GetAttribute("lantern:emissionSampling").Set("none")
+        assert reader.sync(None).lights == set(paths)
+        assert not any(p.startswith("/root/panel") for p in reader.scene.lights)
+    finally:
+        reader.close()
+
+
+def test_a_scene_without_emission_has_no_emitter_lights():
+    reader = StageReader(stage_with("rect"))
+    try:
+        reader.sync(None)
+        assert list(reader.scene.lights) == ["/root/rect"]
+    finally:
+        reader.close()
+
+
+def test_a_planar_convex_quad_merges_and_a_bent_one_does_not():
+    flat = np.array([[[0, 0, 0], [1, 0, 0], [1, 1, 0]], [[0, 0, 0], [1, 1, 0], [0, 1, 0]]], float)
+    up = np.tile([0.0, 0.0, 1.0], (2, 3, 1))
+    merged = polygons(flat, up)
+    assert len(merged) == 1 and len(merged[0]) == 4
+    assert math.isclose(np.cross(merged[0][1] - merged[0][0], merged[0][2] - merged[0][0])[2], 1.0)
+    bent = flat.copy()
+    bent[1, 2, 2] = 0.5
+    assert [len(p) for p in polygons(bent, up)] == [3, 3]
+    down = polygons(flat, -up)                     # normals the other way: wound the other way
+    assert np.cross(down[0][1] - down[0][0], down[0][2] - down[0][0])[2] < 0
