@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from pxr import Gf, Sdf, UsdGeom, UsdLux, UsdShade
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade
 
 import shadow_scenes
 from lantern.engine import RenderSettings, render_stage
@@ -164,3 +164,25 @@ def test_a_planar_convex_quad_merges_and_a_bent_one_does_not():
     assert [len(p) for p in polygons(bent, up)] == [3, 3]
     down = polygons(flat, -up)                     # normals the other way: wound the other way
     assert np.cross(down[0][1] - down[0][0], down[0][2] - down[0][0])[2] < 0
+
+
+def test_emission_sampling_is_exported_where_not_auto(empty_scene):
+    """Material > Settings > Emission Sampling (material.cycles.emission_sampling):
+    lantern:emissionSampling on the Material prim, unauthored for Cycles' Auto, and the
+    reader takes it."""
+    import bpy
+    from _export_helpers import cube_object, export_current
+    from lantern.engine.usd.materials import read_material
+    for i, sampling in enumerate(("AUTO", "NONE", "FRONT", "BACK", "FRONT_BACK")):
+        mat = bpy.data.materials.new(sampling)
+        mat.cycles.emission_sampling = sampling
+        cube_object(f"C{i}").data.materials.append(mat)
+    stage, _ = export_current()
+    attr = "lantern:emissionSampling"
+    assert not stage.GetPrimAtPath("/root/_materials/AUTO").HasAttribute(attr)
+    read = {}
+    for sampling in ("NONE", "FRONT", "BACK", "FRONT_BACK"):
+        prim = stage.GetPrimAtPath(f"/root/_materials/{sampling}")
+        read[sampling] = read_material(UsdShade.Material(prim), Usd.TimeCode.Default(),
+                                       []).emission_sampling
+    assert read == {"NONE": "none", "FRONT": "front", "BACK": "back", "FRONT_BACK": "both"}
