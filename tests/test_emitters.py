@@ -186,3 +186,22 @@ def test_emission_sampling_is_exported_where_not_auto(empty_scene):
         read[sampling] = read_material(UsdShade.Material(prim), Usd.TimeCode.Default(),
                                        []).emission_sampling
     assert read == {"NONE": "none", "FRONT": "front", "BACK": "back", "FRONT_BACK": "both"}
+
+
+def test_emissive_table_shot_is_as_close_to_cycles_as_four_samples():
+    """The table lit only by an emissive panel (tests/shot_scenes.py), direct light,
+    at medium: mean HDR-FLIP against Cycles' 1,024-spp reference at or below Cycles'
+    own at 4 spp, 0.100 (bench/bench_shots.py, 2026-11-28; before emitters lit, 0.873)."""
+    import bpy
+    import shot_scenes
+    from image_metrics import mean_flip
+    from lantern.engine import read_exr
+    from lantern.exporters import stage_from_depsgraph
+    shot_scenes.build("emissive_table")
+    stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+    width, height = shot_scenes.SIZE
+    result = render_stage(stage, RenderSettings(width=width, height=height, preset="medium"))
+    flip = mean_flip(result.rgba, read_exr(str(shot_scenes.reference_path("emissive_table",
+                                                                           "direct"))))
+    print(f"emissive_table direct: mean HDR-FLIP {flip:.4f}")
+    assert flip <= 0.100
