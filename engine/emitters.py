@@ -1,8 +1,12 @@
 """Meshes whose material emits, as lights: each emitting polygon of a drawn mesh
 becomes a polygon light (core/lights.py POLYGON) in Scene.lights, shaded as an area
-light (shaders/lights.glsl area_light: LTC, diffuse and GGX), with a shadow map of its
-own from its middle, as an area light's. The surface still shows its own emission
-(the G-buffer's emissive channel); these lights are what it sends to the others.
+light (shaders/lights.glsl area_light: LTC, diffuse and GGX). A placed mesh's polygons
+share one shadow: an area light's (one map from the middle of the box they lie in,
+filtered over that box, shaders/shadow_lookup.glsl), exact in the way a rect light's
+is for a flat rectangular emitter, approximate for others (a triangle's box is twice
+its size; a curved mesh is shadowed as its box). The surface still shows its own
+emission (the G-buffer's emissive channel); these lights are what it sends to the
+others.
 
 Which faces light: the material's emission sampling (core/emission.py): none, the
 front face (the side the mesh's normals point to), the back face, or both (Cycles'
@@ -27,6 +31,7 @@ import numpy as np
 
 from ..core.emission import SAMPLING
 from ..core.lights import POLYGON
+from .lighting import polygon_area
 from .scene import Light
 from .textures import read_image_linear
 
@@ -101,21 +106,51 @@ def polygons(tris: np.ndarray, normals: np.ndarray) -> list:
     return out
 
 
-def polygon_light(name: str, corners: np.ndarray, color, front: bool, back: bool) -> Light:
-    """The light of one front-wound polygon emitting `color` from the given faces: its
-    box in its plane (x along its first edge) centred on `position`."""
-    normal = np.cross(corners[1] - corners[0], corners[2] - corners[0])
-    normal /= np.linalg.norm(normal)
-    x = corners[1] - corners[0]
-    x /= np.linalg.norm(x)
+def _group_frame(polys: list) -> tuple:
+    """(centre, x, y, normal, width, height) of the box in which a mesh's emitting
+    polygons (front-wound, world) lie: about their summed area vector (the largest
+    polygon's normal where those cancel, as on a closed mesh), x along the largest
+    polygon's first edge."""
+    area_vectors = np.array([np.cross(c - c[0], np.roll(c, -1, axis=0) - c[0]).sum(axis=0) / 2
+                             for c in polys])
+    sizes = np.linalg.norm(area_vectors, axis=1)
+    largest = int(np.argmax(sizes))
+    total = area_vectors.sum(axis=0)
+    normal = total if np.linalg.norm(total) > 1e-6 * sizes.sum() else area_vectors[largest]
+    normal = normal / np.linalg.norm(normal)
+    edge = polys[largest][1] - polys[largest][0]
+    x = edge - normal * (edge @ normal)
+    if np.linalg.norm(x) < 1e-9 * np.linalg.norm(edge):
+        x = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])
+    x = x / np.linalg.norm(x)
     y = np.cross(normal, x)
+    corners = np.concatenate(polys)
     rel = corners - corners[0]
-    u, v = rel @ x, rel @ y
-    centre = corners[0] + x * (u.min() + u.max()) / 2 + y * (v.min() + v.max()) / 2
-    return Light(kind=POLYGON, name=name, color=np.array(color, np.float64), position=centre,
-                 axis=normal if front else -normal, x_axis=x, y_axis=y,
-                 width=float(u.max() - u.min()), height=float(v.max() - v.min()),
-                 polygon=corners, two_sided=front and back, soft_falloff=False)
+    u, v, h = rel @ x, rel @ y, rel @ normal
+    centre = corners[0] + x * (u.min() + u.max()) / 2 + y * (v.min() + v.max()) / 2 + \
+        normal * (h.min() + h.max()) / 2
+    return centre, x, y, normal, float(u.max() - u.min()), float(v.max() - v.min())
+
+
+def group_lights(prefix: str, name: str, emitting: list) -> dict:
+    """{path: Light} of one placed mesh's emitting polygons, [(corners, colour, front,
+    back)]: each its own polygon and faces, all sharing one shadow map, that of the
+    brightest (its `shadow`; the others name it in `shadow_of`), planned for the box
+    they lie in (position, axes and sizes: _group_frame), an area light's shadow."""
+    centre, x, y, _, width, height = _group_frame([c for c, *_ in emitting])
+    power = [polygon_area(c) * float(np.max(colour)) for c, colour, *_ in emitting]
+    owner = f"{prefix}{int(np.argmax(power))}>"
+    lights = {}
+    for k, (corners, colour, front, back) in enumerate(emitting):
+        normal = np.cross(corners[1] - corners[0], corners[2] - corners[0])
+        normal /= np.linalg.norm(normal)
+        path = f"{prefix}{k}>"
+        lights[path] = Light(kind=POLYGON, name=name, color=np.array(colour, np.float64),
+                             position=centre, axis=normal if front else -normal,
+                             x_axis=x, y_axis=y, width=width, height=height,
+                             polygon=corners, two_sided=front and back, soft_falloff=False,
+                             shadow=path == owner, shadow_of=None if path == owner else owner)
+    return lights
 
 
 def instance_lights(inst, mesh, materials) -> tuple[dict, str | None]:
@@ -143,20 +178,20 @@ def instance_lights(inst, mesh, materials) -> tuple[dict, str | None]:
         world = np.asarray(world, np.float64)
         p = points @ world[:3, :3].T + world[:3, 3]
         nrm = normals @ np.linalg.inv(world[:3, :3])     # the inverse transpose, row vectors
-        k = 0
+        polys = []
         for first, count, color, front, back in emitting:
             idx = mesh.indices[first:first + count].reshape(-1, 3)
-            for corners in polygons(p[idx], nrm[idx]):
-                path = f"{inst.path}<emission {w}.{k}>" if len(worlds) > 1 else \
-                    f"{inst.path}<emission {k}>"
-                lights[path] = polygon_light(f"{inst.path} emission", corners, color, front, back)
-                k += 1
+            polys += [(corners, color, front, back) for corners in polygons(p[idx], nrm[idx])]
+        if polys:
+            prefix = f"{inst.path}<emission {w}." if len(worlds) > 1 else f"{inst.path}<emission "
+            lights.update(group_lights(prefix, f"{inst.path} emission", polys))
     return lights, None
 
 
 def _same(a: Light, b: Light) -> bool:
     return all(np.array_equal(getattr(a, f), getattr(b, f)) for f in
-               ("color", "position", "axis", "polygon")) and a.two_sided == b.two_sided
+               ("color", "position", "axis", "x_axis", "polygon", "width", "height",
+                "two_sided", "shadow", "shadow_of"))
 
 
 class Emitters:

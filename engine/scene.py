@@ -361,10 +361,12 @@ class Light:
     shadow_resolution: int = 0     # lantern:shadowResolution; 0 = the preset's
     headlight: bool = False
     # A polygon (an emissive mesh's, engine/emitters.py): its 3 or 4 corners (world,
-    # (n, 3)); x_axis, y_axis, width and height are its box in its plane, centred on
-    # `position`, and `axis` its front. Two-sided: it emits from both faces.
+    # (n, 3)) and `axis` its front; two-sided: it emits from both faces. `position`,
+    # x_axis, y_axis, width and height are the box its mesh's emitting polygons lie in,
+    # whose area-light shadow they share: one map, of the light named in `shadow_of`.
     polygon: np.ndarray | None = None
     two_sided: bool = False
+    shadow_of: str | None = None
 
     @property
     def direction(self) -> np.ndarray:

@@ -169,12 +169,13 @@ void area_polygon(Surface s) {
 // split-sum's), the microfiber sheen its own LTC exactly (sheen.glsl).
 void area_light(Surface s, out vec3 diffuse, out vec3 glossy) {
     diffuse = glossy = vec3(0.0);
-    vec3 rel = s.p - light_pos;
-    if (dot(rel, light_axis) <= 0.0) {
+    // The side of the polygon's plane s is on (an emissive polygon's position is its
+    // mesh's box's middle, not on its plane: a corner is).
+    if (dot(s.p - light_poly(0), light_axis) <= 0.0) {
         if (!two_sided) return;                // one-sided
         light_axis = -light_axis;              // the face s sees (its shadow reads it too)
     }
-    if (length(rel) > light_range) return;
+    if (length(s.p - light_pos) > light_range) return;
     area_polygon(s);
     if (ltc_poly_n < 3) return;
     vec3 L = light_color;

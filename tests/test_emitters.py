@@ -22,11 +22,11 @@ FORMS = {"volumes": dict(lighting="volumes", compute=False),
          "clustered": dict(lighting="clustered", light_error=0.0)}
 
 
-def stage_with(light: str, sampling: str = "", facing: float = -1.0):
+def stage_with(light: str, sampling: str = "", facing: float = -1.0, cells: int = 1):
     """The white plane under a black world, seen straight down, lit by a rect light
-    ("rect"), or by an emissive quad ("quad") of the rect's size and radiance whose
-    normals point along z = `facing`, its material's emission sampling `sampling`
-    (unauthored: Cycles' Auto)."""
+    ("rect"), or by an emissive panel ("quad") of the rect's size and radiance, a grid
+    of cells x cells quads, whose normals point along z = `facing`, its material's
+    emission sampling `sampling` (unauthored: Cycles' Auto)."""
     stage = shadow_scenes.new_stage(20.0)
     cam = UsdGeom.Camera.Define(stage, "/root/cam")
     cam.CreateFocalLengthAttr(FOCAL)
@@ -56,13 +56,18 @@ def stage_with(light: str, sampling: str = "", facing: float = -1.0):
                                       custom=True).Set(sampling)
     quad = UsdGeom.Mesh.Define(stage, "/root/panel")
     quad.CreateSubdivisionSchemeAttr("none")
-    corners = [(-w / 2, -h / 2), (w / 2, -h / 2), (w / 2, h / 2), (-w / 2, h / 2)]
-    if facing < 0:
-        corners = corners[::-1]          # wound clockwise from above: facing down
-    quad.CreatePointsAttr([(x, y, 0.0) for x, y in corners])
-    quad.CreateFaceVertexCountsAttr([4])
-    quad.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
-    quad.CreateNormalsAttr([(0, 0, facing)] * 4)
+    # cells x cells quads, wound counter-clockwise about their normals
+    xs, ys = np.linspace(-w / 2, w / 2, cells + 1), np.linspace(-h / 2, h / 2, cells + 1)
+    quad.CreatePointsAttr([(x, y, 0.0) for y in ys for x in xs])
+    faces = []
+    for j in range(cells):
+        for i in range(cells):
+            a = j * (cells + 1) + i
+            face = [a, a + 1, a + cells + 2, a + cells + 1]
+            faces += face[::-1] if facing < 0 else face
+    quad.CreateFaceVertexCountsAttr([4] * cells * cells)
+    quad.CreateFaceVertexIndicesAttr(faces)
+    quad.CreateNormalsAttr([(0, 0, facing)] * (cells + 1) ** 2)
     quad.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
     quad.AddTranslateOp().Set(Gf.Vec3d(*CENTRE))
     UsdShade.MaterialBindingAPI.Apply(quad.GetPrim()).Bind(mat)
@@ -80,9 +85,11 @@ def plane_mask():
     return ~inside
 
 
-def render(stage, form):
+def render(stage, form, stats=None):
     res = render_stage(stage, RenderSettings(width=W, height=H, **FORMS[form]))
     assert np.isfinite(res.rgba).all()
+    if stats is not None:
+        stats.update(res.stats, warnings=res.warnings)
     return res.rgba[..., 0]
 
 
@@ -99,6 +106,19 @@ def test_emissive_quad_lights_as_a_rect_light_of_its_size_and_power(form, rect_i
     err = float(np.max(np.abs(quad[mask] - rect[mask]) / rect[mask]))
     print(f"{form}: worst relative difference {err:.2e}")
     assert err < 0.01
+
+
+@pytest.mark.parametrize("form", sorted(FORMS))
+def test_a_panel_of_many_quads_lights_as_one_rect_with_one_shadow_map(form, rect_images):
+    """64 polygon lights, one map: the mesh's polygons share an area light's shadow
+    over the box they lie in, here the panel itself, as the rect light's."""
+    stats = {}
+    rect, grid = rect_images[form], render(stage_with("quad", cells=8), form, stats)
+    mask = plane_mask() & (rect > 0.02 * rect.max())
+    err = float(np.max(np.abs(grid[mask] - rect[mask]) / rect[mask]))
+    print(f"{form}: 64 quads, worst relative difference {err:.2e}")
+    assert err < 0.01
+    assert stats["shadow_maps"] == 1 and stats["warnings"] == []
 
 
 # (emission sampling, the quad's normals along z) -> whether the plane (below) is lit

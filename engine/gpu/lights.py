@@ -10,7 +10,8 @@ Row layout (texels, must match shaders/lights.glsl):
   4 x axis, half width (disk: r)     5 y axis, half height
   6 polygon vertices, area           7 position (lo)
   8.. polygon vertices about the position (rect 4, disk an N-gon, an emissive polygon
-       its 3 or 4 corners; x, y and half sizes are then its box in its plane)
+       its 3 or 4 corners; position, x, y and half sizes are then its mesh's box, the
+       area its shadow is filtered over: Light.shadow_of)
 flags: 1 soft falloff, 2 spot, 4 disk, 8 headlight (shines along the view), 16 distant
 (a sun: shaders/lights.glsl's light_radiance picks the kind by these), 32 two-sided
 (an emissive polygon lighting from both faces).
@@ -97,6 +98,8 @@ class LightTable:
         # What the passes ask of every light each frame, sorted once per change (a
         # Python loop over 16,384 lights a pass took 5-30 ms a frame):
         self.casting = []          # paths of the lights that get a shadow map (casts)
+        self.sharing = {}          # path -> the light whose map it reads (Light.shadow_of)
+        self.reading = []          # paths of the lights that read a map: casting + sharing
         self.one_by_one = []       # paths shaded one by one, not through the tree
         self.has_disk = False
 
@@ -114,6 +117,11 @@ class LightTable:
         self.version += 1
         self._write(scene, changed, disk_sides)
         self.casting = [p for p, light in scene.lights.items() if casts(light, self.ranges[p])]
+        # Emissive polygons reading another's map (Light.shadow_of), and every light
+        # that reads a map: the casting ones and those.
+        self.sharing = {p: light.shadow_of for p, light in scene.lights.items()
+                        if light.shadow_of is not None}
+        self.reading = self.casting + list(self.sharing)
         self.one_by_one = [p for p, light in scene.lights.items()
                            if not light_tree.in_tree(light)]
 
