@@ -1,12 +1,12 @@
-"""Meshes whose material emits, as lights: each emitting polygon of a drawn mesh
-becomes a polygon light (core/lights.py POLYGON) in Scene.lights, shaded as an area
-light (shaders/lights.glsl area_light: LTC, diffuse and GGX). A placed mesh's polygons
-share one shadow: an area light's (one map from the middle of the box they lie in,
-filtered over that box, shaders/shadow_lookup.glsl), exact in the way a rect light's
-is for a flat rectangular emitter, approximate for others (a triangle's box is twice
-its size; a curved mesh is shadowed as its box). The surface still shows its own
-emission (the G-buffer's emissive channel); these lights are what it sends to the
-others.
+"""Meshes whose material emits, as lights: the emitting polygons of each placed mesh
+are one light (core/lights.py POLYGON) in Scene.lights, each polygon shaded as an area
+light's (shaders/lights.glsl area_light: LTC, diffuse and GGX), in one draw or one
+entry of a cluster's list for the mesh, and all of them under one shadow: an area
+light's (one map from the middle of the box they lie in, filtered over that box,
+shaders/shadow_lookup.glsl), exact in the way a rect light's is for a flat rectangular
+emitter, approximate for others (a lone triangle is shadowed as its box; a curved mesh
+as its box). The surface still shows its own emission (the G-buffer's emissive
+channel); these lights are what it sends to the others.
 
 Which faces light: the material's emission sampling (core/emission.py): none, the
 front face (the side the mesh's normals point to), the back face, or both (Cycles'
@@ -31,7 +31,6 @@ import numpy as np
 
 from ..core.emission import SAMPLING
 from ..core.lights import POLYGON
-from .lighting import polygon_area
 from .scene import Light
 from .textures import read_image_linear
 
@@ -132,25 +131,19 @@ def _group_frame(polys: list) -> tuple:
     return centre, x, y, normal, float(u.max() - u.min()), float(v.max() - v.min())
 
 
-def group_lights(prefix: str, name: str, emitting: list) -> dict:
-    """{path: Light} of one placed mesh's emitting polygons, [(corners, colour, front,
-    back)]: each its own polygon and faces, all sharing one shadow map, that of the
-    brightest (its `shadow`; the others name it in `shadow_of`), planned for the box
-    they lie in (position, axes and sizes: _group_frame), an area light's shadow."""
-    centre, x, y, _, width, height = _group_frame([c for c, *_ in emitting])
-    power = [polygon_area(c) * float(np.max(colour)) for c, colour, *_ in emitting]
-    owner = f"{prefix}{int(np.argmax(power))}>"
-    lights = {}
-    for k, (corners, colour, front, back) in enumerate(emitting):
-        normal = np.cross(corners[1] - corners[0], corners[2] - corners[0])
-        normal /= np.linalg.norm(normal)
-        path = f"{prefix}{k}>"
-        lights[path] = Light(kind=POLYGON, name=name, color=np.array(colour, np.float64),
-                             position=centre, axis=normal if front else -normal,
-                             x_axis=x, y_axis=y, width=width, height=height,
-                             polygon=corners, two_sided=front and back, soft_falloff=False,
-                             shadow=path == owner, shadow_of=None if path == owner else owner)
-    return lights
+def mesh_light(name: str, emitting: list) -> Light:
+    """The light of one placed mesh's emitting polygons, [(corners, colour, front,
+    back)]: each its own polygon (wound about the face it lights from), radiance and
+    faces; together one light with one shadow, an area light's over the box they lie
+    in (_group_frame)."""
+    centre, x, y, normal, width, height = _group_frame([c for c, *_ in emitting])
+    polys = tuple(c if front else c[::-1].copy() for c, _, front, _ in emitting)
+    colours = np.array([colour for _, colour, *_ in emitting], np.float64)
+    return Light(kind=POLYGON, name=name, color=colours.max(axis=0), position=centre,
+                 axis=normal, x_axis=x, y_axis=y, width=width, height=height,
+                 polygons=polys, polygon_colors=colours,
+                 two_sided=np.array([front and back for *_, front, back in emitting]),
+                 soft_falloff=False)
 
 
 def instance_lights(inst, mesh, materials) -> tuple[dict, str | None]:
@@ -183,15 +176,16 @@ def instance_lights(inst, mesh, materials) -> tuple[dict, str | None]:
             idx = mesh.indices[first:first + count].reshape(-1, 3)
             polys += [(corners, color, front, back) for corners in polygons(p[idx], nrm[idx])]
         if polys:
-            prefix = f"{inst.path}<emission {w}." if len(worlds) > 1 else f"{inst.path}<emission "
-            lights.update(group_lights(prefix, f"{inst.path} emission", polys))
+            path = f"{inst.path}<emission {w}>" if len(worlds) > 1 else f"{inst.path}<emission>"
+            lights[path] = mesh_light(f"{inst.path} emission", polys)
     return lights, None
 
 
 def _same(a: Light, b: Light) -> bool:
-    return all(np.array_equal(getattr(a, f), getattr(b, f)) for f in
-               ("color", "position", "axis", "x_axis", "polygon", "width", "height",
-                "two_sided", "shadow", "shadow_of"))
+    return len(a.polygons) == len(b.polygons) and \
+        all(np.array_equal(p, q) for p, q in zip(a.polygons, b.polygons)) and \
+        all(np.array_equal(getattr(a, f), getattr(b, f)) for f in
+            ("polygon_colors", "two_sided", "position", "axis", "x_axis", "width", "height"))
 
 
 class Emitters:

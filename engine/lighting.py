@@ -50,7 +50,13 @@ def _far_intensity(light: Light):
     """(I_max in W/sr, the light's extent in m) of a local light; a sun's E (W/m2)
     reflects E / pi at any distance, as a light of I = E does at 1 m."""
     c = max(map(float, light.color)) * max(light.diffuse, light.specular, 0.0)
-    if light.kind in (RECT, DISK, POLYGON):
+    if light.kind == POLYGON:
+        c = max(light.diffuse, light.specular, 0.0) * sum(
+            polygon_area(p) * float(np.max(col))
+            for p, col in zip(light.polygons, light.polygon_colors))
+        corners = np.concatenate(light.polygons) - np.asarray(light.position, np.float64)
+        extent = float(np.linalg.norm(corners, axis=1).max())
+    elif light.kind in (RECT, DISK):
         c *= light_area(light)
         extent = light.radius if light.kind == DISK else math.hypot(light.width, light.height) / 2
     else:
@@ -59,12 +65,12 @@ def _far_intensity(light: Light):
 
 
 def light_area(light: Light) -> float:
-    """The emitting area of an area light (rect, disk, polygon), m2."""
+    """The emitting area of an area light (rect, disk, an emissive mesh's polygons), m2."""
     if light.kind == RECT:
         return light.width * light.height
     if light.kind == DISK:
         return math.pi * light.radius ** 2
-    return polygon_area(light.polygon)
+    return sum(polygon_area(p) for p in light.polygons)
 
 
 def polygon_area(corners) -> float:

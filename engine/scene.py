@@ -360,13 +360,14 @@ class Light:
     shadow: bool = True
     shadow_resolution: int = 0     # lantern:shadowResolution; 0 = the preset's
     headlight: bool = False
-    # A polygon (an emissive mesh's, engine/emitters.py): its 3 or 4 corners (world,
-    # (n, 3)) and `axis` its front; two-sided: it emits from both faces. `position`,
-    # x_axis, y_axis, width and height are the box its mesh's emitting polygons lie in,
-    # whose area-light shadow they share: one map, of the light named in `shadow_of`.
-    polygon: np.ndarray | None = None
-    two_sided: bool = False
-    shadow_of: str | None = None
+    # A placed mesh's emitting polygons (kind POLYGON, engine/emitters.py): their
+    # corners ((3 or 4, 3) each, world), wound about the face they light from, their
+    # radiances (n, 3) and which light from both faces (n,). `color` is then the
+    # greatest of each channel; position, axis, x_axis, y_axis, width and height are
+    # the box they lie in, over which their one shadow is filtered.
+    polygons: tuple = ()
+    polygon_colors: np.ndarray | None = None
+    two_sided: np.ndarray | None = None
 
     @property
     def direction(self) -> np.ndarray:

@@ -32,7 +32,8 @@ bool soft_falloff;
 bool is_spot;
 bool is_disk;
 bool is_distant;
-bool two_sided;             // an emissive polygon lighting from both faces
+int first_extra;            // an emissive mesh's polygons past the first: their rows
+int n_extra;
 vec3 light_x;
 vec3 light_y;
 vec2 half_size;             // rect half extents; disk: (radius, 0)
@@ -56,12 +57,12 @@ void load_light(int row, vec3 view_forward) {
     is_spot = (flags & 2) != 0;
     is_disk = (flags & 4) != 0;
     is_distant = (flags & 16) != 0;
-    two_sided = (flags & 32) != 0;
     if ((flags & 8) != 0) light_axis = view_forward;   // a headlight follows the view
     vec4 t4 = light_texel(4), t5 = light_texel(5), t6 = light_texel(6);
     light_x = t4.xyz; light_y = t5.xyz;
     half_size = vec2(t4.w, t5.w);
     n_poly = int(t6.x);
+    first_extra = int(t6.z); n_extra = int(t6.w);
 }
 
 // --- What the loaded light reflects off a surface, unshadowed, as its diffuse and
@@ -150,41 +151,32 @@ void sphere_light(Surface s, out vec3 diffuse, out vec3 glossy) {
     if (sphere_emitter(s, l, Ed, Es, widen)) point_reflected(s, l, Ed, Es, widen, diffuse, glossy);
 }
 
-// The loaded area light's polygon about s, in the frame (t, b, n) of s's lobes (lib.glsl
-// Lobe), clipped to s's horizon: ltc_poly (ltc.glsl).
-void area_polygon(Surface s) {
+// Polygon k of the loaded area light about s, in the frame (t, b, n) of s's lobes
+// (lib.glsl Lobe), clipped to s's horizon: ltc_poly (ltc.glsl). `row`: the table row
+// that holds it (the light's own, or one of its polygon rows), n its corners.
+void area_polygon(Surface s, int row, int n) {
     vec3 t = s.v - s.n * dot(s.n, s.v);
     float len = length(t);
     t = len > 1e-5 ? t / len
                    : normalize(cross(s.n, abs(s.n.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
     mat3 to_frame = transpose(mat3(t, cross(s.n, t), s.n));
-    ltc_in_n = n_poly;
-    for (int i = 0; i < n_poly; ++i) ltc_in[i] = to_frame * (light_poly(i) - s.p);
+    ltc_in_n = n;
+    for (int i = 0; i < n; ++i)
+        ltc_in[i] = to_frame * (light_pos + light_table(row, 8 + i).xyz - s.p);
     set_polygon();
 }
 
-// A polygon light of radiance L (a rect, a disk's polygon, an emissive polygon):
-// diffuse the exact form factor (Lambert's lobe), the base's GGX lobe and the coat's each their share of the polygon by their LTC
-// (ltc.glsl) times their albedo at n.v (their Fresnel averaged over the lobe, as the
-// split-sum's), the microfiber sheen its own LTC exactly (sheen.glsl).
-void area_light(Surface s, out vec3 diffuse, out vec3 glossy) {
-    diffuse = glossy = vec3(0.0);
-    // The side of the polygon's plane s is on (an emissive polygon's position is its
-    // mesh's box's middle, not on its plane: a corner is).
-    if (dot(s.p - light_poly(0), light_axis) <= 0.0) {
-        if (!two_sided) return;                // one-sided
-        light_axis = -light_axis;              // the face s sees (its shadow reads it too)
-    }
-    if (length(s.p - light_pos) > light_range) return;
-    area_polygon(s);
-    if (ltc_poly_n < 3) return;
-    vec3 L = light_color;
+// What ltc_poly, of radiance L, reflects off s: diffuse the exact form factor
+// (Lambert's lobe), the base's GGX lobe and the coat's each their share of the polygon
+// by their LTC (ltc.glsl) times their albedo at n.v (their Fresnel averaged over the
+// lobe, as the split-sum's), the microfiber sheen its own LTC exactly (sheen.glsl).
+void polygon_reflected(Surface s, vec3 L, inout vec3 diffuse, inout vec3 glossy) {
     // The bump map correction towards the light's centre for the diffuse integral, and
     // along the mirror direction for the glossy lobes.
     vec3 to_centre = normalize(light_pos - s.p);
     float visible = bump_visible(s, to_centre);
     vec3 E = L * (PI * ltc_share(mat3(1.0))) * light_diffuse * visible;
-    diffuse = E * brdf_diffuse(s) * bump_shadowing(s, to_centre);
+    diffuse += E * brdf_diffuse(s) * bump_shadowing(s, to_centre);
 #ifdef SHEEN
     if (s.sheen_mode == 2) {
         diffuse += E * brdf_sheen(s, to_centre);
@@ -197,7 +189,29 @@ void area_light(Surface s, out vec3 diffuse, out vec3 glossy) {
     vec3 lobes = s.under_coat * s.spec_albedo * ltc_share(ltc_inverse(s.NoV, s.roughness));
     if (s.coat > 0.0)
         lobes += vec3(s.coat_albedo * ltc_share(ltc_inverse(s.NoV, s.coat_roughness)));
-    glossy = L * light_specular * bump_visible(s, reflect(-s.v, s.n)) * lobes;
+    glossy += L * light_specular * bump_visible(s, reflect(-s.v, s.n)) * lobes;
+}
+
+// An area light: a rect, a disk's polygon, or an emissive mesh's polygons (its own row
+// holds the first, n_extra rows from first_extra the others, each with its radiance,
+// its front and whether it lights from both faces: engine/gpu/lights.py). Each lights
+// s from the face s is on, if it lights from that face. The shadow's axis
+// (shadow_lookup.glsl) is the first polygon's, turned to s's side.
+void area_light(Surface s, out vec3 diffuse, out vec3 glossy) {
+    diffuse = glossy = vec3(0.0);
+    if (length(s.p - light_pos) > light_range) return;
+    vec3 first_axis = light_axis;
+    for (int k = 0; k <= n_extra; ++k) {
+        int row = k == 0 ? light_row : first_extra + k - 1;
+        vec4 t1 = light_table(row, 1), t2 = light_table(row, 2);
+        bool both = (int(light_table(row, 3).w) & 32) != 0;
+        // The side of the polygon's plane s is on (a corner is on it; the light's
+        // position, an emissive mesh's box's middle, may not be).
+        if (dot(s.p - light_pos - light_table(row, 8).xyz, t2.xyz) <= 0.0 && !both) continue;
+        area_polygon(s, row, int(light_table(row, 6).x));
+        if (ltc_poly_n >= 3) polygon_reflected(s, t1.rgb, diffuse, glossy);
+    }
+    if (dot(s.p - light_poly(0), first_axis) <= 0.0) light_axis = -first_axis;
 }
 
 // Any of the program's kinds, by the loaded row's flags.

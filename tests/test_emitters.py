@@ -7,82 +7,12 @@ import math
 
 import numpy as np
 import pytest
-from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade
+from pxr import Gf, Usd, UsdGeom, UsdShade
 
-import shadow_scenes
-from lantern.engine import RenderSettings, render_stage
+from emitter_scenes import CENTRE, FORMS, SIZE, H, W, plane_mask, stage_with
+from lantern.engine import RenderSettings, Session, render_stage
 from lantern.engine.emitters import polygons
 from lantern.engine.usd.stage import StageReader
-
-W, H = 64, 48
-CAM_Z = 4.0
-FOCAL, HAP = 20.0, 36.0
-CENTRE, SIZE, INTENSITY = np.array([0.3, 0.2, 1.5]), (1.2, 0.8), 50.0
-FORMS = {"volumes": dict(lighting="volumes", compute=False),
-         "clustered": dict(lighting="clustered", light_error=0.0)}
-
-
-def stage_with(light: str, sampling: str = "", facing: float = -1.0, cells: int = 1):
-    """The white plane under a black world, seen straight down, lit by a rect light
-    ("rect"), or by an emissive panel ("quad") of the rect's size and radiance, a grid
-    of cells x cells quads, whose normals point along z = `facing`, its material's
-    emission sampling `sampling` (unauthored: Cycles' Auto)."""
-    stage = shadow_scenes.new_stage(20.0)
-    cam = UsdGeom.Camera.Define(stage, "/root/cam")
-    cam.CreateFocalLengthAttr(FOCAL)
-    cam.CreateHorizontalApertureAttr(HAP)
-    cam.CreateVerticalApertureAttr(HAP * H / W)
-    cam.CreateClippingRangeAttr(Gf.Vec2f(0.1, 100.0))
-    cam.AddTranslateOp().Set((0, 0, CAM_Z))
-    UsdLux.DomeLight.Define(stage, "/root/world").CreateColorAttr(Gf.Vec3f(0, 0, 0))
-    w, h = SIZE
-    if light == "rect":
-        rect = UsdLux.RectLight.Define(stage, "/root/rect")
-        rect.CreateIntensityAttr(INTENSITY)
-        rect.CreateNormalizeAttr(True)
-        rect.CreateWidthAttr(w)
-        rect.CreateHeightAttr(h)
-        rect.AddTranslateOp().Set(Gf.Vec3d(*CENTRE))
-        return stage
-    mat = UsdShade.Material.Define(stage, "/root/glow")
-    surface = UsdShade.Shader.Define(stage, "/root/glow/surface")
-    surface.CreateIdAttr("UsdPreviewSurface")
-    surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(0, 0, 0))
-    L = INTENSITY / (w * h)
-    surface.CreateInput("emissiveColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(L, L, L))
-    mat.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
-    if sampling:
-        mat.GetPrim().CreateAttribute("lantern:emissionSampling", Sdf.ValueTypeNames.Token,
-                                      custom=True).Set(sampling)
-    quad = UsdGeom.Mesh.Define(stage, "/root/panel")
-    quad.CreateSubdivisionSchemeAttr("none")
-    # cells x cells quads, wound counter-clockwise about their normals
-    xs, ys = np.linspace(-w / 2, w / 2, cells + 1), np.linspace(-h / 2, h / 2, cells + 1)
-    quad.CreatePointsAttr([(x, y, 0.0) for y in ys for x in xs])
-    faces = []
-    for j in range(cells):
-        for i in range(cells):
-            a = j * (cells + 1) + i
-            face = [a, a + 1, a + cells + 2, a + cells + 1]
-            faces += face[::-1] if facing < 0 else face
-    quad.CreateFaceVertexCountsAttr([4] * cells * cells)
-    quad.CreateFaceVertexIndicesAttr(faces)
-    quad.CreateNormalsAttr([(0, 0, facing)] * (cells + 1) ** 2)
-    quad.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
-    quad.AddTranslateOp().Set(Gf.Vec3d(*CENTRE))
-    UsdShade.MaterialBindingAPI.Apply(quad.GetPrim()).Bind(mat)
-    return stage
-
-
-def plane_mask():
-    """Pixels that see the plane past the quad's place (the quad hides the rest)."""
-    j = (np.arange(W) + 0.5) / W * 2 - 1
-    i = 1 - (np.arange(H) + 0.5) / H * 2
-    X, Y = np.meshgrid(j * (HAP / 2) / FOCAL * CAM_Z, i * (HAP * H / W / 2) / FOCAL * CAM_Z)
-    t = (CAM_Z - CENTRE[2]) / CAM_Z           # where the ray to the plane crosses the quad
-    inside = (np.abs(X * t - CENTRE[0]) < SIZE[0] / 2 + 0.1) & \
-        (np.abs(Y * t - CENTRE[1]) < SIZE[1] / 2 + 0.1)
-    return ~inside
 
 
 def render(stage, form, stats=None):
@@ -110,8 +40,9 @@ def test_emissive_quad_lights_as_a_rect_light_of_its_size_and_power(form, rect_i
 
 @pytest.mark.parametrize("form", sorted(FORMS))
 def test_a_panel_of_many_quads_lights_as_one_rect_with_one_shadow_map(form, rect_images):
-    """64 polygon lights, one map: the mesh's polygons share an area light's shadow
-    over the box they lie in, here the panel itself, as the rect light's."""
+    """64 polygons, one light, one map: the mesh's polygons share an area light's
+    shadow over the box they lie in, here the panel itself, as the rect light's; the
+    light volumes draw one volume."""
     stats = {}
     rect, grid = rect_images[form], render(stage_with("quad", cells=8), form, stats)
     mask = plane_mask() & (rect > 0.02 * rect.max())
@@ -119,6 +50,8 @@ def test_a_panel_of_many_quads_lights_as_one_rect_with_one_shadow_map(form, rect
     print(f"{form}: 64 quads, worst relative difference {err:.2e}")
     assert err < 0.01
     assert stats["shadow_maps"] == 1 and stats["warnings"] == []
+    if form == "volumes":
+        assert stats["light_volumes"] == 1
 
 
 # (emission sampling, the quad's normals along z) -> whether the plane (below) is lit
@@ -145,8 +78,9 @@ def test_a_moved_emissive_mesh_moves_its_lights_and_nothing_else_is_made():
         reader.sync(None)
         lights = reader.scene.lights
         paths = [p for p in lights if p.startswith("/root/panel")]
-        assert len(paths) == 1                     # the quad's two triangles, merged
+        assert len(paths) == 1
         before = lights[paths[0]]
+        assert len(before.polygons) == 1           # the quad's two triangles, merged
         assert np.allclose(before.position, CENTRE)
         assert math.isclose(before.width * before.height, SIZE[0] * SIZE[1], rel_tol=1e-6)
         UsdGeom.Xformable(stage.GetPrimAtPath("/root/panel")).GetOrderedXformOps()[0].Set(
@@ -225,3 +159,21 @@ def test_emissive_table_shot_is_as_close_to_cycles_as_four_samples():
                                                                            "direct"))))
     print(f"emissive_table direct: mean HDR-FLIP {flip:.4f}")
     assert flip <= 0.100
+
+
+def test_a_session_moving_a_many_polygon_emitter_renders_as_a_fresh_read():
+    """The light's rows written again in place (its polygon rows span table lines)
+    give the image a first read of the edited stage gives."""
+    stage = stage_with("quad", cells=9)
+    settings = RenderSettings(width=W, height=H, **FORMS["volumes"])
+    session = Session(stage, settings)
+    try:
+        session.render()
+        UsdGeom.Xformable(stage.GetPrimAtPath("/root/panel")).GetOrderedXformOps()[0].Set(
+            Gf.Vec3d(*(CENTRE + [0.4, -0.2, 0.1])))
+        moved = session.render().rgba
+    finally:
+        session.close()
+    fresh = render_stage(stage, settings).rgba
+    assert np.abs(moved - fresh).max() <= 1e-6 * np.abs(fresh).max()
+    assert np.abs(moved - render(stage_with("quad", cells=9), "volumes")[..., None]).max() > 0

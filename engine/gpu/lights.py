@@ -8,13 +8,17 @@ Row layout (texels, must match shaders/lights.glsl):
   0 position (hi), volume radius R   1 colour (I, L or E), sphere radius
   2 emission direction, cos(cone)    3 cone softness, diffuse, specular, flags
   4 x axis, half width (disk: r)     5 y axis, half height
-  6 polygon vertices, area           7 position (lo)
-  8.. polygon vertices about the position (rect 4, disk an N-gon, an emissive polygon
-       its 3 or 4 corners; position, x, y and half sizes are then its mesh's box, the
-       area its shadow is filtered over: Light.shadow_of)
+  6 polygon vertices, area, first polygon row, polygon rows
+  7 position (lo)
+  8.. polygon vertices about the position (rect 4, disk an N-gon)
 flags: 1 soft falloff, 2 spot, 4 disk, 8 headlight (shines along the view), 16 distant
-(a sun: shaders/lights.glsl's light_radiance picks the kind by these), 32 two-sided
-(an emissive polygon lighting from both faces).
+(a sun: shaders/lights.glsl's light_radiance picks the kind by these), 32 two-sided.
+An emissive mesh's polygons (kind POLYGON, engine/emitters.py) are one light: its row
+holds the first polygon (its radiance in 1, its front in 2, flag 32 where it lights
+from both faces, its corners about the light's position), and each other polygon a
+row of the same form past the lights' rows (POLYGON ROWS, numbered in texel 6); the
+position, x and y axes and half sizes are the box they lie in, over which their one
+shadow is filtered.
 The position is a double split in two floats: shaders make it camera-relative
 (shaders/origin.glsl), so the table does not change when the view does.
 
@@ -67,22 +71,50 @@ def pack_rows(lights, ranges, disk_sides: int) -> np.ndarray:
 def _flags(light) -> int:
     return (1 if light.soft_falloff else 0) | (2 if light.kind == SPOT else 0) | \
         (4 if light.kind == DISK else 0) | (8 if light.headlight else 0) | \
-        (16 if light.kind == SUN else 0) | (32 if light.two_sided else 0)
+        (16 if light.kind == SUN else 0) | \
+        (32 if light.kind == POLYGON and light.two_sided[0] else 0)
 
 
 def _pack_polygon(row, light, disk_sides: int):
-    """An area light's axes, half sizes and polygon (texels 4-6 and 8..)."""
+    """An area light's axes, half sizes and (first) polygon (texels 4-6 and 8..)."""
     if light.kind == DISK:
         verts = disk_polygon(light, disk_sides)
         half = (light.radius, 0.0)
     else:
-        verts = rect_polygon(light) if light.kind == RECT else light.polygon
+        verts = rect_polygon(light) if light.kind == RECT else light.polygons[0]
         half = (light.width / 2, light.height / 2)
-    area = light_area(light)
+    if light.kind == POLYGON:
+        row[1, :3] = light.polygon_colors[0]
+        row[2, :3] = _front(verts)
     row[4] = [*light.x_axis, half[0]]
     row[5] = [*light.y_axis, half[1]]
-    row[6] = [len(verts), area, 0.0, 0.0]
+    row[6, :2] = [len(verts), light_area(light)]
     row[8:8 + len(verts), :3] = verts - np.asarray(light.position, np.float64)
+
+
+def _front(corners) -> np.ndarray:
+    n = np.cross(corners[1] - corners[0], corners[2] - corners[0])
+    return n / np.linalg.norm(n)
+
+
+def extra_polygons(light) -> int:
+    """How many polygon rows a light has past its own (an emissive mesh's polygons
+    after the first)."""
+    return len(light.polygons) - 1 if light.kind == POLYGON else 0
+
+
+def pack_extra(light) -> np.ndarray:
+    """(extra_polygons(light), ROW_TEXELS, 4) float32 polygon rows of `light`."""
+    rows = np.zeros((extra_polygons(light), ROW_TEXELS, 4), np.float32)
+    centre = np.asarray(light.position, np.float64)
+    for row, corners, colour, both in zip(rows, light.polygons[1:], light.polygon_colors[1:],
+                                          light.two_sided[1:]):
+        row[1, :3] = colour
+        row[2, :3] = _front(corners)
+        row[3, 3] = 32 if both else 0
+        row[6, 0] = len(corners)
+        row[8:8 + len(corners), :3] = corners - centre
+    return rows
 
 
 class LightTable:
@@ -91,6 +123,7 @@ class LightTable:
         self.disk_sides = None     # the preset's polygon for disk lights, as packed
         self.texture = None
         self.index = {}            # light path -> row
+        self.extras = {}           # light path -> (first, count) of its polygon rows
         self.ranges = {}           # light path -> volume radius R
         self.threshold = None      # the scene's volume threshold the ranges use
         self.version = 0           # counts the updates that changed a light
@@ -98,8 +131,6 @@ class LightTable:
         # What the passes ask of every light each frame, sorted once per change (a
         # Python loop over 16,384 lights a pass took 5-30 ms a frame):
         self.casting = []          # paths of the lights that get a shadow map (casts)
-        self.sharing = {}          # path -> the light whose map it reads (Light.shadow_of)
-        self.reading = []          # paths of the lights that read a map: casting + sharing
         self.one_by_one = []       # paths shaded one by one, not through the tree
         self.has_disk = False
 
@@ -117,11 +148,6 @@ class LightTable:
         self.version += 1
         self._write(scene, changed, disk_sides)
         self.casting = [p for p, light in scene.lights.items() if casts(light, self.ranges[p])]
-        # Emissive polygons reading another's map (Light.shadow_of), and every light
-        # that reads a map: the casting ones and those.
-        self.sharing = {p: light.shadow_of for p, light in scene.lights.items()
-                        if light.shadow_of is not None}
-        self.reading = self.casting + list(self.sharing)
         self.one_by_one = [p for p, light in scene.lights.items()
                            if not light_tree.in_tree(light)]
 
@@ -130,27 +156,51 @@ class LightTable:
         paths = list(scene.lights)
         threshold = volume_threshold(scene.lights.values())
         if paths != list(self.index) or self.texture is None or \
-                disk_sides != self.disk_sides or threshold != self.threshold:
+                disk_sides != self.disk_sides or threshold != self.threshold or \
+                any(extra_polygons(scene.lights[p]) != self.extras.get(p, (0, 0))[1]
+                    for p in changed if p in scene.lights):
             self.disk_sides = disk_sides
             self.index = {p: i for i, p in enumerate(paths)}
             self.threshold = threshold
             self.ranges = {p: volume_radius(scene.lights[p], threshold) for p in paths}
-            lines = max(-(-len(paths) // LIGHTS_PER_LINE), 1)
+            self.extras, first = {}, len(paths)
+            for p in paths:
+                count = extra_polygons(scene.lights[p])
+                if count:
+                    self.extras[p] = (first, count)
+                    first += count
+            lines = max(-(-first // LIGHTS_PER_LINE), 1)
             rows = np.zeros((lines * LIGHTS_PER_LINE, ROW_TEXELS, 4), np.float32)
             rows[:len(paths)] = pack_rows([scene.lights[p] for p in paths],
                                           [self.ranges[p] for p in paths], self.disk_sides)
+            for p, (at, count) in self.extras.items():
+                rows[self.index[p], 6, 2:] = at, count
+                rows[at:at + count] = pack_extra(scene.lights[p])
             self.texture = self.uploads.rewrite_float_texture(
                 self.texture, rows.reshape(lines, LIGHTS_PER_LINE * ROW_TEXELS, 4), kind="lights")
             return
         for p in changed:
             if p in self.index:
-                i = self.index[p]
-                self.ranges[p] = volume_radius(scene.lights[p], threshold)
-                self.uploads.write_texture(
-                    self.texture,
-                    pack_rows([scene.lights[p]], [self.ranges[p]], self.disk_sides)[0],
-                    kind="lights", viewport=((i % LIGHTS_PER_LINE) * ROW_TEXELS,
-                                             i // LIGHTS_PER_LINE, ROW_TEXELS, 1))
+                light = scene.lights[p]
+                self.ranges[p] = volume_radius(light, threshold)
+                row = pack_rows([light], [self.ranges[p]], self.disk_sides)
+                at, count = self.extras.get(p, (0, 0))
+                row[0, 6, 2:] = at, count
+                self._write_rows(self.index[p], row)
+                if count:
+                    self._write_rows(at, pack_extra(light))
+
+    def _write_rows(self, first: int, rows: np.ndarray):
+        """Rows (n, ROW_TEXELS, 4) into the table from row `first`, a line's run at a time."""
+        i = 0
+        while i < len(rows):
+            at = first + i
+            run = min(len(rows) - i, LIGHTS_PER_LINE - at % LIGHTS_PER_LINE)
+            self.uploads.write_texture(
+                self.texture, rows[i:i + run].reshape(1, run * ROW_TEXELS, 4), kind="lights",
+                viewport=((at % LIGHTS_PER_LINE) * ROW_TEXELS, at // LIGHTS_PER_LINE,
+                          run * ROW_TEXELS, 1))
+            i += run
 
     def tree_for(self, scene, error: float):
         """(LightTree or None, its nodes' texture or None): the tree of the scene's

@@ -129,7 +129,7 @@ class LightPass(Pass):
         dispatch's time on llvmpipe (docs/gpu.md)."""
         if frame.lighting == "volumes":
             return list(frame.scene.lights)
-        return [path for path in self.table.reading if path in shadow_maps]
+        return [path for path in self.table.casting if path in shadow_maps]
 
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]

@@ -38,9 +38,6 @@ distances directly; ortho depth is linear already. The lookup (shaders/shadow_lo
 (normal offset + receiver-plane depth + slope-scaled constant), a PCSS blocker
 search, and PCF with hardware compares (sampler2DShadow, bilinear).
 
-An emissive mesh's polygon lights share one map (engine/emitters.py): drawn for the
-one that casts, handed to the others under their own paths as well.
-
 reads: skinned (posed casters), tessellated (optional), view   writes: shadow_maps (light path -> ShadowMap)"""
 from __future__ import annotations
 
@@ -187,8 +184,6 @@ class ShadowPass(Pass):
             scene.warnings.pop(BUDGET_WARNING, None)
         frame.count("shadow_maps", len(out))
         frame.count("unshadowed_lights", len(casting) - len(out))
-        # An emissive mesh's polygons read the one map of theirs (Light.shadow_of).
-        out.update({p: out[owner] for p, owner in self.lights.sharing.items() if owner in out})
         # A screen pixel's width per unit of view depth (perspective) or in all (ortho).
         pixel = 2.0 / (abs(float(view.camera.proj[1][1])) * frame.size[1])
         for sm in out.values():
