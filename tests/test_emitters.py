@@ -177,3 +177,21 @@ def test_a_session_moving_a_many_polygon_emitter_renders_as_a_fresh_read():
     fresh = render_stage(stage, settings).rgba
     assert np.abs(moved - fresh).max() <= 1e-6 * np.abs(fresh).max()
     assert np.abs(moved - render(stage_with("quad", cells=9), "volumes")[..., None]).max() > 0
+
+
+def test_a_textured_emission_lights_with_its_mean(tmp_path):
+    """An emission texture's mean times its scale plus its bias (a linear EXR)."""
+    from lantern.engine.emitters import radiance
+    from lantern.engine.image_io import write_image
+    from lantern.engine.scene import Material, TextureRef
+    path = str(tmp_path / "glow.exr")
+    pixels = np.zeros((2, 2, 4), np.float32)
+    pixels[..., 3] = 1.0
+    pixels[0, 0, :3] = (4.0, 2.0, 0.0)
+    pixels[1, 1, :3] = (0.0, 2.0, 8.0)
+    write_image(path, pixels)
+    material = Material(name="/glow", emissive=(1.0, 1.0, 1.0), maps={
+        "emissiveColor": TextureRef(path, "raw", scale=(3.0, 3.0, 3.0, 1.0),
+                                    bias=(0.5, 0.0, 0.0, 0.0))})
+    assert np.allclose(radiance(material), [3.0 * 1.0 + 0.5, 3.0 * 1.0, 3.0 * 2.0])
+    assert np.allclose(radiance(Material(name="/flat", emissive=(2.0, 1.0, 0.5))), [2, 1, 0.5])
