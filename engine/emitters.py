@@ -18,6 +18,8 @@ over it.
 
 Polygons: the mesh's triangles, world space, a pair that makes a planar convex quad
 (a quad's two triangles, as triangulation leaves them side by side) merged into one.
+A mesh of more than CHUNK is several lights, each of polygons that lie together, each
+with its own shadow over its own box.
 Skinned, blend-shaped and GPU-subdivided meshes are not made lights (a warning: their
 triangles are posed on the GPU).
 
@@ -31,11 +33,15 @@ import numpy as np
 
 from ..core.emission import SAMPLING
 from ..core.lights import POLYGON
+from ..core.morton import morton_order
 from .scene import Light
 from .textures import read_image_linear
 
 WARNINGS = "<emitters>"          # Scene.warnings key of the meshes not made lights
 COPLANAR = 1.0 - 1e-6           # cos between the normals of a quad's two triangles
+# Polygons a light at most: a shader invocation loops over a light's polygons, about 60
+# loop iterations each, and llvmpipe ends an invocation's loops after 65,535 in all.
+CHUNK = 256
 
 
 @functools.lru_cache(maxsize=64)
@@ -146,6 +152,15 @@ def mesh_light(name: str, emitting: list) -> Light:
                  soft_falloff=False)
 
 
+def _chunks(polys: list) -> list:
+    """`polys` as lights of at most CHUNK polygons, those that lie together (along the
+    Morton curve of their centres) in one."""
+    if len(polys) <= CHUNK:
+        return [polys] if polys else []
+    order = morton_order(np.array([c.mean(axis=0) for c, *_ in polys]))
+    return [[polys[i] for i in order[k:k + CHUNK]] for k in range(0, len(polys), CHUNK)]
+
+
 def instance_lights(inst, mesh, materials) -> tuple[dict, str | None]:
     """({light path: Light} of an instance's emitting polygons, a warning or None)."""
     emitting = []
@@ -175,9 +190,10 @@ def instance_lights(inst, mesh, materials) -> tuple[dict, str | None]:
         for first, count, color, front, back in emitting:
             idx = mesh.indices[first:first + count].reshape(-1, 3)
             polys += [(corners, color, front, back) for corners in polygons(p[idx], nrm[idx])]
-        if polys:
-            path = f"{inst.path}<emission {w}>" if len(worlds) > 1 else f"{inst.path}<emission>"
-            lights[path] = mesh_light(f"{inst.path} emission", polys)
+        for c, chunk in enumerate(_chunks(polys)):
+            path = f"{inst.path}<emission" + (f" {w}" if len(worlds) > 1 else "") + \
+                (f" {c}" if len(polys) > CHUNK else "") + ">"
+            lights[path] = mesh_light(f"{inst.path} emission", chunk)
     return lights, None
 
 

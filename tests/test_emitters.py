@@ -195,3 +195,23 @@ def test_a_textured_emission_lights_with_its_mean(tmp_path):
                                     bias=(0.5, 0.0, 0.0, 0.0))})
     assert np.allclose(radiance(material), [3.0 * 1.0 + 0.5, 3.0 * 1.0, 3.0 * 2.0])
     assert np.allclose(radiance(Material(name="/flat", emissive=(2.0, 1.0, 0.5))), [2, 1, 0.5])
+
+
+def test_a_mesh_of_more_polygons_than_a_light_holds_is_several_lights_that_light_as_one():
+    """289 quads: two lights of polygons that lie together (a shader loops over a
+    light's polygons, and llvmpipe ends an invocation's loops after 65,535
+    iterations), each with its own map; together as the rect light."""
+    from lantern.engine.emitters import CHUNK
+    stage = stage_with("quad", cells=17)
+    reader = StageReader(stage)
+    try:
+        reader.sync(None)
+        sizes = sorted(len(light.polygons) for light in reader.scene.lights.values())
+    finally:
+        reader.close()
+    assert sizes == [289 - CHUNK, CHUNK]
+    stats = {}
+    rect, grid = render(stage_with("rect"), "volumes"), render(stage, "volumes", stats)
+    mask = plane_mask() & (rect > 0.02 * rect.max())
+    assert float(np.max(np.abs(grid[mask] - rect[mask]) / rect[mask])) < 0.01
+    assert stats["shadow_maps"] == 2 and stats["light_volumes"] == 2
