@@ -215,3 +215,14 @@ def test_a_mesh_of_more_polygons_than_a_light_holds_is_several_lights_that_light
     mask = plane_mask() & (rect > 0.02 * rect.max())
     assert float(np.max(np.abs(grid[mask] - rect[mask]) / rect[mask])) < 0.01
     assert stats["shadow_maps"] == 2 and stats["light_volumes"] == 2
+
+
+def test_an_unknown_emission_sampling_is_a_warning_and_auto():
+    from lantern.engine.usd.materials import read_material
+    stage = stage_with("quad", "sideways")
+    warnings = []
+    material = read_material(UsdShade.Material(stage.GetPrimAtPath("/root/glow")),
+                             Usd.TimeCode.Default(), warnings)
+    assert material.emission_sampling == "auto"
+    assert warnings == ["/root/glow: lantern:emissionSampling 'sideways' is not one of "
+                        "none, auto, front, back, both; using 'auto'"]
