@@ -1,0 +1,114 @@
+"""Glass (docs/rendering.md, "Glass"): a slab of glass shifts what lies behind it by
+Snell's law, in closed form; without bounces no light goes through (Cycles' Max Bounces
+0), and the pass runs only when a scene has glass."""
+import math
+
+import numpy as np
+import pytest
+from pxr import Gf, Sdf, UsdGeom, UsdLux, UsdShade
+
+import transparency_scenes as T
+
+WIDTH, HEIGHT = 160, 40
+VIEW = 2.0                      # the orthographic camera's width, m
+IOR, THICKNESS, TILT = 1.5, 0.3, math.radians(35.0)
+
+
+def glass(stage, ior=IOR):
+    mat = T.material(stage, "Glass", diffuse=(1.0, 1.0, 1.0), opacity=0.0)
+    shader = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/Glass/surface"))
+    shader.GetInput("ior").Set(ior)
+    shader.GetInput("roughness").Set(0.0)
+    mat.GetPrim().CreateAttribute("lantern:transmission", Sdf.ValueTypeNames.Float,
+                                  custom=True).Set(1.0)
+    return mat
+
+
+def slab(stage, mat):
+    """A 6 x 6 m slab THICKNESS thick about z = 1, turned by TILT about y: its faces'
+    normal (sin, 0, cos) of TILT, outward windings and flat normals."""
+    c, s, h = math.cos(TILT), math.sin(TILT), THICKNESS / 2
+    corners = [(x, y, z) for z in (-h, h) for y in (-3, 3) for x in (-3, 3)]
+    points = [Gf.Vec3f(c * x + s * z, y, -s * x + c * z + 1.0) for x, y, z in corners]
+    faces = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+    mesh = UsdGeom.Mesh.Define(stage, "/root/Slab")
+    mesh.CreateSubdivisionSchemeAttr("none")
+    mesh.CreatePointsAttr(points)
+    mesh.CreateFaceVertexCountsAttr([4] * 6)
+    mesh.CreateFaceVertexIndicesAttr([i for f in faces for i in f])
+    normals = []
+    for f in faces:
+        a, b, d = (np.array(points[i]) for i in f[:3])
+        n = np.cross(b - a, d - a)
+        normals += [Gf.Vec3f(*(float(v) for v in n / np.linalg.norm(n)))] * 4
+    mesh.CreateNormalsAttr(normals)
+    mesh.SetNormalsInterpolation(UsdGeom.Tokens.faceVarying)
+    UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(mat)
+
+
+def edge_scene(with_slab=True, ior=IOR):
+    """A floor at z = 0, dark for x < 0 and emitting 1 for x > 0, seen straight down by
+    an orthographic camera; a black dome (the glass reflects nothing)."""
+    stage = T._stage()
+    UsdLux.DomeLight.Define(stage, "/root/_world").CreateIntensityAttr(0.0)
+    T.quad(stage, "/root/Dark", (-4, 0), (-4, 4), 0.0, T.material(stage, "Dark"))
+    T.quad(stage, "/root/Bright", (0, 4), (-4, 4), 0.0,
+           T.material(stage, "Bright", emissive=(1, 1, 1)))
+    if with_slab:
+        slab(stage, glass(stage, ior))
+    T.camera(stage, (0.0, 0.0, 10.0), (0.0, 0.0, 0.0), up=(0, 1, 0), ortho_width=VIEW,
+             aspect=WIDTH / HEIGHT)
+    return stage
+
+
+def render(stage, **settings):
+    from lantern.engine import RenderSettings, render_stage
+    from lantern.engine.bounces import Bounces
+    return render_stage(stage, RenderSettings(**{
+        "width": WIDTH, "height": HEIGHT, "supersample": 4, "fxaa": False,
+        "bounces": Bounces(), **settings}))
+
+
+def edge_column(image) -> float:
+    """Where the dark-to-bright edge lies along the middle row, in pixels from the
+    left: the row's dark share (supersampled pixels cover the edge in part)."""
+    row = image[HEIGHT // 2, :, :3].mean(-1)
+    lo, hi = row.min(), row.max()
+    assert hi - lo > 0.2, (lo, hi)
+    return float(np.sum(1.0 - (row - lo) / (hi - lo)))
+
+
+def test_a_slab_shifts_the_edge_behind_it_by_snells_law():
+    # Rays straight down meet the slab at TILT; they leave it parallel, shifted across
+    # by d = t sin(theta - theta_r) / cos(theta_r), towards -x: the edge moves to +x.
+    bare = render(edge_scene(with_slab=False))
+    result = render(edge_scene())
+    assert result.warnings == [] and result.stats["glass_objects"] == 1
+    assert np.isfinite(result.rgba).all()
+    refracted = math.asin(math.sin(TILT) / IOR)
+    shift = THICKNESS * math.sin(TILT - refracted) / math.cos(refracted)
+    pixel = VIEW / WIDTH
+    assert edge_column(bare.rgba) == pytest.approx(WIDTH / 2, abs=0.25)
+    moved = edge_column(result.rgba) - edge_column(bare.rgba)
+    assert moved == pytest.approx(shift / pixel, abs=0.5), (moved, shift / pixel)
+    # Through the slab the bright side keeps what two interfaces let through.
+    fresnel = 1.0 - 0.5 * sum(((a - b) / (a + b)) ** 2 for a, b in (
+        (math.cos(TILT), IOR * math.cos(refracted)), (IOR * math.cos(TILT), math.cos(refracted))))
+    bright = result.rgba[HEIGHT // 2, -10:, :3].mean()
+    assert bright == pytest.approx(fresnel ** 2, rel=0.02)
+
+
+def test_without_bounces_no_light_goes_through_and_no_glass_runs_no_pass():
+    from lantern.engine.bounces import DIRECT
+    direct = render(edge_scene(), bounces=DIRECT)
+    assert direct.rgba[HEIGHT // 2, -10:, :3].max() < 0.05      # glass: black, as Cycles
+    bare = render(edge_scene(with_slab=False))
+    assert "glass" not in bare.stats["passes"] and bare.stats["glass_draws"] == 0
+
+
+def test_without_compute_glass_is_one_interface_in_screen_space():
+    # GL 3.3 and 4.1: the refracted ray runs to the opaque surface behind the pixel.
+    result = render(edge_scene(), compute=False)
+    assert result.warnings == [] and np.isfinite(result.rgba).all()
+    refracted = math.asin(math.sin(TILT) / IOR)
+    assert edge_column(result.rgba) > WIDTH / 2 + 1.0          # moved, one interface
