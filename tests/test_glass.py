@@ -112,3 +112,35 @@ def test_without_compute_glass_is_one_interface_in_screen_space():
     assert result.warnings == [] and np.isfinite(result.rgba).all()
     refracted = math.asin(math.sin(TILT) / IOR)
     assert edge_column(result.rgba) > WIDTH / 2 + 1.0          # moved, one interface
+
+
+@pytest.mark.parametrize("preset", ["low", "medium"])
+def test_glass_lets_a_panes_share_of_a_suns_light_through_its_shadow(preset):
+    # The transparency tests' two layers (tests/transparency_scenes.py), made white
+    # glass of IOR 1.5: each lets (1 - F0)^2 of the light through (a flat pane at
+    # normal incidence; grey, stochastic), two layers its square; without bounces
+    # glass shadows fully, as Cycles' shadow rays stop at it. The stochastic casters'
+    # 16 levels round the opacity to sixteenths (0.078 -> 1/16).
+    stage = T.shadow_layers(alpha=1.0)
+    mat = stage.GetPrimAtPath("/root/_materials/glass")
+    mat.CreateAttribute("lantern:transmission", Sdf.ValueTypeNames.Float, custom=True).Set(1.0)
+    shader = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/glass/surface"))
+    shader.GetInput("ior").Set(1.5)
+    shader.GetInput("diffuseColor").Set(Gf.Vec3f(1.0, 1.0, 1.0))
+    pane = (1.0 - 0.04) ** 2
+    for bounces, one_expected in ((None, pane), ("direct", 0.0)):
+        settings = {} if bounces is None else {"bounces": __import__(
+            "lantern.engine.bounces", fromlist=["DIRECT"]).DIRECT}
+        result = T_render(stage, preset, **settings)
+        lit = T.floor_region(result.rgba, (2.3, 2.9), (-1.9, -1.3))[:3]
+        one = T.floor_region(result.rgba, (1.2, 1.8), (-1.8, -1.2))[:3] / lit
+        two = T.floor_region(result.rgba, (1.2, 1.8), (-0.8, -0.2))[:3] / lit
+        assert one == pytest.approx(one_expected, abs=1 / 32 + 0.01), (bounces, one)
+        assert two == pytest.approx(one_expected ** 2, abs=2 / 32 + 0.01), (bounces, two)
+
+
+def T_render(stage, preset, **settings):
+    from lantern.engine import RenderSettings, render_stage
+    from lantern.engine.bounces import Bounces
+    return render_stage(stage, RenderSettings(**{"width": 96, "height": 96, "preset": preset,
+                                                 "bounces": Bounces(), **settings}))
