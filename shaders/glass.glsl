@@ -44,6 +44,9 @@ uniform sampler2D u_opaque_depth;  // g_depth (not attached: the depth test is h
 // its distance from the camera: the front surface's position comes from its depth,
 // within about this much, and must not be hit again.
 #define GLASS_OFFSET 1.0e-3
+// A hit on screen is hidden where the opaque surface there is nearer than this share of
+// its distance.
+#define GLASS_HIDDEN 0.95
 
 out vec4 frag;
 
@@ -73,6 +76,23 @@ vec3 frame_at(vec2 uv, float r) {
 }
 
 #ifdef TRACED
+// The traced triangles' corner normals, object space (passes/glass.py); zero: none.
+layout(std430, binding = 14) readonly buffer GlassNormals { vec4 glass_normals[]; };
+
+// The shading normal at a hit, world space, on the side of the triangle's own normal
+// `flat_n` (unit, world): its corner normals interpolated, else flat_n.
+vec3 hit_shading_normal(RtHit hit, vec3 flat_n) {
+    int k = 3 * hit.triangle;
+    vec2 b = hit.barycentric;
+    vec3 n = (1.0 - b.x - b.y) * glass_normals[k].xyz + b.x * glass_normals[k + 1].xyz
+           + b.y * glass_normals[k + 2].xyz;
+    if (dot(n, n) < 1.0e-12) return flat_n;
+    vec4 r0 = rt_instance(hit.instance, 0), r1 = rt_instance(hit.instance, 1),
+         r2 = rt_instance(hit.instance, 2);
+    n = normalize(n.x * r0.xyz + n.y * r1.xyz + n.z * r2.xyz);
+    return dot(n, flat_n) < 0.0 ? -n : n;
+}
+
 // Whether the ray from camera-relative q along d meets something; L: what it meets, as
 // the lit frame shows it where the hit is on screen and in front of the opaque surface
 // there, else the dome along the ray.
@@ -86,8 +106,10 @@ bool traced_radiance(vec3 q, vec3 d, float r, out vec3 L) {
     bool found;
     if (on_screen(h, uv)) {
         vec3 o = opaque_at(uv, found);
-        // Hidden behind an opaque surface on screen: the hit is not in the frame.
-        if (!found || length(h) <= length(o) * 1.002 + 1.0e-3) L = frame_at(uv, r);
+        // Hidden behind an opaque surface clearly nearer on screen: the hit is not in
+        // the frame. (The frame's depth is the pixel centre's: on a grazing floor it
+        // differs from a hit elsewhere in the pixel by a few per cent.)
+        if (!found || length(o) >= GLASS_HIDDEN * length(h)) L = frame_at(uv, r);
     }
     return true;
 }
@@ -116,6 +138,8 @@ vec3 transmitted(vec3 p, vec3 n, vec3 dir, float eta, vec3 tint, float r) {
         vec3 hn = rt_hit_normal(hit);
         bool leaving = dot(hn, d) > 0.0;       // the winding's normal points out
         if (leaving) hn = -hn;
+        vec3 sn = hit_shading_normal(hit, hn);
+        if (dot(sn, -d) > 0.0) hn = sn;        // smooth, where it still faces the ray
         float ratio = leaving ? eta : 1.0 / eta;
         float c = clamp(dot(-d, hn), 0.0, 1.0);
         float f = fresnel_dielectric(c, 1.0 / ratio);   // lib.glsl: n_t / n_i

@@ -130,7 +130,7 @@ class Renderer:
             self.light_cull,
             ClusteredLightPass(ctx, programs, self.lights, self.environment, self.light_cull),
             GlassPass(ctx, self.pool, programs, self.geometry, self.textures, self.lights,
-                      self.environment, self.depth,
+                      self.environment, self.depth, self.uploads,
                       self.tracer if self.features.compute else None),
             TransparencyPass(ctx, self.pool, programs, self.geometry, self.textures,
                              self.lights, self.environment, self.depth),

@@ -32,9 +32,14 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ..programs import UNITS, set_uniform
 from ..pattern import material_variant
 from .transparency import TransparencyPass
+
+
+NORMALS_BINDING = 14               # shaders/glass.glsl glass_normals
 
 
 class GlassPass(TransparencyPass):
@@ -44,9 +49,12 @@ class GlassPass(TransparencyPass):
     culled = ("back",)                # front faces only: the way in
 
     def __init__(self, ctx, pool, programs, geometry, textures, lights, environment, depth,
-                 tracer):
+                 uploads, tracer):
         super().__init__(ctx, pool, programs, geometry, textures, lights, environment, depth)
+        self.uploads = uploads
         self.tracer = tracer           # scene -> Raytracer (Renderer.tracer); None: no compute
+        self.normals = None            # the traced triangles' corner normals (binding 14)
+        self._normals_of = None        # what they were made from
         self.behind = None             # the lit frame's mip-mapped copy, kept by size
         self._frame = None             # this frame's (traced, refract, eye)
 
@@ -70,9 +78,32 @@ class GlassPass(TransparencyPass):
         # one-interface form, as GL 3.3 and 4.1 draw it).
         traced = self.tracer is not None and frame.options.compute is not False
         if traced:
-            self.tracer(frame.scene).bind()
+            tracer = self.tracer(frame.scene)
+            tracer.bind()
+            self._corner_normals(tracer).bind_to_storage_buffer(NORMALS_BINDING)
         self._frame = (traced, refract, board["view"].origin)
         return fbo
+
+    def _corner_normals(self, tracer):
+        """(T, 3, 4) float32 object-space normals of the tracer's triangles, in its
+        order: a mesh's own vertex normals, so the faces inside refract as smoothly as
+        the front is shaded; zero (the triangle's own normal, glass.glsl) for a skinned
+        mesh (its normals move with the pose) and a subdivision surface's patches."""
+        made_of = tuple((key, id(b.mesh), b.first_triangle, len(b.triangles))
+                        for key, b in tracer.bottoms.items())
+        if self.normals is not None and made_of == self._normals_of:
+            return self.normals
+        out = np.zeros((max(tracer.triangle_count, 1), 3, 4), np.float32)
+        for b in tracer.bottoms.values():
+            mesh = b.mesh
+            if mesh.skin is None and mesh.patches is None and len(mesh.indices):
+                corners = mesh.vertices[:, 3:6][mesh.indices.reshape(-1, 3)]
+                out[b.first_triangle:b.first_triangle + len(corners), :, :3] = corners
+        if self.normals is not None:
+            self.normals.release()
+        self.normals = self.uploads.buffer(out, kind="raytrace")
+        self._normals_of = made_of
+        return self.normals
 
     def _program(self, frame, mat, defines):
         traced, refract, eye = self._frame
@@ -88,6 +119,9 @@ class GlassPass(TransparencyPass):
         return prog
 
     def release(self):
+        if self.normals is not None:
+            self.normals.release()
+            self.normals = self._normals_of = None
         if self.behind is not None:
             self.behind.release()
             self.behind = None
