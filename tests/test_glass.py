@@ -144,3 +144,87 @@ def T_render(stage, preset, **settings):
     from lantern.engine.bounces import Bounces
     return render_stage(stage, RenderSettings(**{"width": 96, "height": 96, "preset": preset,
                                                  "bounces": Bounces(), **settings}))
+
+
+# --- a ball lens -----------------------------------------------------------------------
+
+BALL_R, BALL_Z, BALL_EDGE, BALL_VIEW = 0.5, 1.0, 0.05, 1.2
+
+
+def ball(stage, mat, segments=64, rings=32):
+    """A UV sphere of BALL_R about (0, 0, BALL_Z), its normals the sphere's."""
+    dirs = [(0.0, 0.0, 1.0)]
+    for i in range(1, rings):
+        t = math.pi * i / rings
+        dirs += [(math.sin(t) * math.cos(2 * math.pi * j / segments),
+                  math.sin(t) * math.sin(2 * math.pi * j / segments), math.cos(t))
+                 for j in range(segments)]
+    dirs.append((0.0, 0.0, -1.0))
+    ring = lambda i, j: 1 + (i - 1) * segments + j % segments  # noqa: E731
+    faces = [(0, ring(1, j), ring(1, j + 1)) for j in range(segments)]
+    faces += [(ring(i, j), ring(i + 1, j), ring(i + 1, j + 1), ring(i, j + 1))
+              for i in range(1, rings - 1) for j in range(segments)]
+    faces += [(len(dirs) - 1, ring(rings - 1, j + 1), ring(rings - 1, j)) for j in range(segments)]
+    points = np.array(dirs) * BALL_R + (0.0, 0.0, BALL_Z)
+    out = []
+    for f in faces:                       # wound counter-clockwise seen from outside
+        a, b, c = points[list(f[:3])]
+        out.append(f if np.dot(np.cross(b - a, c - a), a - (0, 0, BALL_Z)) > 0 else f[::-1])
+    mesh = UsdGeom.Mesh.Define(stage, "/root/Ball")
+    mesh.CreateSubdivisionSchemeAttr("none")
+    mesh.CreatePointsAttr([Gf.Vec3f(*map(float, p)) for p in points])
+    mesh.CreateFaceVertexCountsAttr([len(f) for f in out])
+    mesh.CreateFaceVertexIndicesAttr([i for f in out for i in f])
+    mesh.CreateNormalsAttr([Gf.Vec3f(*map(float, d)) for d in dirs])
+    mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
+    UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(mat)
+
+
+def ball_scene():
+    stage = T._stage()
+    UsdLux.DomeLight.Define(stage, "/root/_world").CreateIntensityAttr(0.0)
+    T.quad(stage, "/root/Dark", (-4, BALL_EDGE), (-4, 4), 0.0, T.material(stage, "Dark"))
+    T.quad(stage, "/root/Bright", (BALL_EDGE, 4), (-4, 4), 0.0,
+           T.material(stage, "Bright", emissive=(1, 1, 1)))
+    ball(stage, glass(stage))
+    T.camera(stage, (0.0, 0.0, 10.0), (0.0, 0.0, 0.0), up=(0, 1, 0), ortho_width=BALL_VIEW,
+             aspect=WIDTH / HEIGHT)
+    return stage
+
+
+def ball_floor_x(s):
+    """Where a ray straight down at x = s (through the ball's centre plane) meets the
+    floor, refracted through a perfect sphere: Snell's law at both interfaces."""
+    def refract(d, n, eta):
+        c = -np.dot(n, d)
+        k = 1.0 - eta * eta * (1.0 - c * c)
+        return eta * d + (eta * c - math.sqrt(k)) * n
+    centre = np.array([0.0, 0.0, BALL_Z])
+    p = np.array([s, 0.0, BALL_Z + math.sqrt(BALL_R ** 2 - s * s)])
+    d = refract(np.array([0.0, 0.0, -1.0]), (p - centre) / BALL_R, 1.0 / IOR)
+    t = -2.0 * np.dot(p - centre, d)                 # the chord
+    q = p + t * d
+    d = refract(d, -(q - centre) / BALL_R, IOR)
+    return q[0] - q[2] / d[2] * d[0]
+
+
+def test_a_ball_lens_images_an_edge_where_snells_law_puts_it():
+    # A glass ball inverts what lies behind it: the floor's edge at x = 0.05 is seen
+    # through it at s*, where the ray refracted at both faces of a perfect sphere
+    # meets the floor at the edge. The mesh's interpolated normals refract as the
+    # sphere does (flat facets would move the edge by several pixels).
+    lo, hi = -0.3, 0.0
+    assert ball_floor_x(lo) > BALL_EDGE > ball_floor_x(hi)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if ball_floor_x(mid) > BALL_EDGE else (lo, mid)
+    expected = (lo + BALL_VIEW / 2) / BALL_VIEW * WIDTH             # pixels from the left
+    result = render(ball_scene())
+    assert result.warnings == [] and np.isfinite(result.rgba).all()
+    row = result.rgba[HEIGHT // 2, :, :3].mean(-1)
+    a, b = int((BALL_VIEW / 2 - 0.3) / BALL_VIEW * WIDTH), WIDTH // 2     # s in [-0.3, 0]
+    span = row[a:b]
+    level = 0.5 * (span[:5].mean() + span[-5:].mean())
+    k = int(np.argmax(span < level))                 # the first pixel past the edge
+    crossing = a + k - 1 + (span[k - 1] - level) / (span[k - 1] - span[k]) + 0.5
+    assert crossing == pytest.approx(expected, abs=0.5), (crossing, expected)
