@@ -25,7 +25,6 @@ uniform vec3 cam_forward;
 uniform bool cam_ortho;
 uniform vec2 u_size;            // the target's size in pixels
 uniform vec3 u_eye;             // the camera's world position (the tracer's frame)
-uniform float u_transmission;   // Material.transmission
 uniform bool u_refract;         // whether light goes through (Cycles: not at 0 bounces)
 uniform float u_behind_lods;    // mip levels of u_behind
 uniform sampler2D u_behind;     // the lit opaque frame (mip-mapped)
@@ -166,8 +165,10 @@ vec3 transmitted(vec3 p, vec3 n, vec3 dir, float eta, vec3 tint, float r) {
 #endif
 
 void main() {
+    // Behind an opaque surface (without bounces the glass is in the depth itself: the
+    // same depth, within rounding, passes).
     float opaque = texelFetch(u_opaque_depth, ivec2(gl_FragCoord.xy), 0).r;
-    if (!nearer(gl_FragCoord.z, opaque)) discard;        // behind an opaque surface
+    if (nearer(opaque, gl_FragCoord.z * (1.0 + 1.0e-5))) discard;
     MaterialSample m = material_sample(v_uv, v_normal, v_tangent, gl_FrontFacing);
     vec3 p = position_from_depth(gl_FragCoord.xy / u_size, gl_FragCoord.z, inv_view_proj);
     vec3 v = cam_ortho ? -cam_forward : normalize(-p);

@@ -99,9 +99,15 @@ def test_a_slab_shifts_the_edge_behind_it_by_snells_law():
 
 
 def test_without_bounces_no_light_goes_through_and_no_glass_runs_no_pass():
+    # Cycles' paths stop at glass at Max Bounces 0: it is black but for its
+    # reflections, and hides what lies behind it (in the G-buffer: the Depth pass sees
+    # it, the screen-space occlusion too); with bounces the floor's depth shows through.
     from lantern.engine.bounces import DIRECT
-    direct = render(edge_scene(), bounces=DIRECT)
+    direct = render(edge_scene(), bounces=DIRECT, passes=frozenset({"Depth"}))
     assert direct.rgba[HEIGHT // 2, -10:, :3].max() < 0.05      # glass: black, as Cycles
+    assert direct.passes["Depth"][HEIGHT // 2, WIDTH // 2, 0] < 9.5      # the slab's top
+    bounced = render(edge_scene(), passes=frozenset({"Depth"}))
+    assert bounced.passes["Depth"][HEIGHT // 2, WIDTH // 2, 0] == pytest.approx(10.0, abs=1e-3)
     bare = render(edge_scene(with_slab=False))
     assert "glass" not in bare.stats["passes"] and bare.stats["glass_draws"] == 0
 

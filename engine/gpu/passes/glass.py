@@ -20,8 +20,12 @@ a roughness level of the prefiltered dome. With no bounces (Cycles' Max Bounces 
 RenderSettings.bounces_for) no light goes through, as in Cycles: the glass shows its
 reflections only.
 
+Without bounces glass is also drawn in the G-buffer (its diffuse share; passes/gbuffer.py),
+so it hides and occludes what lies behind it as Cycles' opaque-to-paths glass does, and
+this pass draws over it with the traced reflection.
+
 Depth: tested in the shader against the opaque depth (g_depth, sampled, so not
-attached), never written; objects back to front, front faces only, each replacing the
+attached; equal passes: the glass itself without bounces), never written; objects back to front, front faces only, each replacing the
 pixel. The frame read behind is the opaque one: a second glass object behind the first
 is not seen through it, and blended surfaces are drawn after (over) the glass.
 
@@ -69,11 +73,12 @@ class GlassPass(TransparencyPass):
             self.behind.repeat_x = self.behind.repeat_y = False
             self.behind.filter = (self.ctx.LINEAR_MIPMAP_LINEAR, self.ctx.LINEAR)
         fbo = self.pool.framebuffer([hdr])
-        self.ctx.copy_framebuffer(self.behind, fbo)
-        self.behind.build_mipmaps()
+        refract = frame.glass_refracts
+        if refract:                    # else nothing is read behind the glass
+            self.ctx.copy_framebuffer(self.behind, fbo)
+            self.behind.build_mipmaps()
         board["g_depth"].use(UNITS["g_depth"])
         self.behind.use(UNITS["hdr"])
-        refract = frame.options.bounces_for(frame.scene).total > 0
         # The tracer wherever compute shaders are (RenderSettings.compute False: the
         # one-interface form, as GL 3.3 and 4.1 draw it).
         traced = self.tracer is not None and frame.options.compute is not False
@@ -110,7 +115,6 @@ class GlassPass(TransparencyPass):
         prog = self.programs.get("gbuffer.vert", "glass_traced.frag" if traced else "glass.frag",
                                  list(defines) + ["WRITE_INDEX"],
                                  generated=material_variant(mat))
-        set_uniform(prog, "u_transmission", float(mat.transmission))
         set_uniform(prog, "u_refract", refract)
         set_uniform(prog, "u_eye", tuple(float(c) for c in eye))
         set_uniform(prog, "u_behind_lods", float(math.floor(math.log2(max(self.behind.size)))))

@@ -136,7 +136,7 @@ class ShadowPass(Pass):
     def execute(self, frame, board):
         scene, view = frame.scene, board["view"]
         moved = self.geometry.moved
-        see_through = _see_through(scene, frame.options.bounces_for(scene).total > 0)
+        see_through = _see_through(scene, frame.glass_refracts)
         if frame.preset != self.preset:
             # Each preset keeps its own maps (their sizes and cascades differ), so a
             # view that settles from the interactive preset finds its maps drawn.
@@ -240,7 +240,7 @@ class ShadowPass(Pass):
         """Ranges of cut-out and blended materials, each testing its opacity
         (shadow.frag ALPHA_TEST), one draw per range; returns whether any was blended."""
         blended = False
-        refract = frame.options.bounces_for(frame.scene).total > 0
+        refract = frame.glass_refracts
         for store, name, first, count, oid, n in self.geometry.commands.alpha_casters():
             mat = glass_caster(frame.scene.materials[name], refract)
             opacity = mat.maps.get("opacity")
