@@ -4,7 +4,8 @@
 PSNR and warm time, as `lantern compare` measures them: compare/lantern_timing.py) beside
 Cycles at 1, 4, 16 and 64 spp rendered in the same run on the same cores (configured
 and timed as compare does: compare/blender_render.py, after one untimed 1-spp render).
-Lantern has no modes: the same image is scored against each mode's reference.
+Lantern renders each mode as the stage asks it: `direct` saves the shot with Cycles' Max
+Bounces 0 (lantern:maxBounces), which Lantern reads (glass then lets no light through).
 Prints a Markdown table; asserts nothing.
 
     nice -n 19 .venv/bin/python bench/bench_shots.py [SHOT[:MODE] ...]
@@ -42,11 +43,14 @@ def cell(image, reference, seconds):
     return f"{scores['hdr_flip']:.3f} · {scores['psnr']:.1f} dB ({seconds:.2f} s)"
 
 
-def lantern_cells(name, workdir):
-    """{preset: (rgba, warm seconds, warnings)} of the shot saved as a .blend and
-    rendered as `lantern compare` renders it."""
-    shot_scenes.build(name)
-    blend = str(workdir / f"{name}.blend")
+def lantern_cells(name, mode, workdir):
+    """{preset: (rgba, warm seconds, warnings)} of the shot saved as a .blend (in
+    `direct` mode with Max Bounces 0, as compare sets Cycles) and rendered as
+    `lantern compare` renders it."""
+    scene = shot_scenes.build(name)
+    if mode == "direct":
+        scene.cycles.max_bounces = 0
+    blend = str(workdir / f"{name}_{mode}.blend")
     bpy.ops.wm.save_as_mainfile(filepath=blend)
     out = {}
     for preset in PRESETS:
@@ -90,15 +94,15 @@ def main():
         workdir = pathlib.Path(tmp)
         lantern = {}
         for name, mode in cases:
-            if name not in lantern:
-                lantern[name] = lantern_cells(name, workdir)
+            if (name, mode) not in lantern:
+                lantern[name, mode] = lantern_cells(name, mode, workdir)
             reference = read_exr(str(shot_scenes.reference_path(name, mode)))
             row = [cell(rgba, reference, seconds) for rgba, seconds, _ in
-                   (lantern[name][p] for p in PRESETS)]
+                   (lantern[name, mode][p] for p in PRESETS)]
             row += [cell(rgba, reference, seconds)
                     for _, rgba, seconds in cycles_images(name, mode, workdir)]
             print(f"| {name} | {mode} | " + " | ".join(row) + " |", flush=True)
-            warnings[name] = sorted({w for p in PRESETS for w in lantern[name][p][2]})
+            warnings[name] = sorted({w for p in PRESETS for w in lantern[name, mode][p][2]})
     print()
     for name, found in warnings.items():
         print(f"{name}: Lantern's warnings: {'; '.join(found) or 'none'}")

@@ -94,6 +94,9 @@ class Material:
     sheen_mode: str = ""
     sheen: tuple = (0.0, 0.0, 0.0)
     sheen_roughness: float = 0.5
+    # lantern:transmission: the share of light the surface lets through as glass
+    # (tinted by the base colour, refracted by the IOR, blurred by the roughness).
+    transmission: float = 0.0
     # lantern:emissionSampling: which faces of its meshes light others, Cycles'
     # Emission Sampling (core/emission.py SAMPLING); "auto" emits from both.
     emission_sampling: str = "auto"
@@ -176,7 +179,11 @@ class Material:
                   Blender's Blended and Dithered (hashed) alike, since Cycles renders
                   both as the same continuous transparency. Its opaque texels (alpha >=
                   OPAQUE_ALPHA) go in the G-buffer like a cut-out's; the rest is drawn
-                  by the transparency pass, blended, and casts transparent shadows."""
+                  by the transparency pass, blended, and casts transparent shadows.
+          glass   transmissive (lantern:transmission > 0): drawn by the glass pass
+                  (refracted), not in the G-buffer; its shadow lets light through."""
+        if self.transmission > 0.0:
+            return "glass"
         if self.opacity_threshold > 0.0:
             return "clip"
         if "opacity" in self.maps or self.opacity < 1.0 or self.opacity_varies:
@@ -192,6 +199,8 @@ class Material:
             return self.opacity_threshold
         if alpha == "blend":
             return OPAQUE_ALPHA if "opacity" in self.maps or self.opacity_varies else None
+        if alpha == "glass":
+            return None
         return 0.0
 
     @property

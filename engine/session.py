@@ -277,7 +277,8 @@ def nothing_on_screen(gprims: dict, stats: dict, view) -> str | None:
     """The one line a render says when the stage has gprims and none of them put a
     fragment on screen: what was there, what of it is drawn and where, and where the
     camera looked. None when something is on screen, or the stage has no gprim."""
-    if not gprims or stats.get("fragments_drawn") or stats.get("transparent_draws"):
+    if not gprims or stats.get("fragments_drawn") or stats.get("transparent_draws") \
+            or stats.get("glass_draws"):
         return None
     total = sum(gprims.values())
     kinds = ", ".join(f"{name} {n}" for name, n in gprims.items())

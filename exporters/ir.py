@@ -68,6 +68,7 @@ class MaterialRecord:
     # renderer's ambient occlusion (contract: Material, lantern:baseColorOcclusion).
     base_occlusion: bool = False
     sheen: SheenRecord | None = None   # a sheen lobe (contract: Sheen), if any
+    transmission: float = 0.0   # the share that goes through, as glass (contract: Glass)
     graph: PatternGraph | None = None  # the node network feeding surface inputs, if any
 
 

@@ -50,7 +50,7 @@ void main() {
     if (u_opacity_threshold > 0.0 && alpha < u_opacity_threshold) discard;
 #ifndef DEPTH_ONLY
     MaterialSample m = material_sample(v_uv, v_normal, v_tangent, gl_FrontFacing);
-    rt_base = vec4(m.base, alpha);
+    rt_base = vec4(m.base * (1.0 - u_transmission), alpha);   // glass: its diffuse share
     rt_normal = vec4(m.n, m.coat_roughness);
     rt_mat = m.mat;
     rt_emit = vec4(m.emissive, u_base_occlusion);   // .a: BASE_OCCLUSION (light.frag)

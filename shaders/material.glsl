@@ -10,6 +10,7 @@ uniform float u_ior;
 uniform vec3 u_emissive;
 uniform float u_opacity;
 uniform float u_opacity_threshold;
+uniform float u_transmission;      // Material.transmission: glass (the base colour tints it)
 uniform float u_clearcoat;
 uniform float u_base_occlusion;    // 1: the base colour takes the frame's occlusion
 uniform float u_clearcoat_roughness;

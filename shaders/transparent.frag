@@ -27,9 +27,7 @@ uniform float u_opaque_alpha;   // texels at or above it are the G-buffer's (Mat
 #include "shadow_lookup.glsl"
 #endif
 
-#define MAX_FORWARD_LIGHTS 32
-uniform int n_lights;
-uniform int light_rows[MAX_FORWARD_LIGHTS];
+#include "forward.glsl"
 
 out vec4 frag;
 
@@ -44,21 +42,7 @@ void main() {
 #ifdef SHEEN
     apply_sheen(s, m.sheen);
 #endif
-    vec3 c = vec3(0.0), diffuse, glossy;
-#ifdef AMBIENT
-    dome_light(s, vec2(1.0), diffuse, glossy);      // no ambient occlusion: it is screen space
-    c += m.emissive + diffuse + glossy;
-#endif
-    for (int i = 0; i < n_lights; ++i) {
-        load_light(light_rows[i], cam_forward);
-        light_reflected(s, diffuse, glossy);
-        vec3 r = diffuse + glossy;
-#ifdef HAS_SHADOW
-        if (max(r.r, max(r.g, r.b)) > 0.0)
-            r *= light_shadow(p, m.n, dot(p, cam_forward));
-#endif
-        c += r;
-    }
+    vec3 c = forward_light(s, p, m.n, m.emissive);
     // NaN or Inf goes through, as the light pass lets it: the resolve pass counts it.
 #ifdef AMBIENT
     frag = vec4(alpha * c, alpha);

@@ -1104,3 +1104,71 @@ def test_the_gltf_importers_nearest_sampler_is_exported_as_closest(empty_scene, 
     tex, _ = source(surface(stage, "Pixels"), "diffuseColor")
     attr = tex.GetPrim().GetAttribute("lantern:filtertype")
     assert (attr.Get() if attr and attr.HasAuthoredValue() else None) == filtertype
+
+
+def _read_back(stage, name):
+    """The engine's record of an exported material (engine/usd/materials.py)."""
+    from lantern.engine.usd.materials import read_material
+    warnings = []
+    mat = read_material(UsdShade.Material(stage.GetPrimAtPath(f"/root/_materials/{name}")),
+                        Usd.TimeCode.Default(), warnings)
+    assert warnings == []
+    return mat
+
+
+def test_glass_is_transmission_with_opacity_and_ior_for_other_readers(empty_scene):
+    """The Principled BSDF's Transmission, the Glass BSDF and the Refraction BSDF are
+    lantern:transmission on the Material prim, with `opacity` 1 - transmission and
+    `ior` the IOR (what any UsdPreviewSurface reader draws as translucent), the tint as
+    the base colour and the roughness as the roughness, on the MaterialX surface too;
+    the engine reads them back as glass."""
+    mat, tree, bsdf = principled_material("Glass")
+    bsdf.inputs["Base Color"].default_value = (0.9, 0.8, 0.7, 1.0)
+    bsdf.inputs["Transmission Weight"].default_value = 0.75
+    bsdf.inputs["IOR"].default_value = 1.45
+    bsdf.inputs["Roughness"].default_value = 0.1
+    tree.links.new(tree.nodes.new("ShaderNodeTexChecker").outputs["Fac"],
+                   bsdf.inputs["Roughness"])          # a network: the MaterialX surface
+    cube_object("C").data.materials.append(mat)
+    stage, report = export_current()
+    assert report.warnings == [], report.warnings
+    s = surface(stage, "Glass")
+    assert s.GetInput("opacity").Get() == pytest.approx(0.25)
+    assert s.GetInput("ior").Get() == pytest.approx(1.45, rel=1e-5)
+    assert tuple(s.GetInput("diffuseColor").Get()) == pytest.approx((0.9, 0.8, 0.7))
+    prim = stage.GetPrimAtPath("/root/_materials/Glass")
+    assert prim.GetAttribute("lantern:transmission").Get() == pytest.approx(0.75)
+    assert not prim.GetAttribute("lantern:alphaMode")       # not Dithered alpha
+    mtlx = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/Glass/MtlxSurface"))
+    assert mtlx.GetInput("opacity").Get() == pytest.approx(0.25)
+    assert mtlx.GetInput("ior").Get() == pytest.approx(1.45, rel=1e-5)
+    read = _read_back(stage, "Glass")
+    assert read.transmission == pytest.approx(0.75) and read.alpha == "glass"
+    assert read.opacity == 1.0 and read.ior == pytest.approx(1.45, rel=1e-5)
+
+    for kind in ("ShaderNodeBsdfGlass", "ShaderNodeBsdfRefraction"):
+        node = tree.nodes.new(kind)
+        node.inputs["Color"].default_value = (0.5, 0.9, 0.6, 1.0)
+        node.inputs["Roughness"].default_value = 0.2
+        node.inputs["IOR"].default_value = 1.33
+        tree.links.new(node.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+        stage, report = export_current()
+        assert report.warnings == [], (kind, report.warnings)
+        s = surface(stage, "Glass")
+        assert s.GetInput("opacity").Get() == 0.0 and s.GetInput("metallic").Get() == 0.0
+        assert s.GetInput("ior").Get() == pytest.approx(1.33)
+        assert s.GetInput("roughness").Get() == pytest.approx(0.2)
+        read = _read_back(stage, "Glass")
+        assert read.transmission == 1.0 and read.diffuse == pytest.approx((0.5, 0.9, 0.6))
+
+    # Alpha below 1 on glass: one warning, and the glass is whole.
+    tree.links.new(bsdf.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+    bsdf.inputs["Alpha"].default_value = 0.5
+    stage, report = export_current()
+    assert len(report.warnings) == 1 and "Alpha of a transmissive" in report.warnings[0]
+    assert surface(stage, "Glass").GetInput("opacity").Get() == pytest.approx(0.25)
+    # No transmission: nothing of glass is written.
+    bsdf.inputs["Transmission Weight"].default_value = 0.0
+    stage, report = export_current()
+    assert not stage.GetPrimAtPath("/root/_materials/Glass").GetAttribute("lantern:transmission")
+    assert _read_back(stage, "Glass").alpha == "blend"

@@ -1,10 +1,10 @@
 """The measuring ground for the bounce, emitters as lights, area-light highlights and glass
-(tests/shot_scenes.py): every shot exports and renders at its size with no warning (today
-Lantern says nothing of what it leaves out there: glass is drawn opaque without a
-word), and every committed Cycles reference is there, finite, at that
-size, and in the mode it claims. The accuracy goals are the bench's
-(bench/bench_shots.py), not asserted here: the engine cannot meet them all yet
-(the emitter's is, in tests/test_emitters.py)."""
+(tests/shot_scenes.py): every shot exports and renders at its size with no warning, and
+every committed Cycles reference is there, finite, at that size, and in the mode it
+claims. The accuracy goals are the bench's (bench/bench_shots.py), not asserted here:
+the engine cannot meet them all yet (glass is drawn refracted since the glass pass:
+tests/test_glass.py holds its closed forms; the emitter's goal is asserted in
+tests/test_emitters.py)."""
 import numpy as np
 import pytest
 

@@ -99,6 +99,14 @@ class Frame:
     board: dict | None = None      # what the graph handed on, until the frame is finished
 
     @property
+    def glass_refracts(self) -> bool:
+        """Whether light goes through glass this frame. Cycles' paths stop at glass
+        without bounces (Max Bounces 0): glass then shows its reflections alone, is
+        drawn in the G-buffer (it hides and occludes what is behind it) and shadows
+        fully (passes/glass.py)."""
+        return self.options.bounces_for(self.scene).total > 0
+
+    @property
     def fxaa(self) -> bool:
         o = self.options.fxaa
         return bool(self.preset.fxaa if o is None else o)

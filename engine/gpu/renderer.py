@@ -33,6 +33,7 @@ from .passes.resolve import ResolvePass
 from .passes.shadows import ShadowPass
 from .passes.skinning import SkinningPass
 from .passes.tessellation import TessellationPass
+from .passes.glass import GlassPass
 from .passes.transparency import TransparencyPass
 from .passes.view import ViewPass
 from .raytracer import Raytracer
@@ -62,6 +63,7 @@ COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "meshes
             "shadow_maps", "shadow_maps_rendered", "shadow_passes", "shadow_draws", "lights_drawn",
             "light_volumes", "stencil_marks", "batched_lights", "instances_drawn",
             "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws",
+            "glass_objects", "glass_draws",
             "pattern_bytes", "programs_pending", "light_clusters", "light_items",
             "clusters_overflowed", "light_tree_pixels", "light_tree_steps", "light_tree_steps_max",
             "ao_searches")
@@ -127,6 +129,9 @@ class Renderer:
                       self.geometry, self.environment),
             self.light_cull,
             ClusteredLightPass(ctx, programs, self.lights, self.environment, self.light_cull),
+            GlassPass(ctx, self.pool, programs, self.geometry, self.textures, self.lights,
+                      self.environment, self.depth, self.uploads,
+                      self.tracer if self.features.compute else None),
             TransparencyPass(ctx, self.pool, programs, self.geometry, self.textures,
                              self.lights, self.environment, self.depth),
             SupersamplePass(ctx, self.pool, programs, self.depth),

@@ -117,6 +117,19 @@ def _read_sheen(prim, out: Material, time, warnings: list):
         out.sheen_roughness = float(roughness.Get(time))
 
 
+def _read_transmission(prim, out: Material, time, warnings: list):
+    """lantern:transmission (docs/stage_contract.md, "Glass"), in [0, 1]."""
+    attr = prim.GetAttribute("lantern:transmission")
+    if not attr or not attr.HasAuthoredValue():
+        return
+    value = float(attr.Get(time))
+    if not 0.0 <= value <= 1.0:
+        warnings.append(f"{prim.GetPath()}: lantern:transmission {value!r} is not in "
+                        f"[0, 1]; clamped")
+        value = min(max(value, 0.0), 1.0) if math.isfinite(value) else 0.0
+    out.transmission = value
+
+
 def read_material(mat: UsdShade.Material, time, warnings: list) -> Material:
     path = str(mat.GetPath())
     out = Material(name=path)
@@ -133,6 +146,7 @@ def read_material(mat: UsdShade.Material, time, warnings: list) -> Material:
     if occlusion and occlusion.HasAuthoredValue():
         out.base_occlusion = bool(occlusion.Get())
     _read_sheen(mat.GetPrim(), out, time, warnings)
+    _read_transmission(mat.GetPrim(), out, time, warnings)
     _read_emission_sampling(mat.GetPrim(), out, warnings)
     surface = mat.ComputeSurfaceSource()[0]
     if not surface or _shader_id(surface) != "UsdPreviewSurface":
@@ -170,6 +184,12 @@ def read_material(mat: UsdShade.Material, time, warnings: list) -> Material:
                 continue
             setattr(out, FIELDS[name], value)
     out.pattern = read_pattern(mat, time, warnings)
+    if out.transmission > 0.0:
+        # `opacity` says "translucent" to other readers (1 - transmission): glass is
+        # drawn whole, its see-through share by the glass pass.
+        out.opacity = 1.0
+        out.opacity_threshold = 0.0
+        out.maps.pop("opacity", None)
     return out
 
 

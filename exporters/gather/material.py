@@ -108,6 +108,7 @@ class _Walker:
         self.pattern = PatternBuilder(_link, self.network_image)
         self.base_occlusion = False
         self.sheen = None          # SheenRecord: the first sheen lobe met
+        self.transmission = 0.0    # the share of light that goes through (glass)
 
     def unsupported(self, node, why="not supported"):
         self.warn(f"material '{self.material.name}': node '{node.name}' ({node.bl_idname}) "
@@ -268,6 +269,8 @@ class _Walker:
         if normal is not None:
             inputs["normal"] = normal
         self.coat(node, inputs)
+        self.constant_only(get("Transmission Weight"))
+        self.transmission = min(max(_constant(get("Transmission Weight"), "float"), 0.0), 1.0)
         self.constant_only(get("Sheen Weight"))
         self.sheen_lobe(node, "principled", get("Sheen Tint"),
                         _constant(get("Sheen Weight"), "float"), get("Sheen Roughness"), weight)
@@ -387,6 +390,18 @@ class _Walker:
             inputs["diffuseColor"] = self.value(node.inputs["Color"], "color", "diffuseColor")
             inputs["roughness"] = 1.0
             inputs["ior"] = 1.0  # no specular layer
+        elif kind in GLASS_BSDFS:
+            # Clear glass of the node's Color (the tint), Roughness and IOR (Fresnel's
+            # and Snell's); the Refraction BSDF is drawn as glass (with its reflection).
+            inputs["diffuseColor"] = self.value(node.inputs["Color"], "color", "diffuseColor")
+            inputs["metallic"] = 0.0
+            inputs["roughness"] = self.value(node.inputs["Roughness"], "float", "roughness")
+            self.constant_only(node.inputs["IOR"])
+            inputs["ior"] = _constant(node.inputs["IOR"], "float")
+            normal = self.normal(node.inputs["Normal"])
+            if normal is not None:
+                inputs["normal"] = normal
+            self.transmission = 1.0
         elif kind == "ShaderNodeBsdfSheen":
             # Alone, the surface is the sheen: nothing else reflects.
             inputs.setdefault("diffuseColor", (0.0, 0.0, 0.0))
@@ -550,6 +565,9 @@ class _Walker:
         return float(opacity) * share
 
 
+# BSDFs that are all transmission (contract: "Glass").
+GLASS_BSDFS = {"ShaderNodeBsdfGlass", "ShaderNodeBsdfRefraction"}
+
 # Shaders an Add or Mix Shader weights exactly: their closure weight scales them.
 EXACTLY_WEIGHTED = {"ShaderNodeEmission", "ShaderNodeBsdfSheen"}
 
@@ -607,6 +625,10 @@ def gather_material(material, warn, texture_dir=None):
             walker.shader(link, found)
             inputs.update(found)
             graph = walker.pattern.graph if walker.pattern.graph.outputs else None
+    transmission = walker.transmission if walker is not None else 0.0
+    mode = alpha_mode(material, inputs, graph)
+    if transmission > 0.0:
+        mode = see_through_glass(material, inputs, graph, transmission, warn)
     read = list(dict.fromkeys(n.settings["name"] for n in (graph.nodes if graph else ())
                               if n.kind == "attribute"))
     if len(read) > 1:      # one colour stream a material (engine/usd/mesh.py)
@@ -616,11 +638,28 @@ def gather_material(material, warn, texture_dir=None):
     return MaterialRecord(key=material.name_full, name=material.name, inputs=inputs,
                           backface_culling=bool(material.use_backface_culling),
                           pass_index=int(material.pass_index),
-                          alpha_mode=alpha_mode(material, inputs, graph), graph=graph,
+                          alpha_mode=mode, graph=graph, transmission=transmission,
                           bump_correction=bump_correction(material),
                           emission_sampling=emission_sampling(material),
                           base_occlusion=walker is not None and walker.base_occlusion,
                           sheen=walker.sheen if walker is not None else None)
+
+
+def see_through_glass(material, inputs, graph, transmission, warn) -> str:
+    """A transmissive material's `opacity` and `ior` say "translucent" to every reader:
+    opacity = 1 - transmission (lantern:transmission says the rest, contract "Glass").
+    Its Alpha is not exported (one warning where it is not 1). Returns its alpha mode:
+    none."""
+    alpha = inputs.get("opacity", 1.0)
+    if isinstance(alpha, TexInput) or alpha != 1.0 or (graph is not None and
+                                                         "opacity" in graph.outputs):
+        warn(f"material '{material.name}': Alpha of a transmissive material is not "
+             f"exported (glass is drawn whole)")
+        if graph is not None:
+            graph.outputs.pop("opacity", None)
+    inputs["opacity"] = 1.0 - transmission
+    inputs.pop("opacityThreshold", None)
+    return ""
 
 
 def bump_correction(material) -> bool:

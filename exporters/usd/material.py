@@ -20,6 +20,8 @@ ALPHA_MODE = "lantern:alphaMode"
 BUMP_CORRECTION = "lantern:bumpMapCorrection"
 EMISSION_SAMPLING = "lantern:emissionSampling"
 BASE_OCCLUSION = "lantern:baseColorOcclusion"
+# The share of light a surface lets through as glass (contract: "Glass").
+TRANSMISSION = "lantern:transmission"
 # A UsdUVTexture's interpolation, where not linear (contract: "Textures").
 FILTERTYPE = "lantern:filtertype"
 # A sheen lobe (contract: "Sheen"; core/sheen.py its modes).
@@ -94,6 +96,9 @@ def write_material(stage, path, rec, default_uv, asset_path):
     if rec.base_occlusion:
         material.GetPrim().CreateAttribute(BASE_OCCLUSION, Sdf.ValueTypeNames.Bool,
                                            custom=True).Set(True)
+    if rec.transmission > 0.0:
+        material.GetPrim().CreateAttribute(TRANSMISSION, Sdf.ValueTypeNames.Float,
+                                           custom=True).Set(float(rec.transmission))
     if rec.sheen is not None:
         sheen = rec.sheen
         for (name, kind), value in zip(SHEEN, (sheen.mode, Gf.Vec3f(*sheen.color),

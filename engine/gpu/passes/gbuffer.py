@@ -143,6 +143,8 @@ class GBufferPass(Pass):
         for batch in batches:
             mat = materials[batch.material]
             threshold = mat.gbuffer_threshold
+            if mat.alpha == "glass" and not frame.glass_refracts:
+                threshold = 0.0            # light does not go through: opaque
             if threshold is None:
                 continue                   # wholly see-through: the transparency pass's
             prog = self.programs.get(*self.program_args(mat, defines))
@@ -201,6 +203,7 @@ def set_material(prog, mat, textures, threshold, pixel_filter=False):
     set_uniform(prog, "u_ior", mat.ior)
     set_uniform(prog, "u_emissive", mat.emissive)
     set_uniform(prog, "u_opacity", mat.opacity)
+    set_uniform(prog, "u_transmission", mat.transmission)
     set_uniform(prog, "u_opacity_threshold", threshold)
     set_uniform(prog, "u_clearcoat", mat.clearcoat)
     set_uniform(prog, "u_clearcoat_roughness", mat.clearcoat_roughness)

@@ -41,6 +41,8 @@ search, and PCF with hardware compares (sampler2DShadow, bilinear).
 reads: skinned (posed casters), tessellated (optional), view   writes: shadow_maps (light path -> ShadowMap)"""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from ....core.lights import SUN
@@ -134,7 +136,7 @@ class ShadowPass(Pass):
     def execute(self, frame, board):
         scene, view = frame.scene, board["view"]
         moved = self.geometry.moved
-        see_through = _see_through(scene)
+        see_through = _see_through(scene, frame.glass_refracts)
         if frame.preset != self.preset:
             # Each preset keeps its own maps (their sizes and cascades differ), so a
             # view that settles from the interactive preset finds its maps drawn.
@@ -238,8 +240,9 @@ class ShadowPass(Pass):
         """Ranges of cut-out and blended materials, each testing its opacity
         (shadow.frag ALPHA_TEST), one draw per range; returns whether any was blended."""
         blended = False
+        refract = frame.glass_refracts
         for store, name, first, count, oid, n in self.geometry.commands.alpha_casters():
-            mat = frame.scene.materials[name]
+            mat = glass_caster(frame.scene.materials[name], refract)
             opacity = mat.maps.get("opacity")
             prog = self.programs.get("shadow.vert", "shadow.frag", ["ALPHA_TEST"] + (
                 ["HAS_OPACITY_MAP", *filter_defines([opacity])] if opacity else []))
@@ -251,7 +254,7 @@ class ShadowPass(Pass):
             store.vao(prog).render(self.ctx.TRIANGLES, vertices=int(count), first=int(first),
                                    instances=int(n))
             frame.count("shadow_draws")
-            blended |= mat.alpha == "blend"
+            blended |= mat.alpha == "blend" or mat.opacity < 1.0
         return blended
 
     def _draw_points(self, sm, light, view_proj, window) -> int:
@@ -291,9 +294,24 @@ class ShadowPass(Pass):
         self._drop_kept()
 
 
-def _see_through(scene) -> tuple:
-    """What the see-through casters' shadows depend on: their materials' opacity."""
-    return tuple(sorted((name, m.alpha, m.opacity, m.opacity_threshold, m.maps.get("opacity"))
+def glass_caster(mat, refract: bool):
+    """A glass material as a shadow caster: blended, of opacity 1 - what a flat pane
+    of it lets through at normal incidence (transmission x (1 - F0)^2 x the tint's
+    luminance: stochastic, grey); opaque without bounces, as Cycles' shadow rays
+    stop at glass. Other materials as they are."""
+    if mat.alpha != "glass" or not refract:
+        return mat
+    f0 = ((mat.ior - 1.0) / (mat.ior + 1.0)) ** 2
+    tint = 0.2126 * mat.diffuse[0] + 0.7152 * mat.diffuse[1] + 0.0722 * mat.diffuse[2]
+    through = mat.transmission * (1.0 - f0) ** 2 * min(max(tint, 0.0), 1.0)
+    return replace(mat, opacity=1.0 - through)
+
+
+def _see_through(scene, refract: bool) -> tuple:
+    """What the see-through casters' shadows depend on: their materials' opacity (a
+    glass one's, with or without bounces)."""
+    return tuple(sorted((name, m.alpha, m.opacity, m.opacity_threshold, m.maps.get("opacity"),
+                         glass_caster(m, refract).opacity)
                         for name, m in scene.materials.items() if m.alpha != "opaque"))
 
 

@@ -53,6 +53,10 @@ class TransparencyPass(Pass):
     reads = ("hdr", "g_depth", "view")
     optional = ("shadow_maps", "tessellated")
     writes = ("hdr",)
+    kind = "blend"                    # the Material.alpha this pass draws
+    fragment = "transparent.frag"
+    stat = "transparent"              # its stats: <stat>_objects, <stat>_draws
+    culled = ("front", "back")        # a double-sided mesh's faces culled, draw by draw
 
     def __init__(self, ctx, pool, programs, geometry, textures, lights, environment, depth):
         self.ctx, self.pool, self.programs = ctx, pool, programs
@@ -61,7 +65,7 @@ class TransparencyPass(Pass):
         self.preset = None             # the frame's being drawn (its shadow filter taps)
 
     def needed(self, frame) -> bool:
-        blended = blended_materials(frame.scene)
+        blended = materials_of(frame.scene, self.kind)
         return bool(blended) and any(m in blended for d in self.geometry.draws.values()
                                      for m, _, _ in d.ranges)
 
@@ -69,11 +73,10 @@ class TransparencyPass(Pass):
         ctx, view = self.ctx, board["view"]
         self.preset = frame.preset
         layers = self.back_to_front(frame, view)
-        frame.count("transparent_objects", len(layers))
+        frame.count(f"{self.stat}_objects", len(layers))
         if not layers:
             return
-        fbo = self.pool.framebuffer([board["hdr"]], depth=board["g_depth"])
-        fbo.depth_mask = False
+        fbo = self._target(frame, board)
         fbo.use()
         ctx.enable(ctx.DEPTH_TEST | ctx.BLEND)
         ctx.depth_func = ">"              # nearer than the opaque surface (reversed depth)
@@ -94,9 +97,21 @@ class TransparencyPass(Pass):
             ctx.disable(ctx.DEPTH_TEST | ctx.BLEND | ctx.CULL_FACE)
             self.depth.far_clip(False)
 
+    def _target(self, frame, board):
+        """The framebuffer drawn into: the HDR image, depth-tested against the opaque
+        depth (not written)."""
+        fbo = self.pool.framebuffer([board["hdr"]], depth=board["g_depth"])
+        fbo.depth_mask = False
+        return fbo
+
+    def _program(self, frame, mat, defines):
+        """The program that draws `mat` with these variant defines."""
+        return self.programs.get("gbuffer.vert", self.fragment, defines,
+                                 generated=material_variant(mat))
+
     def back_to_front(self, frame, view) -> list:
-        """[(draw object, world box lo, hi)] with blended ranges, in view, far first."""
-        blended = blended_materials(frame.scene)
+        """[(draw object, world box lo, hi)] with this pass's ranges, in view, far first."""
+        blended = materials_of(frame.scene, self.kind)
         draws, lo, hi = view.boxes
         pick = [i for i, d in enumerate(draws) if any(m in blended for m, _, _ in d.ranges)]
         if not pick:
@@ -115,12 +130,12 @@ class TransparencyPass(Pass):
         materials = frame.scene.materials
         store = self.geometry.meshes[d.mesh_key][0]
         ranges = [(materials[m], first, count) for m, first, count in d.ranges
-                  if materials[m].alpha == "blend"]
+                  if materials[m].alpha == self.kind]
         lit, shadowed = self._lights_reaching(frame.scene, lo, hi, shadow_maps)
         ctx.front_face = "cw" if d.mirrored else "ccw"
         ctx.enable(ctx.CULL_FACE)
         # Back faces first (culling the front ones), then front faces.
-        for culled in (("back",) if d.cull else ("front", "back")):
+        for culled in (("back",) if d.cull else self.culled):
             ctx.cull_face = culled
             for mat, first, count in ranges:
                 chunks = [lit[i:i + MAX_FORWARD_LIGHTS]
@@ -158,8 +173,7 @@ class TransparencyPass(Pass):
         defines = map_defines(mat) + (["HAS_DOME_MAP"] if env is not None else []) + \
             (["AMBIENT"] if ambient else []) + (["HAS_SHADOW"] if sm is not None else []) + \
             (["SHEEN"] if mat.has_sheen else [])
-        prog = self.programs.get("gbuffer.vert", "transparent.frag", defines,
-                                 generated=material_variant(mat))
+        prog = self._program(frame, mat, defines)
         set_uniform(prog, "view_proj", view.view_proj)
         set_uniform(prog, "u_far", view.far_clip)
         view.set_camera(prog)
@@ -183,8 +197,9 @@ class TransparencyPass(Pass):
         prog["u_object"].value = int(d.oid)
         store.vao(prog).render(ctx.TRIANGLES, vertices=int(count), first=int(first),
                                instances=int(d.n))
-        frame.count("transparent_draws")
+        frame.count(f"{self.stat}_draws")
 
 
-def blended_materials(scene) -> set:
-    return {name for name, m in scene.materials.items() if m.alpha == "blend"}
+def materials_of(scene, kind) -> set:
+    """The names of the scene's materials whose Material.alpha is `kind`."""
+    return {name for name, m in scene.materials.items() if m.alpha == kind}
