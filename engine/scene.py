@@ -97,8 +97,7 @@ class Material:
     # lantern:transmission: the share of light the surface lets through as glass
     # (tinted by the base colour, refracted by the IOR, blurred by the roughness).
     transmission: float = 0.0
-    # lantern:emissionSampling: which faces of its meshes light others, Cycles'
-    # Emission Sampling (core/emission.py SAMPLING); "auto" emits from both.
+    # lantern:emissionSampling: the faces that light others (core/emission.py).
     emission_sampling: str = "auto"
     pattern: PatternGraph | None = None  # the mtlx network feeding surface inputs
 
@@ -369,11 +368,8 @@ class Light:
     shadow: bool = True
     shadow_resolution: int = 0     # lantern:shadowResolution; 0 = the preset's
     headlight: bool = False
-    # A placed mesh's emitting polygons (kind POLYGON, engine/emitters.py): their
-    # corners ((3 or 4, 3) each, world), wound about the face they light from, their
-    # radiances (n, 3) and which light from both faces (n,). `color` is then the
-    # greatest of each channel; position, axis, x_axis, y_axis, width and height are
-    # the box they lie in, over which their one shadow is filtered.
+    # POLYGON (engine/emitters.py): a mesh's polygons (wound about the face they light
+    # from), radiances, both faces or one; position, axes, sizes: their box.
     polygons: tuple = ()
     polygon_colors: np.ndarray | None = None
     two_sided: np.ndarray | None = None
