@@ -5,8 +5,13 @@ entry of a cluster's list for the mesh, and all of them under one shadow: an are
 light's (one map from the middle of the box they lie in, filtered over that box,
 shaders/shadow_lookup.glsl), exact in the way a rect light's is for a flat rectangular
 emitter, approximate for others (a lone triangle is shadowed as its box; a curved mesh
-as its box). The surface still shows its own emission (the G-buffer's emissive
-channel); these lights are what it sends to the others.
+as its box). The emitting mesh casts nothing into its own lights' maps: a closed mesh
+lies around its box's middle, and a convex one never shadows its own light (a
+concave one does, in Cycles, and not here). So a closed mesh lights from its front
+faces only, whatever its sampling: its back faces light its inside, which it hides
+from everything else (an emissive sphere around a scene lights it when its normals
+point inwards, or with Back sampling). The surface still shows its own emission
+(the G-buffer's emissive channel); these lights are what it sends to the others.
 
 Which faces light: the material's emission sampling (core/emission.py): none, the
 front face (the side the mesh's normals point to), the back face, or both (Cycles'
@@ -137,11 +142,12 @@ def _group_frame(polys: list) -> tuple:
     return centre, x, y, normal, float(u.max() - u.min()), float(v.max() - v.min())
 
 
-def mesh_light(name: str, emitting: list) -> Light:
+def mesh_light(name: str, emitting: list, emitter: tuple = ()) -> Light:
     """The light of one placed mesh's emitting polygons, [(corners, colour, front,
     back)]: each its own polygon (wound about the face it lights from), radiance and
     faces; together one light with one shadow, an area light's over the box they lie
-    in (_group_frame)."""
+    in (_group_frame), which the mesh itself (`emitter`: its instance) does not cast
+    into."""
     centre, x, y, normal, width, height = _group_frame([c for c, *_ in emitting])
     polys = tuple(c if front else c[::-1].copy() for c, _, front, _ in emitting)
     colours = np.array([colour for _, colour, *_ in emitting], np.float64)
@@ -149,7 +155,7 @@ def mesh_light(name: str, emitting: list) -> Light:
                  axis=normal, x_axis=x, y_axis=y, width=width, height=height,
                  polygons=polys, polygon_colors=colours,
                  two_sided=np.array([front and back for *_, front, back in emitting]),
-                 soft_falloff=False)
+                 soft_falloff=False, emitter=emitter)
 
 
 def _chunks(polys: list) -> list:
@@ -159,6 +165,16 @@ def _chunks(polys: list) -> list:
         return [polys] if polys else []
     order = morton_order(np.array([c.mean(axis=0) for c, *_ in polys]))
     return [[polys[i] for i in order[k:k + CHUNK]] for k in range(0, len(polys), CHUNK)]
+
+
+def closed(mesh) -> bool:
+    """Whether a mesh's triangles close a volume: each edge (between points of equal
+    position) shared by exactly two."""
+    _, point = np.unique(mesh.vertices[:, :3], axis=0, return_inverse=True)
+    tris = point.reshape(-1)[mesh.indices].reshape(-1, 3)
+    edges = np.sort(np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return len(counts) > 0 and bool(np.all(counts == 2))
 
 
 def instance_lights(inst, mesh, materials) -> tuple[dict, str | None]:
@@ -178,6 +194,12 @@ def instance_lights(inst, mesh, materials) -> tuple[dict, str | None]:
         why = "skinned or blend-shaped" if mesh.skin is not None else "subdivided on the GPU"
         return {}, f"{inst.path}: its emission lights only itself (a {why} mesh's " \
                    f"emitting faces are not made lights)"
+    if closed(mesh):
+        # Its back faces face its inside, which they alone light: outside, the mesh hides
+        # them, but it casts nothing into its own light's map (below). Both faces: the
+        # front; Back alone stays Back (its inside lit).
+        emitting = [(first, count, color, front, back and not front)
+                    for first, count, color, front, back in emitting]
     worlds = inst.worlds if inst.worlds is not None else [inst.world]
     points = mesh.vertices[:, :3].astype(np.float64)
     normals = mesh.vertices[:, 3:6].astype(np.float64)
@@ -193,12 +215,12 @@ def instance_lights(inst, mesh, materials) -> tuple[dict, str | None]:
         for c, chunk in enumerate(_chunks(polys)):
             path = f"{inst.path}<emission" + (f" {w}" if len(worlds) > 1 else "") + \
                 (f" {c}" if len(polys) > CHUNK else "") + ">"
-            lights[path] = mesh_light(f"{inst.path} emission", chunk)
+            lights[path] = mesh_light(f"{inst.path} emission", chunk, (inst.path, w))
     return lights, None
 
 
 def _same(a: Light, b: Light) -> bool:
-    return len(a.polygons) == len(b.polygons) and \
+    return len(a.polygons) == len(b.polygons) and a.emitter == b.emitter and \
         all(np.array_equal(p, q) for p, q in zip(a.polygons, b.polygons)) and \
         all(np.array_equal(getattr(a, f), getattr(b, f)) for f in
             ("polygon_colors", "two_sided", "position", "axis", "x_axis", "width", "height"))

@@ -368,11 +368,11 @@ class Light:
     shadow: bool = True
     shadow_resolution: int = 0     # lantern:shadowResolution; 0 = the preset's
     headlight: bool = False
-    # POLYGON (engine/emitters.py): a mesh's polygons (wound about the face they light
-    # from), radiances, both faces or one; position, axes, sizes: their box.
+    # POLYGON (engine/emitters.py): polygons (wound to face their light), radiances, faces
     polygons: tuple = ()
     polygon_colors: np.ndarray | None = None
     two_sided: np.ndarray | None = None
+    emitter: tuple = ()            # POLYGON: (instance path, instance) that emits it
 
     @property
     def direction(self) -> np.ndarray:

@@ -7,6 +7,9 @@
 #include "objects.glsl"
 in vec3 in_pos;
 uniform mat4 view_proj;
+// An object that casts nothing into this map: an emissive mesh's own, into its light's
+// (engine/emitters.py); -1 for none.
+uniform int skip_object = -1;
 out vec3 v_world;              // anchor-relative
 #ifdef ALPHA_TEST
 in vec2 in_uv;
@@ -18,5 +21,6 @@ void main() {
 #ifdef ALPHA_TEST
     v_uv = in_uv;
 #endif
-    gl_Position = view_proj * w;
+    gl_Position = OBJECT_ID == skip_object ? vec4(0.0, 0.0, 2.0, 1.0)   // clipped
+                                           : view_proj * w;
 }

@@ -226,3 +226,47 @@ def test_an_unknown_emission_sampling_is_a_warning_and_auto():
     assert material.emission_sampling == "auto"
     assert warnings == ["/root/glow: lantern:emissionSampling 'sideways' is not one of "
                         "none, auto, front, back, both; using 'auto'"]
+
+
+def test_a_closed_emissive_mesh_lights_as_its_faces_would_as_rect_lights():
+    """An emissive cube (Auto: both faces) above the plane: its one shadow map, from
+    its middle, inside it, is not cast into by the cube itself, and its faces' backs,
+    which light only its inside, light nothing; so the plane is lit as by five rect
+    lights in the places of the faces that see it."""
+    from pxr import Gf, Sdf, UsdLux
+    import shadow_scenes
+    centre, size, L = np.array([0.3, 0.2, 1.0]), 0.4, 20.0
+    cube = stage_with("rect")
+    cube.RemovePrim("/root/rect")
+    box = shadow_scenes.add_box(cube, center=tuple(centre), size=size, name="lamp")
+    glow = UsdShade.Material.Define(cube, "/root/glow")
+    surface = UsdShade.Shader.Define(cube, "/root/glow/surface")
+    surface.CreateIdAttr("UsdPreviewSurface")
+    surface.CreateInput("emissiveColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(L, L, L))
+    glow.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
+    UsdShade.MaterialBindingAPI.Apply(box.GetPrim()).Bind(glow)
+    rects = stage_with("rect")
+    rects.RemovePrim("/root/rect")
+    # (face centre offset, rotation op, angle): a RectLight emits along its -Z.
+    faces = [((0, 0, -1), None, 0.0), ((1, 0, 0), "Y", -90.0), ((-1, 0, 0), "Y", 90.0),
+             ((0, 1, 0), "X", 90.0), ((0, -1, 0), "X", -90.0)]
+    for i, (offset, axis, angle) in enumerate(faces):
+        rect = UsdLux.RectLight.Define(rects, f"/root/face{i}")
+        rect.CreateIntensityAttr(L * size * size)
+        rect.CreateNormalizeAttr(True)
+        rect.CreateWidthAttr(size)
+        rect.CreateHeightAttr(size)
+        rect.AddTranslateOp().Set(Gf.Vec3d(*(centre + np.asarray(offset) * size / 2)))
+        if axis == "X":
+            rect.AddRotateXOp().Set(angle)
+        elif axis == "Y":
+            rect.AddRotateYOp().Set(angle)
+    lit, want = render(cube, "volumes"), render(rects, "volumes")
+    plane = lit < 0.5 * L                          # not the cube itself
+    for shift in ((0, 1), (0, -1), (1, 0), (-1, 0)):
+        plane &= np.roll(lit, shift, axis=(0, 1)) < 0.5 * L   # nor its edge
+    mask = plane & (want > 0.02 * want[plane].max())
+    assert mask.sum() > 500
+    err = float(np.max(np.abs(lit[mask] - want[mask]) / want[mask]))
+    print(f"closed cube: worst relative difference {err:.2e}")
+    assert err < 0.01

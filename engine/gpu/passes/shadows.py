@@ -71,9 +71,11 @@ def _budget_warning(scene, unshadowed, casting):
         f"shadow maps would pass the {SHADOW_BUDGET_BYTES >> 20} MiB shadow memory budget"]
 
 
-def _set_light(prog, sm, light):
+def _set_light(prog, sm, light, skip=-1):
     """What every caster draw into map `sm` needs of its light: the map's kind, the
-    light relative to the map's anchor, the depth scale, the anchor as origin."""
+    light relative to the map's anchor, the depth scale, the anchor as origin, and the
+    object that casts nothing into it (an emissive mesh's own: `skip`, -1 for none)."""
+    set_uniform(prog, "skip_object", int(skip))
     set_uniform(prog, "radial", sm.radial)
     set_uniform(prog, "light_pos", np.asarray(light.position, float) - sm.anchor)
     set_uniform(prog, "far", sm.far)
@@ -216,7 +218,8 @@ class ShadowPass(Pass):
         prog = self.programs.get("shadow.vert", "shadow.frag",
                                  self.geometry.commands.object_defines())
         self.geometry.bind_objects(UNITS["u_objects"])
-        _set_light(prog, sm, light)
+        skip = self._emitter_object(light)
+        _set_light(prog, sm, light, skip)
         clip = ZERO_TO_ONE if self.depth.zero_to_one else np.eye(4)
         for i in tiles:
             x, y, sx, sy = sm.rects[i]
@@ -229,14 +232,20 @@ class ShadowPass(Pass):
             ctx.depth_func = "<"
             set_uniform(prog, "view_proj", clip @ sm.mats[i])
             frame.count("shadow_draws", self.geometry.commands.draw_casters(prog))
-            sm.stochastic |= self._draw_see_through(frame, sm, light, clip @ sm.mats[i])
+            sm.stochastic |= self._draw_see_through(frame, sm, light, clip @ sm.mats[i], skip)
             if self.geometry.points.clouds:
                 frame.count("shadow_draws", self._draw_points(sm, light, clip @ sm.mats[i],
                                                               BIAS @ sm.mats[i]))
         ctx.scissor = None
         ctx.disable(ctx.DEPTH_TEST)
 
-    def _draw_see_through(self, frame, sm, light, view_proj):
+    def _emitter_object(self, light) -> int:
+        """The object id of the mesh an emissive polygon light comes from (it casts
+        nothing into its own light's map), or -1."""
+        d = self.geometry.draws.get(light.emitter[0]) if light.emitter else None
+        return d.oid + light.emitter[1] if d is not None else -1
+
+    def _draw_see_through(self, frame, sm, light, view_proj, skip=-1):
         """Ranges of cut-out and blended materials, each testing its opacity
         (shadow.frag ALPHA_TEST), one draw per range; returns whether any was blended."""
         blended = False
@@ -246,7 +255,7 @@ class ShadowPass(Pass):
             opacity = mat.maps.get("opacity")
             prog = self.programs.get("shadow.vert", "shadow.frag", ["ALPHA_TEST"] + (
                 ["HAS_OPACITY_MAP", *filter_defines([opacity])] if opacity else []))
-            _set_light(prog, sm, light)
+            _set_light(prog, sm, light, skip)
             set_uniform(prog, "view_proj", view_proj)
             set_material(prog, mat, self.textures,
                          mat.opacity_threshold if mat.alpha == "clip" else 0.0)
