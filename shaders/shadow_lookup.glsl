@@ -164,10 +164,26 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
 // Compares are against the receiver's tangent plane along each ray (receiver-plane
 // depth, exact for a planar receiver), never beyond the map's range.
 const float AREA_SEARCH = 1.0;
+// The last area_shadow_factor's penumbra width on the receiver (world; 0 where no
+// blocker was found), the narrowest of the blockers' mean depth's and of what the march
+// found (a contact shadow): how far its filter may blur (area_visibility_blur.glsl).
+float area_penumbra = 0.0;
 const int AREA_MARCH_STEPS = 4;
 
 vec2 lattice(int i, int n, vec2 jitter) {          // [0, 1)^2
     return fract(vec2((float(i) + 0.5) / float(n), float(i) * 0.6180340) + jitter);
+}
+
+// Where a pixel's taps start on the lattice, in [0, 1): AREA_INTERLEAVED (a filtered
+// visibility, area_visibility.glsl), the pixel's cell of its 4 x 4 block, so a block's
+// 16 pixels take 16 evenly spread offsets of the lattice and their blur averages all
+// of them; else interleaved gradient noise (noise, not bands, where nothing filters).
+float tap_phase() {
+#ifdef AREA_INTERLEAVED
+    return (float(bayer4(uvec2(pixel_centre()))) + 0.5) / 16.0;
+#else
+    return fract(52.9829189 * fract(dot(pixel_centre(), vec2(0.06711056, 0.00583715))));
+#endif
 }
 
 vec2 shape_point(vec2 u, bool disk) {              // [-1, 1]^2, or the unit disk
@@ -217,6 +233,7 @@ float map_visible(vec3 w, vec3 q, vec3 n, vec3 c) {
 // axis (the footprint of a map with blended casters).
 float area_shadow_factor(vec3 p, vec3 n, vec3 c, vec3 x, vec3 y, vec2 half_extent,
                          bool disk, vec3 axis, float view_depth) {
+    area_penumbra = 0.0;
     float dist = length(p - c);
     if (dist < 1e-5) return 1.0;
     vec3 dir = (p - c) / dist;
@@ -228,8 +245,8 @@ float area_shadow_factor(vec3 p, vec3 n, vec3 c, vec3 x, vec3 y, vec2 half_exten
     vec3 q = p + n * texel * (0.5 + 1.5 * sin_t);
     float D = length(q - c);
     vec3 ex = x * half_extent.x, ey = y * half_extent.y;
-    float ign = fract(52.9829189 * fract(dot(pixel_centre(), vec2(0.06711056, 0.00583715))));
-    vec2 jitter = vec2(ign, fract(ign * 1.6180340 + 0.5));
+    float ign = tap_phase();
+    vec2 jitter = vec2(ign / float(blocker_taps), fract(ign * 1.6180340 + 0.5));
 
     float blockers = 0.0, block_sum = 0.0, nearest = NO_SURFACE, farthest = 0.0;
     for (int i = 0; i < blocker_taps; ++i) {
@@ -249,13 +266,14 @@ float area_shadow_factor(vec3 p, vec3 n, vec3 c, vec3 x, vec3 y, vec2 half_exten
     // At least a screen pixel's footprint over blended casters (shadow_footprint).
     float least = 0.75 * (shadow_footprint.x * view_depth + shadow_footprint.y);
     k = max(k, least / max(max(half_extent.x, half_extent.y), 1e-9));
+    area_penumbra = 2.0 * k * max(half_extent.x, half_extent.y);
     float lo = 0.9 * nearest, hi = min(1.1 * farthest, 0.99 * D);
     float step = max(hi - lo, 0.0) / float(AREA_MARCH_STEPS);
     float thickness = 1.5 * step;
     float offset = fract(ign * 7.0 + 0.5);
 
     float lit = 0.0, total = 0.0;
-    vec2 jitter2 = fract(jitter + vec2(0.7548777, 0.5698403));
+    vec2 jitter2 = vec2(ign / float(pcf_taps), fract(ign * 1.6180340 + 0.5698403));
     for (int i = 0; i < pcf_taps; ++i) {
         vec2 s = shape_point(lattice(i, pcf_taps, jitter2), disk);
         vec3 e = ex * s.x + ey * s.y;          // the light's point, from its centre
@@ -274,17 +292,30 @@ float area_shadow_factor(vec3 p, vec3 n, vec3 c, vec3 x, vec3 y, vec2 half_exten
             vec3 m = l + (q - l) * ((lo + (float(j) + offset) * step) / D);
             float r = length(m - c);
             float surface = map_distance(m, c);
-            if (surface + shadow_texel * r * (1.0 + tan_t) + 1e-4 * r <= r && r <= surface + thickness)
+            if (surface + shadow_texel * r * (1.0 + tan_t) + 1e-4 * r <= r && r <= surface + thickness) {
                 v = 0.0;
+                // An occluder the blockers' mean depth misses: its own, narrower penumbra.
+                float t = length(m - q);
+                area_penumbra = min(area_penumbra, 2.0 * max(half_extent.x, half_extent.y)
+                                                   * t / max(D - t, 1e-6));
+            }
         }
         lit += wgt * v;
     }
     return total > 0.0 ? lit / total : 1.0;
 }
 
+#ifdef AREA_VISIBILITY
+uniform sampler2D area_visibility;  // this light's, filtered (area_visibility.glsl)
+#endif
+
 // The loaded light's shadow (lights.glsl's globals), of any of the program's kinds
-// (lights.glsl LIGHT_DISTANT, LIGHT_SPHERE, LIGHT_AREA).
+// (lights.glsl LIGHT_DISTANT, LIGHT_SPHERE, LIGHT_AREA); AREA_VISIBILITY: an area
+// light's, filtered, at this pixel (the G-buffer's surfaces only).
 float light_shadow(vec3 p, vec3 n, float view_depth) {
+#ifdef AREA_VISIBILITY
+    if (n_poly > 0) return texelFetch(area_visibility, ivec2(pixel_centre()), 0).r;
+#endif
 #ifdef LIGHT_AREA
     if (n_poly > 0)
         return area_shadow_factor(p, n, light_pos, light_x, light_y,

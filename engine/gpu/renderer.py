@@ -64,7 +64,7 @@ COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "meshes
             "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws",
             "pattern_bytes", "programs_pending", "light_clusters", "light_items",
             "clusters_overflowed", "light_tree_pixels", "light_tree_steps", "light_tree_steps_max",
-            "ao_searches")
+            "ao_searches", "area_visibility_passes")
 
 
 def _shape(material):
@@ -126,7 +126,8 @@ class Renderer:
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
                       self.geometry, self.environment),
             self.light_cull,
-            ClusteredLightPass(ctx, programs, self.lights, self.environment, self.light_cull),
+            ClusteredLightPass(ctx, self.pool, programs, self.lights, self.environment,
+                               self.light_cull),
             TransparencyPass(ctx, self.pool, programs, self.geometry, self.textures,
                              self.lights, self.environment, self.depth),
             SupersamplePass(ctx, self.pool, programs, self.depth),
