@@ -45,6 +45,10 @@ void main() {
     apply_sheen(s, m.sheen);
 #endif
     vec3 c = vec3(0.0), diffuse, glossy;
+#ifdef HAS_SHADOW
+    vec3 ng = cross(dFdx(p), dFdy(p));               // geometric normal (contact shadows)
+    ng = dot(ng, ng) > 0.0 ? normalize(ng) * sign(dot(ng, m.n) + 1e-30) : m.n;
+#endif
 #ifdef AMBIENT
     dome_light(s, vec2(1.0), diffuse, glossy);      // no ambient occlusion: it is screen space
     c += m.emissive + diffuse + glossy;
@@ -55,7 +59,7 @@ void main() {
         vec3 r = diffuse + glossy;
 #ifdef HAS_SHADOW
         if (max(r.r, max(r.g, r.b)) > 0.0)
-            r *= light_shadow(p, m.n, dot(p, cam_forward));
+            r *= light_shadow(p, m.n, ng, dot(p, cam_forward));
 #endif
         c += r;
     }
