@@ -138,17 +138,29 @@ float contact_shadow(vec3 p, vec3 ng, vec3 light_pos, vec3 axis, int cascade,
     vec3 pts[N];
     float rs[N];
     bool ok[N];
+    bool read[N];
+    for (int j = 0; j < N; ++j) ok[j] = read[j] = false;
+    // Where the texel under the receiver holds the receiver's own surface, the light
+    // sees the receiver: nothing is in contact (the filter alone decides). That texel
+    // and its four neighbours first: most receivers stop here.
+    ivec2 c0 = ivec2(floor(f + 0.5)) - i0;
+    int j0 = c0.y * CONTACT_BLOCK + c0.x;
     for (int j = 0; j < N; ++j) {
+        ivec2 c = ivec2(j % CONTACT_BLOCK, j / CONTACT_BLOCK) - c0;
+        if (abs(c.x) + abs(c.y) > 1) continue;
+        ivec2 i = clamp(i0 + ivec2(j % CONTACT_BLOCK, j / CONTACT_BLOCK), ivec2(0), ivec2(size) - 1);
+        rs[j] = texelFetch(shadow_raw, i, 0).r;
+        pts[j] = texel_point(i, rs[j], k, light_pos, size, ok[j]);
+        read[j] = true;
+    }
+    if (ok[j0] && abs(dot(pts[j0] - p, ng)) < 2.0 * texel
+        && abs(dot(block_plane(j0, pts, rs, ok), ng)) >= 0.9) return 0.0;
+    for (int j = 0; j < N; ++j) {
+        if (read[j]) continue;
         ivec2 i = clamp(i0 + ivec2(j % CONTACT_BLOCK, j / CONTACT_BLOCK), ivec2(0), ivec2(size) - 1);
         rs[j] = texelFetch(shadow_raw, i, 0).r;
         pts[j] = texel_point(i, rs[j], k, light_pos, size, ok[j]);
     }
-    // Where the texel under the receiver holds the receiver's own surface, the light
-    // sees the receiver: nothing is in contact (the filter alone decides).
-    ivec2 c0 = ivec2(floor(f + 0.5)) - i0;
-    int j0 = c0.y * CONTACT_BLOCK + c0.x;
-    if (ok[j0] && abs(dot(pts[j0] - p, ng)) < 2.0 * texel
-        && abs(dot(block_plane(j0, pts, rs, ok), ng)) >= 0.9) return 0.0;
     float contact = 0.0;
     for (int j = 0; j < N; ++j) {
         ivec2 c = ivec2(j % CONTACT_BLOCK, j / CONTACT_BLOCK);
@@ -217,9 +229,7 @@ float shadow_factor(vec3 p, vec3 n, vec3 ng, vec3 light_pos, vec3 dir, float vie
     // PCF's least kernel; with its bilinear texel, twice over, the filter's reach
     // across the light that contact shadows cover (a margin for the seam's angle).
     float least = max(texel * 1.5, 0.75 * (shadow_footprint.x * view_depth + shadow_footprint.y));
-    float contact = contact_shadow(p, ng, light_pos, axis, cascade, texel, bias, ref,
-                                   2.0 * (least + texel));
-    if (contact >= 1.0) return 0.0;
+    float reach = 2.0 * (least + texel);
     float inv_NoL = 1.0 / max(NoL, 0.05);
     vec3 t = normalize(cross(axis, abs(axis.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
     vec3 b = cross(axis, t);
@@ -240,7 +250,8 @@ float shadow_factor(vec3 p, vec3 n, vec3 ng, vec3 light_pos, vec3 dir, float vie
             float plane = ref + clamp(dot(o, n) * inv_NoL, -search * 20.0, search * 20.0);
             if (d < plane - bias) { blockers += 1.0; block_sum += d; }
         }
-        if (blockers == 0.0) return 1.0 - contact;
+        if (blockers == 0.0)
+            return 1.0 - contact_shadow(p, ng, light_pos, axis, cascade, texel, bias, ref, reach);
     }
     float kernel = least;
     if (blockers > 0.0) {
@@ -260,7 +271,9 @@ float shadow_factor(vec3 p, vec3 n, vec3 ng, vec3 light_pos, vec3 dir, float vie
         float plane = ref + clamp(dot(o, n) * inv_NoL, -kernel * 20.0, kernel * 20.0);
         lit += texture(shadow_cmp, vec3(uv, (plane - bias) / scale));
     }
-    return lit / float(pcf_taps) * (1.0 - contact);
+    if (lit <= 0.0) return 0.0;                // dark already: no contact to look for
+    return lit / float(pcf_taps)
+         * (1.0 - contact_shadow(p, ng, light_pos, axis, cascade, texel, bias, ref, reach));
 }
 
 // --- Area lights (rect, disk): PCSS over the light's extent ------------------------
