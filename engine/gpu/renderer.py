@@ -66,7 +66,7 @@ COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "meshes
             "glass_objects", "glass_draws",
             "pattern_bytes", "programs_pending", "light_clusters", "light_items",
             "clusters_overflowed", "light_tree_pixels", "light_tree_steps", "light_tree_steps_max",
-            "ao_searches")
+            "ao_searches", "area_visibility_passes")
 
 
 def _shape(material):
@@ -128,7 +128,8 @@ class Renderer:
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
                       self.geometry, self.environment),
             self.light_cull,
-            ClusteredLightPass(ctx, programs, self.lights, self.environment, self.light_cull),
+            ClusteredLightPass(ctx, self.pool, programs, self.lights, self.environment,
+                               self.light_cull),
             GlassPass(ctx, self.pool, programs, self.geometry, self.textures, self.lights,
                       self.environment, self.depth, self.uploads,
                       self.tracer if self.features.compute else None),
