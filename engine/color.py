@@ -69,8 +69,10 @@ def check(view: str = STANDARD, look: str | None = None, exposure: float = 0.0) 
     70-100 ms), beside the stage read and the first frame."""
     if view != STANDARD or look or exposure != 0.0:
         _check_names(_config(), view, look)
+        # Not a daemon: a process that ends meanwhile waits for it (at most the build)
+        # rather than tearing OpenColorIO down under it.
         threading.Thread(target=_build_ahead, args=(view, look or "", float(exposure)),
-                         name="lantern-colour", daemon=True).start()
+                         name="lantern-colour").start()
 
 
 def _build_ahead(view, look, exposure):
