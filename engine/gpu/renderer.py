@@ -91,7 +91,7 @@ class Renderer:
         self.gl_info = {**gl.describe(), "gl_path": _path_name(self.features)}
         self.largest_side = budget.largest_side(ctx)
         self._memory = None         # the device's memory as last asked (budget.Memory)
-        self.uploads = Uploads(ctx)
+        self.uploads = Uploads(ctx, gl.proc)
         self.stencil = Stencil(gl.proc)
         self.depth = DepthConvention(gl.proc, self.features.clip_control)
         self.pool = TargetPool(ctx, self.stencil, self.depth)
