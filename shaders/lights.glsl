@@ -36,7 +36,7 @@ int first_extra;            // an emissive mesh's polygons past the first: their
 int n_extra;
 vec3 light_x;
 vec3 light_y;
-vec2 half_size;             // rect half extents; disk: (radius, 0)
+vec2 half_size;             // rect half extents; disk: its semi-axes (an ellipse's differ)
 int n_poly;
 int light_row;
 

@@ -365,8 +365,8 @@ float map_visible(vec3 w, vec3 q, vec3 n, vec3 c) {
 }
 
 // 1 = lit, 0 = shadowed, for the area light centred at c (camera-relative) with unit
-// axes x, y in its plane, half extents `half_extent` (a disk: its radius twice),
-// emitting along `axis`. p, n: the receiver; view_depth: its depth along the camera
+// axes x, y in its plane, half extents `half_extent` (a disk: its semi-axes, which
+// differ for an ellipse), emitting along `axis`. p, n: the receiver; view_depth: its depth along the camera
 // axis (the footprint of a map with blended casters).
 float area_shadow_factor(vec3 p, vec3 n, vec3 c, vec3 x, vec3 y, vec2 half_extent,
                          bool disk, vec3 axis, float view_depth) {
@@ -456,7 +456,7 @@ float light_shadow(vec3 p, vec3 n, vec3 ng, float view_depth) {
 #ifdef LIGHT_AREA
     if (n_poly > 0)
         return area_shadow_factor(p, n, light_pos, light_x, light_y,
-                                  is_disk ? vec2(half_size.x) : half_size, is_disk,
+                                  half_size, is_disk,
                                   light_axis, view_depth);
 #endif
 #if defined(LIGHT_DISTANT) || defined(LIGHT_SPHERE)
