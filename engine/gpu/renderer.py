@@ -25,6 +25,7 @@ from .passes.ao import AoPass
 from .passes.aovs import AovPass
 from .passes.cryptomatte import CryptomattePass
 from .passes.gbuffer import GBufferPass
+from .passes.irradiance import IrradiancePass
 from .passes.clustered import ClusteredLightPass
 from .passes.light_cull import LightCullPass
 from .passes.lights import LightPass
@@ -64,7 +65,7 @@ COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "meshes
             "points_drawn", "nonfinite_pixels", "transparent_objects", "transparent_draws",
             "pattern_bytes", "programs_pending", "light_clusters", "light_items",
             "clusters_overflowed", "light_tree_pixels", "light_tree_steps", "light_tree_steps_max",
-            "ao_searches")
+            "ao_searches", "field_updates")
 
 
 def _shape(material):
@@ -121,6 +122,8 @@ class Renderer:
             self.shadows,
             self.gbuffer,
             AovPass(ctx, self.pool, programs),
+            IrradiancePass(ctx, self.uploads, programs, self.lights, self.environment,
+                           self.tracer, self.features.compute),
             AoPass(ctx, self.pool, programs, self.environment),
             AmbientPass(ctx, self.pool, programs, self.environment),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
