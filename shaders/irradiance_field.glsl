@@ -17,7 +17,7 @@ uniform ivec3 field_counts;     // probes along each axis
 uniform int field_tiles;        // tiles a line
 uniform float field_bias;       // the self-shadowing bias (a share of the spacing)
 uniform sampler2D field_irradiance;   // rgb: irradiance E (W/m2 per unit radiance)
-uniform sampler2D field_distance;     // rg: mean distance, mean squared distance
+uniform sampler2D field_distance;     // mean distance, mean squared distance, nearest
 uniform sampler2D field_probes;
 
 const float FIELD_PI = 3.14159265358979;
@@ -63,6 +63,15 @@ vec2 field_uv(sampler2D atlas, int probe, vec3 d) {
     return texel / vec2(textureSize(atlas, 0));
 }
 
+// The nearest hit of the four texels about uv: never more than what a ray that way hit
+// (filtering would blend a near wall's edge with the far side beyond it).
+float field_nearest(vec2 uv) {
+    ivec2 t = ivec2(floor(uv * vec2(textureSize(field_distance, 0)) - 0.5));
+    return min(min(texelFetch(field_distance, t, 0).b, texelFetch(field_distance, t + ivec2(1, 0), 0).b),
+               min(texelFetch(field_distance, t + ivec2(0, 1), 0).b,
+                   texelFetch(field_distance, t + ivec2(1, 1), 0).b));
+}
+
 // The irradiance at world point p on a surface of normal n seen along v (towards the
 // viewer; n for a ray's hit): the eight probes of its cell, each weighted by trilinear
 // position, by whether it lies in front of the surface, and by the chance (Chebyshev,
@@ -93,7 +102,9 @@ vec3 field_irradiance_at(vec3 p, vec3 n, vec3 v) {
         vec3 from_probe = q - pp;
         float r = length(from_probe);
         if (r > 0.0) {
-            vec2 m = textureLod(field_distance, field_uv(field_distance, probe, from_probe / r), 0.0).rg;
+            vec2 uv = field_uv(field_distance, probe, from_probe / r);
+            vec2 m = textureLod(field_distance, uv, 0.0).rg;
+            if (r > field_nearest(uv) + 0.05 * spacing) continue;   // behind a hit that way
             if (r > m.x) {
                 float variance = abs(m.y - m.x * m.x);
                 float d = r - m.x;

@@ -18,7 +18,8 @@ uniform mat3 u_rotation;
 uniform int u_rays;                  // a probe's
 uniform int n_lights;
 uniform bool u_bounce;               // the field read holds a bounce already
-uniform float u_epsilon;             // a shadow ray's offset off its surface
+uniform float u_epsilon;
+uniform vec3 u_view_forward;         // where a headlight shines             // a shadow ray's offset off its surface
 
 // Whether nothing lies between x and the loaded light.
 bool light_visible(vec3 x, vec3 n) {
@@ -50,7 +51,7 @@ void main() {
         vec3 arriving = vec3(0.0);           // irradiance x pi: albedo / pi below
         Surface s = make_surface(x, n, n, vec4(albedo, 1.0), vec4(0.0, 1.0, 0.0, 0.0));
         for (int i = 0; i < n_lights; ++i) {
-            load_light(i, vec3(0.0, 0.0, -1.0));
+            load_light(i, u_view_forward);
             vec3 diffuse, glossy;
             light_reflected(s, diffuse, glossy);
             if (max(diffuse.r, max(diffuse.g, diffuse.b)) > 0.0 && light_visible(x, n))

@@ -44,6 +44,11 @@ BIAS = 0.3                   # the read's self-shadowing bias, a share of the sp
 PROBES = {"low": 4, "medium": 6, "high": 8, "ultra": 10}
 RAYS = {"low": 64, "medium": 128, "high": 192, "ultra": 256}
 ALL_BARRIERS = 0xFFFFFFFF
+# Probes sit off their cells' centres by this share of the spacing: walls often lie on
+# the centres' planes (a room as wide as its bounds, split in even cells), and a probe
+# on a wall sees both sides (its rays start in the wall's plane). Off it, the probe sees
+# the wall and is moved from it (shaders/irradiance_blend.comp), on whichever side.
+NUDGE = np.array([0.0371, 0.0253, 0.0419])
 
 
 def has_bounce(frame, compute: bool) -> bool:
@@ -65,7 +70,7 @@ def grid(lo, hi, along_longest: int):
     spacing = max(float(size.max()), 1e-6) / along_longest
     counts = np.maximum(np.ceil(size / spacing - 1e-6), 1).astype(int)
     step = np.where(size > 0, size / counts, spacing)
-    return lo + 0.5 * step, step, counts
+    return lo + (0.5 + NUDGE) * step, step, counts
 
 
 def rotation(k: int) -> np.ndarray:
@@ -123,17 +128,21 @@ class IrradiancePass(Pass):
         view = board["view"]
         scene, bounces = frame.scene, frame.options.bounces_for(frame.scene)
         lo, hi = view.bounds
-        key = (bounces.diffuse_bounces, frame.preset.name, tuple(lo), tuple(hi))
+        # A headlight (the default rig) shines along the view: its field follows it.
+        along = tuple(view.camera.forward) if any(
+            light.headlight for light in scene.lights.values()) else None
+        key = (bounces.diffuse_bounces, frame.preset.name, tuple(lo), tuple(hi), along)
         c = frame.changes
         changed = bool(c.meshes or c.dropped_meshes or c.instances or c.dropped_instances or
                        c.shapes or c.skeletons or c.materials or c.lights or c.dome)
         if self.field is None or changed or key != self._key:
-            self._build(frame, lo, hi, bounces.diffuse_bounces)
+            self._build(frame, view, bounces.diffuse_bounces)
             self._key = key
         board["field"] = self.field
 
-    def _build(self, frame, lo, hi, updates: int):
+    def _build(self, frame, view, updates: int):
         t0 = time.perf_counter()
+        lo, hi = view.bounds
         scene, preset = frame.scene, frame.preset.name
         tracer = self.tracer(scene)
         first, step, counts = grid(lo, hi, PROBES.get(preset, PROBES["medium"]))
@@ -162,6 +171,7 @@ class IrradiancePass(Pass):
                 set_uniform(trace, "n_lights", len(self.lights.index))
                 set_uniform(trace, "u_bounce", k > 0)
                 set_uniform(trace, "u_epsilon", 1e-4 * max(diagonal, 1e-6))
+                set_uniform(trace, "u_view_forward", np.asarray(view.camera.forward, float))
                 ray_tex.bind_to_image(0, read=False, write=True)
                 trace.run(-(-rays // GROUP), n)
                 self.ctx.memory_barrier(ALL_BARRIERS)
