@@ -210,8 +210,8 @@ class IrradiancePass(Pass):
         for _ in range(2):
             maps = []
             for _ in range(2):
-                tex = self.ctx.texture(size, 4, np.zeros(size[0] * size[1] * 4, np.float32),
-                                       dtype="f4")
+                tex = self.uploads.texture(size, 4, np.zeros(size[0] * size[1] * 4, np.float32),
+                                           kind="field", dtype="f4")
                 tex.filter = (self.ctx.LINEAR, self.ctx.LINEAR)
                 tex.repeat_x = tex.repeat_y = False
                 maps.append(tex)
