@@ -156,3 +156,27 @@ def test_the_bounce_does_not_leak_into_a_sealed_room():
     assert full.stats["field_updates"] == 4 and full.stats["field_probes"] > 8
     bounce = full.rgba[..., :3] - direct.rgba[..., :3]
     assert np.abs(bounce).max() < 1e-4 * sun_radiance
+
+
+def test_a_textured_surface_bounces_its_maps_mean_colour(tmp_path):
+    from lantern.engine.image_io import write_image
+    rho, le = 0.4, 2.0
+    image = np.full((4, 4, 4), 1.0, np.float32)
+    image[:2, :, :3], image[2:, :, :3] = 0.2, 0.6            # mean 0.4
+    write_image(str(tmp_path / "albedo.exr"), image)
+    stage = glowing_sphere_stage(0.9, le)                    # 0.9: the unbound value
+    root = "/root/_materials/glow"
+    reader = UsdShade.Shader.Define(stage, f"{root}/uv")
+    reader.CreateIdAttr("UsdPrimvarReader_float2")
+    reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set("st")
+    tex = UsdShade.Shader.Define(stage, f"{root}/tex")
+    tex.CreateIdAttr("UsdUVTexture")
+    tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(str(tmp_path / "albedo.exr"))
+    tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(), "result")
+    tex.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("raw")
+    surface = UsdShade.Shader(stage.GetPrimAtPath(f"{root}/surface"))
+    surface.GetInput("diffuseColor").ConnectToSource(tex.ConnectableAPI(), "rgb")
+    one, _ = _mean(stage, Bounces(12, 1, 4))
+    two, _ = _mean(stage, Bounces(12, 2, 4))
+    # The second bounce is the first's light off the walls again: x the map's mean.
+    assert (two - le) / (one - le) == pytest.approx(1.0 + rho, rel=0.02)

@@ -123,7 +123,7 @@ class Renderer:
             self.gbuffer,
             AovPass(ctx, self.pool, programs),
             IrradiancePass(ctx, self.uploads, programs, self.lights, self.environment,
-                           self.tracer, self.features.compute),
+                           self.textures, self.tracer, self.features.compute),
             AoPass(ctx, self.pool, programs, self.environment),
             AmbientPass(ctx, self.pool, programs, self.environment),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,

@@ -22,7 +22,8 @@ bounce and the scene has surfaces and something that lights them; else the frame
 today's direct image, with no tracer.
 
 A hit's albedo is its material's base colour times (1 - metallic), its emission the
-material's emission colour: texture maps and pattern networks are not sampled there.
+material's emission colour, a texture map's mean colour where one is bound (the hit's
+texel is not sampled), the constant where a pattern network feeds them.
 
 reads: view   writes: field (the Field: bind it into a shading program)"""
 from __future__ import annotations
@@ -112,8 +113,10 @@ class IrradiancePass(Pass):
     reads = ("view",)
     writes = ("field",)
 
-    def __init__(self, ctx, uploads, programs, lights, environment, tracer, compute: bool):
+    def __init__(self, ctx, uploads, programs, lights, environment, textures, tracer,
+                 compute: bool):
         self.ctx, self.uploads, self.programs = ctx, uploads, programs
+        self.textures = textures     # MaterialTextures: a map's mean colour
         self.lights, self.environment = lights, environment
         self.tracer, self.compute = tracer, compute   # tracer(scene): Renderer.tracer
         self.field = None            # the current Field
@@ -229,8 +232,12 @@ class IrradiancePass(Pass):
             if m is None:
                 table[0, 2 * i, :3] = 0.18
                 continue
-            table[0, 2 * i, :3] = np.asarray(m.diffuse, np.float32) * (1.0 - m.metallic)
-            table[0, 2 * i + 1, :3] = m.emissive
+            base = m.maps.get("diffuseColor")
+            base = m.diffuse if base is None else self.textures.mean(base)
+            emission = m.maps.get("emissiveColor")
+            emission = m.emissive if emission is None else self.textures.mean(emission)
+            table[0, 2 * i, :3] = np.asarray(base, np.float32) * (1.0 - m.metallic)
+            table[0, 2 * i + 1, :3] = emission
         tex = self.uploads.texture((table.shape[1], 1), 4, table, kind="field", dtype="f4")
         tex.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
         return tex
