@@ -180,3 +180,17 @@ def test_a_textured_surface_bounces_its_maps_mean_colour(tmp_path):
     two, _ = _mean(stage, Bounces(12, 2, 4))
     # The second bounce is the first's light off the walls again: x the map's mean.
     assert (two - le) / (one - le) == pytest.approx(1.0 + rho, rel=0.02)
+
+
+def test_without_compute_shaders_the_scene_is_lit_directly_with_one_warning():
+    stage = room_stage((12, 4, 4))
+    with Session(stage, RenderSettings(**SIZE)) as s:
+        from lantern.engine.gpu.context import run_gl
+        run_gl(lambda gl: setattr(s._renderer.irradiance, "compute", False))
+        result = s.render()
+    assert result.stats["field_updates"] == 0
+    lines = [w for w in result.warnings if "compute shaders" in w]
+    assert len(lines) == 1 and "lit directly" in lines[0]
+    with Session(stage, RenderSettings(**SIZE, bounces=DIRECT)) as s:
+        direct = s.render()
+    np.testing.assert_array_equal(result.rgba, direct.rgba)

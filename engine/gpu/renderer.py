@@ -114,6 +114,9 @@ class Renderer:
         self.gbuffer = GBufferPass(ctx, self.pool, programs, self.geometry, self.textures,
                                    self.depth)
         self._drawn = {}            # material name -> the record its last frame drew
+        self.irradiance = IrradiancePass(ctx, self.uploads, programs, self.lights,
+                                         self.environment, self.textures, self.tracer,
+                                         self.features.compute)
         self.light_cull = LightCullPass(ctx, programs, self.uploads, self.lights)
         self.graph = FrameGraph(ctx, self.pool, [
             self.skinning,
@@ -122,8 +125,7 @@ class Renderer:
             self.shadows,
             self.gbuffer,
             AovPass(ctx, self.pool, programs),
-            IrradiancePass(ctx, self.uploads, programs, self.lights, self.environment,
-                           self.textures, self.tracer, self.features.compute),
+            self.irradiance,
             AoPass(ctx, self.pool, programs, self.environment),
             AmbientPass(ctx, self.pool, programs, self.environment),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
@@ -316,7 +318,7 @@ class Renderer:
         the CPU (engine/gpu/devices.py)."""
         traced = self._raytracer.warnings if self._raytracer is not None else []
         return self.gl.take_notices() + list(self.textures.failed.values()) + \
-            self.resolve.warnings + traced
+            self.resolve.warnings + traced + self.irradiance.warnings
 
     def tracer(self, scene) -> Raytracer:
         """The session's ray tracer (engine/gpu/raytracer.py), made on the first ask

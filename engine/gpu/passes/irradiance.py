@@ -52,13 +52,11 @@ ALL_BARRIERS = 0xFFFFFFFF
 NUDGE = np.array([0.0371, 0.0253, 0.0419])
 
 
-def has_bounce(frame, compute: bool) -> bool:
-    """Whether `frame` gets a field: compute shaders, a diffuse bounce, surfaces, and
-    something that lights them (a lamp, the dome, an emissive material)."""
+def would_bounce(frame) -> bool:
+    """Whether `frame` asks for the bounce: a diffuse bounce, surfaces, and something
+    that lights them (a lamp, the dome, an emissive material)."""
     scene = frame.scene
-    if not compute or frame.options.bounces_for(scene).diffuse_bounces <= 0:
-        return False
-    if not scene.instances:
+    if frame.options.bounces_for(scene).diffuse_bounces <= 0 or not scene.instances:
         return False
     return bool(scene.lights) or scene.dome is not None or \
         any(max(m.emissive) > 0.0 for m in scene.materials.values())
@@ -123,9 +121,17 @@ class IrradiancePass(Pass):
         self.spare = None            # the other one, which an update writes
         self._key = None             # what the field was made for
         self.seconds = 0.0           # the last build's CPU seconds (GPU work waited for)
+        self.warnings = []           # without compute shaders: that the bounce is off
 
     def needed(self, frame) -> bool:
-        return has_bounce(frame, self.compute)
+        if not would_bounce(frame):
+            return False
+        if not self.compute:
+            line = ("bounces: the diffuse bounce needs compute shaders (GL 4.3), which this "
+                    "context lacks; the scene is lit directly (bounces 0)")
+            self.warnings = [line]
+            return False
+        return True
 
     def execute(self, frame, board):
         view = board["view"]
