@@ -194,3 +194,16 @@ def test_without_compute_shaders_the_scene_is_lit_directly_with_one_warning():
     with Session(stage, RenderSettings(**SIZE, bounces=DIRECT)) as s:
         direct = s.render()
     np.testing.assert_array_equal(result.rgba, direct.rgba)
+
+
+def test_a_lamp_inside_a_sphere_bounces_its_light_by_the_series():
+    # A point light at the centre lights the sphere evenly: each bounce adds rho times
+    # the last, through the hits' shadow rays and the light table as the pixels see it.
+    rho = 0.5
+    stage = glowing_sphere_stage(rho, 0.0)
+    shadow_scenes.add_light(stage, "point", pos=(0, 0, 0), power=100.0, radius=0.01,
+                            shadow=False)
+    direct, _ = _mean(stage, DIRECT)
+    full, _ = _mean(stage, Bounces())
+    assert direct > 0.1
+    assert full / direct == pytest.approx(sum(rho ** k for k in range(5)), rel=0.01)
