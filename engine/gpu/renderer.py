@@ -155,6 +155,7 @@ class Renderer:
             self.textures.prune(scene.materials.values())
         self.skinning.update(scene, changes)
         self.tessellation.update(scene, changes)
+        self.irradiance.note(changes)
         return meshes
 
     def render(self, scene, changes, camera, size, transparent, cull_backfaces,

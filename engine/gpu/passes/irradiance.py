@@ -120,6 +120,7 @@ class IrradiancePass(Pass):
         self.field = None            # the current Field
         self.spare = None            # the other one, which an update writes
         self._key = None             # what the field was made for
+        self.stale = True            # what it holds changed since (note)
         self.seconds = 0.0           # the last build's CPU seconds (GPU work waited for)
         self.warnings = []           # without compute shaders: that the bounce is off
 
@@ -141,13 +142,17 @@ class IrradiancePass(Pass):
         along = tuple(view.camera.forward) if any(
             light.headlight for light in scene.lights.values()) else None
         key = (bounces.diffuse_bounces, frame.preset.name, tuple(lo), tuple(hi), along)
-        c = frame.changes
-        changed = bool(c.meshes or c.dropped_meshes or c.instances or c.dropped_instances or
-                       c.shapes or c.skeletons or c.materials or c.lights or c.dome)
-        if self.field is None or changed or key != self._key:
+        if self.field is None or self.stale or key != self._key:
             self._build(frame, view, bounces.diffuse_bounces)
-            self._key = key
+            self._key, self.stale = key, False
         board["field"] = self.field
+
+    def note(self, changes):
+        """Every sync's changes (Renderer.update: a frame's, or a sync outside one, as
+        a host's or a tool's): the field is stale once what it holds changed."""
+        c = changes
+        self.stale |= bool(c.meshes or c.dropped_meshes or c.instances or c.dropped_instances
+                           or c.shapes or c.skeletons or c.materials or c.lights or c.dome)
 
     def _build(self, frame, view, updates: int):
         t0 = time.perf_counter()
