@@ -183,6 +183,10 @@ def test_a_textured_surface_bounces_its_maps_mean_colour(tmp_path):
     tex.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("raw")
     surface = UsdShade.Shader(stage.GetPrimAtPath(f"{root}/surface"))
     surface.GetInput("diffuseColor").ConnectToSource(tex.ConnectableAPI(), "rgb")
+    # A roughness map too (no specular lobe at ior 1: it changes nothing seen): its
+    # sampler sits on a texture unit the field shares, as material maps do.
+    surface.CreateInput("roughness", Sdf.ValueTypeNames.Float).ConnectToSource(
+        tex.ConnectableAPI(), "r")
     one, _ = _mean(stage, Bounces(12, 1, 4))
     two, _ = _mean(stage, Bounces(12, 2, 4))
     # The second bounce is the first's light off the walls again: x the map's mean.

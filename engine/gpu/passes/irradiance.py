@@ -16,7 +16,8 @@ one bounce: a frame whose field is out of date runs the scene's diffuse bounces 
 them from nothing, so a still and every frame of a sequence render it converged.
 
 The field is kept while nothing it depends on changes (lights, geometry, materials,
-the dome, the bounces, the preset): stats field_updates counts the updates a frame ran.
+the dome, the bounces, the preset; the grid covers the traced triangles' bounds): stats
+field_updates counts the updates a frame ran.
 Only on GL 4.3 (compute shaders) and only when the frame's bounces have a diffuse
 bounce and the scene has surfaces and something that lights them; else the frame is
 today's direct image, with no tracer.
@@ -45,6 +46,8 @@ BIAS = 0.3                   # the read's self-shadowing bias, a share of the sp
 PROBES = {"low": 4, "medium": 6, "high": 8, "ultra": 10}
 RAYS = {"low": 64, "medium": 128, "high": 192, "ultra": 256}
 ALL_BARRIERS = 0xFFFFFFFF
+FIELD_UNITS = ("field_irradiance", "field_distance", "field_probes", "field_materials",
+               "field_rays")
 # Probes sit off their cells' centres by this share of the spacing: walls often lie on
 # the centres' planes (a room as wide as its bounds, split in even cells), and a probe
 # on a wall sees both sides (its rays start in the wall's plane). Off it, the probe sees
@@ -72,6 +75,15 @@ def grid(lo, hi, along_longest: int):
     return lo + (0.5 + NUDGE) * step, step, counts
 
 
+def unbind_samplers(ctx):
+    """The field's units without sampler objects: the G-buffer pass leaves material
+    maps' samplers (mipmapped filtering) on the units the field shares with them, and a
+    sampler's mipmap filter makes the field's textures, which have no mipmaps,
+    incomplete: they would read as 0."""
+    for name in FIELD_UNITS:
+        ctx.clear_samplers(UNITS[name], UNITS[name] + 1)
+
+
 def rotation(k: int) -> np.ndarray:
     """A random rotation for update k (the same k, the same rays: renders repeat)."""
     q, r = np.linalg.qr(np.random.default_rng(k).normal(size=(3, 3)))
@@ -92,6 +104,7 @@ class Field:
     counts: np.ndarray
 
     def bind(self, prog):
+        unbind_samplers(self.irradiance.ctx)
         self.irradiance.use(UNITS["field_irradiance"])
         self.distance.use(UNITS["field_distance"])
         self.probes.use(UNITS["field_probes"])
@@ -137,11 +150,10 @@ class IrradiancePass(Pass):
     def execute(self, frame, board):
         view = board["view"]
         scene, bounces = frame.scene, frame.options.bounces_for(frame.scene)
-        lo, hi = view.bounds
         # A headlight (the default rig) shines along the view: its field follows it.
         along = tuple(view.camera.forward) if any(
             light.headlight for light in scene.lights.values()) else None
-        key = (bounces.diffuse_bounces, frame.preset.name, tuple(lo), tuple(hi), along)
+        key = (bounces.diffuse_bounces, frame.preset.name, along)
         if self.field is None or self.stale or key != self._key:
             self._build(frame, view, bounces.diffuse_bounces)
             self._key, self.stale = key, False
@@ -156,9 +168,11 @@ class IrradiancePass(Pass):
 
     def _build(self, frame, view, updates: int):
         t0 = time.perf_counter()
-        lo, hi = view.bounds
         scene, preset = frame.scene, frame.preset.name
         tracer = self.tracer(scene)
+        # Over what is traced, as its triangles lie (a skinned mesh's drawn box is padded
+        # by its joints': F12's deformed copy and the file's rig would get two grids).
+        lo, hi = tracer.bounds if tracer.bounds is not None else view.bounds
         first, step, counts = grid(lo, hi, PROBES.get(preset, PROBES["medium"]))
         n = int(np.prod(counts))
         rays = RAYS.get(preset, RAYS["medium"])
