@@ -179,7 +179,8 @@ def test_a_textured_surface_bounces_its_maps_mean_colour(tmp_path):
     tex = UsdShade.Shader.Define(stage, f"{root}/tex")
     tex.CreateIdAttr("UsdUVTexture")
     tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(str(tmp_path / "albedo.exr"))
-    tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(), "result")
+    tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(),
+                                                                      "result")
     tex.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("raw")
     surface = UsdShade.Shader(stage.GetPrimAtPath(f"{root}/surface"))
     surface.GetInput("diffuseColor").ConnectToSource(tex.ConnectableAPI(), "rgb")
