@@ -131,6 +131,17 @@ def test_the_field_updates_only_when_what_it_holds_changes():
         np.testing.assert_array_equal(back.rgba, first.rgba)
 
 
+def test_a_material_edit_updates_the_field_only_when_its_colour_changes():
+    stage = room_stage((12, 4, 4))
+    surface = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/red/surface"))
+    with Session(stage, RenderSettings(**SIZE)) as s:
+        assert s.render().stats["field_updates"] == 4
+        surface.GetInput("roughness").Set(0.3)            # not what the field holds
+        assert s.render().stats["field_updates"] == 0
+        surface.GetInput("diffuseColor").Set(Gf.Vec3f(0.1, 0.8, 0.1))
+        assert s.render().stats["field_updates"] == 4
+
+
 def sealed_room_stage():
     """A closed room of six zero-thickness walls meeting at seams, on a white ground that
     reaches far beyond it, under a sun: no opening. The camera inside."""

@@ -134,6 +134,8 @@ class IrradiancePass(Pass):
         self.spare = None            # the other one, which an update writes
         self._key = None             # what the field was made for
         self.stale = True            # what it holds changed since (note)
+        self.touched = False         # materials changed since: their table is compared
+        self.table = None            # the materials' albedo and emission it was built with
         self.seconds = 0.0           # the last build's CPU seconds (GPU work waited for)
         self.warnings = []           # without compute shaders: that the bounce is off
 
@@ -154,6 +156,13 @@ class IrradiancePass(Pass):
         along = tuple(view.camera.forward) if any(
             light.headlight for light in scene.lights.values()) else None
         key = (bounces.diffuse_bounces, frame.preset.name, along)
+        if self.field is not None and not self.stale and key == self._key and self.touched:
+            # Only materials changed: the field holds their albedo and emission alone
+            # (a pattern's parameters, a roughness, leave it as it is).
+            tracer = self.tracer(frame.scene)
+            self.stale = not np.array_equal(self._table(frame.scene, tracer.materials),
+                                            self.table)
+        self.touched = False
         if self.field is None or self.stale or key != self._key:
             self._build(frame, view, bounces.diffuse_bounces)
             self._key, self.stale = key, False
@@ -164,7 +173,8 @@ class IrradiancePass(Pass):
         a host's or a tool's): the field is stale once what it holds changed."""
         c = changes
         self.stale |= bool(c.meshes or c.dropped_meshes or c.instances or c.dropped_instances
-                           or c.shapes or c.skeletons or c.materials or c.lights or c.dome)
+                           or c.shapes or c.skeletons or c.lights or c.dome)
+        self.touched |= bool(c.materials)
 
     def _build(self, frame, view, updates: int):
         t0 = time.perf_counter()
@@ -178,7 +188,10 @@ class IrradiancePass(Pass):
         rays = RAYS.get(preset, RAYS["medium"])
         self._make(first, step, counts)
         ray_tex = self.ctx.texture((rays, n), 4, dtype="f4")
-        materials = self._materials(scene, tracer.materials)
+        self.table = self._table(scene, tracer.materials)
+        materials = self.uploads.texture((self.table.shape[1], 1), 4, self.table, kind="field",
+                                         dtype="f4")
+        materials.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
         env = self.environment.prepare(scene.dome)
         trace = self.programs.get("irradiance_trace.comp", None,
                                   ["HAS_DOME_MAP"] if env is not None else [], compute=True)
@@ -225,32 +238,35 @@ class IrradiancePass(Pass):
         frame.timings["field_build"] = self.seconds
 
     def _make(self, first, step, counts):
-        """Both fields at this grid's size, their probes on and in place, maps 0."""
+        """Both fields at this grid's size (their textures kept when it is the same),
+        cleared on the GPU: probes on and in place, maps 0."""
         n = int(np.prod(counts))
         lines = -(-n // TILES_PER_LINE)
         size = (TILES_PER_LINE * TILE, lines * TILE)
-        for f in (self.field, self.spare):
-            if f is not None:
+        fields = [f for f in (self.field, self.spare) if f is not None]
+        if len(fields) != 2 or fields[0].irradiance.size != size:
+            for f in fields:
                 f.release()
-        probes = np.zeros((lines, TILES_PER_LINE, 4), np.float32)
-        probes[..., 3] = 1.0
-        fields = []
-        for _ in range(2):
-            maps = []
-            for _ in range(2):
-                tex = self.uploads.texture(size, 4, np.zeros(size[0] * size[1] * 4, np.float32),
-                                           kind="field", dtype="f4")
-                tex.filter = (self.ctx.LINEAR, self.ctx.LINEAR)
-                tex.repeat_x = tex.repeat_y = False
-                maps.append(tex)
-            state = self.uploads.texture((TILES_PER_LINE, lines), 4, probes, kind="field",
-                                         dtype="f4")
-            state.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
-            fields.append(Field(maps[0], maps[1], state, first, step, counts))
+            fields = [Field(self._texture(size, True), self._texture(size, True),
+                            self._texture((TILES_PER_LINE, lines), False), first, step, counts)
+                      for _ in range(2)]
+        for f in fields:
+            f.lo, f.step, f.counts = first, step, counts
+            for tex, clear in ((f.irradiance, 0.0), (f.distance, 0.0), (f.probes, 1.0)):
+                fbo = self.ctx.framebuffer(color_attachments=[tex])
+                fbo.clear(0.0, 0.0, 0.0, clear)
+                fbo.release()
         self.field, self.spare = fields
 
-    def _materials(self, scene, names):
-        """The tracer's materials as a texture: albedo, emission, two texels each."""
+    def _texture(self, size, linear: bool):
+        tex = self.ctx.texture(size, 4, dtype="f4")
+        f = self.ctx.LINEAR if linear else self.ctx.NEAREST
+        tex.filter = (f, f)
+        tex.repeat_x = tex.repeat_y = False
+        return tex
+
+    def _table(self, scene, names) -> np.ndarray:
+        """The tracer's materials: albedo, emission, two texels each."""
         table = np.zeros((1, 2 * max(len(names), 1), 4), np.float32)
         for i, name in enumerate(names):
             m = scene.materials.get(name)
@@ -263,9 +279,7 @@ class IrradiancePass(Pass):
             emission = m.emissive if emission is None else self.textures.mean(emission)
             table[0, 2 * i, :3] = np.asarray(base, np.float32) * (1.0 - m.metallic)
             table[0, 2 * i + 1, :3] = emission
-        tex = self.uploads.texture((table.shape[1], 1), 4, table, kind="field", dtype="f4")
-        tex.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
-        return tex
+        return table
 
     def release(self):
         for f in (self.field, self.spare):
