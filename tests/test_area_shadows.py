@@ -35,8 +35,9 @@ def _renders(name):
     scene = penumbra_scenes.build(name)
     width, height = penumbra_scenes.SIZE
     # Point-sampled references: no FXAA (as tests/test_shadows_vs_cycles.py).
+    from lantern.engine.bounces import DIRECT       # the references: bounces 0
     settings = RenderSettings(width=width, height=height, preset="medium",
-                              frame=scene.frame_current, fxaa=False)
+                              frame=scene.frame_current, fxaa=False, bounces=DIRECT)
     images = []
     for shadow in (True, False):
         for light in bpy.data.lights:

@@ -18,7 +18,7 @@ import numpy as np
 from .stencil import entry_points
 
 KINDS = ("mesh", "objects", "commands", "joints", "shapes", "lights", "textures", "overlays",
-         "raytrace")
+         "raytrace", "field")
 
 GL_TEXTURE_2D, GL_TEXTURE0, GL_RGBA, GL_UNSIGNED_BYTE, GL_RGBA8 = \
     0x0DE1, 0x84C0, 0x1908, 0x1401, 0x8058
