@@ -58,6 +58,11 @@ UNITS.update(edge_depth=UNITS["g_base"], edge_marks=UNITS["g_normal"], separable
 # No shading program reads post-processing's source: the area lights' table takes its
 # unit (shaders/ltc.glsl).
 UNITS.update(ltc_lut=UNITS["post_src"])
+# The irradiance field (passes/irradiance.py): read by the ambient pass and the field's
+# own passes, which sample no material map.
+UNITS.update(field_irradiance=UNITS["t_metallic"], field_distance=UNITS["t_roughness"],
+             field_probes=UNITS["t_emissive"], field_materials=UNITS["t_opacity"],
+             field_rays=UNITS["t_normal"])
 
 
 class ShaderError(RuntimeError):

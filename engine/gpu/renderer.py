@@ -25,6 +25,7 @@ from .passes.ao import AoPass
 from .passes.aovs import AovPass
 from .passes.cryptomatte import CryptomattePass
 from .passes.gbuffer import GBufferPass
+from .passes.irradiance import IrradiancePass
 from .passes.clustered import ClusteredLightPass
 from .passes.light_cull import LightCullPass
 from .passes.lights import LightPass
@@ -66,7 +67,7 @@ COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "meshes
             "glass_objects", "glass_draws",
             "pattern_bytes", "programs_pending", "light_clusters", "light_items",
             "clusters_overflowed", "light_tree_pixels", "light_tree_steps", "light_tree_steps_max",
-            "ao_searches")
+            "ao_searches", "field_updates")
 
 
 def _shape(material):
@@ -115,6 +116,9 @@ class Renderer:
         self.gbuffer = GBufferPass(ctx, self.pool, programs, self.geometry, self.textures,
                                    self.depth)
         self._drawn = {}            # material name -> the record its last frame drew
+        self.irradiance = IrradiancePass(ctx, self.uploads, programs, self.lights,
+                                         self.environment, self.textures, self.tracer,
+                                         self.features.compute)
         self.light_cull = LightCullPass(ctx, programs, self.uploads, self.lights)
         self.graph = FrameGraph(ctx, self.pool, [
             self.skinning,
@@ -123,6 +127,7 @@ class Renderer:
             self.shadows,
             self.gbuffer,
             AovPass(ctx, self.pool, programs),
+            self.irradiance,
             AoPass(ctx, self.pool, programs, self.environment),
             AmbientPass(ctx, self.pool, programs, self.environment),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
@@ -318,7 +323,7 @@ class Renderer:
         the CPU (engine/gpu/devices.py)."""
         traced = self._raytracer.warnings if self._raytracer is not None else []
         return self.gl.take_notices() + list(self.textures.failed.values()) + \
-            self.resolve.warnings + traced
+            self.resolve.warnings + traced + self.irradiance.warnings
 
     def tracer(self, scene) -> Raytracer:
         """The session's ray tracer (engine/gpu/raytracer.py), made on the first ask

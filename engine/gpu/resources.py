@@ -15,7 +15,7 @@ from collections import Counter
 import numpy as np
 
 KINDS = ("mesh", "objects", "commands", "joints", "shapes", "lights", "textures", "overlays",
-         "raytrace")
+         "raytrace", "field")
 
 
 class Uploads:

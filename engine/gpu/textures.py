@@ -92,6 +92,7 @@ class MaterialTextures:
         self._tex = {}
         self._samplers = {}
         self.failed = {}               # path -> warning: images that could not be read
+        self._means = {}               # (path, colorspace) -> its linear mean colour
 
     def get(self, path: str, colorspace: str):
         """(texture, cycles_srgb): whether the shader filters it as Cycles filters an
@@ -100,6 +101,23 @@ class MaterialTextures:
         if key not in self._tex:
             self._tex[key] = self._upload(path, colorspace)
         return self._tex[key]
+
+    def mean(self, ref) -> np.ndarray:
+        """A map's mean colour (rgb, linear, its scale and bias applied): what the
+        irradiance field takes for a textured surface its rays hit."""
+        key = (ref.path, ref.colorspace)
+        if key not in self._means:
+            img = self._image(ref.path)
+            f = img[..., :3].astype(np.float64)
+            if img.dtype.kind in "ui":
+                f /= np.iinfo(img.dtype).max
+            if is_srgb(img, ref.colorspace):
+                f = srgb_to_linear(f)
+            self._means[key] = f.reshape(-1, 3).mean(axis=0)
+        m = self._means[key] * np.asarray(ref.scale[:3]) + np.asarray(ref.bias[:3])
+        if ref.channel in ("r", "g", "b", "a"):
+            m = np.full(3, m["rgba".index(ref.channel)] if ref.channel != "a" else 1.0)
+        return m
 
     def _image(self, path):
         """The file's pixels, or a magenta texel when it cannot be read: the one place
