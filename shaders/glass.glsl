@@ -37,6 +37,7 @@ uniform sampler2D u_opaque_depth;  // g_depth (not attached: the depth test is h
 #include "shadow_lookup.glsl"
 #endif
 #include "forward.glsl"
+#include "lit_frame.glsl"
 
 #define GLASS_INTERFACES 8
 // The least distance a traced ray goes from where it starts on a surface, relative to
@@ -60,13 +61,6 @@ vec3 opaque_at(vec2 uv, out bool found) {
     float depth = textureLod(u_opaque_depth, uv, 0.0).r;
     found = !is_background(depth);
     return position_from_depth(uv, depth, inv_view_proj);
-}
-
-// Window uv of camera-relative q; false when it is behind the camera or off screen.
-bool on_screen(vec3 q, out vec2 uv) {
-    vec4 clip = view_proj * vec4(q, 1.0);
-    uv = clip.xy / clip.w * 0.5 + 0.5;
-    return clip.w > 0.0 && all(greaterThanEqual(uv, vec2(0.0))) && all(lessThanEqual(uv, vec2(1.0)));
 }
 
 // The lit frame at uv, blurred by roughness r.

@@ -1,0 +1,83 @@
+"""The glossy bounce (engine/gpu/passes/reflections.py): surfaces reflect the lit scene.
+A metal ball over a red plane lit by a sun under a black world; the ball's lower half
+reflects the plane. Needs compute shaders (GL 4.3), as the ray tracer does."""
+import numpy as np
+import pytest
+from pxr import Gf, Sdf, UsdGeom, UsdLux, UsdShade
+
+import shadow_scenes
+from lantern.engine import RenderSettings, Session
+from lantern.engine.bounces import DIRECT, Bounces
+
+W, H, FOCAL, HAP = 64, 48, 50.0, 36.0
+CENTRE, RADIUS, EYE = (0.0, 0.0, 0.6), 0.5, (0.0, -4.0, 1.2)
+
+
+def _material(stage, name, color, metallic, roughness):
+    mat = UsdShade.Material.Define(stage, f"/root/_materials/{name}")
+    sh = UsdShade.Shader.Define(stage, f"/root/_materials/{name}/surface")
+    sh.CreateIdAttr("UsdPreviewSurface")
+    sh.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(*color))
+    sh.CreateInput("metallic", Sdf.ValueTypeNames.Float).Set(metallic)
+    sh.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(roughness)
+    mat.CreateSurfaceOutput().ConnectToSource(sh.ConnectableAPI(), "surface")
+    return mat
+
+
+def ball_over_red_plane(roughness):
+    stage = shadow_scenes.new_stage(half=6.0)
+    UsdShade.MaterialBindingAPI(stage.GetPrimAtPath("/root/plane")).Bind(
+        _material(stage, "red", (0.8, 0.05, 0.05), 0.0, 1.0))
+    ball = UsdGeom.Sphere.Define(stage, "/root/ball")
+    ball.CreateRadiusAttr(RADIUS)
+    ball.AddTranslateOp().Set(Gf.Vec3d(*CENTRE))
+    UsdShade.MaterialBindingAPI.Apply(ball.GetPrim()).Bind(
+        _material(stage, "metal", (0.9, 0.9, 0.9), 1.0, roughness))
+    shadow_scenes.add_light(stage, "sun", strength=3.0, dir=(0.6, 0.3, -1.0))
+    shadow_scenes.add_camera(stage, eye=EYE, target=CENTRE, focal=FOCAL, hap=HAP, aspect=W / H)
+    UsdLux.DomeLight.Define(stage, "/root/dark").CreateIntensityAttr(0.0)   # a black world
+    return stage
+
+
+def lower_half(rgba):
+    """The mean colour of the ball's lower half (its centre is the image's)."""
+    radius = np.degrees(np.arcsin(RADIUS / np.linalg.norm(np.subtract(EYE, CENTRE))))
+    r_px = np.tan(np.radians(radius)) * FOCAL / HAP * W
+    y, x = np.mgrid[0:H, 0:W] + 0.5
+    dx, dy = x - W / 2, y - H / 2                      # rows run down the image
+    inside = (dx * dx + dy * dy < (0.8 * r_px) ** 2) & (dy > 0.2 * r_px)
+    assert inside.sum() > 20
+    return rgba[inside, :3].mean(axis=0)
+
+
+def render(stage, bounces):
+    with Session(stage, RenderSettings(width=W, height=H, bounces=bounces, preset="low")) as s:
+        return s.render()
+
+
+@pytest.mark.parametrize("roughness, bounces", [(0.0, Bounces()), (0.0, Bounces(12, 0, 4)),
+                                                (1.0, Bounces())])
+def test_a_metal_ball_on_a_plane_shows_the_planes_lit_colour(roughness, bounces):
+    """A mirror reflects the lit plane whether or not a field exists (traced, read from the
+    lit frame); a rough metal takes the field's light (full mode). Without bounces the
+    ball shows the dome's reflection only (black here) and the sun's highlight."""
+    stage = ball_over_red_plane(roughness)
+    full = render(stage, bounces)
+    direct = render(stage, DIRECT)
+    assert "reflections" in full.stats["passes"]
+    assert "reflections" not in direct.stats["passes"]
+    if roughness == 0.0:
+        assert lower_half(direct.rgba).max() < 0.01
+    r, g, b = lower_half(full.rgba) - lower_half(direct.rgba)
+    assert r > 0.05 and r > 4.0 * g and r > 4.0 * b
+
+
+def test_without_compute_a_mirror_reflects_the_dome_only():
+    """GL 3.3 and 4.1 (RenderSettings(compute=False) draws as they do): no glossy bounce,
+    today's reflection of the dome."""
+    stage = ball_over_red_plane(0.0)
+    with Session(stage, RenderSettings(width=W, height=H, bounces=Bounces(), preset="low",
+                                       compute=False)) as s:
+        result = s.render()
+    assert "reflections" not in result.stats["passes"]
+    assert lower_half(result.rgba).max() < 0.01
