@@ -29,8 +29,8 @@ uniform float u_lit_lods;       // its coarsest mip level
 
 // Roughness from which the field's reflection takes over from the traced one, and at
 // which it is all of it.
-#define ROUGH_FROM 0.5
-#define ROUGH_TO 0.8
+#define ROUGH_FROM 0.25
+#define ROUGH_TO 0.45
 // The least distance a ray goes from its surface, relative to its distance from the
 // camera (the position comes from depth), and off it along the normal.
 #define REFLECT_OFFSET 1.0e-3
@@ -86,7 +86,7 @@ void screen_pixel(ivec2 px, out vec4 frag, out vec4 unused1, out vec4 unused2,
     float a = s.roughness * s.roughness;
     vec3 d = normalize(mix(s.n, reflect(-s.v, s.n), (1.0 - a) * (sqrt(1.0 - a) + a)));
 #ifdef IRRADIANCE_FIELD
-    vec3 far = field_irradiance_at(s.p + u_eye, d, s.v) / PI;
+    vec3 far = field_irradiance_along(s.p + u_eye, s.n, s.v, d) / PI;
 #else
     vec3 far = dome * specular_occlusion;
 #endif

@@ -81,3 +81,17 @@ def test_without_compute_a_mirror_reflects_the_dome_only():
         result = s.render()
     assert "reflections" not in result.stats["passes"]
     assert lower_half(result.rgba).max() < 0.01
+
+
+def test_where_nothing_reflects_the_frame_is_kept_exactly():
+    """The pass rewrites the frame from its copy (engine/gpu/lit_copy.py): on surfaces
+    with no specular lobe (IOR 1) the image is the one without the glossy bounce, bit for
+    bit (a copy into the texture itself rounded the floats to 8 bits on llvmpipe)."""
+    stage = ball_over_red_plane(0.0)
+    for name in ("red", "metal"):
+        shader = UsdShade.Shader(stage.GetPrimAtPath(f"/root/_materials/{name}/surface"))
+        shader.CreateInput("ior", Sdf.ValueTypeNames.Float).Set(1.0)
+        shader.GetInput("metallic").Set(0.0)
+    glossy = render(stage, Bounces(12, 4, 4))
+    assert "reflections" in glossy.stats["passes"]
+    assert np.array_equal(glossy.rgba, render(stage, Bounces(12, 4, 0)).rgba)

@@ -11,13 +11,14 @@ class LitCopy:
     def __init__(self, ctx, pool):
         self.ctx, self.pool = ctx, pool
         self.texture = None            # kept while the frame's size stays
+        self.fbo = None                # the copy as a framebuffer, to blit into
 
     def made(self, hdr):
         """The copy's texture at `hdr`'s size (its contents those of the last copy)."""
         if self.texture is None or self.texture.size != hdr.size:
-            if self.texture is not None:
-                self.texture.release()
+            self.release()
             self.texture = self.ctx.texture(hdr.size, 4, dtype="f4")
+            self.fbo = self.ctx.framebuffer(color_attachments=[self.texture])
             self.texture.repeat_x = self.texture.repeat_y = False
             self.texture.filter = (self.ctx.LINEAR_MIPMAP_LINEAR, self.ctx.LINEAR)
         return self.texture
@@ -25,7 +26,12 @@ class LitCopy:
     def copy(self, hdr):
         """`hdr` as it is now, copied and its mip levels made."""
         tex = self.made(hdr)
-        self.ctx.copy_framebuffer(tex, self.pool.framebuffer([hdr]))
+        # The clustered light pass stores into the frame as an image: a framebuffer read
+        # sees those stores only after a barrier.
+        self.ctx.memory_barrier()
+        # Framebuffer to framebuffer (a blit): exact. Into the texture itself (a copy
+        # to a texture image) llvmpipe rounds the floats to 8 bits.
+        self.ctx.copy_framebuffer(self.fbo, self.pool.framebuffer([hdr]))
         tex.build_mipmaps()
         return tex
 
@@ -36,5 +42,6 @@ class LitCopy:
 
     def release(self):
         if self.texture is not None:
+            self.fbo.release()
             self.texture.release()
-            self.texture = None
+            self.texture = self.fbo = None
