@@ -28,7 +28,8 @@ uniform float u_lit_lods;       // its coarsest mip level
 #include "lit_frame.glsl"
 
 // Roughness from which the field's reflection takes over from the traced one, and at
-// which it is all of it.
+// which it is all of it: one ray, blurred by the cone's mip level, stands for a lobe
+// only while the lobe is narrow (docs/rendering.md, "Glossy bounce").
 #define ROUGH_FROM 0.25
 #define ROUGH_TO 0.45
 // The least distance a ray goes from its surface, relative to its distance from the

@@ -5,10 +5,11 @@ as the glass pass reads what lies behind it), and replaces each pixel's reflecti
 the dome (the base lobe's: the coat keeps the dome's) with, by roughness
 (shaders/reflections.glsl):
 
-- up to medium roughness, the lobe's dominant ray traced with the ray tracer
-  (engine/gpu/raytracer.py): what it meets read from the lit frame where that is on
-  screen and not hidden, blurred to the mip level of the lobe's cone's footprint; the
-  dome over the lobe where it escapes; else as a rough reflection;
+- sharp lobes (roughness up to 0.25, blended into the rough ones by 0.45): the lobe's
+  dominant ray traced with the ray tracer (engine/gpu/raytracer.py); what it meets read
+  from the lit frame where that is on screen and not hidden, blurred to the mip level of
+  the lobe's cone's footprint; the dome over the lobe where it escapes; else as a rough
+  reflection;
 - rough reflections: the irradiance field's irradiance along the lobe (over pi: the
   field read as prefiltered radiance, Majercik et al. 2021) where the frame has a field
   (passes/irradiance.py), else the dome's reflection as today;
@@ -17,7 +18,8 @@ weighted by the same split-sum albedo as the dome's reflection it replaces.
 Only when the frame's bounces have a glossy bounce (RenderSettings.bounces_for) and on
 GL 4.3 (compute shaders, which the tracer needs; the pass is a compute dispatch whatever
 the frame's form): GL 3.3 and 4.1 (and RenderSettings(compute=False), which draws as
-they do) reflect the dome and the lights only, as with no bounces. The render passes keep the dome's reflection in GlossDir.
+they do) reflect the dome and the lights only, as with no bounces. The render passes
+keep the dome's reflection in GlossDir.
 
 reads: g_base, g_normal, g_mat, g_emit, g_depth, hdr, view, ao, field, g_smooth and
        g_sheen (optional)   writes: hdr"""
