@@ -15,7 +15,8 @@ the dome (the base lobe's: the coat keeps the dome's) with, by roughness
   (passes/irradiance.py), else the dome's reflection as today;
 weighted by the same split-sum albedo as the dome's reflection it replaces.
 
-Only when the frame's bounces have a glossy bounce (RenderSettings.bounces_for) and on
+Only when the frame's bounces have a glossy bounce (RenderSettings.bounces_for), some
+material has a specular lobe (`reflects`), and on
 GL 4.3 (compute shaders, which the tracer needs; the pass is a compute dispatch whatever
 the frame's form): GL 3.3 and 4.1 (and RenderSettings(compute=False), which draws as
 they do) reflect the dome and the lights only, as with no bounces. The render passes
@@ -33,6 +34,15 @@ from .ambient import GBUFFER, bind_gbuffer, surface_defines
 from .ao import occludes
 
 
+def reflects(material) -> bool:
+    """Whether a material has a base specular lobe (which the pass changes): a metal
+    (its value, map or network), or a dielectric of IOR other than 1 (its F0 is the IOR's:
+    shaders/material.glsl)."""
+    fed = material.pattern is not None and material.pattern.feeds("metallic")
+    return material.ior != 1.0 or material.metallic > 0.0 or "metallic" in material.maps \
+        or fed
+
+
 class ReflectionPass(Pass):
     name = "reflections"
     reads = GBUFFER + ("hdr", "view")
@@ -48,8 +58,8 @@ class ReflectionPass(Pass):
     def needed(self, frame) -> bool:
         # RenderSettings.compute False: as GL 3.3 and 4.1 draw it (the glass pass alike).
         return self.tracer is not None and frame.options.compute is not False and \
-            bool(frame.scene.instances) and \
-            frame.options.bounces_for(frame.scene).glossy_bounces > 0
+            frame.options.bounces_for(frame.scene).glossy_bounces > 0 and \
+            bool(frame.scene.instances) and any(map(reflects, frame.scene.materials.values()))
 
     def execute(self, frame, board):
         dome = frame.scene.dome
