@@ -102,3 +102,26 @@ def test_where_nothing_reflects_the_frame_is_kept_exactly():
     ball.CreateInput("ior", Sdf.ValueTypeNames.Float).Set(1.0)
     ball.GetInput("metallic").Set(0.0)
     assert "reflections" not in render(stage, Bounces(12, 4, 4)).stats["passes"]
+
+
+@pytest.mark.parametrize("roughness", [0.0, 0.3])
+def test_under_a_uniform_dome_a_lone_ball_reflects_what_it_did(roughness):
+    """Rays that escape bring the dome over the lobe, weighted as the dome's reflection
+    was: a lone metal ball under a uniform dome (nothing else to reflect, no field) is
+    today's image within 1%."""
+    from pxr import Usd
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    UsdGeom.Xform.Define(stage, "/root")
+    ball = UsdGeom.Sphere.Define(stage, "/root/ball")
+    ball.CreateRadiusAttr(RADIUS)
+    ball.AddTranslateOp().Set(Gf.Vec3d(*CENTRE))
+    UsdShade.MaterialBindingAPI.Apply(ball.GetPrim()).Bind(
+        _material(stage, "metal", (0.9, 0.6, 0.3), 1.0, roughness))
+    shadow_scenes.add_camera(stage, eye=EYE, target=CENTRE, focal=FOCAL, hap=HAP, aspect=W / H)
+    dome = UsdLux.DomeLight.Define(stage, "/root/sky")
+    dome.CreateColorAttr(Gf.Vec3f(0.4, 0.5, 0.6))
+    glossy = render(stage, Bounces(12, 0, 4))
+    assert "reflections" in glossy.stats["passes"]
+    np.testing.assert_allclose(lower_half(glossy.rgba), lower_half(render(stage, DIRECT).rgba),
+                               rtol=0.01)
