@@ -44,9 +44,6 @@ uniform sampler2D u_opaque_depth;  // g_depth (not attached: the depth test is h
 // its distance from the camera: the front surface's position comes from its depth,
 // within about this much, and must not be hit again.
 #define GLASS_OFFSET 1.0e-3
-// A hit on screen is hidden where the opaque surface there is nearer than this share of
-// its distance.
-#define GLASS_HIDDEN 0.95
 
 out vec4 frag;
 
@@ -87,24 +84,15 @@ vec3 hit_shading_normal(RtHit hit, vec3 flat_n) {
 }
 
 // Whether the ray from camera-relative q along d meets something; L: what it meets, as
-// the lit frame shows it where the hit is on screen and in front of the opaque surface
-// there, else the dome along the ray.
+// the lit frame shows it where the hit is on screen and not hidden there, else the dome
+// along the ray.
 bool traced_radiance(vec3 q, vec3 d, float r, out vec3 L) {
-    RtHit hit;
     L = dome_along(d, r);
-    if (!rt_closest_hit(q + u_eye, d, GLASS_OFFSET * (1.0 + length(q)), RT_FAR, hit))
-        return false;
-    vec3 h = q + hit.t * d;
     vec2 uv;
-    bool found;
-    if (on_screen(h, uv)) {
-        vec3 o = opaque_at(uv, found);
-        // Hidden behind an opaque surface clearly nearer on screen: the hit is not in
-        // the frame. (The frame's depth is the pixel centre's: on a grazing floor it
-        // differs from a hit elsewhere in the pixel by a few per cent.)
-        if (!found || length(o) >= GLASS_HIDDEN * length(h)) L = frame_at(uv, r);
-    }
-    return true;
+    float t;
+    int met = frame_hit(q, d, GLASS_OFFSET * (1.0 + length(q)), u_opaque_depth, uv, t);
+    if (met == FRAME_SHOWN) L = frame_at(uv, r);
+    return met != FRAME_ESCAPED;
 }
 
 vec3 radiance_along(vec3 q, vec3 d, float r) {

@@ -35,9 +35,6 @@ uniform float u_lit_lods;       // its coarsest mip level
 // The least distance a ray goes from its surface, relative to its distance from the
 // camera (the position comes from depth), and off it along the normal.
 #define REFLECT_OFFSET 1.0e-3
-// A hit on screen is hidden where the opaque surface there is nearer than this share of
-// its distance (as the glass pass reads it).
-#define REFLECT_HIDDEN 0.95
 
 // The lit frame where camera-relative point h, at distance t along ray d, is seen,
 // blurred over the footprint of a cone of half-angle `cone` about d.
@@ -56,15 +53,11 @@ vec3 lit_at(vec2 uv, vec3 h, vec3 d, float t, float cone) {
 vec3 traced_reflection(vec3 p, vec3 n, vec3 d, float cone, vec3 escaped, vec3 far) {
     float scale = 1.0 + length(p);
     vec3 o = p + n * REFLECT_OFFSET * scale;
-    RtHit hit;
-    if (!rt_closest_hit(o + u_eye, d, REFLECT_OFFSET * scale, RT_FAR, hit)) return escaped;
-    vec3 h = o + hit.t * d;
     vec2 uv;
-    if (!on_screen(h, uv)) return far;
-    float depth = textureLod(g_depth, uv, 0.0).r;
-    vec3 shown = position_from_depth(uv, depth, inv_view_proj);
-    if (!is_background(depth) && length(shown) < REFLECT_HIDDEN * length(h)) return far;
-    return lit_at(uv, h, d, hit.t, cone);
+    float t;
+    int met = frame_hit(o, d, REFLECT_OFFSET * scale, g_depth, uv, t);
+    if (met == FRAME_ESCAPED) return escaped;
+    return met == FRAME_SHOWN ? lit_at(uv, o + t * d, d, t, cone) : far;
 }
 
 // A screen pass's body (engine/gpu/screen.py), compute form only: the lit frame with
