@@ -25,6 +25,9 @@ uniform mat4 view_proj;         // camera-relative -> clip
 uniform vec3 u_eye;             // the camera's world position (the tracer's frame)
 uniform sampler2D u_lit;        // the lit opaque frame, mip-mapped (lit_copy.py)
 uniform float u_lit_lods;       // its coarsest mip level
+#ifdef WRITE_AOVS
+uniform sampler2D u_glossy;     // the GlossDir render pass so far (passes/ambient.py)
+#endif
 #include "lit_frame.glsl"
 
 // Roughness from which the field's reflection takes over from the traced one, and at
@@ -61,10 +64,16 @@ vec3 traced_reflection(vec3 p, vec3 n, vec3 d, float cone, vec3 escaped, vec3 fa
 }
 
 // A screen pass's body (engine/gpu/screen.py), compute form only: the lit frame with
-// the base lobe's reflection of the scene in place of the dome's.
-void screen_pixel(ivec2 px, out vec4 frag, out vec4 unused1, out vec4 unused2,
+// the base lobe's reflection of the scene in place of the dome's; with WRITE_AOVS the
+// GlossDir render pass with the same change.
+void screen_pixel(ivec2 px, out vec4 frag, out vec4 aov_glossy, out vec4 unused2,
                   out vec4 unused3) {
-    unused1 = unused2 = unused3 = vec4(0.0);
+    aov_glossy = unused2 = unused3 = vec4(0.0);
+#ifdef WRITE_AOVS
+    // Its own texel, read before this invocation stores it: the change goes to GlossDir
+    // too, so the render passes still add up to the image.
+    aov_glossy = texelFetch(u_glossy, px, 0);
+#endif
     frag = texelFetch(u_lit, px, 0);
     float depth = texelFetch(g_depth, px, 0).r;
     if (is_background(depth)) return;
@@ -86,5 +95,7 @@ void screen_pixel(ivec2 px, out vec4 frag, out vec4 unused1, out vec4 unused2,
 #endif
     float rough = smoothstep(ROUGH_FROM, ROUGH_TO, s.roughness);
     vec3 near = rough < 1.0 ? traced_reflection(s.p, s.n, d, lobe_cone(lobe), dome, far) : far;
-    frag.rgb += spec * (mix(near, far, rough) - dome * specular_occlusion);
+    vec3 change = spec * (mix(near, far, rough) - dome * specular_occlusion);
+    frag.rgb += change;
+    aov_glossy.rgb += change;
 }

@@ -125,3 +125,17 @@ def test_under_a_uniform_dome_a_lone_ball_reflects_what_it_did(roughness):
     assert "reflections" in glossy.stats["passes"]
     np.testing.assert_allclose(lower_half(glossy.rgba), lower_half(render(stage, DIRECT).rgba),
                                rtol=0.01)
+
+
+def test_the_render_passes_take_the_reflection_in_glossdir():
+    """DiffDir + GlossDir + Env + Emit is the image (without FXAA or post) with the glossy
+    bounce too: the reflection's change goes to GlossDir."""
+    stage = ball_over_red_plane(0.0)
+    names = frozenset({"DiffDir", "GlossDir", "Env", "Emit"})
+    with Session(stage, RenderSettings(width=W, height=H, bounces=Bounces(), preset="low",
+                                       passes=names, fxaa=False)) as s:
+        result = s.render()
+    assert "reflections" in result.stats["passes"]
+    total = sum(result.passes[n][..., :3] for n in names)
+    np.testing.assert_allclose(total, result.rgba[..., :3], atol=1e-4)
+    assert lower_half(result.passes["GlossDir"])[0] > 0.05     # the plane's red

@@ -20,17 +20,18 @@ material has a specular lobe (`reflects`), and on
 GL 4.3 (compute shaders, which the tracer needs; the pass is a compute dispatch whatever
 the frame's form): GL 3.3 and 4.1 (and RenderSettings(compute=False), which draws as
 they do) reflect the dome and the lights only, as with no bounces. The render passes
-keep the dome's reflection in GlossDir.
+take the change in GlossDir (no GlossInd pass of its own), so they add up to the image.
 
 reads: g_base, g_normal, g_mat, g_emit, g_depth, hdr, view, ao, field, g_smooth and
-       g_sheen (optional)   writes: hdr"""
+       g_sheen (optional)   writes: hdr
+render passes: GlossDir (added to in place, as the light passes add to it)"""
 from __future__ import annotations
 
 from ..framegraph import Pass
 from ..lit_copy import LitCopy
 from ..programs import UNITS, set_uniform
 from ..screen import run_screen, screen_program
-from .ambient import GBUFFER, bind_gbuffer, surface_defines
+from .ambient import GBUFFER, LIGHTING_AOVS, bind_gbuffer, surface_defines
 from .ao import occludes
 
 
@@ -48,6 +49,7 @@ class ReflectionPass(Pass):
     reads = GBUFFER + ("hdr", "view")
     optional = ("ao", "g_smooth", "g_sheen", "field")
     writes = ("hdr",)
+    aovs = {"GlossDir": LIGHTING_AOVS["GlossDir"]}    # added to in place
 
     def __init__(self, ctx, pool, programs, environment, tracer):
         self.ctx, self.pool, self.programs = ctx, pool, programs
@@ -68,7 +70,12 @@ class ReflectionPass(Pass):
         ao = "ao" in board and occludes(frame)
         defines = (["HAS_DOME_MAP"] if env is not None else []) + (["HAS_AO"] if ao else []) + \
             surface_defines(frame, board) + (["IRRADIANCE_FIELD"] if "field" in board else [])
-        prog = screen_program(self.programs, "reflections", defines, compute=True)
+        targets = [board["hdr"]]
+        if "GlossDir" in frame.aovs:   # it takes the change, read and stored in place
+            defines.append("WRITE_AOVS")
+            targets.append(board["aov_glossy"])
+        prog = screen_program(self.programs, "reflections", defines, compute=True,
+                              outputs=len(targets))
         view = board["view"]
         bind_gbuffer(board, prog, view)
         self.environment.bind(prog, dome, env)
@@ -79,10 +86,13 @@ class ReflectionPass(Pass):
         lit.use(UNITS["hdr"])
         set_uniform(prog, "u_lit", UNITS["hdr"])
         set_uniform(prog, "u_lit_lods", self.lit.lods)
+        if len(targets) > 1:
+            board["aov_glossy"].use(UNITS["post_src"])
+            set_uniform(prog, "u_glossy", UNITS["post_src"])
         set_uniform(prog, "view_proj", view.view_proj)
         set_uniform(prog, "u_eye", view.origin)
         self.ctx.disable(self.ctx.BLEND)
-        run_screen(self.ctx, self.programs, self.pool, prog, [board["hdr"]], True)
+        run_screen(self.ctx, self.programs, self.pool, prog, targets, True)
 
     def release(self):
         self.lit.release()
