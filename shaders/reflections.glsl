@@ -86,8 +86,7 @@ void screen_pixel(ivec2 px, out vec4 frag, out vec4 aov_glossy, out vec4 unused2
 #endif
     Lobe lobe = make_lobe(s.n, s.v, s.roughness, s.spec_dielectric);
     vec3 dome = has_dome ? dome_specular(lobe) : vec3(0.0);
-    float a = s.roughness * s.roughness;
-    vec3 d = normalize(mix(s.n, reflect(-s.v, s.n), (1.0 - a) * (sqrt(1.0 - a) + a)));
+    vec3 d = normalize(specular_dominant(s.n, s.v, s.roughness));
 #ifdef IRRADIANCE_FIELD
     vec3 far = field_irradiance_along(s.p + u_eye, s.n, s.v, d) / PI;
 #else
