@@ -76,8 +76,9 @@ float field_nearest(vec2 uv) {
 // viewer; n for a ray's hit): the eight probes of its cell, each weighted by trilinear
 // position, by whether it lies in front of the surface, and by the chance (Chebyshev,
 // from its mean and squared distances) that it sees the point, which goes to 0 behind a
-// wall. 0 where no probe sees the point.
-vec3 field_irradiance_at(vec3 p, vec3 n, vec3 v) {
+// wall. 0 where no probe sees the point. `along`: the direction whose irradiance is
+// read (n for the surface's own; a reflection's direction for a rough lobe's light).
+vec3 field_irradiance_along(vec3 p, vec3 n, vec3 v, vec3 along) {
     float spacing = min(field_step.x, min(field_step.y, field_step.z));
     vec3 q = p + (0.2 * n + 0.8 * v) * field_bias * spacing;
     vec3 g = clamp((q - field_lo) / field_step, vec3(0.0), vec3(field_counts - 1));
@@ -113,8 +114,10 @@ vec3 field_irradiance_at(vec3 p, vec3 n, vec3 v) {
             }
         }
         if (w < 0.2) w *= w * w / 0.04;              // crushes what little light leaks
-        sum += w * textureLod(field_irradiance, field_uv(field_irradiance, probe, n), 0.0).rgb;
+        sum += w * textureLod(field_irradiance, field_uv(field_irradiance, probe, along), 0.0).rgb;
         total += w;
     }
     return total > 0.0 ? sum / total : vec3(0.0);
 }
+
+vec3 field_irradiance_at(vec3 p, vec3 n, vec3 v) { return field_irradiance_along(p, n, v, n); }

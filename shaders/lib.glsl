@@ -128,6 +128,14 @@ Lobe make_lobe(vec3 n, vec3 v, float r, float dielectric) {
     return lobe;
 }
 
+// The direction a GGX lobe of roughness r about n, seen along v, reflects most: from the
+// mirror direction towards n as it roughens (Lagarde and de Rousiers 2014,
+// getSpecularDominantDir).
+vec3 specular_dominant(vec3 n, vec3 v, float r) {
+    float a = r * r;
+    return mix(n, reflect(-v, n), (1.0 - a) * (sqrt(1.0 - a) + a));
+}
+
 // The lobe's mean direction, E[l] (shorter than 1 by its spread).
 vec3 lobe_mean(Lobe lobe) { return lobe.first.x * lobe.t + lobe.first.z * lobe.n; }
 

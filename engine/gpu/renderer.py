@@ -30,6 +30,7 @@ from .passes.clustered import ClusteredLightPass
 from .passes.light_cull import LightCullPass
 from .passes.lights import LightPass
 from .passes.post import PostPass
+from .passes.reflections import ReflectionPass
 from .passes.resolve import ResolvePass
 from .passes.shadows import ShadowPass
 from .passes.skinning import SkinningPass
@@ -135,6 +136,8 @@ class Renderer:
             self.light_cull,
             ClusteredLightPass(ctx, self.pool, programs, self.lights, self.environment,
                                self.light_cull),
+            ReflectionPass(ctx, self.pool, programs, self.environment,
+                           self.tracer if self.features.compute else None),
             GlassPass(ctx, self.pool, programs, self.geometry, self.textures, self.lights,
                       self.environment, self.depth, self.uploads,
                       self.tracer if self.features.compute else None),
