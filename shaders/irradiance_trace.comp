@@ -13,7 +13,12 @@
 #include "irradiance_field.glsl"
 layout(local_size_x = 64) in;
 layout(rgba32f, binding = 0) writeonly uniform image2D ray_image;   // x ray, y probe
-uniform sampler2D field_materials;   // two texels a material: albedo, emission
+uniform sampler2D field_materials;   // two texels a material: albedo, (emission, sides)
+// Per traced instance (irradiance.py _instance_sides): 4 its faces are made lights where
+// they emit, 8 its mesh is closed. A material's sides (1 front, 2 back: its emission
+// sampling) of such faces are lights of the light table, which bring their light per
+// pixel: a ray that meets them takes no emission there (engine/emitters.py closed_sides).
+layout(std430, binding = 15) readonly buffer FieldSides { int field_sides[]; };
 uniform mat3 u_rotation;
 uniform int u_rays;                  // a probe's
 uniform int n_lights;
@@ -47,7 +52,11 @@ void main() {
         vec3 x = origin + hit.t * dir;
         int m = rt_hit_material(hit);
         vec3 albedo = texelFetch(field_materials, ivec2(2 * m, 0), 0).rgb;
-        radiance = texelFetch(field_materials, ivec2(2 * m + 1, 0), 0).rgb;
+        vec4 emission = texelFetch(field_materials, ivec2(2 * m + 1, 0), 0);
+        int sampled = int(emission.a), mesh = field_sides[hit.instance];
+        bool lit_front = (mesh & 4) != 0 && (sampled & 1) != 0;
+        bool lit_back = (mesh & 4) != 0 && (sampled & 2) != 0 && !((mesh & 8) != 0 && lit_front);
+        radiance = (back ? lit_back : lit_front) ? vec3(0.0) : emission.rgb;
         vec3 arriving = vec3(0.0);           // irradiance x pi: albedo / pi below
         Surface s = make_surface(x, n, n, vec4(albedo, 1.0), vec4(0.0, 1.0, 0.0, 0.0));
         for (int i = 0; i < n_lights; ++i) {

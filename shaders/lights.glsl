@@ -206,8 +206,12 @@ void area_light(Surface s, out vec3 diffuse, out vec3 glossy) {
         vec4 t1 = light_table(row, 1), t2 = light_table(row, 2);
         bool both = (int(light_table(row, 3).w) & 32) != 0;
         // The side of the polygon's plane s is on (a corner is on it; the light's
-        // position, an emissive mesh's box's middle, may not be).
-        if (dot(s.p - light_pos - light_table(row, 8).xyz, t2.xyz) <= 0.0 && !both) continue;
+        // position, an emissive mesh's box's middle, may not be). A point in the plane
+        // (within the depth's rounding: an emitter's own surface) sees it edge on, and
+        // nothing: the horizon's clip of a polygon around the point is not to be trusted.
+        vec3 to_s = s.p - light_pos - light_table(row, 8).xyz;
+        float side = dot(to_s, t2.xyz);
+        if (abs(side) <= 1e-3 * length(to_s) || (side < 0.0 && !both)) continue;
         area_polygon(s, row, int(light_table(row, 6).x));
         if (ltc_poly_n >= 3) polygon_reflected(s, t1.rgb, diffuse, glossy);
     }

@@ -34,6 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ....core.emission import SAMPLING
+from ...emitters import closed, makes_lights, radiance
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
 
@@ -46,6 +48,7 @@ BIAS = 0.3                   # the read's self-shadowing bias, a share of the sp
 PROBES = {"low": 4, "medium": 6, "high": 8, "ultra": 10}
 RAYS = {"low": 64, "medium": 128, "high": 192, "ultra": 256}
 ALL_BARRIERS = 0xFFFFFFFF
+SIDES_BINDING = 15           # shaders/irradiance_trace.comp FieldSides
 FIELD_UNITS = ("field_irradiance", "field_distance", "field_probes", "field_materials",
                "field_rays")
 # Probes sit off their cells' centres by this share of the spacing: walls often lie on
@@ -192,6 +195,7 @@ class IrradiancePass(Pass):
         materials = self.uploads.texture((self.table.shape[1], 1), 4, self.table, kind="field",
                                          dtype="f4")
         materials.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
+        sides = self.uploads.buffer(self._instance_sides(scene, tracer), kind="field")
         env = self.environment.prepare(scene.dome)
         trace = self.programs.get("irradiance_trace.comp", None,
                                   ["HAS_DOME_MAP"] if env is not None else [], compute=True)
@@ -201,6 +205,7 @@ class IrradiancePass(Pass):
             for k in range(updates):
                 R = rotation(k)
                 tracer.bind()
+                sides.bind_to_storage_buffer(SIDES_BINDING)
                 self.field.bind(trace)
                 materials.use(UNITS["field_materials"])
                 if self.lights.texture is not None:
@@ -231,6 +236,7 @@ class IrradiancePass(Pass):
         finally:
             ray_tex.release()
             materials.release()
+            sides.release()
         frame.stats["field_probes"] = n
         frame.stats["field_rays"] = n * rays * updates
         self.ctx.finish()
@@ -277,9 +283,33 @@ class IrradiancePass(Pass):
             base = m.diffuse if base is None else self.textures.mean(base)
             emission = m.maps.get("emissiveColor")
             emission = m.emissive if emission is None else self.textures.mean(emission)
-            table[0, 2 * i, :3] = np.asarray(base, np.float32) * (1.0 - m.metallic)
+            # Glass: its diffuse share (the field's rays stop at it; what it lets
+            # through is not followed).
+            table[0, 2 * i, :3] = np.asarray(base, np.float32) * (1.0 - m.metallic) * \
+                (1.0 - m.transmission)
             table[0, 2 * i + 1, :3] = emission
+            front, back = SAMPLING.get(m.emission_sampling, SAMPLING["auto"])
+            table[0, 2 * i + 1, 3] = front + 2 * back
         return table
+
+    def _instance_sides(self, scene, tracer) -> np.ndarray:
+        """Per traced instance, the sides of its emitting faces that are lights of the
+        light table (engine/emitters.py: 1 front, 2 back, 4 where its mesh's faces are
+        made lights at all, 8 where the mesh is closed): a ray meeting them takes no
+        emission there, which the lights bring per pixel; the other sides' emission (the
+        inside of a closed emitter, a skinned one's, sampling None's) comes through the
+        field, as Cycles finds it by BSDF sampling."""
+        memo = {}
+        flags = np.zeros(max(len(tracer.instances), 1), np.int32)
+        for i, (path, _) in enumerate(tracer.instances):
+            key = scene.instances[path].mesh_key
+            if key not in memo:
+                mesh = scene.meshes[key]
+                emits = any(float(radiance(scene.materials[name]).max()) > 0.0
+                            for name in mesh.materials if name in scene.materials)
+                memo[key] = (4 * makes_lights(mesh) + 8 * closed(mesh)) if emits else 0
+            flags[i] = memo[key]
+        return flags
 
     def release(self):
         for f in (self.field, self.spare):
