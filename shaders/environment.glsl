@@ -71,8 +71,10 @@ void dome_light(Surface s, vec2 occlusion, out vec3 diffuse, out vec3 glossy) {
 #ifdef SHEEN
     diffuse += sheen_ambient(s, E) * ao;
 #endif
+#ifndef GLOSSY_BOUNCE   // else the reflection pass adds the base lobe's (reflections.glsl)
     glossy = s.under_coat * s.spec_albedo
            * dome_specular(make_lobe(s.n, s.v, s.roughness, s.spec_dielectric));
+#endif
     if (s.coat > 0.0)
         glossy += s.coat_albedo * dome_specular(make_lobe(s.n, s.v, s.coat_roughness, 1.0));
     glossy *= occlusion.y;

@@ -1,7 +1,8 @@
 // The glossy bounce (engine/gpu/passes/reflections.py): the base lobe's reflection of the
-// lit scene in place of the dome's, over the lit opaque frame. The ambient pass added
-// the dome's reflection, spec x dome_specular(lobe) x the specular occlusion; this adds
-// spec x (L - that), spec the same split-sum albedo, so energy stays as the dome's had it.
+// lit scene in place of the dome's, over the lit opaque frame. The ambient pass left out
+// the dome's reflection (GLOSSY_BOUNCE: spec x dome_specular(lobe) x the specular
+// occlusion); this adds spec x L, spec the same split-sum albedo, so energy stays as the
+// dome's had it.
 // L, by the roughness, mixes
 //   near  the ray along the lobe's dominant direction, traced (raytrace.glsl): where it
 //         meets a surface shown on screen and not hidden, the lit frame there, at the mip
@@ -94,7 +95,7 @@ void screen_pixel(ivec2 px, out vec4 frag, out vec4 aov_glossy, out vec4 unused2
 #endif
     float rough = smoothstep(ROUGH_FROM, ROUGH_TO, s.roughness);
     vec3 near = rough < 1.0 ? traced_reflection(s.p, s.n, d, lobe_cone(lobe), dome, far) : far;
-    vec3 change = spec * (mix(near, far, rough) - dome * specular_occlusion);
+    vec3 change = spec * mix(near, far, rough);
     frag.rgb += change;
     aov_glossy.rgb += change;
 }

@@ -4,8 +4,9 @@ split-sum table for the specular lobe and the coat; engine/gpu/environment.py ke
 them per map), emission (added here and only here), and the dome as the background.
 Ambient occlusion, when the AO pass ran, dims the dome's light only. With an
 irradiance field (passes/irradiance.py) the diffuse light is the field's instead of the
-dome's: the field's rays that escape bring the dome, so it is counted once. It starts
-the HDR target.
+dome's: the field's rays that escape bring the dome, so it is counted once. In a frame
+with the glossy bounce (passes/reflections.py) the base lobe's dome reflection is left
+to that pass. It starts the HDR target.
 
 reads: g_base, g_normal, g_mat, g_emit, g_depth, view, ao, field (optional), g_smooth (optional:
        the normals before the normal maps, for the bump map correction), g_sheen
@@ -101,7 +102,8 @@ class AmbientPass(Pass):
         ao = board.get("ao") if occludes(frame) else None
         defines = (["HAS_DOME_MAP"] if env is not None else []) + (["HAS_AO"] if ao else []) + \
             (["WRITE_AOVS"] if aovs else []) + surface_defines(frame, board) + \
-            (["IRRADIANCE_FIELD"] if "field" in board else [])
+            (["IRRADIANCE_FIELD"] if "field" in board else []) + \
+            (["GLOSSY_BOUNCE"] if "reflections" in frame.stats["passes"] else [])
         prog = screen_program(self.programs, "ambient", defines, frame.compute, len(targets))
         bind_gbuffer(board, prog, board["view"])
         self.environment.bind(prog, dome, env)

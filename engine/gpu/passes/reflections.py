@@ -18,8 +18,8 @@ weighted by the same split-sum albedo as the dome's reflection it replaces.
 Only when the frame's bounces have a glossy bounce (RenderSettings.bounces_for), some
 material has a specular lobe (`reflects`), and on
 GL 4.3 (compute shaders, which the tracer needs; the pass is a compute dispatch whatever
-the frame's form): GL 3.3 and 4.1 (and RenderSettings(compute=False), which draws as
-they do) reflect the dome and the lights only, as with no bounces. The render passes
+the frame's form, so both forms take it): GL 3.3 and 4.1 reflect the dome and the
+lights only, as with no bounces. The render passes
 take the change in GlossDir (no GlossInd pass of its own), so they add up to the image.
 
 reads: g_base, g_normal, g_mat, g_emit, g_depth, hdr, view, ao, field, g_smooth and
@@ -58,9 +58,8 @@ class ReflectionPass(Pass):
         self.lit = LitCopy(ctx, pool)
 
     def needed(self, frame) -> bool:
-        # RenderSettings.compute False: as GL 3.3 and 4.1 draw it (the glass pass alike).
-        return self.tracer is not None and frame.options.compute is not False and \
-            frame.options.bounces_for(frame.scene).glossy_bounces > 0 and \
+        # A dispatch in either form of the frame (RenderSettings.compute), as the field's.
+        return self.tracer is not None and frame.options.bounces_for(frame.scene).glossy_bounces > 0 and \
             bool(frame.scene.instances) and any(map(reflects, frame.scene.materials.values()))
 
     def execute(self, frame, board):
