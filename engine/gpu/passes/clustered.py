@@ -92,6 +92,7 @@ class ClusteredLightPass(Pass):
                                  + ["SINGLE_LIGHT", "HAS_SHADOW"])
             set_shadow_uniforms(prog, shadow_maps[path], frame.preset, view.origin)
             set_uniform(prog, "light_index", self.table.index[path])
+            set_uniform(prog, "light_error", float(clusters.error))  # emitter groups'
             set_uniform(prog, "u_offset", rect[:2])
             prog.run(-(-rect[2] // TILE), -(-rect[3] // TILE))
             ctx.memory_barrier()
