@@ -207,7 +207,7 @@ int next_in_tree(int i) {
 // Whether the polygon or group at `row` lights s: s on the face it lights from (a
 // corner is on its plane; the light's position, an emissive mesh's box's middle, may
 // not be).
-bool faces(Surface s, int row) {
+bool polygon_faces(Surface s, int row) {
     return dot(s.p - light_pos - light_table(row, 8).xyz, light_table(row, 2).xyz) > 0.0
         || (int(light_table(row, 3).w) & 32) != 0;
 }
@@ -259,13 +259,13 @@ void area_light(Surface s, out vec3 diffuse, out vec3 glossy) {
             if (light_table(group, 5).w > 0.0) {
                 bool coplanar = int(light_table(group, 6).x) > 0;
                 if (!coplanar) down = true;
-                else if (faces(s, group)) {
+                else if (polygon_faces(s, group)) {
                     if (group_stands(s, group)) row = group;
                     else down = true;
                 }
             }
         }
-        if (row >= 0 && faces(s, row)) {
+        if (row >= 0 && polygon_faces(s, row)) {
             area_polygon(s, row, int(light_table(row, 6).x));
             if (ltc_poly_n >= 3) polygon_reflected(s, light_table(row, 1).rgb, diffuse, glossy);
         }
