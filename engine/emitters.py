@@ -44,8 +44,9 @@ from .textures import read_image_linear
 
 WARNINGS = "<emitters>"          # Scene.warnings key of the meshes not made lights
 COPLANAR = 1.0 - 1e-6           # cos between the normals of a quad's two triangles
-# Polygons a light at most: a shader invocation loops over a light's polygons, about 60
-# loop iterations each, and llvmpipe ends an invocation's loops after 65,535 in all.
+# Polygons a light at most: a pixel near a light may walk its every group and polygon
+# (511 steps, about 60 loop iterations a polygon), and llvmpipe ends an invocation's
+# loops after 65,535 in all.
 CHUNK = 256
 
 
