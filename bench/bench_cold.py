@@ -236,6 +236,10 @@ def baseline_code(rev, folder):
     package.mkdir(parents=True)
     archive = subprocess.run(["git", "archive", rev], cwd=REPO, capture_output=True, check=True)
     subprocess.run(["tar", "-x", "-C", str(package)], input=archive.stdout, check=True)
+    # Its bytecode written ahead, as `make` writes this checkout's: where
+    # PYTHONDONTWRITEBYTECODE is set, each of its processes would compile it again.
+    subprocess.run([sys.executable, "-m", "compileall", "-q", str(package)], check=True,
+                   capture_output=True)
     commit = subprocess.run(["git", "rev-parse", "--short", rev], cwd=REPO, capture_output=True,
                             text=True, check=True).stdout.strip()
     return folder, commit

@@ -23,12 +23,15 @@ def point_sampled(pixel_filter: float) -> bool:
 
 
 def time_lantern(blend, frame, size, preset, transparent, spawned_at, warm_runs,
-                 coverage=False, antialias=True) -> dict:
+                 coverage=False, antialias=True, direct=False) -> dict:
     """Renders `blend` with Lantern and times it. spawned_at: time.time() in the parent
     just before it started this process. Returns the image (float RGBA), the times,
-    the warnings, and with `coverage` Lantern's coverage (alpha) for foreground masks."""
+    the warnings, and with `coverage` Lantern's coverage (alpha) for foreground masks.
+    `direct`: lit directly (bounces 0, as compare's direct mode sets Cycles), else with the
+    scene's bounces."""
     from .. import exporters  # Blender's pxr before the engine imports any
     from ..engine import RenderSettings, Session
+    from ..engine.bounces import DIRECT
     from .blender_scene import open_scene
 
     notes = open_scene(blend, frame, size)
@@ -37,7 +40,7 @@ def time_lantern(blend, frame, size, preset, transparent, spawned_at, warm_runs,
     stage, report = exporters.stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
     export_seconds = time.perf_counter() - start
     settings = RenderSettings(width=size[0], height=size[1], frame=frame, preset=preset,
-                              transparent=transparent,
+                              transparent=transparent, bounces=DIRECT if direct else None,
                               **({} if antialias else {"supersample": 1, "fxaa": False}))
     with Session(stage, settings) as session:
         first = session.render()

@@ -133,6 +133,9 @@ def _plan(options, out, scan, scene_files, size, frame):
         jobs.append(Job(f"lantern {preset}", common | {
             "job": "lantern", "preset": preset, "transparent": transparent,
             "antialias": not point_sampled(options.pixel_filter), "warm_runs": options.warm_runs, "image": _image(out, f"lantern_{preset}"),
+            # Lit as the references are: directly unless full mode is asked for (one
+            # Lantern image is scored against every mode's reference).
+            "direct": "full" not in options.modes,
             "coverage": coverage}, 1, extra={"renderer": "lantern", "preset": preset}))
     return jobs, references
 

@@ -75,7 +75,8 @@ def _lantern(spec):
     timed = time_lantern(spec["scene"], spec["frame"], tuple(spec["size"]), spec["preset"],
                          spec["transparent"], spec["spawned_at"], spec["warm_runs"],
                          coverage=spec.get("coverage") is not None,
-                         antialias=spec.get("antialias", True))
+                         antialias=spec.get("antialias", True),
+                         direct=spec.get("direct", False))
     write_image(spec["image"], timed.pop("rgba"))
     coverage = timed.pop("coverage")
     if coverage is not None:

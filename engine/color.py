@@ -24,6 +24,7 @@ import glob
 import importlib.util
 import os
 import sys
+import threading
 
 import numpy as np
 
@@ -62,9 +63,23 @@ def to_display8(rgba: np.ndarray, view: str = STANDARD, look: str | None = None,
 
 
 def check(view: str = STANDARD, look: str | None = None, exposure: float = 0.0) -> None:
-    """Raise ColorManagementError now for settings to_display8 could not apply."""
+    """Raise ColorManagementError now for settings to_display8 could not apply (no
+    config, an unknown view or look). Their transform is then built on a thread of its
+    own, for the image written later: OpenColorIO builds it without Python's lock (AgX:
+    70-100 ms), beside the stage read and the first frame."""
     if view != STANDARD or look or exposure != 0.0:
-        _processor(view, look or "", float(exposure))
+        _check_names(_config(), view, look)
+        # Not a daemon: a process that ends meanwhile waits for it (at most the build)
+        # rather than tearing OpenColorIO down under it.
+        threading.Thread(target=_build_ahead, args=(view, look or "", float(exposure)),
+                         name="lantern-colour").start()
+
+
+def _build_ahead(view, look, exposure):
+    try:
+        _processor(view, look, exposure)
+    except Exception:       # noqa: BLE001  (raised again where the image asks for it)
+        pass
 
 
 def display_rgb(rgb: np.ndarray, view: str = STANDARD, look: str | None = None,
@@ -132,13 +147,27 @@ def _look_name(config, view, look):
                                f"known: {', '.join(looks_for(view)) or 'none'}")
 
 
-@functools.lru_cache(maxsize=16)
-def _processor(view, look, exposure):
-    import PyOpenColorIO as ocio
-    config = _config()
+def _check_names(config, view, look):
     if view not in config.getViews(DISPLAY):
         raise ColorManagementError(f"unknown view {view!r}; known: "
                                    f"{', '.join(config.getViews(DISPLAY))}")
+    if look:
+        _look_name(config, view, look)
+
+
+_building = threading.Lock()        # one build of a transform, whoever asks first
+
+
+def _processor(view, look, exposure):
+    with _building:
+        return _built_processor(view, look, exposure)
+
+
+@functools.lru_cache(maxsize=16)
+def _built_processor(view, look, exposure):
+    import PyOpenColorIO as ocio
+    config = _config()
+    _check_names(config, view, look)
     group = ocio.GroupTransform()
     source = ocio.ROLE_SCENE_LINEAR
     if exposure != 0.0:

@@ -193,6 +193,21 @@ def closed(mesh) -> bool:
     return len(counts) > 0 and bool(np.all(counts == 2))
 
 
+def makes_lights(mesh) -> bool:
+    """Whether a mesh's emitting faces can be lights: not a skinned, blend-shaped or
+    GPU-subdivided one (its triangles are posed on the GPU)."""
+    return mesh.skin is None and mesh.patches is None
+
+
+def closed_sides(front: bool, back: bool) -> tuple:
+    """The sides of a closed mesh's faces that are lights, of the sides its sampling asks
+    for. Its back faces face its inside, which they alone light: outside, the mesh hides
+    them, but it casts nothing into its own light's map. Both faces: the front; Back
+    alone stays Back (its inside lit). The irradiance field takes the sides left out
+    (engine/gpu/passes/irradiance.py)."""
+    return front, back and not front
+
+
 def instance_lights(inst, mesh, materials) -> tuple[dict, str | None]:
     """({light path: Light} of an instance's emitting polygons, a warning or None)."""
     emitting = []
@@ -206,15 +221,12 @@ def instance_lights(inst, mesh, materials) -> tuple[dict, str | None]:
             emitting.append((first, count, color, front, back))
     if not emitting:
         return {}, None
-    if mesh.skin is not None or mesh.patches is not None:
+    if not makes_lights(mesh):
         why = "skinned or blend-shaped" if mesh.skin is not None else "subdivided on the GPU"
         return {}, f"{inst.path}: its emission lights only itself (a {why} mesh's " \
                    f"emitting faces are not made lights)"
     if closed(mesh):
-        # Its back faces face its inside, which they alone light: outside, the mesh hides
-        # them, but it casts nothing into its own light's map (below). Both faces: the
-        # front; Back alone stays Back (its inside lit).
-        emitting = [(first, count, color, front, back and not front)
+        emitting = [(first, count, color, *closed_sides(front, back))
                     for first, count, color, front, back in emitting]
     worlds = inst.worlds if inst.worlds is not None else [inst.world]
     points = mesh.vertices[:, :3].astype(np.float64)

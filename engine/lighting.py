@@ -69,7 +69,8 @@ def light_area(light: Light) -> float:
     if light.kind == RECT:
         return light.width * light.height
     if light.kind == DISK:
-        return math.pi * light.radius ** 2
+        rx, ry = disk_semi_axes(light)
+        return math.pi * rx * ry
     return sum(polygon_area(p) for p in light.polygons)
 
 
@@ -95,11 +96,23 @@ def volume_radius(light: Light, threshold: float = VOLUME_THRESHOLD) -> float:
     return math.sqrt(c / (math.pi * threshold)) + extent
 
 
+def disk_semi_axes(light: Light) -> tuple:
+    """A disk light's semi-axes along its x and y axes: half its width and height (an
+    ellipse's differ), or its radius twice for a disk made with a radius only."""
+    if light.width > 0 and light.height > 0:
+        return light.width / 2, light.height / 2
+    return light.radius, light.radius
+
+
 def disk_polygon(light: Light, sides: int) -> np.ndarray:
-    """Equal-area regular polygon for a disk light."""
-    R = light.radius * math.sqrt(2 * math.pi / (sides * math.sin(2 * math.pi / sides)))
+    """Equal-area polygon for a disk light: the regular polygon of the disk's area,
+    stretched along y for an ellipse (a linear image of a disk, whose polygon's image
+    keeps the area ratio)."""
+    scale = math.sqrt(2 * math.pi / (sides * math.sin(2 * math.pi / sides)))
+    rx, ry = disk_semi_axes(light)
     ang = np.arange(sides) * 2 * math.pi / sides
-    return light.position + (np.outer(np.cos(ang), light.x_axis) + np.outer(np.sin(ang), light.y_axis)) * R
+    return light.position + (np.outer(np.cos(ang) * rx, light.x_axis)
+                             + np.outer(np.sin(ang) * ry, light.y_axis)) * scale
 
 
 def rect_polygon(light: Light) -> np.ndarray:

@@ -199,7 +199,7 @@ class LightRecord:
     cone_angle: float = 90.0    # degrees, half angle
     cone_softness: float = 0.0
     angle: float = 0.0          # sun, degrees
-    width: float = 1.0
+    width: float = 1.0          # rect; a disk's diameters along x and y (an ellipse's differ)
     height: float = 1.0
     # Lantern's own shadow settings (`light.lantern` in Blender); the defaults are the
     # add-on's property defaults and mean "not authored".

@@ -7,6 +7,10 @@
 // dome's reflections (ao.glsl); it never touches emission or the lights. The surface
 // is read from the G-buffer as the light passes read it (gbuffer_surface.glsl).
 #include "gbuffer_surface.glsl"
+#ifdef IRRADIANCE_FIELD
+#include "irradiance_field.glsl"
+uniform vec3 field_eye;         // the camera's world position: s.p is relative to it
+#endif
 uniform bool transparent;
 #if defined(HAS_AO) && !defined(BASE_OCCLUSION)    // gbuffer_surface.glsl declares it then
 uniform sampler2D ao_tex;
@@ -32,6 +36,14 @@ void screen_pixel(ivec2 px, out vec4 frag, out vec4 aov_diffuse, out vec4 aov_gl
         occlusion = texelFetch(ao_tex, px, 0).xy;
 #endif
         dome_light(s, occlusion, diffuse, glossy);
+#ifdef IRRADIANCE_FIELD
+        // The field's light in place of the dome's diffuse light (which it holds).
+        vec3 E = field_irradiance_at(s.p + field_eye, s.n, s.v);
+        diffuse = brdf_diffuse(s) * E * bump_dome(s);
+#ifdef SHEEN
+        diffuse += sheen_ambient(s, E);
+#endif
+#endif
     }
     // Alpha: coverage (resolve.frag), averaged by anti-aliasing.
     frag = vec4(diffuse + glossy + background + emitted, is_background(depth) ? 0.0 : 1.0);

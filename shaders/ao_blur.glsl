@@ -28,7 +28,6 @@ void screen_pixel(ivec2 px, out vec4 ao, out vec4 aov_ao, out vec4 unused2,
     }
     vec3 p = position_from_depth((vec2(px) + 0.5) / vec2(size), depth, inv_view_proj);
     vec3 n = normalize(texelFetch(g_normal, px, 0).xyz);
-    float scale = max(length(p), 1e-6);
     float sum = 0.0, weight = 0.0;
     float specular = 0.0;
     ivec2 cells = textureSize(ao_tex, 0);
@@ -41,8 +40,7 @@ void screen_pixel(ivec2 px, out vec4 ao, out vec4 aov_ao, out vec4 unused2,
             if (is_background(dq)) continue;
             vec3 pq = position_from_depth((vec2(q) + 0.5) / vec2(size), dq, inv_view_proj);
             vec3 nq = normalize(texelFetch(g_normal, q, 0).xyz);
-            float plane = abs(dot(pq - p, n)) / scale;       // distance off p's plane
-            float w = exp(-plane * plane / (2.0 * 0.02 * 0.02)) * max(dot(n, nq), 0.0);
+            float w = same_surface(p, n, pq, nq);
             vec4 raw = texelFetch(ao_tex, c, 0);
             sum += raw.x * w;
             specular += raw.y * w;

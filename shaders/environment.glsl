@@ -44,8 +44,8 @@ vec3 dome_specular(Lobe lobe) {
            + lobe.second.z * outerProduct(nl, nl)
            + lobe.first.w * (outerProduct(tl, nl) + outerProduct(nl, tl));
     vec3 smooth_part = sh_radiance_mean(dome_sh, lobe.first.x * tl + lobe.first.z * nl, S);
-    float r = lobe.roughness, a = r * r;
-    vec3 dominant = mix(lobe.n, reflect(-lobe.v, lobe.n), (1.0 - a) * (sqrt(1.0 - a) + a));
+    float r = lobe.roughness;
+    vec3 dominant = specular_dominant(lobe.n, lobe.v, r);
     vec3 rest = textureLod(env_specular, dome_to_local * dominant, env_lod_max * r * (2.0 - r)).rgb;
     return max(smooth_part + rest * dome_radiance, vec3(0.0));
 #else
@@ -71,8 +71,10 @@ void dome_light(Surface s, vec2 occlusion, out vec3 diffuse, out vec3 glossy) {
 #ifdef SHEEN
     diffuse += sheen_ambient(s, E) * ao;
 #endif
+#ifndef GLOSSY_BOUNCE   // else the reflection pass adds the base lobe's (reflections.glsl)
     glossy = s.under_coat * s.spec_albedo
            * dome_specular(make_lobe(s.n, s.v, s.roughness, s.spec_dielectric));
+#endif
     if (s.coat > 0.0)
         glossy += s.coat_albedo * dome_specular(make_lobe(s.n, s.v, s.coat_roughness, 1.0));
     glossy *= occlusion.y;

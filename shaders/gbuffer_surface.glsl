@@ -42,3 +42,44 @@ Surface gbuffer_surface(ivec2 px, float depth) {
     return s;
 }
 
+
+// The geometric normal at pixel px (camera-relative point p, shading normal n), facing
+// the side n faces, from its neighbours' points: on each axis the side whose next two
+// pixels continue p's surface best (the nearest to a line with p), so that a
+// pixel at a crease or a silhouette takes its own surface's side; n where no side on
+// an axis is flat (a crease on one side, the image's edge or the sky on the other).
+// Shadows' contact test takes the surface's plane from it (shadow_lookup.glsl).
+vec3 gbuffer_point(ivec2 q, ivec2 size, out bool ok) {
+    float d = texelFetch(g_depth, clamp(q, ivec2(0), size - 1), 0).r;
+    ok = !is_background(d) && all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, size));
+    return position_from_depth((vec2(q) + 0.5) / vec2(size), d, inv_view_proj);
+}
+
+vec3 gbuffer_geometric_normal(ivec2 px, vec3 p, vec3 n) {
+    ivec2 size = textureSize(g_depth, 0);
+    vec3 axes[2];
+    for (int a = 0; a < 2; ++a) {
+        axes[a] = vec3(0.0);
+        float best = 1e30;
+        ivec2 step = a == 0 ? ivec2(1, 0) : ivec2(0, 1);
+        for (int side = -1; side <= 1; side += 2) {
+            bool ok1, ok2;
+            vec3 p1 = gbuffer_point(px + side * step, size, ok1);
+            vec3 p2 = gbuffer_point(px + 2 * side * step, size, ok2);
+            if (!ok1) continue;
+            // How far p2 falls off the line through p and p1 (a plane's points along a
+            // row of pixels lie on a line), over the step: flat at a tenth at most.
+            vec3 step1 = p1 - p;
+            float off = ok2 ? length(cross(p2 - p, step1)) / max(dot(step1, step1), 1e-30)
+                            : 1e30;
+            if (off < min(best, 0.1)) {
+                best = off;
+                axes[a] = (p1 - p) * float(side);
+            }
+        }
+    }
+    vec3 g = cross(axes[0], axes[1]);
+    if (dot(g, g) <= 0.0) return n;
+    g = normalize(g);
+    return dot(g, n) < 0.0 ? -g : g;
+}

@@ -37,15 +37,13 @@ uniform sampler2D u_opaque_depth;  // g_depth (not attached: the depth test is h
 #include "shadow_lookup.glsl"
 #endif
 #include "forward.glsl"
+#include "lit_frame.glsl"
 
 #define GLASS_INTERFACES 8
 // The least distance a traced ray goes from where it starts on a surface, relative to
 // its distance from the camera: the front surface's position comes from its depth,
 // within about this much, and must not be hit again.
 #define GLASS_OFFSET 1.0e-3
-// A hit on screen is hidden where the opaque surface there is nearer than this share of
-// its distance.
-#define GLASS_HIDDEN 0.95
 
 out vec4 frag;
 
@@ -60,13 +58,6 @@ vec3 opaque_at(vec2 uv, out bool found) {
     float depth = textureLod(u_opaque_depth, uv, 0.0).r;
     found = !is_background(depth);
     return position_from_depth(uv, depth, inv_view_proj);
-}
-
-// Window uv of camera-relative q; false when it is behind the camera or off screen.
-bool on_screen(vec3 q, out vec2 uv) {
-    vec4 clip = view_proj * vec4(q, 1.0);
-    uv = clip.xy / clip.w * 0.5 + 0.5;
-    return clip.w > 0.0 && all(greaterThanEqual(uv, vec2(0.0))) && all(lessThanEqual(uv, vec2(1.0)));
 }
 
 // The lit frame at uv, blurred by roughness r.
@@ -93,24 +84,15 @@ vec3 hit_shading_normal(RtHit hit, vec3 flat_n) {
 }
 
 // Whether the ray from camera-relative q along d meets something; L: what it meets, as
-// the lit frame shows it where the hit is on screen and in front of the opaque surface
-// there, else the dome along the ray.
+// the lit frame shows it where the hit is on screen and not hidden there, else the dome
+// along the ray.
 bool traced_radiance(vec3 q, vec3 d, float r, out vec3 L) {
-    RtHit hit;
     L = dome_along(d, r);
-    if (!rt_closest_hit(q + u_eye, d, GLASS_OFFSET * (1.0 + length(q)), RT_FAR, hit))
-        return false;
-    vec3 h = q + hit.t * d;
     vec2 uv;
-    bool found;
-    if (on_screen(h, uv)) {
-        vec3 o = opaque_at(uv, found);
-        // Hidden behind an opaque surface clearly nearer on screen: the hit is not in
-        // the frame. (The frame's depth is the pixel centre's: on a grazing floor it
-        // differs from a hit elsewhere in the pixel by a few per cent.)
-        if (!found || length(o) >= GLASS_HIDDEN * length(h)) L = frame_at(uv, r);
-    }
-    return true;
+    float t;
+    int met = frame_hit(q, d, GLASS_OFFSET * (1.0 + length(q)), u_opaque_depth, uv, t);
+    if (met == FRAME_SHOWN) L = frame_at(uv, r);
+    return met != FRAME_ESCAPED;
 }
 
 vec3 radiance_along(vec3 q, vec3 d, float r) {

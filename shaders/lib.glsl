@@ -36,6 +36,21 @@ vec2 pixel_centre() { return shaded_pixel; }
 vec2 pixel_centre() { return gl_FragCoord.xy; }
 #endif
 
+// How much a neighbour's surface (camera-relative pq, normal nq) is p's own (normal n),
+// for depth-aware blurs: nothing off p's plane by more than a few percent of its
+// distance, or with a normal turned away, so nothing bleeds across an edge.
+float same_surface(vec3 p, vec3 n, vec3 pq, vec3 nq) {
+    float plane = abs(dot(pq - p, n)) / max(length(p), 1e-6);   // distance off p's plane
+    return exp(-plane * plane / (2.0 * 0.02 * 0.02)) * max(dot(n, nq), 0.0);
+}
+
+// Each of a 4 x 4 block's 16 cells its own index 0..15, neighbours far apart (a Bayer
+// matrix): p's cell is p mod 4.
+uint bayer4(uvec2 p) {
+    uint x = p.x & 3u, y = p.y & 3u;
+    return ((x ^ y) & 1u) << 3 | (y & 1u) << 2 | ((x ^ y) & 2u) | (y & 2u) >> 1;
+}
+
 // --- BRDF (Filament's model, layered as Cycles' Principled BSDF) ----------------
 // GGX / Trowbridge-Reitz, alpha = roughness^2.
 float d_ggx(float NoH, float a) {
@@ -111,6 +126,14 @@ Lobe make_lobe(vec3 n, vec3 v, float r, float dielectric) {
     float c = clamp(NoV, 0.0, 1.0);
     lobe.first.xw *= sqrt(1.0 - c * c);     // stored over sin(theta_v): engine/lighting.py
     return lobe;
+}
+
+// The direction a GGX lobe of roughness r about n, seen along v, reflects most: from the
+// mirror direction towards n as it roughens (Lagarde and de Rousiers 2014,
+// getSpecularDominantDir).
+vec3 specular_dominant(vec3 n, vec3 v, float r) {
+    float a = r * r;
+    return mix(n, reflect(-v, n), (1.0 - a) * (sqrt(1.0 - a) + a));
 }
 
 // The lobe's mean direction, E[l] (shorter than 1 by its spread).

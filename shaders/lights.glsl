@@ -36,7 +36,7 @@ int first_extra;            // an emissive mesh's polygons past the first: their
 int n_extra;
 vec3 light_x;
 vec3 light_y;
-vec2 half_size;             // rect half extents; disk: (radius, 0)
+vec2 half_size;             // rect half extents; disk: its semi-axes (an ellipse's differ)
 int n_poly;
 int light_row;
 uniform float light_error;  // the light tree's and emitter groups' bound (RenderSettings)
@@ -206,10 +206,14 @@ int next_in_tree(int i) {
 
 // Whether the polygon or group at `row` lights s: s on the face it lights from (a
 // corner is on its plane; the light's position, an emissive mesh's box's middle, may
-// not be).
+// not be). A point in the plane (within the depth's rounding: an emitter's own
+// surface) sees it edge on, and nothing: the horizon's clip of a polygon around the
+// point is not to be trusted.
 bool polygon_faces(Surface s, int row) {
-    return dot(s.p - light_pos - light_table(row, 8).xyz, light_table(row, 2).xyz) > 0.0
-        || (int(light_table(row, 3).w) & 32) != 0;
+    vec3 to_s = s.p - light_pos - light_table(row, 8).xyz;
+    float side = dot(to_s, light_table(row, 2).xyz);
+    return abs(side) > 1e-3 * length(to_s)
+        && (side > 0.0 || (int(light_table(row, 3).w) & 32) != 0);
 }
 
 // Whether the group at `row` (coplanar polygons facing s) stands for its polygons at s

@@ -20,14 +20,9 @@ uniform int u_object;          // the caster (objects.glsl): its own thresholds
 #include "material.glsl"
 
 // The thresholds of a blended caster: in every 4 x 4 block of map texels, the 16
-// levels (k + 0.5) / 16 once each (a Bayer matrix, so a block passes exactly
+// levels (k + 0.5) / 16 once each (a Bayer matrix, lib.glsl, so a block passes exactly
 // round(16 a) texels, spread out), permuted per block and per caster by XOR with a
 // hashed key, so the layers of different casters are independent.
-uint bayer4(uvec2 p) {
-    uint x = p.x & 3u, y = p.y & 3u;
-    return ((x ^ y) & 1u) << 3 | (y & 1u) << 2 | ((x ^ y) & 2u) | (y & 2u) >> 1;
-}
-
 uint hash3(uvec3 v) {
     uint h = v.x * 0x8da6b343u ^ v.y * 0xd8163841u ^ v.z * 0xcb1ab31fu;
     h ^= h >> 16; h *= 0x7feb352du; h ^= h >> 15; h *= 0x846ca68bu; h ^= h >> 16;

@@ -11,8 +11,10 @@ like the box set: they measure light, not edges) and the tests.
 
 `penumbra(image, cycles, unshadowed)` is the measurement: the pixels Cycles shades
 between 10% and 90% of the unshadowed light (the penumbra), and the ratio of the
-image's light to Cycles' there."""
+image's light to Cycles' there. `roughness(image, mask, unshadowed)` is the penumbra's
+high-frequency energy: a dither shows there, a smooth penumbra (Cycles') has little."""
 import numpy as np
+from scipy.ndimage import gaussian_filter
 
 import calibration
 
@@ -73,3 +75,16 @@ def penumbra(image, cycles, unshadowed, lo=0.1, hi=0.9):
     ratio = float(image[..., :3].mean(-1)[mask].sum() / max(c[mask].sum(), 1e-12))
     return mask, ratio
 
+
+
+def roughness(image, mask, unshadowed, sigma=1.0):
+    """The penumbra's high-frequency energy: the RMS of the luminance less its Gaussian
+    blur (sigma in pixels), over its mean, on the pixels of `mask` where the unshadowed
+    image is itself smooth (no geometric edge or texture: only the shadow varies)."""
+    def detail(rgba):
+        lum = rgba[..., :3].mean(-1)
+        return lum, lum - gaussian_filter(lum, sigma)
+    lum_u, detail_u = detail(unshadowed)
+    flat = mask & (np.abs(detail_u) < 0.02 * lum_u.mean())
+    lum, d = detail(image)
+    return float(np.sqrt((d[flat] ** 2).mean()) / lum[flat].mean()), int(flat.sum())

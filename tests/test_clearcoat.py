@@ -27,8 +27,10 @@ def _stage(name):
 def sphere_means(name, **settings):
     """(Lantern's mean, Cycles' mean) over the sphere's pixels."""
     from lantern.engine import RenderSettings, read_exr, render_stage
+    from lantern.engine.bounces import DIRECT
     w, h = clearcoat_scenes.SIZE
-    result = render_stage(_stage(name), RenderSettings(width=w, height=h,
+    # The references are Cycles' with bounces 0 (references/make_cycles_references.py).
+    result = render_stage(_stage(name), RenderSettings(width=w, height=h, bounces=DIRECT,
                                                        passes=frozenset(["Depth"]), **settings))
     # Cycles' pixel filter reaches 1.5 px: its silhouette pixels blend in the white
     # world, which would weigh a dark sphere's mean by its outline. The interior only.

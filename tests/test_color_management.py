@@ -5,6 +5,7 @@ settings, dither 0, and Image.save_render (Blender's colour management on save).
 Measured 2026-11-23: identical bytes for Standard, AgX, AgX + Punchy + exposure,
 Filmic + a contrast look, and Khronos PBR Neutral, so the bound is 0/255 (the
 issue asks for 2/255; dither 1.0 gave the same bytes on save_render too)."""
+import functools
 import os
 import subprocess
 import sys
@@ -85,6 +86,26 @@ def test_unknown_view_or_look_names_the_choices():
     with pytest.raises(ColorManagementError, match="Punchy"):
         check("AgX", "Nope")
     check("AgX", "Punchy", 1.0)
+
+
+def test_a_checked_view_is_built_once_on_a_thread_of_its_own(monkeypatch):
+    """check() answers from the names; the transform is built beside the render (a cold
+    `lantern render` waited for it before reading the stage), once, and the image that
+    asks for it gets that one."""
+    import threading
+    from lantern.engine import color
+    built_on, build = [], color._built_processor.__wrapped__
+
+    def counted(view, look, exposure):
+        built_on.append(threading.current_thread())
+        return build(view, look, exposure)
+    monkeypatch.setattr(color, "_built_processor", functools.lru_cache(maxsize=16)(counted))
+    color.check("Khronos PBR Neutral", None, 0.25)
+    rgb = linear_test_image()[..., :3]
+    first = color.display_rgb(rgb, view="Khronos PBR Neutral", exposure=0.25)
+    again = color.display_rgb(rgb, view="Khronos PBR Neutral", exposure=0.25)
+    assert len(built_on) == 1 and built_on[0] is not threading.main_thread()
+    assert np.array_equal(first, again)
 
 
 def test_lantern_render_png_with_agx_equals_blenders(empty_scene, tmp_path):

@@ -233,3 +233,73 @@ def test_an_srgb_image_is_interpolated_in_its_stored_values_exactly(tmp_path):
     error = np.abs(got - want) / np.maximum(want, 1e-3)
     print(f"largest relative error {error.max():.2e} at value {error.argmax()}")
     assert error.max() < 2.0 ** -9
+
+
+def _levels_read_back(gl, tex, sizes):
+    """Each level of an RGBA8 texture as GL holds it (glGetTexImage: ModernGL reads
+    only levels it generated)."""
+    import ctypes
+    from lantern.engine.gpu.stencil import entry_points
+    u = ctypes.c_uint
+    fn = entry_points(gl.proc, {"glActiveTexture": (None, u), "glBindTexture": (None, u, u),
+                                "glGetTexImage": (None, u, ctypes.c_int, u, u, ctypes.c_void_p)})
+    fn["glActiveTexture"](0x84C0 + gl.ctx.default_texture_unit)
+    fn["glBindTexture"](0x0DE1, tex.glo)
+    levels = []
+    for level, (w, h) in enumerate(sizes):
+        out = np.zeros((h, w, 4), np.uint8)
+        fn["glGetTexImage"](0x0DE1, level, 0x1908, 0x1401, out.ctypes.data)
+        levels.append(out)
+    return levels
+
+
+def test_mip_levels_of_8_bit_images_are_written_as_computed(tmp_path):
+    """An 8-bit image's mip chain goes up as computed (the driver generates no level:
+    llvmpipe builds a blit shader for that in every new process); data mips from
+    power-of-two sizes are the bytes llvmpipe's glGenerateMipmap made."""
+    from lantern.engine.gpu.context import run_gl
+    from lantern.engine.gpu.resources import Uploads
+    from lantern.engine.gpu.textures import data_mips
+
+    def check(gl):
+        rng = np.random.default_rng(7)
+        for w, h in ((64, 32), (8, 1), (6, 10), (5, 7)):
+            img = rng.integers(0, 256, (h, w, 4), dtype=np.uint8)
+            levels = data_mips(img)
+            sizes = [(lv.shape[1], lv.shape[0]) for lv in levels]
+            assert sizes[-1] == (1, 1) and all(s == (max(w >> i, 1), max(h >> i, 1))
+                                               for i, s in enumerate(sizes))
+            tex = Uploads(gl.ctx, gl.proc).mipmapped_texture(levels, kind="textures")
+            for given, held in zip(levels, _levels_read_back(gl, tex, sizes)):
+                assert np.array_equal(given, held)
+            tex.release()
+            if "llvmpipe" in gl.ctx.info["GL_RENDERER"] and w & (w - 1) == 0 and h & (h - 1) == 0:
+                generated = gl.ctx.texture((w, h), 4, img.tobytes())
+                generated.build_mipmaps()
+                for given, made in zip(levels, _levels_read_back(gl, generated, sizes)):
+                    assert np.array_equal(given, made)
+                generated.release()
+    run_gl(check)
+
+
+def test_a_textured_render_generates_no_mips_in_the_driver(tmp_path, monkeypatch):
+    """8-bit colour and 8-bit data: their mips come from the CPU (a cold render's first
+    frame compiled llvmpipe's mipmap blit, 0.1-0.15 s a format); far away they still
+    average."""
+    import moderngl
+    generated = []
+    build = moderngl.Texture.build_mipmaps
+    monkeypatch.setattr(moderngl.Texture, "build_mipmaps",
+                        lambda self, *a, **k: (generated.append(self), build(self, *a, **k)))
+    n, cell = 64, 16
+    ii, jj = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    img = np.where(((ii // cell) + (jj // cell)) % 2 == 0, 255, 128).astype(np.uint8)
+    path = tmp_path / "checker.png"
+    iio.imwrite(path, np.stack([img] * 3, -1))
+    for colorspace, mean in (("sRGB", (1.0 + srgb_to_linear(128)) / 2), ("raw", 383 / 510)):
+        far = render_stage(textured_stage(path, uv_range=(0.0, 40.0), colorspace=colorspace),
+                           RenderSettings(width=W, height=H))
+        r, c = pixel_of(0, 0)
+        patch = far.rgba[r - 3:r + 3, c - 3:c + 3, 0]
+        assert abs(patch.mean() - mean) < 0.05 and patch.std() < 0.05, colorspace
+    assert generated == []

@@ -63,6 +63,44 @@ def test_lights_follow_the_contract_table(empty_scene):
     disk = stage.GetPrimAtPath("/root/Disk")
     assert disk.IsA(UsdLux.DiskLight)
     assert attr(disk, "inputs:radius") == pytest.approx(0.75)
+    assert not disk.GetAttribute("xformOp:scale:ellipse").IsValid()
+
+
+def test_an_ellipse_is_a_disk_stretched_by_its_xform_and_read_back_as_the_ellipse(empty_scene):
+    """Blender's Ellipse area light: a DiskLight of radius size_x / 2 with a scale op
+    (1, size_y / size_x, 1) after the object's transform (docs/stage_contract.md); the
+    engine reads it back as the ellipse, the object's own scale included, its radiance
+    the power over the ellipse's area."""
+    import numpy as np
+    from lantern.core.lights import DISK
+    from lantern.engine.lighting import light_area
+    from lantern.engine.usd.stage import StageReader
+    ob = add_light("Ellipse", "AREA", energy=40.0, shape="ELLIPSE", size=2.0, size_y=0.5)
+    ob.rotation_euler = (0.0, 0.0, math.radians(30.0))
+    ob.scale = (1.5, 1.0, 1.0)
+    ob.location = (1.0, 2.0, 3.0)
+    stage, report = export_current()
+    assert not any("ellipse" in w for w in report.warnings), report.warnings
+    prim = stage.GetPrimAtPath("/root/Ellipse")
+    assert prim.IsA(UsdLux.DiskLight)
+    assert attr(prim, "inputs:radius") == pytest.approx(1.0)
+    assert tuple(attr(prim, "xformOp:scale:ellipse")) == pytest.approx((1.0, 0.25, 1.0))
+    assert UsdGeom.Xformable(prim).GetXformOpOrderAttr().Get()[-1] == "xformOp:scale:ellipse"
+
+    reader = StageReader(stage)
+    reader.sync(None)
+    light = reader.scene.lights["/root/Ellipse"]
+    assert light.kind == DISK
+    assert (light.width, light.height) == pytest.approx((3.0, 0.5))
+    assert light.radius == pytest.approx(1.5)
+    c, s = math.cos(math.radians(30.0)), math.sin(math.radians(30.0))
+    np.testing.assert_allclose(light.x_axis, (c, s, 0.0), atol=1e-6)
+    np.testing.assert_allclose(light.y_axis, (-s, c, 0.0), atol=1e-6)
+    np.testing.assert_allclose(light.position, (1.0, 2.0, 3.0), atol=1e-6)
+    area = math.pi * 1.5 * 0.25
+    assert light_area(light) == pytest.approx(area)
+    # Blender's power P spread over the ellipse: radiance P / (pi area) (normalized).
+    np.testing.assert_allclose(light.color, 40.0 / (math.pi * area), rtol=1e-5)
 
 
 def add_camera(**props):

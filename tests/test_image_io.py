@@ -175,3 +175,22 @@ def test_gif_lzw_survives_a_full_code_table(tmp_path):
     # Each decoded pixel is the palette colour nearest its 15-bit key: close to the source.
     assert decoded.shape == img.shape
     assert np.abs(decoded.astype(int) - img.astype(int)).mean() < 16
+
+
+def test_a_png_is_deflated_at_blenders_default_level(tmp_path):
+    """PNGs are written as Blender saves them by default (Compression 15%: zlib level 1),
+    not at zlib's default level 6, which took more than twice as long: the zlib header
+    of the first image data chunk says which (FLEVEL 0: the fastest)."""
+    import struct
+    from lantern.engine.image_io import read_image, write_image
+    rng = np.random.default_rng(5)
+    rgba = np.concatenate([rng.random((90, 160, 3)), np.ones((90, 160, 1))], -1)
+    path = tmp_path / "x.png"
+    write_image(str(path), rgba.astype(np.float32))
+    data = path.read_bytes()
+    at = 8
+    while data[at + 4:at + 8] != b"IDAT":
+        at += 12 + struct.unpack(">I", data[at:at + 4])[0]
+    cmf, flg = data[at + 8], data[at + 9]
+    assert cmf & 0x0F == 8 and flg >> 6 == 0
+    assert read_image(str(path)).shape == (90, 160, 4)

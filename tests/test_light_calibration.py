@@ -28,12 +28,14 @@ def _cycles(kind):
 def _lantern(kind, energy=None):
     import bpy
     from lantern.engine import RenderSettings, render_stage
+    from lantern.engine.bounces import DIRECT
     from lantern.exporters import stage_from_depsgraph
     calibration.build_scene(kind)
     if energy is not None:
         bpy.data.lights[kind].energy = energy
     stage, report = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
-    result = render_stage(stage, RenderSettings(width=calibration.SIZE, height=calibration.SIZE))
+    result = render_stage(stage, RenderSettings(width=calibration.SIZE, height=calibration.SIZE,
+                                                 bounces=DIRECT))   # direct light's units
     assert np.isfinite(result.rgba).all()
     return result.rgba[..., 0].astype(np.float64)
 

@@ -34,11 +34,12 @@ def stage_of(name):
 
 def render(name, **settings):
     from lantern.engine import RenderSettings, render_stage
+    from lantern.engine.bounces import DIRECT
     w, h = reference_scenes.SCENES[name].size
     settings.setdefault("frame", FRAMES.get(name))
     settings.setdefault("width", w)
     settings.setdefault("height", h)
-    return render_stage(stage_of(name), RenderSettings(**settings))
+    return render_stage(stage_of(name), RenderSettings(bounces=DIRECT, **settings))
 
 
 def reference(name):
@@ -145,13 +146,14 @@ def test_a_turned_dome_moves_the_glints():
     axis puts the reflections elsewhere (the orientation check above can fail)."""
     from pxr import Gf, UsdGeom
     from lantern.engine import RenderSettings, render_stage
+    from lantern.engine.bounces import DIRECT
     stage = stage_of("environment_mirror")
     dome = UsdGeom.Xformable(stage.GetPrimAtPath("/root/_world"))
     op = dome.GetOrderedXformOps()[0]
     before = op.Get()
     try:
         op.Set(before * Gf.Matrix4d().SetRotate(Gf.Rotation(Gf.Vec3d(0, 0, 1), 90)))
-        turned = render_stage(stage, RenderSettings(width=128, height=72)).rgba
+        turned = render_stage(stage, RenderSettings(bounces=DIRECT, width=128, height=72)).rgba
     finally:
         op.Set(before)
     ref_sun, ref_patch = glints(reference("environment_mirror"))
@@ -216,6 +218,7 @@ def test_an_ambient_occlusion_node_darkens_the_base_colour_by_the_ao_pass():
     the AO pass's occlusion on the albedo it is nearer Cycles than the node ignored (a
     plain 0.8 grey), and the error is the screen-space AO's own (ao_corner's)."""
     from lantern.engine import RenderSettings, render_stage
+    from lantern.engine.bounces import DIRECT
     stage, ref = stage_of("ao_node"), reference("ao_node")
     material = next(p for p in stage.Traverse() if p.GetTypeName() == "Material")
     flag = material.GetAttribute("lantern:baseColorOcclusion")
@@ -224,7 +227,7 @@ def test_an_ambient_occlusion_node_darkens_the_base_colour_by_the_ao_pass():
     with_node = mean_flip(render("ao_node").rgba, ref)
     flag.Set(False)
     try:
-        ignored = mean_flip(render_stage(stage, RenderSettings(width=w, height=h)).rgba, ref)
+        ignored = mean_flip(render_stage(stage, RenderSettings(bounces=DIRECT, width=w, height=h)).rgba, ref)
     finally:
         flag.Set(True)
     print(f"ao_node FLIP (medium): {with_node:.4f}, the node ignored {ignored:.4f}")
@@ -235,13 +238,14 @@ def test_ao_radius_follows_blenders_ao_distance():
     """The world's AO distance is exported (lantern:aoDistance) and read: a short
     distance finds less occlusion in the corner than Blender's default 10 m."""
     from lantern.engine import RenderSettings, render_stage
+    from lantern.engine.bounces import DIRECT
     stage = stage_of("ao_corner")
     attr = stage.GetPrimAtPath("/root/_world").GetAttribute("lantern:aoDistance")
     assert attr and attr.Get() == pytest.approx(10.0)
-    long = render_stage(stage, RenderSettings(width=128, height=72, passes=frozenset(["AO"])))
+    long = render_stage(stage, RenderSettings(bounces=DIRECT, width=128, height=72, passes=frozenset(["AO"])))
     attr.Set(0.2)
     try:
-        short = render_stage(stage, RenderSettings(width=128, height=72, passes=frozenset(["AO"])))
+        short = render_stage(stage, RenderSettings(bounces=DIRECT, width=128, height=72, passes=frozenset(["AO"])))
     finally:
         attr.Set(10.0)
     assert short.passes["AO"].mean() > long.passes["AO"].mean() + 0.05
@@ -360,6 +364,7 @@ def test_sheen_lobes_match_cycles():
     Cycles' and its pixels within 1.5% (relative L1); with the sheen left out the image is far off. A frame without a sheen
     makes no sheen target."""
     from lantern.engine import RenderSettings, render_stage
+    from lantern.engine.bounces import DIRECT
     from lantern.engine.gpu.framegraph import Frame
     from lantern.engine.gpu.passes.gbuffer import GBufferPass
     from lantern.engine.usd.stage import StageReader
@@ -380,7 +385,7 @@ def test_sheen_lobes_match_cycles():
             modes[prim.GetPath()] = prim.GetAttribute("lantern:sheenMode").Get()
             prim.GetAttribute("lantern:sheenMode").Set("none")   # read as no sheen
     try:
-        without = render_stage(stage, RenderSettings(width=w, height=h, preset="ultra"))
+        without = render_stage(stage, RenderSettings(bounces=DIRECT, width=w, height=h, preset="ultra"))
         reader = StageReader(stage)
         reader.sync(None)
         reader.close()
@@ -407,6 +412,7 @@ def test_a_blended_sheen_is_half_the_opaque_one_over_the_world():
     screen-space occlusion, which the two passes treat differently, off)."""
     import bpy
     from lantern.engine import RenderSettings, render_stage
+    from lantern.engine.bounces import DIRECT
     from lantern.exporters import stage_from_depsgraph
     workdir = pathlib.Path(__import__("tempfile").gettempdir()) / "lantern-looks-tests"
     reference_scenes.build("sheen", workdir)
@@ -415,7 +421,7 @@ def test_a_blended_sheen_is_half_the_opaque_one_over_the_world():
     material.use_backface_culling = True     # the sphere's far side would show through
     bsdf = material.node_tree.nodes["Principled BSDF"]
     w, h = reference_scenes.SCENES["sheen"].size
-    settings = RenderSettings(width=w, height=h, preset="medium", ambient_occlusion=False)
+    settings = RenderSettings(bounces=DIRECT, width=w, height=h, preset="medium", ambient_occlusion=False)
     images = {}
     for alpha in (1.0, 0.5):
         bsdf.inputs["Alpha"].default_value = alpha

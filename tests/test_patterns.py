@@ -60,9 +60,11 @@ def lantern_flip(name, preset="ultra"):
     in for Cycles' 1.5 px pixel filter on the patterns' own edges (checker cells, ramp
     steps); docs/materials.md gives the medium preset's figures too."""
     from lantern.engine import RenderSettings, read_exr, render_stage
+    from lantern.engine.bounces import DIRECT
     stage, _ = exported(name)
     w, h = pattern_scenes.SIZE
-    result = render_stage(stage, RenderSettings(width=w, height=h, preset=preset))
+    # The references are Cycles' with bounces 0 (make_cycles_references.configure_cycles).
+    result = render_stage(stage, RenderSettings(width=w, height=h, preset=preset, bounces=DIRECT))
     reference = read_exr(str(PATTERNS / f"{name}.exr"))
     per_tile = {mat: mean_flip(result.rgba[t], reference[t]) for mat, t in tiles(name).items()}
     return float(np.mean(list(per_tile.values()))), per_tile, result
@@ -197,7 +199,9 @@ def test_a_skinned_mesh_draws_its_colour_attribute():
     stage, report = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
     assert report.warnings == [], report.warnings
     w, h = pattern_scenes.SIZE
-    result = render_stage(stage, RenderSettings(width=w, height=h, preset="ultra"))
+    from lantern.engine.bounces import DIRECT
+    result = render_stage(stage, RenderSettings(width=w, height=h, preset="ultra",
+                                                bounces=DIRECT))      # as the reference
     assert result.stats["meshes_skinned"] == 1
     t = tiles("attribute")["attribute_render"]
     reference = read_exr(str(PATTERNS / "attribute.exr"))

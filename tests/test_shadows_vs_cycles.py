@@ -26,13 +26,14 @@ THRESHOLDS = {"sun": 0.00075, "point": 0.0043, "spot": 0.063, "area": 0.0054}
 def test_box_on_plane_against_cycles(kind):
     import bpy
     from lantern.engine import RenderSettings, read_exr, render_stage
+    from lantern.engine.bounces import DIRECT      # the references: Cycles, bounces 0
     from lantern.exporters import stage_from_depsgraph
     calibration.build_box_scene(kind)
     stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
     width, height = calibration.BOX_SIZE
     # The references are point-sampled (0.01 px filter): compare without anti-aliasing.
     result = render_stage(stage, RenderSettings(width=width, height=height, preset="medium",
-                                                fxaa=False))
+                                                fxaa=False, bounces=DIRECT))
     assert result.stats["shadow_maps"] == 1
     cycles = read_exr(str(REFERENCES / f"cycles_box_{kind}.exr"))
     flip = mean_flip(result.rgba, cycles)
@@ -45,11 +46,13 @@ def test_the_flip_check_sees_a_missing_shadow():
     """The same scene with Cast Shadow off is far above the threshold."""
     import bpy
     from lantern.engine import RenderSettings, read_exr, render_stage
+    from lantern.engine.bounces import DIRECT      # the references: Cycles, bounces 0
     from lantern.exporters import stage_from_depsgraph
     calibration.build_box_scene("point")
     bpy.data.lights["point"].use_shadow = False
     stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
     width, height = calibration.BOX_SIZE
-    result = render_stage(stage, RenderSettings(width=width, height=height, fxaa=False))
+    result = render_stage(stage, RenderSettings(width=width, height=height, fxaa=False,
+                                                bounces=DIRECT))
     cycles = read_exr(str(REFERENCES / "cycles_box_point.exr"))
     assert mean_flip(result.rgba, cycles) > 3 * THRESHOLDS["point"]

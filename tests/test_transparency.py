@@ -38,15 +38,18 @@ def before(name) -> float:
 
 def look(name, preset="medium", **settings):
     """(Lantern's image, Cycles' reference) of a reference scene, as `lantern render
-    scene.blend` renders it (an in-memory stage, default options)."""
+    scene.blend` renders it (an in-memory stage, default options; bounces 0, as the
+    references)."""
     import bpy
     from lantern.engine import RenderSettings, read_exr, render_stage
+    from lantern.engine.bounces import DIRECT
     from lantern.exporters import stage_from_depsgraph
     reference_scenes.build(name, WORKDIR)
     stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
     width, height = reference_scenes.SCENES[name].size
+    # The references are Cycles' with bounces 0 (references/make_cycles_references.py).
     result = render_stage(stage, RenderSettings(width=width, height=height, preset=preset,
-                                                **settings))
+                                                bounces=DIRECT, **settings))
     return result, read_exr(str(LOOKS / f"{name}.exr"))
 
 

@@ -67,6 +67,9 @@ def _scene():
     scene.frame_start, scene.frame_end = 1, 10
     scene.render.resolution_x, scene.render.resolution_y = W, H
     scene.lantern.preset = "medium"
+    # Lit directly: an edit changes the image where it is (the bounce would spread a
+    # moved cube's light over the frame, and rebuild its field at each edit).
+    scene.cycles.max_bounces = 0
     bpy.ops.mesh.primitive_plane_add(size=20.0)
     for name, x in (("Cube", -2.0), ("Other", 0.0)):
         bpy.ops.mesh.primitive_cube_add(size=1.0, location=(x, 0.0, 0.5))

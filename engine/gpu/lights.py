@@ -7,7 +7,7 @@ fits GL's texture size limit (16384 lines on llvmpipe).
 Row layout (texels, must match shaders/lights.glsl):
   0 position (hi), volume radius R   1 colour (I, L or E), sphere radius
   2 emission direction, cos(cone)    3 cone softness, diffuse, specular, flags
-  4 x axis, half width (disk: r)     5 y axis, half height
+  4 x axis, half width (disk: rx)    5 y axis, half height (disk: ry)
   6 polygon vertices, area, first polygon row, polygon rows
   7 position (lo)
   8.. polygon vertices about the position (rect 4, disk an N-gon)
@@ -39,7 +39,7 @@ import numpy as np
 
 from ...core.lights import DISK, POLYGON, RECT, SPOT, SUN
 from .. import emitter_groups, light_tree
-from ..lighting import disk_polygon, light_area, rect_polygon, volume_radius, volume_threshold
+from ..lighting import disk_polygon, disk_semi_axes, light_area, rect_polygon, volume_radius, volume_threshold
 from ..shadow_plan import casts
 from ..view import split_double
 
@@ -83,7 +83,7 @@ def _pack_polygon(row, light, disk_sides: int):
     """An area light's axes, half sizes and (first) polygon (texels 4-6 and 8..)."""
     if light.kind == DISK:
         verts = disk_polygon(light, disk_sides)
-        half = (light.radius, 0.0)
+        half = disk_semi_axes(light)
     else:
         verts = rect_polygon(light) if light.kind == RECT else light.polygons[0]
         half = (light.width / 2, light.height / 2)

@@ -43,7 +43,7 @@ UNITS = {name: unit for unit, name in enumerate((
     "dfg_lut", "env_specular", "radiance", "ao_tex", "post_src", "t_pattern4",
     "overlay_image", "overlay_atlas",
     "t_pattern0", "t_pattern1", "t_pattern2", "t_pattern3", "g_smooth", "g_sheen",
-    "sheen_lut"))}
+    "sheen_lut", "area_visibility", "visibility_tex"))}
 UNITS.update(zip(("u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences",
                   "u_deformed", "u_incidence"), range(UNITS["t_diffuse"], UNITS["t_diffuse"] + 6)))
 # The light tree's nodes: read by the clustered light passes only, which read no material.
@@ -58,6 +58,11 @@ UNITS.update(edge_depth=UNITS["g_base"], edge_marks=UNITS["g_normal"], separable
 # No shading program reads post-processing's source: the area lights' table takes its
 # unit (shaders/ltc.glsl).
 UNITS.update(ltc_lut=UNITS["post_src"])
+# The irradiance field (passes/irradiance.py): read by the ambient pass and the field's
+# own passes, which sample no material map.
+UNITS.update(field_irradiance=UNITS["t_metallic"], field_distance=UNITS["t_roughness"],
+             field_probes=UNITS["t_emissive"], field_materials=UNITS["t_opacity"],
+             field_rays=UNITS["t_normal"])
 
 
 class ShaderError(RuntimeError):

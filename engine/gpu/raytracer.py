@@ -106,6 +106,7 @@ class Raytracer:
         self.buffers = {name: None for name in BINDINGS}
         self._placed = None           # what the top tree was built from
         self._lo = self._hi = None    # every bottom tree's boxes (_pack)
+        self.bounds = None            # (lo, hi) world box of every traced triangle, or None
 
     # --- keeping up with the scene -------------------------------------------------
     def update(self, scene):
@@ -265,11 +266,13 @@ class Raytracer:
             root_lo = np.array([b.tree.lo[0] for b in bottoms], np.float64)[owner]
             root_hi = np.array([b.tree.hi[0] for b in bottoms], np.float64)[owner]
             lo, hi = transform_aabbs(root_lo, root_hi, worlds)
+            self.bounds = (lo.min(axis=0), hi.max(axis=0))
             pad = TOP_PAD * (np.maximum(np.abs(lo), np.abs(hi)) + (hi - lo))
             top = bvh.build(lo - pad, hi + pad).packed()
             self._upload("instances", records)
         else:
             self._first, self.instances = np.zeros(0, np.int64), []
+            self.bounds = None
             top = np.zeros((1, bvh.NODE_FLOATS), np.float32)     # miss link 0: empty
             self._upload("instances", np.zeros(INSTANCE_VEC4 * 4, np.float32))
         self._upload("top", top)

@@ -25,10 +25,12 @@ from .passes.ao import AoPass
 from .passes.aovs import AovPass
 from .passes.cryptomatte import CryptomattePass
 from .passes.gbuffer import GBufferPass
+from .passes.irradiance import IrradiancePass
 from .passes.clustered import ClusteredLightPass
 from .passes.light_cull import LightCullPass
 from .passes.lights import LightPass
 from .passes.post import PostPass
+from .passes.reflections import ReflectionPass
 from .passes.resolve import ResolvePass
 from .passes.shadows import ShadowPass
 from .passes.skinning import SkinningPass
@@ -66,7 +68,7 @@ COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "meshes
             "glass_objects", "glass_draws",
             "pattern_bytes", "programs_pending", "light_clusters", "light_items",
             "clusters_overflowed", "light_tree_pixels", "light_tree_steps", "light_tree_steps_max",
-            "ao_searches")
+            "ao_searches", "area_visibility_passes", "field_updates")
 
 
 def _shape(material):
@@ -91,7 +93,7 @@ class Renderer:
         self.gl_info = {**gl.describe(), "gl_path": _path_name(self.features)}
         self.largest_side = budget.largest_side(ctx)
         self._memory = None         # the device's memory as last asked (budget.Memory)
-        self.uploads = Uploads(ctx)
+        self.uploads = Uploads(ctx, gl.proc)
         self.stencil = Stencil(gl.proc)
         self.depth = DepthConvention(gl.proc, self.features.clip_control)
         self.pool = TargetPool(ctx, self.stencil, self.depth)
@@ -115,6 +117,9 @@ class Renderer:
         self.gbuffer = GBufferPass(ctx, self.pool, programs, self.geometry, self.textures,
                                    self.depth)
         self._drawn = {}            # material name -> the record its last frame drew
+        self.irradiance = IrradiancePass(ctx, self.uploads, programs, self.lights,
+                                         self.environment, self.textures, self.tracer,
+                                         self.features.compute)
         self.light_cull = LightCullPass(ctx, programs, self.uploads, self.lights)
         self.graph = FrameGraph(ctx, self.pool, [
             self.skinning,
@@ -123,12 +128,16 @@ class Renderer:
             self.shadows,
             self.gbuffer,
             AovPass(ctx, self.pool, programs),
+            self.irradiance,
             AoPass(ctx, self.pool, programs, self.environment),
             AmbientPass(ctx, self.pool, programs, self.environment),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
                       self.geometry, self.environment),
             self.light_cull,
-            ClusteredLightPass(ctx, programs, self.lights, self.environment, self.light_cull),
+            ClusteredLightPass(ctx, self.pool, programs, self.lights, self.environment,
+                               self.light_cull),
+            ReflectionPass(ctx, self.pool, programs, self.environment,
+                           self.tracer if self.features.compute else None),
             GlassPass(ctx, self.pool, programs, self.geometry, self.textures, self.lights,
                       self.environment, self.depth, self.uploads,
                       self.tracer if self.features.compute else None),
@@ -155,6 +164,7 @@ class Renderer:
             self.textures.prune(scene.materials.values())
         self.skinning.update(scene, changes)
         self.tessellation.update(scene, changes)
+        self.irradiance.note(changes)
         return meshes
 
     def render(self, scene, changes, camera, size, transparent, cull_backfaces,
@@ -318,7 +328,7 @@ class Renderer:
         the CPU (engine/gpu/devices.py)."""
         traced = self._raytracer.warnings if self._raytracer is not None else []
         return self.gl.take_notices() + list(self.textures.failed.values()) + \
-            self.resolve.warnings + traced
+            self.resolve.warnings + traced + self.irradiance.warnings
 
     def tracer(self, scene) -> Raytracer:
         """The session's ray tracer (engine/gpu/raytracer.py), made on the first ask

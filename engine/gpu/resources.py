@@ -10,18 +10,30 @@ shadow maps and taken back, so a session's later frames allocate nothing; and th
 framebuffers made of them, cached by attachments."""
 from __future__ import annotations
 
+import ctypes
 from collections import Counter
 
 import numpy as np
 
+from .stencil import entry_points
+
 KINDS = ("mesh", "objects", "commands", "joints", "shapes", "lights", "textures", "overlays",
-         "raytrace")
+         "raytrace", "field")
+
+GL_TEXTURE_2D, GL_TEXTURE0, GL_RGBA, GL_UNSIGNED_BYTE, GL_RGBA8 = \
+    0x0DE1, 0x84C0, 0x1908, 0x1401, 0x8058
+_u, _i = ctypes.c_uint, ctypes.c_int
+_SIGS = {"glActiveTexture": (None, _u), "glBindTexture": (None, _u, _u),
+         "glTexImage2D": (None, _u, _i, _i, _i, _i, _i, _u, _u, ctypes.c_void_p)}
 
 
 class Uploads:
-    def __init__(self, ctx):
+    def __init__(self, ctx, proc=None):
+        # proc: the context's entry points (GLContext.proc), for what ModernGL does not
+        # wrap: writing a texture's mip levels (mipmapped_texture).
         self.ctx = ctx
         self.bytes = Counter()
+        self._gl = entry_points(proc, _SIGS) if proc is not None else None
 
     def _count(self, kind, n):
         assert kind in KINDS, kind
@@ -55,6 +67,26 @@ class Uploads:
             data = _bytes(data)
             self._count(kind, len(data))
         return self.ctx.texture(size, components, data, dtype=dtype, **kw)
+
+    def mipmapped_texture(self, levels, *, kind: str, internal_format=GL_RGBA8):
+        """An 8-bit RGBA texture whose mip chain is `levels` (uint8 (h, w, 4), level 0
+        first, each the size GL gives it: halved, floored, at least 1), every level
+        written as given. The driver generates no level: llvmpipe's glGenerateMipmap
+        builds a blit shader per format in every new process (0.1-0.15 s of a cold
+        render each, which Mesa's shader cache does not keep), and ModernGL can only
+        allocate levels by generating them."""
+        h, w = levels[0].shape[:2]
+        tex = self.texture((w, h), 4, levels[0], kind=kind, dtype="f1",
+                           internal_format=internal_format)
+        gl = self._gl
+        gl["glActiveTexture"](GL_TEXTURE0 + self.ctx.default_texture_unit)  # as ModernGL's writes
+        gl["glBindTexture"](GL_TEXTURE_2D, tex.glo)
+        for level, data in enumerate(levels[1:], 1):
+            data = np.ascontiguousarray(data, np.uint8)
+            self._count(kind, data.nbytes)
+            gl["glTexImage2D"](GL_TEXTURE_2D, level, internal_format, data.shape[1],
+                               data.shape[0], 0, GL_RGBA, GL_UNSIGNED_BYTE, data.ctypes.data)
+        return tex
 
     def write_texture(self, texture, data, *, kind: str, viewport=None, level=0):
         data = _bytes(data)

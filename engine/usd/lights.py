@@ -239,11 +239,14 @@ def _read_light(prim, path, world, values, warnings):
         return _light(kind=RECT, color=_over(s, w * h) if normalize else s,
                       width=w, height=h, **common)
     if kind == DISK:
-        r = _number(values, "inputs:radius", positive=True) * ((scale[0] + scale[1]) / 2)
-        if not r > 0:
+        # A scale that differs along x and y makes it an ellipse (Blender's ellipse
+        # lights are written so: docs/stage_contract.md).
+        r = _number(values, "inputs:radius", positive=True)
+        rx, ry = r * scale[0], r * scale[1]
+        if not rx * ry > 0:
             raise _Bad("its transform scales it to no area")
-        return _light(kind=DISK, color=_over(s, math.pi * r * r) if normalize else s,
-                      radius=r, **common)
+        return _light(kind=DISK, color=_over(s, math.pi * rx * ry) if normalize else s,
+                      radius=max(rx, ry), width=2 * rx, height=2 * ry, **common)
     warnings.append(f"{path}: light type {tname or 'untyped'} is not supported; skipped")
     return None
 

@@ -39,15 +39,14 @@ def gather_light(light, warn):
     elif kind in (RECT, DISK):
         sx = float(light.size)
         sy = float(light.size_y) if light.shape in {"RECTANGLE", "ELLIPSE"} else sx
+        rec.width, rec.height = sx, sy
         if kind == RECT:
-            rec.width, rec.height = sx, sy
             area = sx * sy
         else:
-            rec.radius = math.sqrt(sx * sy) / 2.0  # area-preserving for ellipses
-            area = math.pi * rec.radius ** 2
-            if light.shape == "ELLIPSE" and abs(sx - sy) > 1e-9:
-                warn(f"light '{light.name}': ellipse {sx:g}x{sy:g} is written as a disk "
-                     f"of equal area (radius {rec.radius:g})")
+            # A disk of diameter sx, stretched to sy along y for an ellipse (its prim's
+            # xform: exporters/usd/light.py ellipse_scale).
+            rec.radius = sx / 2.0
+            area = math.pi * sx * sy / 4.0
         if not getattr(light, "normalize", True):
             # Unnormalized: the power is per unit area, so the total grows with the size.
             rec.intensity *= area

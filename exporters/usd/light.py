@@ -1,7 +1,7 @@
 """LightRecord -> UsdLux light on the object prim (the schema from core.lights)."""
-from pxr import Gf, Sdf, UsdLux
+from pxr import Gf, Sdf, UsdGeom, UsdLux
 
-from ...core.lights import KINDS, POINT, RECT, SPOT, SUN
+from ...core.lights import DISK, KINDS, POINT, RECT, SPOT, SUN
 from ..ir import LightRecord
 
 
@@ -26,6 +26,16 @@ def write_light(stage, path, rec):
     write_common(light, rec.color, rec.intensity, rec.shadow, rec.diffuse, rec.specular)
     _write_shadow_settings(light.GetPrim(), rec)
     return light
+
+
+def write_ellipse_scale(prim, rec):
+    """An ellipse: UsdLux has no such light, so it is its DiskLight (radius half its
+    x size) stretched along y by a scale op after the object's own transform
+    (docs/stage_contract.md), which any UsdLux reader applies to the disk. Blender's
+    own USD exporter writes the disk unstretched."""
+    if rec.kind == DISK and rec.height != rec.width:
+        UsdGeom.Xformable(prim).AddScaleOp(UsdGeom.XformOp.PrecisionDouble, "ellipse").Set(
+            Gf.Vec3d(1.0, rec.height / rec.width, 1.0))
 
 
 def _write_shadow_settings(prim, rec):

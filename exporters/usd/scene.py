@@ -11,7 +11,7 @@ from pxr import Gf, Sdf, UsdGeom, UsdSkel, Vt
 from .camera import write_camera
 from .curves import write_curves
 from .instances import write_instances, write_points, write_prototype
-from .light import write_light
+from .light import write_ellipse_scale, write_light
 from .material import write_material
 from .mesh import bind_materials, write_mesh
 from .names import Namer, primvar_name, set_blender_name, set_pass_index
@@ -111,6 +111,8 @@ def write_object_attributes(prim, obj, times=()):
     """What an object prim holds of the object itself: its transform, Blender name
     and pass index."""
     write_transform(prim, obj, times)
+    if obj.kind == "light":
+        write_ellipse_scale(prim, obj.light)
     set_blender_name(prim, obj.name)
     set_pass_index(prim, obj.pass_index)
 

@@ -2,10 +2,13 @@
 (spherical-harmonics irradiance for diffuse, the prefiltered environment and the
 split-sum table for the specular lobe and the coat; engine/gpu/environment.py keeps
 them per map), emission (added here and only here), and the dome as the background.
-Ambient occlusion, when the AO pass ran, dims the dome's light only. It starts the
-HDR target.
+Ambient occlusion, when the AO pass ran, dims the dome's light only. With an
+irradiance field (passes/irradiance.py) the diffuse light is the field's instead of the
+dome's: the field's rays that escape bring the dome, so it is counted once. In a frame
+with the glossy bounce (passes/reflections.py) the base lobe's dome reflection is left
+to that pass. It starts the HDR target.
 
-reads: g_base, g_normal, g_mat, g_emit, g_depth, view, ao (optional), g_smooth (optional:
+reads: g_base, g_normal, g_mat, g_emit, g_depth, view, ao, field (optional), g_smooth (optional:
        the normals before the normal maps, for the bump map correction), g_sheen
        (optional: the sheen lobes)   writes: hdr
 render passes (with the light pass): DiffDir, GlossDir, Env, Shadow: see LIGHTING_AOVS"""
@@ -65,7 +68,7 @@ def surface_defines(frame, board) -> list:
 class AmbientPass(Pass):
     name = "ambient"
     reads = GBUFFER + ("view",)
-    optional = ("ao", "g_smooth", "g_sheen")
+    optional = ("ao", "g_smooth", "g_sheen", "field")
     writes = ("hdr",)
     aovs = LIGHTING_AOVS
 
@@ -98,11 +101,16 @@ class AmbientPass(Pass):
         # preset has occlusion.
         ao = board.get("ao") if occludes(frame) else None
         defines = (["HAS_DOME_MAP"] if env is not None else []) + (["HAS_AO"] if ao else []) + \
-            (["WRITE_AOVS"] if aovs else []) + surface_defines(frame, board)
+            (["WRITE_AOVS"] if aovs else []) + surface_defines(frame, board) + \
+            (["IRRADIANCE_FIELD"] if "field" in board else []) + \
+            (["GLOSSY_BOUNCE"] if "reflections" in frame.stats["passes"] else [])
         prog = screen_program(self.programs, "ambient", defines, frame.compute, len(targets))
         bind_gbuffer(board, prog, board["view"])
         self.environment.bind(prog, dome, env)
         self.environment.bind_sheen(frame.scene.materials.values())
         set_uniform(prog, "has_dome", dome is not None)
+        if "field" in board:
+            board["field"].bind(prog)
+            set_uniform(prog, "field_eye", board["view"].origin)
         set_uniform(prog, "transparent", bool(frame.transparent))
         run_screen(ctx, self.programs, self.pool, prog, targets, frame.compute)

@@ -26,6 +26,7 @@ from .ambient import GBUFFER, LIGHTING_AOVS, LIGHTING_TARGETS, bind_gbuffer, sur
     lighting_aovs
 from .light_cull import TILE, set_tree_uniforms
 from .lights import kind_defines, screen_rect, volume_hull
+from .area_visibility import DEFINE as AREA_VISIBILITY, area_visibility, filtered
 from .shadows import set_shadow_uniforms
 
 GL_RGBA32F = 0x8814
@@ -40,8 +41,8 @@ class ClusteredLightPass(Pass):
     writes = ("hdr",)
     aovs = LIGHTING_AOVS
 
-    def __init__(self, ctx, programs, table, environment, cull):
-        self.ctx, self.programs, self.table = ctx, programs, table
+    def __init__(self, ctx, pool, programs, table, environment, cull):
+        self.ctx, self.pool, self.programs, self.table = ctx, pool, programs, table
         self.environment, self.cull = environment, cull
 
     def aov_targets(self, frame):
@@ -53,8 +54,7 @@ class ClusteredLightPass(Pass):
     def execute(self, frame, board):
         ctx, view, clusters = self.ctx, board["view"], board["clusters"]
         aovs = lighting_aovs(frame)
-        for unit, name in enumerate(IMAGES if aovs else IMAGES[:1]):
-            board[name].bind_to_image(unit, read=True, write=True, format=GL_RGBA32F)
+        self._bind_targets(board, aovs)
         self.table.texture.use(UNITS["u_lights"])
         self.environment.bind_tables()
         self.environment.bind_sheen(frame.scene.materials.values())
@@ -88,15 +88,28 @@ class ClusteredLightPass(Pass):
                 rect = rect or (0, 0, w, h)
             if rect[2] <= 0 or rect[3] <= 0:
                 continue
+            visibility = None
+            if filtered(light):
+                visibility = area_visibility(ctx, self.pool, self.programs, frame, board, view,
+                                             shadow_maps[path], self.table.index[path])
+                self._bind_targets(board, aovs)     # its screen passes used the units
             prog = self._program(board, view, defines + kind_defines([light.kind])
-                                 + ["SINGLE_LIGHT", "HAS_SHADOW"])
+                                 + ["SINGLE_LIGHT", "HAS_SHADOW"]
+                                 + ([AREA_VISIBILITY] if visibility is not None else []))
             set_shadow_uniforms(prog, shadow_maps[path], frame.preset, view.origin)
             set_uniform(prog, "light_index", self.table.index[path])
             set_uniform(prog, "light_error", float(clusters.error))  # emitter groups'
             set_uniform(prog, "u_offset", rect[:2])
             prog.run(-(-rect[2] // TILE), -(-rect[3] // TILE))
             ctx.memory_barrier()
+            if visibility is not None:
+                self.pool.release(visibility)
             frame.count("lights_drawn")
+
+    @staticmethod
+    def _bind_targets(board, aovs):
+        for unit, name in enumerate(IMAGES if aovs else IMAGES[:1]):
+            board[name].bind_to_image(unit, read=True, write=True, format=GL_RGBA32F)
 
     def _program(self, board, view, defines):
         prog = self.programs.get("lights.comp", defines=defines, compute=True)

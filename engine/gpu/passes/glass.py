@@ -34,10 +34,9 @@ Nothing is drawn, copied or traced when no visible object has a glass material.
 reads: hdr, g_depth, view, shadow_maps and tessellated (optional)   writes: hdr"""
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
+from ..lit_copy import LitCopy
 from ..programs import UNITS, set_uniform
 from ..pattern import material_variant
 from .transparency import TransparencyPass
@@ -59,26 +58,19 @@ class GlassPass(TransparencyPass):
         self.tracer = tracer           # scene -> Raytracer (Renderer.tracer); None: no compute
         self.normals = None            # the traced triangles' corner normals (binding 14)
         self._normals_of = None        # what they were made from
-        self.behind = None             # the lit frame's mip-mapped copy, kept by size
+        self.behind = LitCopy(ctx, pool)   # the lit frame's mip-mapped copy
         self._frame = None             # this frame's (traced, refract, eye)
 
     def _target(self, frame, board):
         """The lit frame copied (and its mip levels made) to read behind the glass; the
         HDR image drawn into without a depth attachment (the shader tests g_depth)."""
         hdr = board["hdr"]
-        if self.behind is None or self.behind.size != hdr.size:
-            if self.behind is not None:
-                self.behind.release()
-            self.behind = self.ctx.texture(hdr.size, 4, dtype="f4")
-            self.behind.repeat_x = self.behind.repeat_y = False
-            self.behind.filter = (self.ctx.LINEAR_MIPMAP_LINEAR, self.ctx.LINEAR)
-        fbo = self.pool.framebuffer([hdr])
         refract = frame.glass_refracts
-        if refract:                    # else nothing is read behind the glass
-            self.ctx.copy_framebuffer(self.behind, fbo)
-            self.behind.build_mipmaps()
+        # Copied only where something is read behind the glass.
+        behind = self.behind.copy(hdr) if refract else self.behind.made(hdr)
+        fbo = self.pool.framebuffer([hdr])
         board["g_depth"].use(UNITS["g_depth"])
-        self.behind.use(UNITS["hdr"])
+        behind.use(UNITS["hdr"])
         # The tracer wherever compute shaders are (RenderSettings.compute False: the
         # one-interface form, as GL 3.3 and 4.1 draw it).
         traced = self.tracer is not None and frame.options.compute is not False
@@ -117,7 +109,7 @@ class GlassPass(TransparencyPass):
                                  generated=material_variant(mat))
         set_uniform(prog, "u_refract", refract)
         set_uniform(prog, "u_eye", tuple(float(c) for c in eye))
-        set_uniform(prog, "u_behind_lods", float(math.floor(math.log2(max(self.behind.size)))))
+        set_uniform(prog, "u_behind_lods", self.behind.lods)
         set_uniform(prog, "u_behind", UNITS["hdr"])
         set_uniform(prog, "u_opaque_depth", UNITS["g_depth"])
         return prog
@@ -126,7 +118,5 @@ class GlassPass(TransparencyPass):
         if self.normals is not None:
             self.normals.release()
             self.normals = self._normals_of = None
-        if self.behind is not None:
-            self.behind.release()
-            self.behind = None
+        self.behind.release()
         super().release()

@@ -35,6 +35,7 @@ from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
 from .ambient import (GBUFFER, LIGHTING_AOVS, LIGHTING_TARGETS, bind_gbuffer, surface_defines,
                       lighting_aovs)
+from .area_visibility import DEFINE as AREA_VISIBILITY, area_visibility, filtered
 from .shadows import set_shadow_uniforms
 
 CONE_SIDES = 24
@@ -171,14 +172,21 @@ class LightPass(Pass):
             if self._batchable(light, R, path in shadow_maps, view):
                 batched.append(path)
                 continue
+            sm = shadow_maps.get(path)
+            visibility = None
+            if sm is not None and filtered(light):
+                visibility = area_visibility(ctx, self.pool, self.programs, frame, board, view,
+                                             sm, self.table.index[path])
             fbo.use()
             ctx.enable(ctx.BLEND)
             ctx.blend_func = ctx.ONE, ctx.ONE
             try:
-                self._draw_light(frame, board, view, path, light, R, shadow_maps.get(path))
+                self._draw_light(frame, board, view, path, light, R, sm, visibility is not None)
             finally:
                 ctx.scissor = None
                 self.stencil.end()
+                if visibility is not None:
+                    self.pool.release(visibility)
         for gone in [p for p in self._cones if p not in frame.scene.lights]:
             self._drop_vaos(self._cones[gone][1])
             self._cones.pop(gone)[1].release()
@@ -241,7 +249,7 @@ class LightPass(Pass):
         frame.count("batched_lights", len(paths))
 
     def _program(self, frame, board, view, vert, variant, row, sm):
-        prog = self.programs.get(vert, "light.frag", [variant] + (["HAS_SHADOW"] if sm else [])
+        prog = self.programs.get(vert, "light.frag", variant + (["HAS_SHADOW"] if sm else [])
                                  + (["WRITE_AOVS"] if self._aovs else [])
                                  + surface_defines(frame, board))
         bind_gbuffer(board, prog, view)
@@ -262,14 +270,14 @@ class LightPass(Pass):
             entry = self._cones[path] = (params, self.uploads.buffer(data, kind="lights"), data)
         return entry[1], entry[2]
 
-    def _draw_light(self, frame, board, view, path, light, R, sm):
+    def _draw_light(self, frame, board, view, path, light, R, sm, filtered_shadow=False):
         """One light into the HDR target (reads the G-buffer, depth+stencil, its
-        shadow map). Suns shade the screen; other lights shade only inside the
-        scissor rectangle of their volume and, via the stencil, only pixels whose
-        scene surface lies inside the volume."""
+        shadow map, or its filtered shadow: area_visibility). Suns shade the screen;
+        other lights shade only inside the scissor rectangle of their volume and, via
+        the stencil, only pixels whose scene surface lies inside the volume."""
         ctx = self.ctx
         row = self.table.index[path]
-        variant = KINDS[light.kind].shader
+        variant = [KINDS[light.kind].shader] + ([AREA_VISIBILITY] if filtered_shadow else [])
         if light.kind == SUN:
             ctx.disable(ctx.DEPTH_TEST)
             self.programs.fullscreen(self._program(frame, board, view, "fullscreen.vert",

@@ -1,0 +1,88 @@
+#version 430 core
+// The irradiance field's maps from one update's rays (engine/gpu/passes/irradiance.py):
+// one invocation a texel of a probe's tile (its border repeats the map's opposite edge),
+// irradiance as the cosine-weighted mean of the rays' radiance (times pi: the mean
+// over the sphere of max(cos, 0) is 1/4), distance and its square weighted by a sharp
+// power of the cosine (Majercik et al. 2019), and the nearest hit about the texel. The tile's first texel also moves its probe
+// and switches it off or on (Majercik et al. 2021): a probe whose rays meet many back
+// faces close by lies inside geometry: off, and moved out through the nearest back face;
+// one closer to a surface (either side) than a fifth of the spacing is moved away; never more
+// than 0.45 of the spacing from its grid place.
+#include "irradiance_field.glsl"
+layout(local_size_x = 10, local_size_y = 10) in;    // FIELD_TEXELS + 2
+layout(rgba32f, binding = 0) writeonly uniform image2D irradiance_image;
+layout(rgba32f, binding = 1) writeonly uniform image2D distance_image;
+layout(rgba32f, binding = 2) writeonly uniform image2D probe_image;
+uniform sampler2D field_rays;        // x ray, y probe: radiance, signed distance
+uniform mat3 u_rotation;
+uniform int u_rays;
+uniform float u_max_distance;        // distances are clamped here (beyond a cell: seen)
+// The nearest hit within this cosine of a texel's direction (about 14 degrees): what a
+// zero-thickness wall's edge hides from the mean, which rays past the edge pull far.
+#define NEAR_CONE 0.97
+
+// The interior texel that border texel t repeats: an edge its mirror image along the
+// edge, a corner the opposite corner.
+ivec2 interior(ivec2 t) {
+    const int N = FIELD_TEXELS;
+    bool ex = t.x == 0 || t.x == N + 1, ey = t.y == 0 || t.y == N + 1;
+    if (ex && ey) return ivec2(t.x == 0 ? N : 1, t.y == 0 ? N : 1);
+    if (ex) return ivec2(t.x == 0 ? 1 : N, N + 1 - t.y);
+    if (ey) return ivec2(N + 1 - t.x, t.y == 0 ? 1 : N);
+    return t;
+}
+
+void main() {
+    int probe = int(gl_WorkGroupID.x);
+    ivec2 t = ivec2(gl_LocalInvocationID.xy);
+    ivec2 src = interior(t);
+    vec3 d = oct_decode((vec2(src - 1) + 0.5) / float(FIELD_TEXELS) * 2.0 - 1.0);
+    vec3 sum = vec3(0.0);
+    float total = 0.0, dist = 0.0, dist2 = 0.0, dist_total = 0.0, nearest = u_max_distance;
+    int backs = 0;
+    float nearest_front = 1.0e30, nearest_back = 1.0e30;
+    vec3 front_dir = vec3(0.0), back_dir = vec3(0.0);
+    float farthest = 0.0;
+    for (int i = 0; i < u_rays; ++i) {
+        vec3 r = fibonacci_ray(i, u_rays, u_rotation);
+        vec4 h = texelFetch(field_rays, ivec2(i, probe), 0);
+        float c = dot(d, r);
+        if (c > 0.0) {
+            sum += c * h.rgb;
+            total += c;
+            float w = pow(c, 50.0);
+            float s = min(abs(h.w), u_max_distance);
+            dist += w * s;
+            dist2 += w * s * s;
+            dist_total += w;
+            if (c > NEAR_CONE) nearest = min(nearest, s);
+        }
+        if (t == ivec2(0)) {
+            float a = abs(h.w);
+            farthest = max(farthest, a);
+            if (h.w < 0.0) {
+                backs += 1;
+                if (a < nearest_back) { nearest_back = a; back_dir = r; }
+            } else if (a < nearest_front) { nearest_front = a; front_dir = r; }
+        }
+    }
+    ivec2 at = probe_tile(probe) * (FIELD_TEXELS + 2) + t;
+    imageStore(irradiance_image, at, vec4(total > 0.0 ? FIELD_PI * sum / total : vec3(0.0), 1.0));
+    vec2 m = dist_total > 0.0 ? vec2(dist, dist2) / dist_total : vec2(u_max_distance, u_max_distance * u_max_distance);
+    imageStore(distance_image, at, vec4(m, nearest, 1.0));
+    if (t == ivec2(0)) {
+        vec4 state = probe_state(probe);
+        float spacing = min(field_step.x, min(field_step.y, field_step.z));
+        bool inside = float(backs) > 0.25 * float(u_rays) && farthest < 1.5 * length(field_step);
+        vec3 offset = state.xyz;
+        if (inside)
+            offset += back_dir * (nearest_back + 0.1 * spacing);
+        else if (min(nearest_front, nearest_back) < 0.2 * spacing) {
+            // Away from the nearest surface, whichever side of it faces the probe.
+            bool front = nearest_front < nearest_back;
+            offset -= (front ? front_dir : back_dir) * (0.2 * spacing - min(nearest_front, nearest_back));
+        }
+        offset = clamp(offset, -0.45 * field_step, 0.45 * field_step);
+        imageStore(probe_image, probe_tile(probe), vec4(offset, inside ? 0.0 : 1.0));
+    }
+}

@@ -1,0 +1,123 @@
+// The irradiance field (engine/gpu/passes/irradiance.py; Majercik et al. 2019, "Dynamic
+// Diffuse Global Illumination with Ray-Traced Irradiance Fields", and 2021, "Scaling
+// Probe-Based Real-Time Dynamic GI for Production"): a grid of probes over the scene's
+// bounds, each holding, in small octahedral maps, the irradiance arriving from every
+// direction and the mean distance (and its square) to what its rays hit. Read per
+// point with a visibility test (Chebyshev) against those distances, so light from a
+// probe beyond a wall does not reach a surface on this side. World space throughout.
+//
+// Atlas layout: a probe is a tile of (FIELD_TEXELS + 2)^2 texels, its octahedral map
+// inside a one-texel border that repeats the map's opposite edge (so bilinear filtering
+// wraps across the octahedron's seams); field_tiles tiles a line. field_probes: one
+// texel a probe at its tile's place, (offset from its grid place, 1 on / 0 off).
+#define FIELD_TEXELS 8
+uniform vec3 field_lo;          // probe (0, 0, 0), before its offset
+uniform vec3 field_step;        // probe spacing
+uniform ivec3 field_counts;     // probes along each axis
+uniform int field_tiles;        // tiles a line
+uniform float field_bias;       // the self-shadowing bias (a share of the spacing)
+uniform sampler2D field_irradiance;   // rgb: irradiance E (W/m2 per unit radiance)
+uniform sampler2D field_distance;     // mean distance, mean squared distance, nearest
+uniform sampler2D field_probes;
+
+const float FIELD_PI = 3.14159265358979;
+
+vec2 oct_encode(vec3 d) {
+    vec3 a = d / (abs(d.x) + abs(d.y) + abs(d.z));
+    vec2 e = a.xy;
+    if (a.z < 0.0) e = (1.0 - abs(a.yx)) * vec2(a.x >= 0.0 ? 1.0 : -1.0, a.y >= 0.0 ? 1.0 : -1.0);
+    return e;
+}
+
+vec3 oct_decode(vec2 e) {
+    vec3 d = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    if (d.z < 0.0) d.xy = (1.0 - abs(d.yx)) * vec2(d.x >= 0.0 ? 1.0 : -1.0, d.y >= 0.0 ? 1.0 : -1.0);
+    return normalize(d);
+}
+
+// Ray i of n from a probe: a spherical Fibonacci point set (even over the sphere),
+// turned by `rotation` (a new one each update, so updates do not repeat their rays).
+vec3 fibonacci_ray(int i, int n, mat3 rotation) {
+    float phi = 2.0 * FIELD_PI * fract(float(i) * 0.6180339887498949);
+    float z = 1.0 - (2.0 * float(i) + 1.0) / float(n);
+    float r = sqrt(max(1.0 - z * z, 0.0));
+    return rotation * vec3(cos(phi) * r, sin(phi) * r, z);
+}
+
+int probe_index(ivec3 c) { return c.x + field_counts.x * (c.y + field_counts.y * c.z); }
+ivec2 probe_tile(int probe) { return ivec2(probe % field_tiles, probe / field_tiles); }
+
+vec4 probe_state(int probe) { return texelFetch(field_probes, probe_tile(probe), 0); }
+
+vec3 probe_position(ivec3 c, vec4 state) { return field_lo + vec3(c) * field_step + state.xyz; }
+
+ivec3 probe_cell(int probe) {
+    return ivec3(probe % field_counts.x, (probe / field_counts.x) % field_counts.y,
+                 probe / (field_counts.x * field_counts.y));
+}
+
+// Where direction d lies in a probe's map, as the atlas' normalised coordinates.
+vec2 field_uv(sampler2D atlas, int probe, vec3 d) {
+    vec2 texel = vec2(probe_tile(probe) * (FIELD_TEXELS + 2)) + 1.0
+               + (oct_encode(d) * 0.5 + 0.5) * float(FIELD_TEXELS);
+    return texel / vec2(textureSize(atlas, 0));
+}
+
+// The nearest hit of the four texels about uv: never more than what a ray that way hit
+// (filtering would blend a near wall's edge with the far side beyond it).
+float field_nearest(vec2 uv) {
+    ivec2 t = ivec2(floor(uv * vec2(textureSize(field_distance, 0)) - 0.5));
+    return min(min(texelFetch(field_distance, t, 0).b, texelFetch(field_distance, t + ivec2(1, 0), 0).b),
+               min(texelFetch(field_distance, t + ivec2(0, 1), 0).b,
+                   texelFetch(field_distance, t + ivec2(1, 1), 0).b));
+}
+
+// The irradiance at world point p on a surface of normal n seen along v (towards the
+// viewer; n for a ray's hit): the eight probes of its cell, each weighted by trilinear
+// position, by whether it lies in front of the surface, and by the chance (Chebyshev,
+// from its mean and squared distances) that it sees the point, which goes to 0 behind a
+// wall. 0 where no probe sees the point. `along`: the direction whose irradiance is
+// read (n for the surface's own; a reflection's direction for a rough lobe's light).
+vec3 field_irradiance_along(vec3 p, vec3 n, vec3 v, vec3 along) {
+    float spacing = min(field_step.x, min(field_step.y, field_step.z));
+    vec3 q = p + (0.2 * n + 0.8 * v) * field_bias * spacing;
+    vec3 g = clamp((q - field_lo) / field_step, vec3(0.0), vec3(field_counts - 1));
+    ivec3 base = min(ivec3(g), max(field_counts - 2, ivec3(0)));
+    vec3 alpha = clamp(g - vec3(base), 0.0, 1.0);
+    vec3 sum = vec3(0.0);
+    float total = 0.0;
+    for (int i = 0; i < 8; ++i) {
+        ivec3 off = ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+        ivec3 c = min(base + off, field_counts - 1);
+        int probe = probe_index(c);
+        vec4 state = probe_state(probe);
+        if (state.w < 0.5) continue;                 // switched off: inside geometry
+        vec3 tri = mix(1.0 - alpha, alpha, vec3(off));
+        float w = tri.x * tri.y * tri.z;
+        vec3 pp = probe_position(c, state);
+        vec3 to_probe = pp - p;
+        float len = length(to_probe);
+        vec3 dir = len > 0.0 ? to_probe / len : n;
+        float facing = (dot(dir, n) + 1.0) * 0.5;    // probes behind the surface count less
+        w *= facing * facing + 0.2;
+        vec3 from_probe = q - pp;
+        float r = length(from_probe);
+        if (r > 0.0) {
+            vec2 uv = field_uv(field_distance, probe, from_probe / r);
+            vec2 m = textureLod(field_distance, uv, 0.0).rg;
+            if (r > field_nearest(uv) + 0.05 * spacing) continue;   // behind a hit that way
+            if (r > m.x) {
+                float variance = abs(m.y - m.x * m.x);
+                float d = r - m.x;
+                float chebyshev = variance / (variance + d * d);
+                w *= chebyshev * chebyshev * chebyshev;
+            }
+        }
+        if (w < 0.2) w *= w * w / 0.04;              // crushes what little light leaks
+        sum += w * textureLod(field_irradiance, field_uv(field_irradiance, probe, along), 0.0).rgb;
+        total += w;
+    }
+    return total > 0.0 ? sum / total : vec3(0.0);
+}
+
+vec3 field_irradiance_at(vec3 p, vec3 n, vec3 v) { return field_irradiance_along(p, n, v, n); }

@@ -1,0 +1,232 @@
+"""The irradiance field (engine/gpu/passes/irradiance.py): the diffuse bounce. Small
+stages built with pxr; the field needs compute shaders (GL 4.3)."""
+import numpy as np
+import pytest
+from pxr import Gf, Sdf, UsdGeom, UsdLux, UsdShade
+
+import shadow_scenes
+from lantern.engine import RenderSettings, Session
+from lantern.engine.bounces import DIRECT, Bounces
+
+SIZE = dict(width=48, height=32)
+
+
+def _material(stage, name, color, emission=(0.0, 0.0, 0.0)):
+    mat = UsdShade.Material.Define(stage, f"/root/_materials/{name}")
+    sh = UsdShade.Shader.Define(stage, f"/root/_materials/{name}/surface")
+    sh.CreateIdAttr("UsdPreviewSurface")
+    sh.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(*color))
+    sh.CreateInput("emissiveColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(*emission))
+    sh.CreateInput("ior", Sdf.ValueTypeNames.Float).Set(1.0)        # no specular lobe
+    sh.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(1.0)
+    mat.CreateSurfaceOutput().ConnectToSource(sh.ConnectableAPI(), "surface")
+    return mat
+
+
+def _quad(stage, name, corners, mat):
+    mesh = UsdGeom.Mesh.Define(stage, f"/root/{name}")
+    mesh.CreateSubdivisionSchemeAttr("none")
+    mesh.CreatePointsAttr([Gf.Vec3f(*c) for c in corners])
+    mesh.CreateFaceVertexCountsAttr([4])
+    mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
+    UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(mat)
+
+
+def glowing_sphere_stage(albedo, radiance):
+    """A closed sphere of `albedo` that glows with `radiance`, the camera at its centre."""
+    from pxr import Usd
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    UsdGeom.Xform.Define(stage, "/root")
+    ball = UsdGeom.Sphere.Define(stage, "/root/ball")
+    ball.CreateRadiusAttr(2.0)
+    UsdShade.MaterialBindingAPI.Apply(ball.GetPrim()).Bind(
+        _material(stage, "glow", (albedo,) * 3, (radiance,) * 3))
+    shadow_scenes.add_camera(stage, eye=(0, 0, 0), target=(1, 0.2, 0.1), aspect=1.5, far=10.0)
+    UsdLux.DomeLight.Define(stage, "/root/dark").CreateIntensityAttr(0.0)   # no default rig
+    return stage
+
+
+def _mean(stage, bounces):
+    with Session(stage, RenderSettings(**SIZE, bounces=bounces, preset="low")) as s:
+        r = s.render()
+    return float(r.rgba[..., :3].mean()), r
+
+
+@pytest.mark.parametrize("n", [1, 2])
+def test_inside_a_glowing_sphere_n_bounces_add_up_the_series(n):
+    rho, le = 0.4, 2.0
+    mean, result = _mean(glowing_sphere_stage(rho, le), Bounces(12, n, 4))
+    assert result.stats["field_updates"] == n
+    expected = le * sum(rho ** k for k in range(n + 1))
+    assert mean == pytest.approx(expected, rel=0.01)
+
+
+def test_inside_a_glowing_sphere_the_scenes_bounces_tend_to_le_over_one_minus_rho():
+    rho, le = 0.4, 2.0
+    stage = glowing_sphere_stage(rho, le)
+    direct, _ = _mean(stage, DIRECT)
+    assert direct == pytest.approx(le, rel=1e-3)       # the emission seen: no bounce
+    full, result = _mean(stage, Bounces())             # Cycles' 4 diffuse bounces
+    assert result.stats["field_updates"] == 4
+    assert full == pytest.approx(le / (1.0 - rho), rel=0.02)
+
+
+def room_stage(settings_bounces=None):
+    """A white box room lit by a point light, with a red wall to bleed: a scene that
+    bounces; `settings_bounces` written on /Render/Settings as the exporter writes them."""
+    stage = shadow_scenes.new_stage(half=2.0)
+    white = _material(stage, "white2", (0.8, 0.8, 0.8))
+    red = _material(stage, "red", (0.8, 0.1, 0.1))
+    x0, y0, z0, x1, y1, z1 = -2, -2, 0, 2, 2, 2.5
+    _quad(stage, "ceiling", [(x0, y0, z1), (x0, y1, z1), (x1, y1, z1), (x1, y0, z1)], white)
+    _quad(stage, "wall_xn", [(x0, y0, z0), (x0, y1, z0), (x0, y1, z1), (x0, y0, z1)], red)
+    _quad(stage, "wall_yp", [(x0, y1, z0), (x1, y1, z0), (x1, y1, z1), (x0, y1, z1)], white)
+    shadow_scenes.add_box(stage, center=(0.5, 0.5, 0.5), size=1.0)
+    shadow_scenes.add_light(stage, "point", pos=(0.5, -0.5, 2.0), power=300.0, radius=0.05,
+                            shadow=False)
+    shadow_scenes.add_camera(stage, eye=(1.8, -1.8, 1.4), target=(-1, 1, 0.8), aspect=1.5,
+                             far=20.0)
+    if settings_bounces is not None:
+        prim = stage.DefinePrim("/Render/Settings", "RenderSettings")
+        for name, value in zip(("maxBounces", "diffuseBounces", "glossyBounces"),
+                               settings_bounces):
+            prim.CreateAttribute(f"lantern:{name}", Sdf.ValueTypeNames.Int).Set(value)
+    return stage
+
+
+def test_bounces_zero_is_todays_direct_image():
+    with Session(room_stage(), RenderSettings(**SIZE)) as s:       # names no bounces
+        today = s.render()
+    with Session(room_stage((12, 4, 4)), RenderSettings(**SIZE, bounces=DIRECT)) as s:
+        direct = s.render()
+    with Session(room_stage((12, 4, 4)), RenderSettings(**SIZE)) as s:
+        full = s.render()
+    assert today.stats["field_updates"] == direct.stats["field_updates"] == 0
+    np.testing.assert_allclose(direct.rgba, today.rgba, rtol=1e-3, atol=1e-4)   # float16
+    # The same stage with its bounces lights what the lamp does not reach directly.
+    assert full.stats["field_updates"] == 4
+    assert full.rgba[..., :3].mean() > 1.2 * today.rgba[..., :3].mean()
+
+
+def test_the_field_updates_only_when_what_it_holds_changes():
+    stage = room_stage((12, 4, 4))
+    with Session(stage, RenderSettings(**SIZE)) as s:
+        first = s.render()
+        again = s.render()
+        assert first.stats["field_updates"] == 4
+        assert again.stats["field_updates"] == 0
+        np.testing.assert_array_equal(again.rgba, first.rgba)
+        light = UsdGeom.Xformable(stage.GetPrimAtPath("/root/point"))
+        light.GetOrderedXformOps()[0].Set(Gf.Vec3d(-0.5, 0.5, 2.0))
+        moved = s.render()
+        assert moved.stats["field_updates"] == 4
+        assert not np.allclose(moved.rgba, first.rgba)
+        # A sync outside a render (a tool's rays) takes the stage's edits first: the
+        # next render still builds the field again.
+        light.GetOrderedXformOps()[0].Set(Gf.Vec3d(0.5, -0.5, 2.0))
+        s.trace([(0.0, 0.0, 1.0)], [(0.0, 0.0, -1.0)])
+        back = s.render()
+        assert back.stats["field_updates"] == 4
+        np.testing.assert_array_equal(back.rgba, first.rgba)
+
+
+def test_a_material_edit_updates_the_field_only_when_its_colour_changes():
+    stage = room_stage((12, 4, 4))
+    surface = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/red/surface"))
+    with Session(stage, RenderSettings(**SIZE)) as s:
+        assert s.render().stats["field_updates"] == 4
+        surface.GetInput("roughness").Set(0.3)            # not what the field holds
+        assert s.render().stats["field_updates"] == 0
+        surface.GetInput("diffuseColor").Set(Gf.Vec3f(0.1, 0.8, 0.1))
+        assert s.render().stats["field_updates"] == 4
+
+
+def sealed_room_stage():
+    """A closed room of six zero-thickness walls meeting at seams, on a white ground that
+    reaches far beyond it, under a sun: no opening. The camera inside."""
+    stage = shadow_scenes.new_stage(half=12.0)
+    white = _material(stage, "white2", (0.8, 0.8, 0.8))
+    x0, y0, z0, x1, y1, z1 = -2, -2, 0.0, 2, 2, 2.6
+    walls = {
+        "floor": [(x0, y0, z0), (x1, y0, z0), (x1, y1, z0), (x0, y1, z0)],
+        "ceiling": [(x0, y0, z1), (x0, y1, z1), (x1, y1, z1), (x1, y0, z1)],
+        "wall_xn": [(x0, y0, z0), (x0, y1, z0), (x0, y1, z1), (x0, y0, z1)],
+        "wall_xp": [(x1, y0, z0), (x1, y0, z1), (x1, y1, z1), (x1, y1, z0)],
+        "wall_yn": [(x0, y0, z0), (x0, y0, z1), (x1, y0, z1), (x1, y0, z0)],
+        "wall_yp": [(x0, y1, z0), (x1, y1, z0), (x1, y1, z1), (x0, y1, z1)],
+    }
+    for name, corners in walls.items():
+        _quad(stage, name, corners, white)
+    shadow_scenes.add_light(stage, "sun", strength=4.0, dir=(-0.7, -0.2, -0.6))
+    shadow_scenes.add_camera(stage, eye=(-1.8, -1.7, 1.5), target=(1, 0.6, 0.7), aspect=1.5,
+                             far=30.0)
+    return stage
+
+
+def test_the_bounce_does_not_leak_into_a_sealed_room():
+    stage = sealed_room_stage()
+    sun_radiance = 0.8 * 4.0 / np.pi          # a white wall in the sun
+    with Session(stage, RenderSettings(**SIZE, bounces=DIRECT)) as s:
+        direct = s.render()
+    with Session(stage, RenderSettings(**SIZE, bounces=Bounces())) as s:
+        full = s.render()
+    assert full.stats["field_updates"] == 4 and full.stats["field_probes"] > 8
+    bounce = full.rgba[..., :3] - direct.rgba[..., :3]
+    assert np.abs(bounce).max() < 1e-4 * sun_radiance
+
+
+def test_a_textured_surface_bounces_its_maps_mean_colour(tmp_path):
+    from lantern.engine.image_io import write_image
+    rho, le = 0.4, 2.0
+    image = np.full((4, 4, 4), 1.0, np.float32)
+    image[:2, :, :3], image[2:, :, :3] = 0.2, 0.6            # mean 0.4
+    write_image(str(tmp_path / "albedo.exr"), image)
+    stage = glowing_sphere_stage(0.9, le)                    # 0.9: the unbound value
+    root = "/root/_materials/glow"
+    reader = UsdShade.Shader.Define(stage, f"{root}/uv")
+    reader.CreateIdAttr("UsdPrimvarReader_float2")
+    reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set("st")
+    tex = UsdShade.Shader.Define(stage, f"{root}/tex")
+    tex.CreateIdAttr("UsdUVTexture")
+    tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(str(tmp_path / "albedo.exr"))
+    tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(),
+                                                                      "result")
+    tex.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("raw")
+    surface = UsdShade.Shader(stage.GetPrimAtPath(f"{root}/surface"))
+    surface.GetInput("diffuseColor").ConnectToSource(tex.ConnectableAPI(), "rgb")
+    # A roughness map too (no specular lobe at ior 1: it changes nothing seen): its
+    # sampler sits on a texture unit the field shares, as material maps do.
+    surface.CreateInput("roughness", Sdf.ValueTypeNames.Float).ConnectToSource(
+        tex.ConnectableAPI(), "r")
+    one, _ = _mean(stage, Bounces(12, 1, 4))
+    two, _ = _mean(stage, Bounces(12, 2, 4))
+    # The second bounce is the first's light off the walls again: x the map's mean.
+    assert (two - le) / (one - le) == pytest.approx(1.0 + rho, rel=0.02)
+
+
+def test_without_compute_shaders_the_scene_is_lit_directly_with_one_warning():
+    stage = room_stage((12, 4, 4))
+    with Session(stage, RenderSettings(**SIZE)) as s:
+        from lantern.engine.gpu.context import run_gl
+        run_gl(lambda gl: setattr(s._renderer.irradiance, "compute", False))
+        result = s.render()
+    assert result.stats["field_updates"] == 0
+    lines = [w for w in result.warnings if "compute shaders" in w]
+    assert len(lines) == 1 and "lit directly" in lines[0]
+    with Session(stage, RenderSettings(**SIZE, bounces=DIRECT)) as s:
+        direct = s.render()
+    np.testing.assert_array_equal(result.rgba, direct.rgba)
+
+
+def test_a_lamp_inside_a_sphere_bounces_its_light_by_the_series():
+    # A point light at the centre lights the sphere evenly: each bounce adds rho times
+    # the last, through the hits' shadow rays and the light table as the pixels see it.
+    rho = 0.5
+    stage = glowing_sphere_stage(rho, 0.0)
+    shadow_scenes.add_light(stage, "point", pos=(0, 0, 0), power=100.0, radius=0.01,
+                            shadow=False)
+    direct, _ = _mean(stage, DIRECT)
+    full, _ = _mean(stage, Bounces())
+    assert direct > 0.1
+    assert full / direct == pytest.approx(sum(rho ** k for k in range(5)), rel=0.01)
