@@ -38,14 +38,15 @@ import numpy as np
 
 from ..core.emission import SAMPLING
 from ..core.lights import POLYGON
-from ..core.morton import morton_order
+from ..core.morton import BITS, morton_codes, morton_order
 from .scene import Light
 from .textures import read_image_linear
 
 WARNINGS = "<emitters>"          # Scene.warnings key of the meshes not made lights
 COPLANAR = 1.0 - 1e-6           # cos between the normals of a quad's two triangles
-# Polygons a light at most: a shader invocation loops over a light's polygons, about 60
-# loop iterations each, and llvmpipe ends an invocation's loops after 65,535 in all.
+# Polygons a light at most: a pixel near a light may walk its every group and polygon
+# (511 steps, about 60 loop iterations a polygon), and llvmpipe ends an invocation's
+# loops after 65,535 in all.
 CHUNK = 256
 
 
@@ -159,11 +160,26 @@ def mesh_light(name: str, emitting: list, emitter: tuple = ()) -> Light:
 
 
 def _chunks(polys: list) -> list:
-    """`polys` as lights of at most CHUNK polygons, those that lie together (along the
-    Morton curve of their centres) in one."""
-    if len(polys) <= CHUNK:
+    """`polys` as lights of at most CHUNK polygons, those that lie together in one, each
+    light's in the order of the Morton curve of their centres: the leaves of its tree of
+    groups (engine/emitter_groups.py) in an order in which aligned runs of a power of
+    two are blocks of the mesh. The centres are counted in cells of the polygons'
+    median size along the axes of the box they lie in (_group_frame), so that a grid of
+    quads is ordered by its rows and columns and its blocks are rects."""
+    if len(polys) <= 1:
         return [polys] if polys else []
-    order = morton_order(np.array([c.mean(axis=0) for c, *_ in polys]))
+    corners = [c for c, *_ in polys]
+    _, x, y, normal, _, _ = _group_frame(corners)
+    axes = np.stack([x, y, normal])
+    centres = np.array([c.mean(axis=0) for c in corners]) @ axes.T
+    sizes = np.array([np.ptp(c @ axes.T, axis=0) for c in corners])
+    cell = np.maximum(np.median(sizes, axis=0), 1e-9 * max(float(np.ptp(centres)), 1e-30))
+    grid = np.round((centres - centres.min(axis=0)) / cell)
+    if grid.max() < 1 << BITS:         # the cells themselves, each its own Morton cell
+        order = np.argsort(morton_codes(grid, np.full(3, -0.5), np.full(3, (1 << BITS) - 1.5)),
+                           kind="stable")
+    else:
+        order = morton_order(centres)
     return [[polys[i] for i in order[k:k + CHUNK]] for k in range(0, len(polys), CHUNK)]
 
 

@@ -4,7 +4,6 @@
 uniform sampler2D u_tree;           // NODES_PER_LINE nodes a line (engine/gpu/lights.py)
 uniform int tree_leaves;            // 0: no tree
 uniform bool tree_exact;            // error 0: every light on its own, within its volume
-uniform float light_error;          // the bound (RenderSettings.light_error)
 const int NODE_TEXELS = 8;
 const int NODES_PER_LINE = 256;
 const float ERROR_CONSTANT = 1.5;   // engine/light_tree.py

@@ -47,8 +47,10 @@ bool reaches(vec3 p) {
     return dot(normalize(p - apex), light_axis) >= cos_half - 1e-5;
 }
 
-// Shades pixel px; returns the light tree's steps (nodes visited) for it.
+// Shades pixel px; returns the light tree's and the emitter groups' steps (nodes
+// visited) for it.
 uint shade_pixel(ivec2 px) {
+    area_steps = 0u;
     if (any(greaterThanEqual(px, imageSize(hdr_image)))) return 0u;
     shaded_pixel = vec2(px) + 0.5;
     float depth = texelFetch(g_depth, px, 0).r;
@@ -109,12 +111,9 @@ uint shade_pixel(ivec2 px) {
     imageStore(aov_shadow_image, px,
                imageLoad(aov_shadow_image, px) + vec4(luminance * lit, luminance, 0.0, 0.0));
 #endif
-    return steps;
+    return steps + area_steps;
 }
 
-#ifdef SINGLE_LIGHT
-void main() { shade_pixel(ivec2(gl_GlobalInvocationID.xy) + u_offset); }
-#else
 // The light tree's steps and the pixels that took one, summed in the work group, then
 // added to the frame's counts with one atomic add each (a carry into the high word where
 // the low one wraps: passes/light_cull.py reads them).
@@ -139,4 +138,3 @@ void main() {
         if (before + group_steps < before) atomicAdd(tree_steps_high, 1u);
     }
 }
-#endif

@@ -39,6 +39,8 @@ vec3 light_y;
 vec2 half_size;             // rect half extents; disk: its semi-axes (an ellipse's differ)
 int n_poly;
 int light_row;
+uniform float light_error;  // the light tree's and emitter groups' bound (RenderSettings)
+uint area_steps = 0u;       // emitter groups' nodes visited (lights.comp counts them)
 
 vec4 light_texel(int k) { return light_table(light_row, k); }
 
@@ -192,28 +194,86 @@ void polygon_reflected(Surface s, vec3 L, inout vec3 diffuse, inout vec3 glossy)
     glossy += L * light_specular * bump_visible(s, reflect(-s.v, s.n)) * lobes;
 }
 
+// The node after i in a depth-first walk of an implicit complete tree (children 2i+1,
+// 2i+2) once i's own subtree is done; -1 when the walk is over: numbered from 1, right
+// children are odd, so climb past the trailing ones to the nearest left child, whose
+// right sibling is next (light_tree.glsl tree_next, with findLSB: GL 4 only).
+int next_in_tree(int i) {
+    int k = i + 1;
+    while ((k & 1) != 0) k >>= 1;
+    return k == 0 ? -1 : k;
+}
+
+// Whether the polygon or group at `row` lights s: s on the face it lights from (a
+// corner is on its plane; the light's position, an emissive mesh's box's middle, may
+// not be). A point in the plane (within the depth's rounding: an emitter's own
+// surface) sees it edge on, and nothing: the horizon's clip of a polygon around the
+// point is not to be trusted.
+bool polygon_faces(Surface s, int row) {
+    vec3 to_s = s.p - light_pos - light_table(row, 8).xyz;
+    float side = dot(to_s, light_table(row, 2).xyz);
+    return abs(side) > 1e-3 * length(to_s)
+        && (side > 0.0 || (int(light_table(row, 3).w) & 32) != 0);
+}
+
+// Whether the group at `row` (coplanar polygons facing s) stands for its polygons at s
+// as its rect of their mean radiance (engine/emitter_groups.py derives the bound): exact
+// where they fill it with one radiance; else its whole rect above s's horizon and the
+// bound within light_error of the rect's irradiance, per channel.
+bool group_stands(Surface s, int row) {
+    vec4 t4 = light_table(row, 4), t5 = light_table(row, 5);
+    if (max(max(t4.r, t4.g), max(t4.b, max(t5.r, max(t5.g, t5.b)))) <= 0.0) return true;
+    vec3 a = light_pos + light_table(row, 8).xyz, c = light_pos + light_table(row, 10).xyz;
+    vec3 b = light_pos + light_table(row, 9).xyz, e = light_pos + light_table(row, 11).xyz;
+    vec3 u = 0.5 * (a + c) - s.p;
+    float d = length(u), r = t4.w, dmin = d - r;
+    if (dmin <= 0.0 || min(min(dot(s.n, a - s.p), dot(s.n, b - s.p)),
+                           min(dot(s.n, c - s.p), dot(s.n, e - s.p))) <= 0.0) return false;
+    vec3 own = light_table(row, 1).rgb * light_table(row, 6).y
+             * abs(dot(light_table(row, 2).xyz, u)) * dot(s.n, u) / (d * d * d * d);
+    vec3 bound = (6.0 * t4.rgb + 19.0 * r * r * t5.rgb / dmin) / (dmin * dmin * dmin);
+    return all(lessThanEqual(bound, light_error * own));
+}
+
 // An area light: a rect, a disk's polygon, or an emissive mesh's polygons (its own row
 // holds the first, n_extra rows from first_extra the others, each with its radiance,
-// its front and whether it lights from both faces: engine/gpu/lights.py). Each lights
-// s from the face s is on, if it lights from that face. The shadow's axis
-// (shadow_lookup.glsl) is the first polygon's, turned to s's side.
+// its front and whether it lights from both faces, then its groups' rows:
+// engine/gpu/lights.py). Each lights s from the face s is on, if it lights from that
+// face. A mesh's polygons are the leaves of a tree of groups (engine/emitter_groups.py):
+// a group that stands for its polygons at s (group_stands) is shaded as one rect, else
+// its parts. The shadow's axis (shadow_lookup.glsl) is the first polygon's, turned to
+// s's side.
 void area_light(Surface s, out vec3 diffuse, out vec3 glossy) {
     diffuse = glossy = vec3(0.0);
     if (length(s.p - light_pos) > light_range) return;
     vec3 first_axis = light_axis;
-    for (int k = 0; k <= n_extra; ++k) {
-        int row = k == 0 ? light_row : first_extra + k - 1;
-        vec4 t1 = light_table(row, 1), t2 = light_table(row, 2);
-        bool both = (int(light_table(row, 3).w) & 32) != 0;
-        // The side of the polygon's plane s is on (a corner is on it; the light's
-        // position, an emissive mesh's box's middle, may not be). A point in the plane
-        // (within the depth's rounding: an emitter's own surface) sees it edge on, and
-        // nothing: the horizon's clip of a polygon around the point is not to be trusted.
-        vec3 to_s = s.p - light_pos - light_table(row, 8).xyz;
-        float side = dot(to_s, t2.xyz);
-        if (abs(side) <= 1e-3 * length(to_s) || (side < 0.0 && !both)) continue;
-        area_polygon(s, row, int(light_table(row, 6).x));
-        if (ltc_poly_n >= 3) polygon_reflected(s, t1.rgb, diffuse, glossy);
+    int n = n_extra + 1;
+    int leaves = 1;
+    while (leaves < n) leaves *= 2;
+    int i = 0;
+    while (i >= 0) {
+        bool down = false;
+        int row = -1;
+        if (i >= leaves - 1) {
+            int k = i - (leaves - 1);
+            if (k < n) row = k == 0 ? light_row : first_extra + k - 1;
+        } else {
+            int group = first_extra + n_extra + i;
+            ++area_steps;
+            if (light_table(group, 5).w > 0.0) {
+                bool coplanar = int(light_table(group, 6).x) > 0;
+                if (!coplanar) down = true;
+                else if (polygon_faces(s, group)) {
+                    if (group_stands(s, group)) row = group;
+                    else down = true;
+                }
+            }
+        }
+        if (row >= 0 && polygon_faces(s, row)) {
+            area_polygon(s, row, int(light_table(row, 6).x));
+            if (ltc_poly_n >= 3) polygon_reflected(s, light_table(row, 1).rgb, diffuse, glossy);
+        }
+        i = down ? 2 * i + 1 : next_in_tree(i);
     }
     if (dot(s.p - light_poly(0), first_axis) <= 0.0) light_axis = -first_axis;
 }

@@ -272,3 +272,77 @@ def test_a_closed_emissive_mesh_lights_as_its_faces_would_as_rect_lights():
     err = float(np.max(np.abs(lit[mask] - want[mask]) / want[mask]))
     print(f"closed cube: worst relative difference {err:.2e}")
     assert err < 0.01
+
+
+@pytest.mark.parametrize("cells", [17, 32])
+def test_a_large_panel_lights_as_one_rect_through_its_groups_not_polygon_by_polygon(cells):
+    """289 quads (lights of 256 and 33) and 1,024 (four of 256): each light's polygons
+    are the leaves of a tree of groups, ordered by the mesh's rows and columns, and a
+    group of quads that fills its rect with one radiance is shaded as that rect,
+    exactly; so a pixel visits a few nodes of each light, not its hundreds of
+    polygons (the steps the clustered pass counts: its compute form, which counts them
+    for shadowed lights too), and the plane is lit as by the rect."""
+    settings = RenderSettings(width=W, height=H, compute=True, **FORMS["clustered"])
+    rect = render_stage(stage_with("rect"), settings).rgba[..., 0]
+    res = render_stage(stage_with("quad", cells=cells), settings)
+    grid, stats = res.rgba[..., 0], res.stats
+    assert res.warnings == []
+    mask = plane_mask() & (rect > 0.02 * rect.max())
+    err = float(np.max(np.abs(grid[mask] - rect[mask]) / rect[mask]))
+    print(f"{cells} x {cells} quads: worst relative difference {err:.2e}, "
+          f"{stats['light_tree_steps']} steps over {stats['light_tree_pixels']} pixel-lights")
+    assert err < 0.01
+    assert stats["light_tree_pixels"] >= mask.sum()
+    assert stats["light_tree_steps"] <= 8 * stats["light_tree_pixels"]   # of 256 a light
+
+
+def _irradiance(quads, colours, p, n, cells=24):
+    """The irradiance at p facing n from one-sided quads (corners wound about their
+    front) of radiance `colours`, by the midpoint rule over cells x cells parts each."""
+    total = np.zeros(3)
+    t = (np.arange(cells) + 0.5) / cells
+    for q, colour in zip(quads, colours):
+        a, b, d = q[0], q[1], q[3]
+        x = a + t[:, None, None] * (b - a) + t[None, :, None] * (d - a)
+        front = np.cross(b - a, d - a)
+        area = np.linalg.norm(front)
+        u = x.reshape(-1, 3) - p
+        r2 = (u * u).sum(axis=1)
+        k = np.maximum(-(u @ front) / area, 0) * np.maximum(u @ n, 0) / r2 ** 2
+        total += colour * k.mean() * area
+    return total
+
+
+def test_a_group_of_unlike_polygons_is_within_its_bound_of_them():
+    """Groups of a grid's quads of random radiance, some left out: the rect of their
+    mean radiance differs from them by no more than the bound the shader tests
+    (engine/emitter_groups.py), at points from just past the group to far."""
+    from lantern.engine import emitter_groups
+    rng = np.random.default_rng(7)
+    checked = 0
+    for trial in range(12):
+        cells = 4
+        keep = rng.random(cells * cells) < 0.7
+        keep[0] = True
+        quads, colours = [], []
+        for j in range(cells):
+            for i in range(cells):
+                if keep[j * cells + i]:
+                    o = np.array([i * 0.1, j * 0.07, 0.0])
+                    quads.append(np.array([o, o + [0.1, 0, 0], o + [0.1, 0.07, 0], o + [0, 0.07, 0]]))
+                    colours.append(rng.uniform(0.2, 2.0, 3))
+        # wound about +z: they light upwards
+        g = emitter_groups.build(quads, colours, np.zeros(len(quads), bool))
+        for _ in range(6):
+            p = np.array([0.2, 0.14, 0.0]) + rng.normal(size=3) * [0.6, 0.6, 0.0] + \
+                [0, 0, rng.uniform(0.2, 1.5)]
+            n = -np.array([rng.normal() * 0.3, rng.normal() * 0.3, 1.0])
+            n /= np.linalg.norm(n)
+            bound = emitter_groups.error_bound(g, 0, p, n)
+            if bound is None:
+                continue
+            rect = _irradiance([g.corners[0]], [g.radiance[0]], p, n, 96)
+            exact = _irradiance(quads, colours, p, n)
+            assert np.all(np.abs(rect - exact) <= bound), (trial, p, n, rect, exact, bound)
+            checked += 1
+    assert checked >= 20

@@ -18,7 +18,11 @@ holds the first polygon (its radiance in 1, its front in 2, flag 32 where it lig
 from both faces, its corners about the light's position), and each other polygon a
 row of the same form past the lights' rows (POLYGON ROWS, numbered in texel 6); the
 position, x and y axes and half sizes are the box they lie in, over which their one
-shadow is filtered.
+shadow is filtered. After its polygon rows come its groups' rows (engine/emitter_groups.py,
+the inner nodes of a tree over its polygons, node i at first polygon row + polygon rows
++ i): 1 mean radiance, 2 front, 3 flags (32), 4 |first moment| per channel, radius,
+5 deviation per channel, polygons, 6 corners (4, or 0 where it may not stand for its
+polygons), area, 8..11 its rect about the light's position.
 The position is a double split in two floats: shaders make it camera-relative
 (shaders/origin.glsl), so the table does not change when the view does.
 
@@ -34,7 +38,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...core.lights import DISK, POLYGON, RECT, SPOT, SUN
-from .. import light_tree
+from .. import emitter_groups, light_tree
 from ..lighting import disk_polygon, disk_semi_axes, light_area, rect_polygon, volume_radius, volume_threshold
 from ..shadow_plan import casts
 from ..view import split_double
@@ -103,9 +107,16 @@ def extra_polygons(light) -> int:
     return len(light.polygons) - 1 if light.kind == POLYGON else 0
 
 
+def extra_rows(light) -> int:
+    """How many rows a light has past its own: its polygons after the first and its
+    groups (an emissive mesh's)."""
+    count = extra_polygons(light)
+    return count + emitter_groups.leaves(count + 1) - 1 if count else 0
+
+
 def pack_extra(light) -> np.ndarray:
-    """(extra_polygons(light), ROW_TEXELS, 4) float32 polygon rows of `light`."""
-    rows = np.zeros((extra_polygons(light), ROW_TEXELS, 4), np.float32)
+    """(extra_rows(light), ROW_TEXELS, 4) float32 polygon and group rows of `light`."""
+    rows = np.zeros((extra_rows(light), ROW_TEXELS, 4), np.float32)
     centre = np.asarray(light.position, np.float64)
     for row, corners, colour, both in zip(rows, light.polygons[1:], light.polygon_colors[1:],
                                           light.two_sided[1:]):
@@ -114,6 +125,15 @@ def pack_extra(light) -> np.ndarray:
         row[3, 3] = 32 if both else 0
         row[6, 0] = len(corners)
         row[8:8 + len(corners), :3] = corners - centre
+    if len(rows):
+        g = emitter_groups.build(light.polygons, light.polygon_colors, light.two_sided)
+        nodes = rows[extra_polygons(light):]
+        nodes[:, 1, :3], nodes[:, 2, :3] = g.radiance, g.front
+        nodes[:, 3, 3] = np.where(g.both, 32, 0)
+        nodes[:, 4, :3], nodes[:, 4, 3] = g.moment, g.radius
+        nodes[:, 5, :3], nodes[:, 5, 3] = g.deviation, g.count
+        nodes[:, 6, 0], nodes[:, 6, 1] = np.where(g.flat, 4, 0), g.area
+        nodes[:, 8:12, :3] = g.corners - centre
     return rows
 
 
@@ -123,7 +143,7 @@ class LightTable:
         self.disk_sides = None     # the preset's polygon for disk lights, as packed
         self.texture = None
         self.index = {}            # light path -> row
-        self.extras = {}           # light path -> (first, count) of its polygon rows
+        self.extras = {}           # light path -> (first, count) of its polygon and group rows
         self.ranges = {}           # light path -> volume radius R
         self.threshold = None      # the scene's volume threshold the ranges use
         self.version = 0           # counts the updates that changed a light
@@ -157,7 +177,7 @@ class LightTable:
         threshold = volume_threshold(scene.lights.values())
         if paths != list(self.index) or self.texture is None or \
                 disk_sides != self.disk_sides or threshold != self.threshold or \
-                any(extra_polygons(scene.lights[p]) != self.extras.get(p, (0, 0))[1]
+                any(extra_rows(scene.lights[p]) != self.extras.get(p, (0, 0))[1]
                     for p in changed if p in scene.lights):
             self.disk_sides = disk_sides
             self.index = {p: i for i, p in enumerate(paths)}
@@ -165,7 +185,7 @@ class LightTable:
             self.ranges = {p: volume_radius(scene.lights[p], threshold) for p in paths}
             self.extras, first = {}, len(paths)
             for p in paths:
-                count = extra_polygons(scene.lights[p])
+                count = extra_rows(scene.lights[p])
                 if count:
                     self.extras[p] = (first, count)
                     first += count
@@ -174,7 +194,7 @@ class LightTable:
             rows[:len(paths)] = pack_rows([scene.lights[p] for p in paths],
                                           [self.ranges[p] for p in paths], self.disk_sides)
             for p, (at, count) in self.extras.items():
-                rows[self.index[p], 6, 2:] = at, count
+                rows[self.index[p], 6, 2:] = at, extra_polygons(scene.lights[p])
                 rows[at:at + count] = pack_extra(scene.lights[p])
             self.texture = self.uploads.rewrite_float_texture(
                 self.texture, rows.reshape(lines, LIGHTS_PER_LINE * ROW_TEXELS, 4), kind="lights")
@@ -185,7 +205,7 @@ class LightTable:
                 self.ranges[p] = volume_radius(light, threshold)
                 row = pack_rows([light], [self.ranges[p]], self.disk_sides)
                 at, count = self.extras.get(p, (0, 0))
-                row[0, 6, 2:] = at, count
+                row[0, 6, 2:] = at, extra_polygons(light)
                 self._write_rows(self.index[p], row)
                 if count:
                     self._write_rows(at, pack_extra(light))

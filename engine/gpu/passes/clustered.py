@@ -98,6 +98,7 @@ class ClusteredLightPass(Pass):
                                  + ([AREA_VISIBILITY] if visibility is not None else []))
             set_shadow_uniforms(prog, shadow_maps[path], frame.preset, view.origin)
             set_uniform(prog, "light_index", self.table.index[path])
+            set_uniform(prog, "light_error", float(clusters.error))  # emitter groups'
             set_uniform(prog, "u_offset", rect[:2])
             prog.run(-(-rect[2] // TILE), -(-rect[3] // TILE))
             ctx.memory_barrier()

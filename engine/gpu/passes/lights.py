@@ -254,6 +254,7 @@ class LightPass(Pass):
                                  + surface_defines(frame, board))
         bind_gbuffer(board, prog, view)
         set_uniform(prog, "light_index", row)
+        set_uniform(prog, "light_error", float(frame.options.light_error))  # emitter groups'
         if sm is not None:
             set_shadow_uniforms(prog, sm, self.preset, view.origin)
         return prog
