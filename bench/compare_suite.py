@@ -484,6 +484,13 @@ def _names(text):
     return tuple(part.strip() for part in text.split(",") if part.strip())
 
 
+def _mode_names(text):
+    wrong = [mode for mode in _names(text) if mode not in MODES]
+    if wrong:
+        raise argparse.ArgumentTypeError(f"{', '.join(wrong)}: choose from {', '.join(MODES)}")
+    return _names(text)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(REPO / "out" / "compare"))
@@ -494,7 +501,7 @@ def main():
     parser.add_argument("--size", default=SIZE, type=lambda t: tuple(map(int, t.split("x"))),
                         help=f"image size of scenes without their own (default {SIZE[0]}x{SIZE[1]})")
     parser.add_argument("--reference-samples", type=int, default=REFERENCE_SAMPLES)
-    parser.add_argument("--mode", type=_names, default=MODES,
+    parser.add_argument("--mode", type=_mode_names, default=MODES,
                         help="reference modes, comma-separated (default direct,full)")
     parser.add_argument("--presets", type=_names, default=None,
                         help="Lantern presets, comma-separated (default: all)")
