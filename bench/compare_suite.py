@@ -394,11 +394,13 @@ HEADER = ["scene", "preset", "Lantern warm", "Lantern cold", "HDR-FLIP",
 
 def fastest(scenes, mode):
     """The scenes where a Lantern preset is fastest at its own error in `mode` (warm),
-    each with those presets: {scene: [preset, ...]}."""
+    each with those presets: {scene: [preset, ...]}. A win where another renderer's
+    cheapest image is already more accurate is not counted (its row says so)."""
     won = {}
     for scene in scenes:
         for row in scene.get("equal_error", []):
-            if row["mode"] == mode and row["winner_warm"] == "lantern":
+            if row["mode"] == mode and row["winner_warm"] == "lantern" \
+                    and not row["better_at_cheapest"]:
                 won.setdefault(scene["name"], []).append(row["preset"])
     return won
 

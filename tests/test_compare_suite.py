@@ -13,11 +13,11 @@ import compare_suite  # noqa: E402
 from test_compare_report import build_scene  # noqa: E402
 
 
-def _scene(name, winners):
+def _scene(name, winners, better_at_cheapest=()):
     """A suite entry whose equal-error rows have these warm winners: {mode: winner}."""
     rows = [{"mode": mode, "preset": "medium", "flip": 0.1, "lantern_warm_seconds": 0.05,
              "lantern_cold_seconds": 2.0, "cycles": None, "eevee": None,
-             "winner_warm": winner, "better_at_cheapest": []}
+             "winner_warm": winner, "better_at_cheapest": list(better_at_cheapest)}
             for mode, winner in winners.items()]
     return {"name": name, "equal_error": rows, "eevee": {}, "report": f"{name}/index.html"}
 
@@ -25,14 +25,16 @@ def _scene(name, winners):
 def test_the_summary_names_the_fastest_scenes_per_mode():
     scenes = [_scene("box", {"direct": "lantern", "full": "cycles"}),
               _scene("room", {"direct": "undecided", "full": "lantern"}),
-              _scene("panel", {"direct": "lantern", "full": "lantern"})]
+              _scene("panel", {"direct": "lantern", "full": "lantern"}),
+              # Fastest at its own error, but Cycles' 1 spp is already better: not named.
+              _scene("plane", {"direct": "lantern", "full": "lantern"}, ["cycles"])]
     assert compare_suite.fastest(scenes, "direct") == {"box": ["medium"], "panel": ["medium"]}
     assert compare_suite.fastest(scenes, "full") == {"room": ["medium"], "panel": ["medium"]}
     text = compare_suite.markdown(scenes)
     direct, full = text.split("## full mode")
     assert direct.startswith("## direct mode")
-    assert "in direct mode (warm): 2 of 3 scenes: box (medium), panel (medium)" in direct
-    assert "in full mode (warm): 2 of 3 scenes: room (medium), panel (medium)" in full
+    assert "in direct mode (warm): 2 of 4 scenes: box (medium), panel (medium)" in direct
+    assert "in full mode (warm): 2 of 4 scenes: room (medium), panel (medium)" in full
     assert direct.count("| box | medium |") == full.count("| box | medium |") == 1
 
 
@@ -51,8 +53,9 @@ def test_one_tiny_scene_in_both_modes(tmp_path):
     compare_suite.write_summary(out, [measured], args, 1.0)
     summary = json.loads((out / "summary.json").read_text())
     for mode in ("direct", "full"):
-        won = next(r for r in measured["equal_error"] if r["mode"] == mode)["winner_warm"]
-        assert summary["lantern_fastest"][mode] == ({"tiny": ["low"]} if won == "lantern" else {})
+        row = next(r for r in measured["equal_error"] if r["mode"] == mode)
+        won = row["winner_warm"] == "lantern" and not row["better_at_cheapest"]
+        assert summary["lantern_fastest"][mode] == ({"tiny": ["low"]} if won else {})
     text = (out / "summary.md").read_text()
     assert "## direct mode" in text and "## full mode" in text
     assert text.count("| tiny | low |") == 2
