@@ -1,6 +1,8 @@
-"""The comparison suite (`make compare`): `lantern compare` on every scene below, one
-report per scene, and out/compare/index.html (with summary.json and summary.md)
-linking them. Not part of `make test`; it prints figures and asserts nothing.
+"""The comparison suite (`make compare`): `lantern compare` on every scene below, in
+both modes (direct: bounces 0; full: the scene's bounces), one report per scene, and
+out/compare/index.html (with summary.json and summary.md) linking them, a table per
+mode that names the scenes where Lantern is fastest at equal error. Not part of
+`make test`; it prints figures and asserts nothing.
 
 Scenes, built or copied into a temporary folder by a Blender process (`--build`):
 - calibration, at the sizes and with the references the pipeline tests use, so that
@@ -20,6 +22,7 @@ Scenes, built or copied into a temporary folder by a Blender process (`--build`)
   own sizes and samples;
 
     .venv/bin/python bench/compare_suite.py [--out out/compare] [--only NAME ...]
+        [--mode direct,full] [--presets low,medium,...] [--cycles-samples 1,4,...]
 
 (--only measures those scenes again and keeps the other rows of an earlier summary.)
 """
@@ -42,6 +45,7 @@ NORMAL_MAP = CORPUS / "08_normal_ribs.png"
 SIZE = (160, 90)               # every scene without a size of its own
 SWEEP = (1, 4, 16, 64, 256)
 REFERENCE_SAMPLES = 1024       # 4x the sweep's last point; calibration scenes use their tests'
+MODES = ("direct", "full")     # every scene in both (lantern.compare.modes)
 EEVEE_SAMPLES = (1, 4, 16)     # 64 would double the suite's time on 2 cores
 CROWD_FRAME = 25
 POINT_SAMPLED = 0.01           # pixel filter width of the calibration references
@@ -285,8 +289,8 @@ def _relative_error_in_lit_area(report_dir, results, preset):
 
     from lantern.engine.image_io import read_exr
     reference = read_exr(str(report_dir / results["references"]["direct"]["image"]))[..., :3]
-    render = next(r for r in results["renders"]
-                  if r["renderer"] == "lantern" and r["preset"] == preset)
+    render = next(r for r in results["renders"] if r["renderer"] == "lantern"
+                  and r["preset"] == preset and r["mode"] == "direct")
     lantern = read_exr(str(report_dir / render["image"]))[..., :3]
     luminance = reference.mean(axis=-1)
     lit = luminance > 0.05 * luminance.max()
@@ -294,8 +298,9 @@ def _relative_error_in_lit_area(report_dir, results, preset):
 
 
 def _bound_check(entry, report_dir, results):
+    """The calibration bound (set in direct mode by its test), where direct was run."""
     bound = entry.get("bound")
-    if not bound:
+    if not bound or "direct" not in results["references"]:
         return None
     if bound["metric"] == "HDR-FLIP":
         row = next((r for r in results["equal_error"] if r["preset"] == bound["preset"]
@@ -311,7 +316,8 @@ def run_scene(name, entry, args):
     out = pathlib.Path(args.out) / name
     options = Options(
         scene=entry["blend"], out=str(out), frame=entry.get("frame"),
-        size=tuple(entry.get("size") or args.size), cycles_samples=SWEEP,
+        size=tuple(entry.get("size") or args.size), cycles_samples=args.cycles_samples,
+        presets=args.presets, modes=args.mode,
         reference_samples=entry.get("reference_samples", args.reference_samples),
         eevee=not args.no_eevee, eevee_samples=EEVEE_SAMPLES, jobs=args.jobs,
         pixel_filter=entry.get("pixel_filter", 1.5), cache=args.cache,
@@ -331,9 +337,11 @@ def run_scene(name, entry, args):
 
 
 def _eevee_points(results):
+    """Per mode, EEVEE's (samples, seconds, HDR-FLIP against that mode's reference)."""
     from lantern.compare.curves import hdr_flip
-    return [{"samples": r["samples"], "seconds": r["seconds"], "flip": hdr_flip(r, "direct")}
-            for r in results["renders"] if r["renderer"] == "eevee"]
+    return {mode: [{"samples": r["samples"], "seconds": r["seconds"], "flip": hdr_flip(r, mode)}
+                   for r in results["renders"] if r["renderer"] == "eevee"]
+            for mode in results["settings"]["modes"]}
 
 
 # --- the summary -----------------------------------------------------------------------
@@ -349,7 +357,8 @@ def _equal(entry):
 
 
 def _eevee_cell(scene, row):
-    first = min(scene["eevee"], key=lambda p: p["samples"]) if scene["eevee"] else None
+    points = scene["eevee"].get(row["mode"], [])
+    first = min(points, key=lambda p: p["samples"]) if points else None
     text = f"1 spp {first['seconds']:.2g} s, FLIP {first['flip']:.3f}" if first and first["flip"] is not None else "–"
     if row.get("eevee"):
         text += f"; at equal FLIP {_equal(row['eevee'])}"
@@ -363,13 +372,13 @@ def _winner(row):
     return row["winner_warm"]
 
 
-def summary_rows(scenes, preset=None):
+def summary_rows(scenes, mode, preset=None):
     rows = []
     for scene in scenes:
         for row in scene.get("equal_error", []):
-            if row["mode"] != "direct" or (preset and row["preset"] != preset):
+            if row["mode"] != mode or (preset and row["preset"] != preset):
                 continue
-            bound = scene.get("bound")
+            bound = scene.get("bound") if mode == "direct" else None
             check = "" if not bound or bound["preset"] != row["preset"] else (
                 f"{'holds' if bound['holds'] else 'FAILS'} ({bound['value']:.4f} ≤ {bound['bound']})")
             rows.append([scene["name"], row["preset"], f"{row['lantern_warm_seconds'] * 1000:.1f} ms",
@@ -383,19 +392,51 @@ HEADER = ["scene", "preset", "Lantern warm", "Lantern cold", "HDR-FLIP",
           "calibration bound"]
 
 
-def markdown(rows):
-    lines = ["| " + " | ".join(HEADER) + " |", "|" + "---|" * len(HEADER)]
-    lines += ["| " + " | ".join(cells) + " |" for cells in rows]
-    return "\n".join(lines) + "\n"
+def fastest(scenes, mode):
+    """The scenes where a Lantern preset is fastest at its own error in `mode` (warm),
+    each with those presets: {scene: [preset, ...]}. A win where another renderer's
+    cheapest image is already more accurate is not counted (its row says so)."""
+    won = {}
+    for scene in scenes:
+        for row in scene.get("equal_error", []):
+            if row["mode"] == mode and row["winner_warm"] == "lantern" \
+                    and not row["better_at_cheapest"]:
+                won.setdefault(scene["name"], []).append(row["preset"])
+    return won
+
+
+def _fastest_line(scenes, mode):
+    won = fastest(scenes, mode)
+    names = ", ".join(f"{name} ({', '.join(presets)})" for name, presets in won.items())
+    return (f"Lantern fastest at equal error in {mode} mode (warm): "
+            f"{len(won)} of {len(scenes)} scenes" + (f": {names}" if names else ""))
+
+
+def _modes(scenes):
+    """The modes the scenes were measured in, in the suite's order."""
+    seen = {row["mode"] for scene in scenes for row in scene.get("equal_error", [])}
+    return [mode for mode in MODES if mode in seen]
+
+
+def markdown(scenes, preset=None):
+    lines = []
+    for mode in _modes(scenes):
+        lines += [f"## {mode} mode", "", _fastest_line(scenes, mode), "",
+                  "| " + " | ".join(HEADER) + " |", "|" + "---|" * len(HEADER)]
+        lines += ["| " + " | ".join(cells) + " |" for cells in summary_rows(scenes, mode, preset)]
+        lines.append("")
+    return "\n".join(lines)
 
 
 def write_summary(out, scenes, args, seconds):
     import html
 
     from lantern.compare.files import write_json, write_text
-    write_json(str(out / "summary.json"), {"scenes": scenes,
-                                           "seconds": seconds, "settings": vars(args)})
-    write_text(str(out / "summary.md"), markdown(summary_rows(scenes)))
+    modes = _modes(scenes)
+    write_json(str(out / "summary.json"), {
+        "scenes": scenes, "seconds": seconds, "settings": vars(args),
+        "lantern_fastest": {mode: fastest(scenes, mode) for mode in modes}})
+    write_text(str(out / "summary.md"), markdown(scenes))
     e = html.escape
     body = ["<!doctype html><html lang=en><head><meta charset=utf-8><link rel=icon href=\"data:,\">"
             "<title>lantern compare: suite</title><style>body{font:14px/1.4 system-ui,sans-serif;"
@@ -403,17 +444,21 @@ def write_summary(out, scenes, args, seconds):
             "padding:2px 6px}th{background:#f3f3f3}.bad{color:#b00}</style></head><body>",
             f"<h1>lantern compare: the suite</h1><p>{len(scenes)} scenes in {seconds / 60:.1f} min; "
             "times and the winner are per image, Lantern warm (see each report for what every "
-            "time includes).</p><table><tr>" + "".join(f"<th>{e(h)}</th>" for h in HEADER) + "</tr>"]
-    for scene in scenes:
-        if "error" in scene:
-            body.append(f"<tr><td>{e(scene['name'])}</td><td colspan={len(HEADER) - 1} class=bad>"
-                        f"{e(scene['error'])}</td></tr>")
-            continue
-        for cells in summary_rows([scene]):
-            cells[0] = f"<a href=\"{e(scene['report'])}\">{e(cells[0])}</a>"
-            body.append("<tr>" + "".join(f"<td>{c if i == 0 else e(c)}</td>"
-                                         for i, c in enumerate(cells)) + "</tr>")
-    body.append("</table><h2>Repairs made in the copies of corpus scenes</h2><ul>")
+            "time includes).</p>"]
+    for mode in modes:
+        body.append(f"<h2>{e(mode)} mode</h2><p>{e(_fastest_line(scenes, mode))}</p><table><tr>" +
+                    "".join(f"<th>{e(h)}</th>" for h in HEADER) + "</tr>")
+        for scene in scenes:
+            if "error" in scene:
+                body.append(f"<tr><td>{e(scene['name'])}</td><td colspan={len(HEADER) - 1} "
+                            f"class=bad>{e(scene['error'])}</td></tr>")
+                continue
+            for cells in summary_rows([scene], mode):
+                cells[0] = f"<a href=\"{e(scene['report'])}\">{e(cells[0])}</a>"
+                body.append("<tr>" + "".join(f"<td>{c if i == 0 else e(c)}</td>"
+                                             for i, c in enumerate(cells)) + "</tr>")
+        body.append("</table>")
+    body.append("<h2>Repairs made in the copies of corpus scenes</h2><ul>")
     for scene in scenes:
         for repair in scene.get("repairs", []):
             body.append(f"<li>{e(scene['name'])}: {e(repair)}</li>")
@@ -437,6 +482,17 @@ def _with_earlier(out, scenes, only):
     return merged + list(fresh.values())
 
 
+def _names(text):
+    return tuple(part.strip() for part in text.split(",") if part.strip())
+
+
+def _mode_names(text):
+    wrong = [mode for mode in _names(text) if mode not in MODES]
+    if wrong:
+        raise argparse.ArgumentTypeError(f"{', '.join(wrong)}: choose from {', '.join(MODES)}")
+    return _names(text)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(REPO / "out" / "compare"))
@@ -447,6 +503,12 @@ def main():
     parser.add_argument("--size", default=SIZE, type=lambda t: tuple(map(int, t.split("x"))),
                         help=f"image size of scenes without their own (default {SIZE[0]}x{SIZE[1]})")
     parser.add_argument("--reference-samples", type=int, default=REFERENCE_SAMPLES)
+    parser.add_argument("--mode", type=_mode_names, default=MODES,
+                        help="reference modes, comma-separated (default direct,full)")
+    parser.add_argument("--presets", type=_names, default=None,
+                        help="Lantern presets, comma-separated (default: all)")
+    parser.add_argument("--cycles-samples", type=lambda t: tuple(map(int, _names(t))),
+                        default=SWEEP, help="the Cycles sweep (default 1,4,16,64,256)")
     parser.add_argument("--no-eevee", action="store_true")
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument("--cache", default=None)
@@ -479,7 +541,7 @@ def main():
         seconds = sum(scene.get("seconds", 0.0) for scene in scenes)
     write_summary(out, scenes, args, seconds)
     print()
-    print(markdown(summary_rows(scenes, preset="medium")))
+    print(markdown(scenes, preset="medium"))
     print(f"{len(scenes)} scenes in {seconds / 60:.1f} min; report: {out / 'index.html'}")
     return 0
 

@@ -68,8 +68,9 @@ def add_parser(commands, parents, parse_size, epilog, formatter):
     compare.add_argument("--cycles-denoised", action="store_true",
                          help="also sweep Cycles with its denoiser (OpenImageDenoise), as its own curve")
     compare.add_argument("--mode", type=_modes, default=DEFAULTS.modes,
-                         help="direct (Cycles max bounces 0, the default), full (the scene's "
-                              "bounces), or direct,full: one reference and column each")
+                         help="full (the scene's bounces, the default), direct (Cycles max "
+                              "bounces 0, Lantern bounces 0), or direct,full: one "
+                              "reference, Lantern image and section each")
     compare.add_argument("--jobs", "-j", type=int, default=DEFAULTS.jobs, metavar="N",
                          help="renders at once (default 1: above 1, times share the cores)")
     compare.add_argument("--pixel-filter", type=float, default=DEFAULTS.pixel_filter,

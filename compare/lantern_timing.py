@@ -6,8 +6,10 @@ the .blend, the export to an in-memory USD stage, the Session (stage read, GL co
 uploads), shader compilation and the first render: what `lantern render scene.blend`
 costs from a shell.
 Warm: the median of several renders of one engine.Session after a warm-up render:
-what a viewport or an F12 that keeps its renderer costs per image (nothing changed,
-so the Session reads and uploads nothing)."""
+what an F12 that keeps its renderer costs per image. Nothing changed, so the Session
+reads and uploads nothing; but each timed render builds the ray tracer's trees and the
+irradiance field from nothing (Session.drop_traced), as Cycles' time includes its BVH:
+no render reuses a field an earlier one made."""
 from __future__ import annotations
 
 import dataclasses
@@ -48,6 +50,7 @@ def time_lantern(blend, frame, size, preset, transparent, spawned_at, warm_runs,
         session.render()  # warm-up
         runs, result = [], first
         for _ in range(max(1, warm_runs)):
+            session.drop_traced()
             start = time.perf_counter()
             result = session.render()
             runs.append(time.perf_counter() - start)

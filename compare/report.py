@@ -215,7 +215,7 @@ def _mode_section(results, mode, plot_file):
     rows = []
     for row in (r for r in results["equal_error"] if r["mode"] == mode):
         lantern = next(r for r in renders if r["renderer"] == "lantern"
-                       and r["preset"] == row["preset"])
+                       and r["preset"] == row["preset"] and r["mode"] == mode)
         fg = (lantern["metrics"][mode].get("foreground") or {}).get("hdr_flip")
         rows.append([_html(row["preset"]), _secs(row["lantern_warm_seconds"]),
                      _secs(row["lantern_cold_seconds"]), _num(row["flip"]), _num(fg),

@@ -52,7 +52,7 @@ class Options:
     reference_samples: int = 4096
     eevee: bool = False
     eevee_samples: tuple = (1, 4, 16, 64)
-    modes: tuple = ("direct",)
+    modes: tuple = ("full",)
     cycles_denoised: bool = False
     jobs: int = 1
     cache: str | None = None
@@ -128,15 +128,18 @@ def _plan(options, out, scan, scene_files, size, frame):
             "images": [_image(out, f"eevee_{s:04d}spp") for s in options.eevee_samples]},
             len(options.eevee_samples), extra={"renderer": "eevee"}))
     transparent = scan["scene"]["film_transparent"]
-    for index, preset in enumerate(options.presets):
-        coverage = _image(out, "lantern_coverage") if index == 0 and not transparent else None
-        jobs.append(Job(f"lantern {preset}", common | {
-            "job": "lantern", "preset": preset, "transparent": transparent,
-            "antialias": not point_sampled(options.pixel_filter), "warm_runs": options.warm_runs, "image": _image(out, f"lantern_{preset}"),
-            # Lit as the references are: directly unless full mode is asked for (one
-            # Lantern image is scored against every mode's reference).
-            "direct": "full" not in options.modes,
-            "coverage": coverage}, 1, extra={"renderer": "lantern", "preset": preset}))
+    for mode in options.modes:
+        for preset in options.presets:
+            first = (mode, preset) == (options.modes[0], options.presets[0])
+            coverage = _image(out, "lantern_coverage") if first and not transparent else None
+            jobs.append(Job(f"lantern {preset} {mode}", common | {
+                "job": "lantern", "preset": preset, "transparent": transparent,
+                "antialias": not point_sampled(options.pixel_filter),
+                "warm_runs": options.warm_runs, "image": _image(out, f"lantern_{preset}_{mode}"),
+                # Lit as its mode's reference is: bounces 0, or the scene's.
+                "direct": mode == "direct",
+                "coverage": coverage}, 1,
+                extra={"renderer": "lantern", "preset": preset, "mode": mode}))
     return jobs, references
 
 
@@ -195,7 +198,7 @@ def _equal_error(renders, modes, presets):
         curves = {name: sweep_points(renders, name, mode) for name in RENDERERS}
         for preset in presets:
             lantern = next((r for r in renders if r["renderer"] == "lantern"
-                            and r["preset"] == preset), None)
+                            and r["preset"] == preset and r["mode"] == mode), None)
             target = lantern and hdr_flip(lantern, mode)
             if target is None:
                 continue
@@ -248,8 +251,9 @@ def _score(options, out, references, jobs, film_transparent, view):
         if renderer is None or job.result is None:
             continue
         if renderer == "lantern":
-            entries = [{"id": f"lantern-{job.extra['preset']}", "renderer": "lantern",
-                        "preset": job.extra["preset"], "image": job.result["image"],
+            entries = [{"id": f"lantern-{job.extra['mode']}-{job.extra['preset']}",
+                        "renderer": "lantern", "preset": job.extra["preset"],
+                        "mode": job.extra["mode"], "image": job.result["image"],
                         "seconds": job.result["warm_seconds"],
                         "cold_seconds": job.result["cold_seconds"],
                         "warm_runs": job.result["warm_runs"],
@@ -273,7 +277,7 @@ def _score(options, out, references, jobs, film_transparent, view):
             entry["metrics"] = {}
             entry["problems"] = metrics.problems(image)
             for mode, reference in loaded.items():
-                if renderer in ("cycles", "cycles_denoised") and entry["mode"] != mode:
+                if renderer != "eevee" and entry["mode"] != mode:
                     continue
                 scored = metrics.score(image, reference, mask)
                 heatmap = None
@@ -304,7 +308,9 @@ def _ratio(x):
 
 
 def _summary(equal, renders, modes):
-    """The one line on stdout."""
+    """The one line on stdout: per mode, the best Lantern image against Cycles."""
+    if len(modes) > 1:
+        return " | ".join(f"{mode}: {_summary(equal, renders, (mode,))}" for mode in modes)
     rows = [r for r in equal if r["mode"] == modes[0]]
     if not rows:
         return "no Lantern image could be scored (see the report's failures)"
@@ -334,7 +340,9 @@ def _timing_notes(options):
     notes = {
         "lantern_warm": (f"median of {options.warm_runs} renders of one engine.Session after "
                          "a warm-up render, the stage exported and read once (nothing "
-                         "changes between renders, so nothing is read or uploaded again)"),
+                         "changes between renders, so nothing is read or uploaded again); "
+                         "each builds the ray-tracing trees and the irradiance field from "
+                         "nothing, as Cycles' time includes its BVH"),
         "lantern_cold": ("from the parent starting the worker process to Lantern's first "
                          "image in memory: process start, imports (bpy), opening the .blend, "
                          "the export to USD, the Session (stage read, GL context, uploads), "

@@ -218,6 +218,14 @@ class Session:
             return hits, list(tracer.instances), {**tracer.counts, "seconds": dict(tracer.seconds)}
         return run_gl(trace)
 
+    def drop_traced(self):
+        """The next render builds the ray tracer's trees and the irradiance field from
+        nothing, without reading the stage or uploading meshes again: what a still costs
+        when its scene bounces, for a timing that includes them (`lantern compare`'s
+        warm renders, as Cycles' time includes its BVH)."""
+        self._check_open()
+        run_gl(lambda gl: self._renderer.drop_traced())
+
     def _frame(self, frame):
         if frame is not None:
             return float(frame)

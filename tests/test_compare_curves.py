@@ -102,7 +102,8 @@ def _render(renderer, seconds, flip, **extra):
 
 
 def _renders(lantern_flip):
-    renders = [_render("lantern", 0.21, lantern_flip, preset="high", cold_seconds=1.9)]
+    renders = [_render("lantern", 0.21, lantern_flip, preset="high", cold_seconds=1.9,
+                       mode="direct")]
     renders += [_render("cycles", seconds, flip, samples=s, mode="direct")
                 for s, seconds, flip in power_law_curve(per_sample=0.15)]
     renders += [_render("eevee", 2.1, 0.094, samples=1), _render("eevee", 4.0, 0.05, samples=4)]
@@ -140,13 +141,33 @@ def test_a_faster_lantern_at_a_worse_error_is_said_so():
     """Cycles at 1 spp (0.5 s) is already below Lantern's FLIP but slower than Lantern
     (0.21 s): Lantern is fastest at its own error, and the row says Cycles' cheapest
     image is better."""
-    renders = [_render("lantern", 0.21, 0.5, preset="high", cold_seconds=1.9)]
+    renders = [_render("lantern", 0.21, 0.5, preset="high", cold_seconds=1.9, mode="direct")]
     renders += [_render("cycles", seconds, flip, samples=s, mode="direct")
                 for s, seconds, flip in power_law_curve(per_sample=0.5)]
     row = _equal_error(renders, ("direct",), ("high",))[0]
     assert row["winner_warm"] == "lantern" and row["better_at_cheapest"] == ["cycles"]
     assert row["winner_cold"] == "cycles"          # 0.5 s < 1.9 s cold
     assert _equal_error(_renders(0.071), ("direct",), ("high",))[0]["better_at_cheapest"] == []
+
+
+def test_each_mode_is_read_off_its_own_lantern_image():
+    """Lantern renders each mode lit as its reference is: a mode's row takes that mode's
+    image, and the summary names the best image of each mode."""
+    renders = []
+    for mode, lantern_flip, per_sample in (("direct", 0.071, 0.15), ("full", 0.5, 0.05)):
+        renders.append({"renderer": "lantern", "seconds": 0.21, "preset": "high",
+                        "cold_seconds": 1.9, "mode": mode,
+                        "metrics": {mode: {"all": {"hdr_flip": lantern_flip}}}})
+        renders += [{"renderer": "cycles", "seconds": seconds, "samples": s, "mode": mode,
+                     "metrics": {mode: {"all": {"hdr_flip": flip}}}}
+                    for s, seconds, flip in power_law_curve(per_sample=per_sample)]
+    rows = _equal_error(renders, ("direct", "full"), ("high",))
+    assert [(r["mode"], r["flip"], r["winner_warm"]) for r in rows] == [
+        ("direct", 0.071, "lantern"), ("full", 0.5, "cycles")]
+    line = _summary(rows, renders, ("direct", "full"))
+    assert line.startswith("direct: Lantern high: 0.21 s warm (1.9 s cold), FLIP 0.071; ")
+    assert " | full: Lantern high: 0.21 s warm (1.9 s cold), FLIP 0.5; Cycles is already " \
+           "below it at 1 spp (0.05 s, 0.238x)" in line
 
 
 # --- metrics ----------------------------------------------------------------------

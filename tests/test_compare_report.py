@@ -1,6 +1,6 @@
-"""lantern compare end to end, tiny: 64x36, Cycles at 1 and 4 samples against a
-16-sample reference, Lantern at one preset, EEVEE at 1 sample, on a scene whose
-image texture is missing. Then the report in headless Chromium.
+"""lantern compare end to end, tiny: 64x36, in both modes, Cycles at 1 and 4 samples
+against a 16-sample reference, Lantern at one preset, EEVEE at 1 sample, on a scene
+whose image texture is missing. Then the report in headless Chromium.
 
 One comparison runs per module (about 20 s); two more check the reference cache."""
 import json
@@ -19,8 +19,9 @@ from lantern.compare import metrics, report
 TINY = ["--size", "64x36", "--cycles-samples", "1,4", "--reference-samples", "16",
         "--presets", "low"]
 NUMBER = r"[\d.]+(?:e-\d+)?"
-SUMMARY = re.compile(rf"^Lantern low: {NUMBER} s warm \({NUMBER} s cold\), FLIP {NUMBER}; Cycles .*"
-                     rf"; EEVEE 1 spp {NUMBER} s, FLIP {NUMBER}$")
+ONE_MODE = (rf"Lantern low: {NUMBER} s warm \({NUMBER} s cold\), FLIP {NUMBER}; Cycles [^|]*"
+            rf"; EEVEE 1 spp {NUMBER} s, FLIP {NUMBER}")
+SUMMARY = re.compile(rf"^direct: {ONE_MODE} \| full: {ONE_MODE}$")
 CHROMIUM = "/usr/bin/chromium"
 
 
@@ -70,7 +71,7 @@ def compared(tmp_path_factory):
     build_scene(scene)
     out, cache = folder / "report", folder / "cache"
     proc = lantern_compare(scene, "-o", out, *TINY, "--eevee", "--eevee-samples", "1",
-                           "--cache", cache)
+                           "--cache", cache, "--mode", "direct,full")
     assert proc.returncode == 0, proc.stderr[-3000:]
     with open(out / "results.json") as f:
         results = json.load(f)
@@ -108,16 +109,21 @@ def test_every_scored_image_is_named_and_the_metrics_can_be_recomputed(compared)
     out, results = compared["out"], compared["results"]
     renderers = {r["renderer"] for r in results["renders"]}
     assert renderers == {"lantern", "cycles", "eevee"}
-    assert [r["samples"] for r in results["renders"] if r["renderer"] == "cycles"] == [1, 4]
-    reference = read_exr(str(out / results["references"]["direct"]["image"]))
-    assert reference.shape == (36, 64, 4)
+    assert [r["samples"] for r in results["renders"] if r["renderer"] == "cycles"] == [1, 4] * 2
+    references = {mode: read_exr(str(out / r["image"])) for mode, r in results["references"].items()}
+    assert sorted(references) == ["direct", "full"]
+    assert all(reference.shape == (36, 64, 4) for reference in references.values())
     for render in results["renders"]:
         image = read_exr(str(out / render["image"]))
         assert (out / render["png"]).is_file()
-        assert (out / render["metrics"]["direct"]["heatmap"]).is_file()
-        again = metrics.score(image, reference)["all"]
-        assert again == pytest.approx(render["metrics"]["direct"]["all"])
-    assert (out / results["plots"]["direct"]).is_file()
+        # Lantern and Cycles: each image against its own mode's reference; EEVEE: both.
+        own = ["direct", "full"] if render["renderer"] == "eevee" else [render["mode"]]
+        assert sorted(render["metrics"]) == own
+        for mode in own:
+            assert (out / render["metrics"][mode]["heatmap"]).is_file()
+            again = metrics.score(image, references[mode])["all"]
+            assert again == pytest.approx(render["metrics"][mode]["all"])
+    assert all((out / results["plots"][mode]).is_file() for mode in ("direct", "full"))
 
 
 def test_a_broken_image_link_is_reported_and_the_scene_still_renders(compared):
@@ -126,7 +132,8 @@ def test_a_broken_image_link_is_reported_and_the_scene_still_renders(compared):
     assert [(b["kind"], b["path"]) for b in broken] == [("image", "//textures/missing.png")]
     assert any("missing.png" in w for w in results["warnings"])
     assert results["failures"] == []
-    lantern = next(r for r in results["renders"] if r["renderer"] == "lantern")
+    lantern = next(r for r in results["renders"] if r["renderer"] == "lantern"
+                   and r["mode"] == "direct")
     assert lantern["problems"]["nonfinite_pixels"] == 0
     assert 0 < lantern["metrics"]["direct"]["all"]["hdr_flip"] < 1
     assert lantern["cold_seconds"] > lantern["seconds"] > 0
@@ -137,10 +144,10 @@ def test_a_broken_image_link_is_reported_and_the_scene_still_renders(compared):
 
 
 def test_the_reference_is_cached_and_a_changed_setting_misses(compared, tmp_path):
-    first = compared["results"]["references"]["direct"]
+    first = compared["results"]["references"]["full"]     # the mode a plain compare runs
     assert first["cached"] is False
-    cache_files = sorted(os.listdir(compared["cache"]))
-    assert cache_files == [first["cache_key"] + ".exr", first["cache_key"] + ".json"]
+    keys = [r["cache_key"] for r in compared["results"]["references"].values()]
+    assert sorted(os.listdir(compared["cache"])) == sorted(k + e for k in keys for e in (".exr", ".json"))
     # Same reference settings, a different sweep: the reference comes from the cache.
     def rerun(out, reference_samples):
         proc = lantern_compare(compared["scene"], "-o", out, "--size", "64x36",
@@ -150,18 +157,20 @@ def test_the_reference_is_cached_and_a_changed_setting_misses(compared, tmp_path
 
     again = tmp_path / "again"
     rerun(again, 16)
-    second = json.loads((again / "results.json").read_text())["references"]["direct"]
+    second = json.loads((again / "results.json").read_text())["references"]
+    assert list(second) == ["full"]
+    second = second["full"]
     assert second["cached"] is True and second["cache_key"] == first["cache_key"]
-    assert not (again / "logs" / "reference_direct.log").exists()   # nothing rendered it
+    assert not (again / "logs" / "reference_full.log").exists()   # nothing rendered it
     assert (again / second["image"]).read_bytes() == \
         (compared["out"] / first["image"]).read_bytes()
     # A different reference (8 samples): a new key, rendered, stored beside the first.
     changed = tmp_path / "changed"
     rerun(changed, 8)
-    third = json.loads((changed / "results.json").read_text())["references"]["direct"]
+    third = json.loads((changed / "results.json").read_text())["references"]["full"]
     assert third["cached"] is False and third["cache_key"] != first["cache_key"]
     assert third["inputs"]["samples"] == 8
-    assert len(os.listdir(compared["cache"])) == 4
+    assert len(os.listdir(compared["cache"])) == 6
 
 
 def test_a_failed_job_is_one_line_and_the_others_go_on(tmp_path):
@@ -232,7 +241,7 @@ def test_the_report_opens_in_chromium_with_every_image(compared, chromium, tmp_p
     sources = [src for src, _ in images]
     assert compared["results"]["plots"]["direct"] in sources
     expected = {r["png"] for r in compared["results"]["renders"]}
-    expected |= {r["metrics"]["direct"]["heatmap"] for r in compared["results"]["renders"]}
+    expected |= {m["heatmap"] for r in compared["results"]["renders"] for m in r["metrics"].values()}
     assert expected <= set(sources)
     assert all(width > 0 for _, width in images), images
     assert screenshot.stat().st_size > 10_000
@@ -264,3 +273,24 @@ def test_a_point_sampled_comparison_renders_lantern_without_anti_aliasing(tmp_pa
     jobs, _ = run._plan(options, str(tmp_path / "out"), scan, files, (16, 9), 1.0)
     lantern = [job for job in jobs if job.spec["job"] == "lantern"]
     assert [job.spec["antialias"] for job in lantern] == [antialias, antialias]
+
+
+def test_each_mode_has_lantern_images_lit_as_its_reference(tmp_path):
+    """Full mode by default; with direct,full, one Lantern job per mode and preset, lit
+    directly (bounces 0) for direct and with the scene's bounces for full."""
+    from lantern.compare import cache, command, run
+    scene = tmp_path / "scene.blend"
+    scene.write_bytes(b"BLENDER")
+    assert run.Options(scene=str(scene), out="out").modes == ("full",)
+    assert command.DEFAULTS.modes == ("full",)
+    options = run.Options(scene=str(scene), out=str(tmp_path / "out"), presets=("low", "high"),
+                          modes=("direct", "full"), cache=str(tmp_path / "cache"))
+    scan = {"scene": {"blender": "5.0.1", "film_transparent": False}, "links": []}
+    jobs, _ = run._plan(options, str(tmp_path / "out"), scan,
+                        cache.scene_inputs(str(scene), []), (16, 9), 1.0)
+    lantern = [(j.extra["mode"], j.extra["preset"], j.spec["direct"], os.path.basename(j.spec["image"]))
+               for j in jobs if j.spec["job"] == "lantern"]
+    assert lantern == [("direct", "low", True, "lantern_low_direct.exr"),
+                       ("direct", "high", True, "lantern_high_direct.exr"),
+                       ("full", "low", False, "lantern_low_full.exr"),
+                       ("full", "high", False, "lantern_high_full.exr")]

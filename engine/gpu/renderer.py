@@ -344,6 +344,14 @@ class Renderer:
         self._raytracer.update(scene)
         return self._raytracer
 
+    def drop_traced(self):
+        """Forgets the ray tracer's trees and marks the field stale: the next frame that
+        traces builds both from nothing (the geometry's uploads are kept)."""
+        if self._raytracer is not None:
+            self._raytracer.release()
+            self._raytracer = None
+        self.irradiance.stale = True
+
     def _posed(self, scene, changes, settings):
         """Uploads what the sync changed and runs the skinning pass, outside a frame."""
         self.update(scene, changes, bool(self._cull_backfaces))
