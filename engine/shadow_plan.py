@@ -45,7 +45,6 @@ class ShadowMap:
                  size=0.0, atlas=(0, 0), anchor=(0.0, 0.0, 0.0)):
         self.radial, self.tiles = radial, tiles
         self.mats, self.rects = mats, rects   # GL projections of anchor-relative positions
-        self.inverse = np.linalg.inv(np.asarray(mats, np.float64))   # one call for all tiles
         self.anchor = np.asarray(anchor, np.float64)  # world, what positions are relative to
         self.texel = texel          # radial: world texel per unit distance; ortho: per cascade
         self.far = far

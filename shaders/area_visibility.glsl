@@ -21,6 +21,6 @@ void screen_pixel(ivec2 px, out vec4 visibility, out vec4 unused1, out vec4 unus
     if (is_background(depth)) return;
     load_light(light_index, cam_forward);
     Surface s = gbuffer_surface(px, depth);
-    visibility.x = light_shadow(s.p, s.n, s.n, dot(s.p, cam_forward));   // area: ng unread
+    visibility.x = light_shadow(s.p, s.n, dot(s.p, cam_forward));
     visibility.y = area_penumbra;
 }

@@ -1,7 +1,6 @@
 // Forward lighting of a surface the deferred passes do not light (the transparency
-// and glass passes, both fragment shaders: the contact shadows' geometric normal comes
-// from the position's derivatives): the deferred passes' own functions (material.glsl,
-// lights.glsl, environment.glsl, shadow_lookup.glsl with HAS_SHADOW), never a copy.
+// and glass passes): the deferred passes' own functions (material.glsl, lights.glsl,
+// environment.glsl, shadow_lookup.glsl with HAS_SHADOW), never a copy.
 #define MAX_FORWARD_LIGHTS 32
 uniform int n_lights;
 uniform int light_rows[MAX_FORWARD_LIGHTS];
@@ -11,10 +10,6 @@ uniform int light_rows[MAX_FORWARD_LIGHTS];
 // exactly one, with its shadow map).
 vec3 forward_light(Surface s, vec3 p, vec3 n, vec3 emissive) {
     vec3 c = vec3(0.0), diffuse, glossy;
-#ifdef HAS_SHADOW
-    vec3 ng = cross(dFdx(p), dFdy(p));               // geometric normal (contact shadows)
-    ng = dot(ng, ng) > 0.0 ? normalize(ng) * sign(dot(ng, n) + 1e-30) : n;
-#endif
 #ifdef AMBIENT
     dome_light(s, vec2(1.0), diffuse, glossy);      // no ambient occlusion: it is screen space
     c += emissive + diffuse + glossy;
@@ -25,7 +20,7 @@ vec3 forward_light(Surface s, vec3 p, vec3 n, vec3 emissive) {
         vec3 r = diffuse + glossy;
 #ifdef HAS_SHADOW
         if (max(r.r, max(r.g, r.b)) > 0.0)
-            r *= light_shadow(p, n, ng, dot(p, cam_forward));
+            r *= light_shadow(p, n, dot(p, cam_forward));
 #endif
         c += r;
     }

@@ -42,7 +42,7 @@ void main() {
     if (max(radiance.r, max(radiance.g, radiance.b)) <= 0.0) discard;
     float lit = 1.0;
 #ifdef HAS_SHADOW
-    lit = light_shadow(p, n, gbuffer_geometric_normal(px, p, n), dot(p, cam_forward));
+    lit = light_shadow(p, n, dot(p, cam_forward));
 #endif
     frag = vec4(radiance * lit, 0.0);   // NaN or Inf goes through: the resolve pass counts it
 #ifdef WRITE_AOVS

@@ -69,7 +69,7 @@ uint shade_pixel(ivec2 px) {
     vec3 radiance = sum_d + sum_g;
     if (max(radiance.r, max(radiance.g, radiance.b)) <= 0.0) return 0u;
 #ifdef HAS_SHADOW
-    lit = light_shadow(s.p, s.n, gbuffer_geometric_normal(px, s.p, s.n), dot(s.p, cam_forward));
+    lit = light_shadow(s.p, s.n, dot(s.p, cam_forward));
 #endif
 #else
     // The cluster's list: lights shaded one by one (HAS_EXACT), then the light tree's

@@ -19,7 +19,6 @@ uniform sampler2D shadow_raw;
 uniform bool shadow_radial;
 uniform int shadow_tiles;
 uniform mat4 shadow_mats[6];    // camera-relative position -> tile uv, depth in [0, 1]
-uniform mat4 shadow_inv[6];     // its inverse: tile uv, depth -> camera-relative position
 uniform vec4 shadow_rects[6];   // atlas offset xy, scale zw
 uniform float shadow_far;       // radial: stored depth = distance / far
 uniform float shadow_texel;     // radial: world texel size per unit distance
@@ -56,144 +55,15 @@ bool shadow_uv(vec3 w, vec3 light_pos, int cascade, out vec2 uv, out float z) {
     return all(greaterThanEqual(t, vec2(0.0))) && all(lessThanEqual(t, vec2(1.0)));
 }
 
-// --- Contact shadows ---------------------------------------------------------------
-// Where an occluder meets the receiver (a wall on a floor, the seams of a room), the
-// bias that keeps a surface from shadowing itself, and PCF taps that reach past the
-// occluder's edge onto whatever lies beyond it, let light through: the seams of a
-// closed room showed as lines of bright dots. So each texel of the map near the
-// receiver is taken for a piece of the plane of the surface it holds: its point, from
-// its depth, and its plane, from its neighbours' points (on each axis the neighbour
-// nearer in depth, so that a texel at a crease or a silhouette takes its own surface's
-// side). No second target: the depth map holds it all. A texel is an occluder in
-// contact when
-//  * it lies in front of the receiver's plane (a concave seam: at a convex edge the
-//    other face falls behind it),
-//  * its surface is another one (planes more than ~25 deg apart: not the receiver's
-//    own plane, nor its curvature), and
-//  * the ray from the receiver to the light crosses its plane near the seam: within
-//    the bias's reach, or closer to the seam, across the light, than the filter
-//    reaches (a crossing s along the ray lies s |facing| NoL across it).
-// Where the texel under the receiver holds the receiver's own surface, the light sees
-// the receiver there, and the filter alone decides: so a surface that only passes
-// near another one (a fold of a crumpled cloth) keeps its filtered shadow, which moves
-// smoothly with the map's texels. The receiver's plane is its geometric one (`ng`,
-// from the G-buffer's depths, gbuffer_surface.glsl), not its shading normal, which a
-// smooth or authored normal turns away from it. A lit concave corner (a floor beside a
-// wall that faces the light) passes the first two tests but its ray leaves the wall's
-// plane: it stays lit. A texel stands for its plane up to half a texel beyond where its
-// surface ends, fading over the next texel: contact shadows are at most a texel wider.
-// Not caught: a wall exactly edge-on to the light (parallel to a sun's rays) is not in
-// the map at all, and the filter reaches past the edge of what it meets.
-// Returns how much of the light contact takes away, 0..1.
-const int CONTACT_BLOCK = 4;    // the 4 x 4 texels around the receiver's footprint
-
-vec3 texel_point(ivec2 i, float r, int k, vec3 light_pos, vec2 size, out bool inside) {
-    vec2 t = ((vec2(i) + 0.5) / size - shadow_rects[k].xy) / shadow_rects[k].zw;
-    inside = r < 1.0 && all(greaterThanEqual(t, vec2(0.0))) && all(lessThanEqual(t, vec2(1.0)));
-    if (shadow_radial) {
-        vec4 h = shadow_inv[k] * vec4(t, 0.5, 1.0);
-        return light_pos + normalize(h.xyz / h.w - light_pos) * r * shadow_far;
-    }
-    vec4 h = shadow_inv[k] * vec4(t, r, 1.0);
-    return h.xyz / h.w;
-}
-
-// The plane of block texel j (its neighbours in the block: on each axis the one nearer
-// in depth); zero where it has no neighbour on an axis.
-vec3 block_plane(int j, vec3 pts[CONTACT_BLOCK * CONTACT_BLOCK],
-                 float rs[CONTACT_BLOCK * CONTACT_BLOCK], bool ok[CONTACT_BLOCK * CONTACT_BLOCK]) {
-    ivec2 c = ivec2(j % CONTACT_BLOCK, j / CONTACT_BLOCK);
-    vec3 du = vec3(0.0), dv = vec3(0.0);
-    float best_u = 1e30, best_v = 1e30;
-    for (int side = -1; side <= 1; side += 2) {
-        ivec2 cu = c + ivec2(side, 0), cv = c + ivec2(0, side);
-        int u = cu.y * CONTACT_BLOCK + cu.x, v = cv.y * CONTACT_BLOCK + cv.x;
-        if (cu.x >= 0 && cu.x < CONTACT_BLOCK && ok[u] && abs(rs[u] - rs[j]) < best_u) {
-            best_u = abs(rs[u] - rs[j]);
-            du = (pts[u] - pts[j]) * float(side);
-        }
-        if (cv.y >= 0 && cv.y < CONTACT_BLOCK && ok[v] && abs(rs[v] - rs[j]) < best_v) {
-            best_v = abs(rs[v] - rs[j]);
-            dv = (pts[v] - pts[j]) * float(side);
-        }
-    }
-    vec3 m = cross(du, dv);
-    return dot(m, m) > 0.0 ? normalize(m) : vec3(0.0);
-}
-
-float contact_shadow(vec3 p, vec3 ng, vec3 light_pos, vec3 axis, int cascade,
-                     float texel, float bias, float ref, float filter_width) {
-    int k = shadow_radial ? (shadow_tiles == 6 ? cube_face(p - light_pos) : 0) : cascade;
-    vec3 to_light = shadow_radial ? normalize(light_pos - p) : -axis;
-    float NoL = dot(ng, to_light);
-    if (NoL <= 0.0) return 0.0;          // the light is behind its geometric face
-    vec3 q = p + ng * (0.5 * texel);     // off its own plane, towards the light
-    vec2 uv;
-    float z;
-    if (!shadow_uv(q, light_pos, cascade, uv, z)) return 0.0;
-    vec2 size = vec2(textureSize(shadow_raw, 0));
-    vec2 f = uv * size - 0.5;
-    ivec2 i0 = ivec2(floor(f)) - 1;
-    const int N = CONTACT_BLOCK * CONTACT_BLOCK;
-    vec3 pts[N];
-    float rs[N];
-    bool ok[N];
-    bool read[N];
-    for (int j = 0; j < N; ++j) ok[j] = read[j] = false;
-    // Where the texel under the receiver holds the receiver's own surface, the light
-    // sees the receiver: nothing is in contact (the filter alone decides). That texel
-    // and its four neighbours first: most receivers stop here.
-    ivec2 c0 = ivec2(floor(f + 0.5)) - i0;
-    int j0 = c0.y * CONTACT_BLOCK + c0.x;
-    for (int j = 0; j < N; ++j) {
-        ivec2 c = ivec2(j % CONTACT_BLOCK, j / CONTACT_BLOCK) - c0;
-        if (abs(c.x) + abs(c.y) > 1) continue;
-        ivec2 i = clamp(i0 + ivec2(j % CONTACT_BLOCK, j / CONTACT_BLOCK), ivec2(0), ivec2(size) - 1);
-        rs[j] = texelFetch(shadow_raw, i, 0).r;
-        pts[j] = texel_point(i, rs[j], k, light_pos, size, ok[j]);
-        read[j] = true;
-    }
-    if (ok[j0] && abs(dot(pts[j0] - p, ng)) < 2.0 * texel
-        && abs(dot(block_plane(j0, pts, rs, ok), ng)) >= 0.9) return 0.0;
-    for (int j = 0; j < N; ++j) {
-        if (read[j]) continue;
-        ivec2 i = clamp(i0 + ivec2(j % CONTACT_BLOCK, j / CONTACT_BLOCK), ivec2(0), ivec2(size) - 1);
-        rs[j] = texelFetch(shadow_raw, i, 0).r;
-        pts[j] = texel_point(i, rs[j], k, light_pos, size, ok[j]);
-    }
-    float contact = 0.0;
-    for (int j = 0; j < N; ++j) {
-        ivec2 c = ivec2(j % CONTACT_BLOCK, j / CONTACT_BLOCK);
-        if (!ok[j]) continue;                              // nothing drawn there
-        vec2 d = abs(f - vec2(i0 + c));                    // from the footprint, in texels
-        float weight = clamp(2.0 - max(d.x, d.y), 0.0, 1.0);
-        if (weight <= contact) continue;
-        vec3 x = pts[j];
-        if (dot(x - p, ng) <= 0.01 * texel) continue;      // behind the receiver's plane
-        vec3 m = block_plane(j, pts, rs, ok);
-        if (abs(dot(m, ng)) >= 0.9) continue;              // the receiver's own surface
-        float facing = dot(to_light, m);
-        if (abs(facing) < 0.01) continue;                  // edge-on: no plane to cross
-        float s = dot(x - q, m) / facing;
-        if (s <= 0.0 || (shadow_radial && s >= ref)) continue;   // (a sun's: anywhere)
-        // Near the seam: within the bias's reach, or closer (across the light) than the
-        // filter reaches.
-        if (s < max(bias + 3.0 * texel / abs(facing), filter_width / (abs(facing) * NoL)))
-            contact = weight;
-    }
-    return contact;
-}
-
 vec2 vogel(int i, int n, float rot) {
     float r = sqrt((float(i) + 0.5) / float(n));
     float th = float(i) * GOLDEN_ANGLE + rot;
     return r * vec2(cos(th), sin(th));
 }
 
-// 1 = lit, 0 = shadowed. p, n, ng: receiver, its shading and its geometric normal
-// (facing the viewer); light_pos: radial lights; dir: direction the
+// 1 = lit, 0 = shadowed. p, n: receiver; light_pos: radial lights; dir: direction the
 // sun's light travels; view_depth: the receiver's depth along the camera axis.
-float shadow_factor(vec3 p, vec3 n, vec3 ng, vec3 light_pos, vec3 dir, float view_depth) {
+float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) {
     int cascade = 0;
     float texel, scale;
     vec3 axis;
@@ -226,10 +96,6 @@ float shadow_factor(vec3 p, vec3 n, vec3 ng, vec3 light_pos, vec3 dir, float vie
         ref = z * scale;
     }
     float bias = texel * (1.0 + tan_t) + 1e-4 * ref;
-    // PCF's least kernel; with its bilinear texel, twice over, the filter's reach
-    // across the light that contact shadows cover (a margin for the seam's angle).
-    float least = max(texel * 1.5, 0.75 * (shadow_footprint.x * view_depth + shadow_footprint.y));
-    float reach = 2.0 * (least + texel);
     float inv_NoL = 1.0 / max(NoL, 0.05);
     vec3 t = normalize(cross(axis, abs(axis.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
     vec3 b = cross(axis, t);
@@ -250,10 +116,9 @@ float shadow_factor(vec3 p, vec3 n, vec3 ng, vec3 light_pos, vec3 dir, float vie
             float plane = ref + clamp(dot(o, n) * inv_NoL, -search * 20.0, search * 20.0);
             if (d < plane - bias) { blockers += 1.0; block_sum += d; }
         }
-        if (blockers == 0.0)
-            return 1.0 - contact_shadow(p, ng, light_pos, axis, cascade, texel, bias, ref, reach);
+        if (blockers == 0.0) return 1.0;
     }
-    float kernel = least;
+    float kernel = max(texel * 1.5, 0.75 * (shadow_footprint.x * view_depth + shadow_footprint.y));
     if (blockers > 0.0) {
         float d_block = max(block_sum / blockers, 1e-6);
         float pen = shadow_radial ? shadow_size * (ref - d_block) / d_block
@@ -271,9 +136,7 @@ float shadow_factor(vec3 p, vec3 n, vec3 ng, vec3 light_pos, vec3 dir, float vie
         float plane = ref + clamp(dot(o, n) * inv_NoL, -kernel * 20.0, kernel * 20.0);
         lit += texture(shadow_cmp, vec3(uv, (plane - bias) / scale));
     }
-    if (lit <= 0.0) return 0.0;                // dark already: no contact to look for
-    return lit / float(pcf_taps)
-         * (1.0 - contact_shadow(p, ng, light_pos, axis, cascade, texel, bias, ref, reach));
+    return lit / float(pcf_taps);
 }
 
 // --- Area lights (rect, disk): PCSS over the light's extent ------------------------
@@ -449,7 +312,7 @@ uniform sampler2D area_visibility;  // this light's, filtered (area_visibility.g
 // The loaded light's shadow (lights.glsl's globals), of any of the program's kinds
 // (lights.glsl LIGHT_DISTANT, LIGHT_SPHERE, LIGHT_AREA); AREA_VISIBILITY: an area
 // light's, filtered, at this pixel (the G-buffer's surfaces only).
-float light_shadow(vec3 p, vec3 n, vec3 ng, float view_depth) {
+float light_shadow(vec3 p, vec3 n, float view_depth) {
 #ifdef AREA_VISIBILITY
     if (n_poly > 0) return texelFetch(area_visibility, ivec2(pixel_centre()), 0).r;
 #endif
@@ -460,7 +323,7 @@ float light_shadow(vec3 p, vec3 n, vec3 ng, float view_depth) {
                                   light_axis, view_depth);
 #endif
 #if defined(LIGHT_DISTANT) || defined(LIGHT_SPHERE)
-    return shadow_factor(p, n, ng, light_pos, light_axis, view_depth);
+    return shadow_factor(p, n, light_pos, light_axis, view_depth);
 #else
     return 1.0;
 #endif

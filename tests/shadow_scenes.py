@@ -19,14 +19,10 @@ def white_material(stage):
 
 
 def new_stage(half=20.0):
-    """A stage with the white material and a ground plane of that half size (None: no
-    ground)."""
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     UsdGeom.Xform.Define(stage, "/root")
     mat = white_material(stage)
-    if half is None:
-        return stage
     mesh = UsdGeom.Mesh.Define(stage, "/root/plane")
     mesh.CreateSubdivisionSchemeAttr("none")
     mesh.CreatePointsAttr([(-half, -half, 0), (half, -half, 0), (half, half, 0), (-half, half, 0)])
@@ -40,9 +36,8 @@ def new_stage(half=20.0):
 
 
 def add_box(stage, center=(0, 0, 0.5), size=1.0, name="box"):
-    """An axis-aligned box with flat (faceVarying) normals; size: its edge, or its
-    three edges."""
-    s = np.asarray(size, float) / 2
+    """An axis-aligned box with flat (faceVarying) normals."""
+    s = size / 2
     c = np.asarray(center, float)
     faces = [((0, 0, 1), (1, 0, 0), (0, 1, 0)), ((0, 0, -1), (0, 1, 0), (1, 0, 0)),
              ((1, 0, 0), (0, 1, 0), (0, 0, 1)), ((-1, 0, 0), (0, 0, 1), (0, 1, 0)),
@@ -130,66 +125,3 @@ def add_light(stage, kind, shadow=True, **kw):
         light.GetPrim().CreateAttribute("lantern:shadowResolution",
                                         Sdf.ValueTypeNames.Int).Set(int(kw["resolution"]))
     return light
-
-
-def _quad(stage, name, corners, normal, double_sided):
-    """A quad wound counter-clockwise about `normal` (its front face)."""
-    corners = np.asarray(corners, float)
-    if np.dot(np.cross(corners[1] - corners[0], corners[2] - corners[1]), normal) < 0:
-        corners = corners[::-1]
-    mesh = UsdGeom.Mesh.Define(stage, f"/root/{name}")
-    mesh.CreatePointsAttr([tuple(map(float, c)) for c in corners])
-    mesh.CreateFaceVertexCountsAttr([4])
-    mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
-    mesh.CreateNormalsAttr([tuple(map(float, normal))] * 4)
-    mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
-    mesh.CreateDoubleSidedAttr(bool(double_sided))
-    UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(
-        UsdShade.Material(stage.GetPrimAtPath("/root/_materials/white")))
-    return mesh
-
-
-def add_room(stage, half=(2.0, 1.5), height=2.5, thickness=0.0, double_sided=False,
-             window=None):
-    """A closed room centred on the origin, floor at z = 0: floor, ceiling and four
-    walls, each a separate mesh meeting its neighbours at seams. thickness 0: each is
-    one quad facing into the room (single- or double-sided); otherwise a box of that
-    thickness outside the room's inner faces (the boxes overlap at the corners, as
-    modelled walls do). window: (x0, x1, z0, z1) of an opening in the +Y wall (quads
-    around it)."""
-    hx, hy = half
-    if thickness > 0:
-        t = thickness
-        boxes = {"floor": ((-hx - t, -hy - t, -t), (hx + t, hy + t, 0.0)),
-                 "ceiling": ((-hx - t, -hy - t, height), (hx + t, hy + t, height + t)),
-                 "wall_px": ((hx, -hy - t, 0.0), (hx + t, hy + t, height)),
-                 "wall_nx": ((-hx - t, -hy - t, 0.0), (-hx, hy + t, height)),
-                 "wall_ny": ((-hx, -hy - t, 0.0), (hx, -hy, height))}
-        if window is None:
-            boxes["wall_py"] = ((-hx, hy, 0.0), (hx, hy + t, height))
-        else:
-            x0, x1, z0, z1 = window
-            boxes.update({"wall_py_left": ((-hx, hy, 0.0), (x0, hy + t, height)),
-                          "wall_py_right": ((x1, hy, 0.0), (hx, hy + t, height)),
-                          "wall_py_below": ((x0, hy, 0.0), (x1, hy + t, z0)),
-                          "wall_py_above": ((x0, hy, z1), (x1, hy + t, height))})
-        for name, (lo, hi) in boxes.items():
-            lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-            add_box(stage, center=tuple((lo + hi) / 2), size=hi - lo, name=name)
-        return
-    quads = {"floor": ([(-hx, -hy, 0), (hx, -hy, 0), (hx, hy, 0), (-hx, hy, 0)], (0, 0, 1)),
-             "ceiling": ([(-hx, -hy, height), (-hx, hy, height), (hx, hy, height),
-                          (hx, -hy, height)], (0, 0, -1)),
-             "wall_px": ([(hx, -hy, 0), (hx, hy, 0), (hx, hy, height), (hx, -hy, height)], (-1, 0, 0)),
-             "wall_nx": ([(-hx, -hy, 0), (-hx, -hy, height), (-hx, hy, height), (-hx, hy, 0)], (1, 0, 0)),
-             "wall_ny": ([(-hx, -hy, 0), (-hx, -hy, height), (hx, -hy, height), (hx, -hy, 0)], (0, 1, 0))}
-    py = (0, -1, 0)
-    if window is None:
-        quads["wall_py"] = ([(-hx, hy, 0), (hx, hy, 0), (hx, hy, height), (-hx, hy, height)], py)
-    else:
-        x0, x1, z0, z1 = window
-        for name, (a, b, c, d) in {"left": (-hx, x0, 0, height), "right": (x1, hx, 0, height),
-                                   "below": (x0, x1, 0, z0), "above": (x0, x1, z1, height)}.items():
-            quads[f"wall_py_{name}"] = ([(a, hy, c), (b, hy, c), (b, hy, d), (a, hy, d)], py)
-    for name, (corners, normal) in quads.items():
-        _quad(stage, name, corners, normal, double_sided)

@@ -61,7 +61,6 @@ SHADOW_BUDGET_BYTES = 512 << 20
 BUDGET_WARNING = "shadow maps"     # the scene's warnings key for the budget's line
 # GL projection (NDC [-1, 1]) -> texture space [0, 1] (the bias matrix of docs/design.md, "Shadow maps").
 BIAS = np.array([[0.5, 0, 0, 0.5], [0, 0.5, 0, 0.5], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]])
-BIAS_INVERSE = np.linalg.inv(BIAS)
 # GL projection -> the same window depth under glClipControl's ZERO_TO_ONE.
 ZERO_TO_ONE = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]])
 
@@ -90,14 +89,11 @@ def set_shadow_uniforms(prog, sm, preset, eye):
     sm.raw.use(UNITS["shadow_raw"])
     set_uniform(prog, "shadow_radial", sm.radial)
     set_uniform(prog, "shadow_tiles", sm.tiles)
-    mats, inverse = np.zeros((6, 4, 4), "f4"), np.zeros((6, 4, 4), "f4")
-    offset = np.asarray(eye, np.float64) - sm.anchor
-    to_anchor, from_anchor = translate(offset), translate(-offset)
-    for i, (m, m_inv) in enumerate(zip(sm.mats, sm.inverse)):
+    mats = np.zeros((6, 4, 4), "f4")
+    to_anchor = translate(np.asarray(eye, np.float64) - sm.anchor)
+    for i, m in enumerate(sm.mats):
         mats[i] = (BIAS @ m @ to_anchor).T    # column-major, as GLSL reads a mat4
-        inverse[i] = (from_anchor @ m_inv @ BIAS_INVERSE).T  # (map uv, depth) -> camera-relative
     set_uniform(prog, "shadow_mats", mats)
-    set_uniform(prog, "shadow_inv", inverse)
     rects = np.zeros((6, 4), "f4")
     rects[:len(sm.rects)] = sm.rects
     set_uniform(prog, "shadow_rects", rects)
