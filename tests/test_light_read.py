@@ -7,7 +7,9 @@ sublayer and instance proxies, equal to the last bit to those in
 tests/references/light_records.json. That file holds what the reader gave before
 (2026-11-28), with the warnings' wording of the float32 check ("not finite in
 float32") since, and the fields of an emissive mesh's light (polygons, their colours
-and faces) at a UsdLux light's values (none); `python tests/test_light_read.py --write`
+and faces) at a UsdLux light's values (none), and a disk's semi-axes since a disk under a
+non-uniform scale is an ellipse (width and height; its radiance over pi rx ry, its
+radius the larger); `python tests/test_light_read.py --write`
 writes it again. Read at
 the default time, frame 1 and frame 2, in one reader (the re-read at a new time
 included)."""
