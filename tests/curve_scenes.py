@@ -328,6 +328,7 @@ def build_hair(hidden=False):
     scene = bpy.context.scene
     scene.render.resolution_x, scene.render.resolution_y = HAIR_SIZE
     scene.render.resolution_percentage = 100
+    scene.cycles.max_bounces = 0     # direct light, as its Cycles reference is lit
     rng = np.random.default_rng(7)
     n, k = HAIR_STRANDS * HAIR_STRANDS, 8
     data = bpy.data.hair_curves.new("Hair")
