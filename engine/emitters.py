@@ -17,9 +17,9 @@ Which faces light: the material's emission sampling (core/emission.py): none, th
 front face (the side the mesh's normals point to), the back face, or both (Cycles'
 Auto). The radiance is the material's emissive colour, W/(sr m2) (the stage contract,
 "Emission"), which a rect light of the same size and power has too; a textured
-emission is its texture's mean (times its scale, plus its bias), a pattern graph's
-its constant: a polygon emits its mean over itself only where the texture is uniform
-over it.
+emission is, per triangle, the texture's mean over the triangle's UVs (the mip level
+whose texel covers them, at their centre; times its scale, plus its bias), a pattern
+graph's its constant: within a triangle the light is uniform.
 
 Polygons: the mesh's triangles, world space, a pair that makes a planar convex quad
 (a quad's two triangles, as triangulation leaves them side by side) merged into one.
@@ -89,10 +89,49 @@ def _merge_quad(a, b):
     return quad if np.all(turns > 0) else None
 
 
-def polygons(tris: np.ndarray, normals: np.ndarray) -> list:
+@functools.lru_cache(maxsize=16)
+def _texture_mips(path: str, colorspace: str) -> tuple:
+    """An image's linear RGBA and its box-filtered halvings, down to a texel."""
+    levels = [read_image_linear(path, colorspace).astype(np.float32)]
+    while min(levels[-1].shape[:2]) > 1:
+        a = levels[-1]
+        h, w = a.shape[0] // 2 * 2, a.shape[1] // 2 * 2
+        levels.append(a[:h, :w].reshape(h // 2, 2, w // 2, 2, 4).mean(axis=(1, 3)))
+    return tuple(levels)
+
+
+def triangle_radiance(material, uvs: np.ndarray) -> np.ndarray:
+    """(T, 3) radiance each triangle of UVs `uvs` (T, 3, 2) lights others with: an
+    emission texture's mean over the triangle (the mip level whose texel covers its
+    UV area, read at its UV centre, repeating), else the emissive colour. A texture's
+    mean over the whole image would light a lamp's dark frame as its bright bulb."""
+    ref = material.maps.get("emissiveColor")
+    if ref is None or not len(uvs):
+        return np.tile(np.asarray(material.emissive, np.float64), (len(uvs), 1))
+    mips = _texture_mips(ref.path, ref.colorspace)
+    h, w = mips[0].shape[:2]
+    e1, e2 = uvs[:, 1] - uvs[:, 0], uvs[:, 2] - uvs[:, 0]
+    texels = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]) * w * h
+    level = np.clip(np.floor(0.5 * np.log2(np.maximum(texels, 1.0))), 0, len(mips) - 1)
+    centre = uvs.mean(axis=1)
+    out = np.empty((len(uvs), 4))
+    for k in np.unique(level).astype(int):
+        pick = level == k
+        img = mips[k]
+        x = np.mod(centre[pick, 0], 1.0) * img.shape[1]
+        y = np.mod(1.0 - centre[pick, 1], 1.0) * img.shape[0]     # row 0 = the image's top
+        out[pick] = img[np.minimum(y.astype(int), img.shape[0] - 1),
+                        np.minimum(x.astype(int), img.shape[1] - 1)]
+    value = out[:, :3] if ref.channel == "rgb" else \
+        np.repeat(out[:, "rgba".index(ref.channel)][:, None], 3, axis=1)
+    return value * np.asarray(ref.scale[:3]) + np.asarray(ref.bias[:3])
+
+
+def polygons(tris: np.ndarray, normals: np.ndarray, colors=None) -> list:
     """Front-wound polygons (each (3 or 4, 3)) of world triangles `tris` (T, 3, 3) whose
     vertex normals are `normals` (T, 3, 3): degenerate ones dropped, a planar convex
-    quad's two triangles (side by side) merged."""
+    quad's two triangles (side by side) merged. With `colors` (T, 3): (polygon, colour)
+    pairs, a quad's the mean of its two triangles'."""
     g = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
     area2 = np.linalg.norm(g, axis=1)
     scale = float(np.abs(tris).max()) if len(tris) else 1.0
@@ -109,10 +148,11 @@ def polygons(tris: np.ndarray, normals: np.ndarray) -> list:
         if t + 1 < n and keep[t + 1] and float(unit[t] @ unit[t + 1]) >= COPLANAR:
             quad = _merge_quad(tris[t], tris[t + 1])
             if quad is not None:
-                out.append(quad)
+                out.append(quad if colors is None else
+                           (quad, 0.5 * (colors[t] + colors[t + 1])))
                 t += 2
                 continue
-        out.append(tris[t])
+        out.append(tris[t] if colors is None else (tris[t], colors[t]))
         t += 1
     return out
 
@@ -210,24 +250,34 @@ def closed_sides(front: bool, back: bool) -> tuple:
 
 def instance_lights(inst, mesh, materials) -> tuple[dict, str | None]:
     """({light path: Light} of an instance's emitting polygons, a warning or None)."""
-    emitting = []
+    emitting, networked = [], []
     for mat_index, first, count in mesh.ranges:
         material = materials.get(mesh.materials[mat_index])
         if material is None:
             continue
+        if material.pattern is not None and material.pattern.feeds("emissiveColor"):
+            # What a node network emits varies over the surface in ways its constant
+            # does not say (a texture through a Mix, a ramp): not a light, rather than
+            # a light of the wrong colour.
+            networked.append(material.name)
+            continue
         front, back = SAMPLING.get(material.emission_sampling, SAMPLING["auto"])
-        color = radiance(material)
-        if (front or back) and float(color.max()) > 0.0:
-            emitting.append((first, count, color, front, back))
+        if (front or back) and float(radiance(material).max()) > 0.0:
+            uv = mesh.vertices[mesh.indices[first:first + count].reshape(-1, 3), 6:8]
+            colors = triangle_radiance(material, uv.astype(np.float64))
+            emitting.append((first, count, colors, front, back))
+    why = None if not networked else \
+        f"{inst.path}: the emission of {', '.join(networked)} comes from a node " \
+        f"network and lights only itself (not made a light)"
     if not emitting:
-        return {}, None
+        return {}, why
     if not makes_lights(mesh):
         why = "skinned or blend-shaped" if mesh.skin is not None else "subdivided on the GPU"
         return {}, f"{inst.path}: its emission lights only itself (a {why} mesh's " \
                    f"emitting faces are not made lights)"
     if closed(mesh):
-        emitting = [(first, count, color, *closed_sides(front, back))
-                    for first, count, color, front, back in emitting]
+        emitting = [(first, count, colors, *closed_sides(front, back))
+                    for first, count, colors, front, back in emitting]
     worlds = inst.worlds if inst.worlds is not None else [inst.world]
     points = mesh.vertices[:, :3].astype(np.float64)
     normals = mesh.vertices[:, 3:6].astype(np.float64)
@@ -237,14 +287,15 @@ def instance_lights(inst, mesh, materials) -> tuple[dict, str | None]:
         p = points @ world[:3, :3].T + world[:3, 3]
         nrm = normals @ np.linalg.inv(world[:3, :3])     # the inverse transpose, row vectors
         polys = []
-        for first, count, color, front, back in emitting:
+        for first, count, colors, front, back in emitting:
             idx = mesh.indices[first:first + count].reshape(-1, 3)
-            polys += [(corners, color, front, back) for corners in polygons(p[idx], nrm[idx])]
+            polys += [(corners, c, front, back)
+                      for corners, c in polygons(p[idx], nrm[idx], colors) if c.max() > 0.0]
         for c, chunk in enumerate(_chunks(polys)):
             path = f"{inst.path}<emission" + (f" {w}" if len(worlds) > 1 else "") + \
                 (f" {c}" if len(polys) > CHUNK else "") + ">"
             lights[path] = mesh_light(f"{inst.path} emission", chunk, (inst.path, w))
-    return lights, None
+    return lights, why
 
 
 def _same(a: Light, b: Light) -> bool:

@@ -199,6 +199,43 @@ def test_a_textured_emission_lights_with_its_mean(tmp_path):
     assert np.allclose(radiance(Material(name="/flat", emissive=(2.0, 1.0, 0.5))), [2, 1, 0.5])
 
 
+def test_a_textured_emission_lights_each_triangle_with_the_texture_over_it(tmp_path):
+    """A triangle inside the texture's bright quarter lights with it, one inside a dark
+    quarter with nothing; one covering the whole image with its mean."""
+    from lantern.engine.emitters import triangle_radiance
+    from lantern.engine.image_io import write_image
+    from lantern.engine.scene import Material, TextureRef
+    path = str(tmp_path / "quarter.exr")
+    pixels = np.zeros((8, 8, 4), np.float32)
+    pixels[..., 3] = 1.0
+    pixels[:4, :4, :3] = (4.0, 2.0, 1.0)            # rows from the top: the top left
+    write_image(path, pixels)
+    material = Material(name="/glow", emissive=(1.0, 1.0, 1.0), maps={
+        "emissiveColor": TextureRef(path, "raw")})
+    small = np.array([[0.05, 0.55], [0.2, 0.55], [0.05, 0.7]])     # u, v up: top left
+    whole = np.array([[0.0, 0.0], [2.0, 0.0], [0.0, 2.0]])
+    got = triangle_radiance(material, np.stack([small, small + [0.5, 0.0], whole]))
+    assert np.allclose(got[0], [4.0, 2.0, 1.0])
+    assert np.allclose(got[1], 0.0)
+    assert np.allclose(got[2], [1.0, 0.5, 0.25])
+
+
+def test_emission_from_a_node_network_is_not_made_a_light_and_says_so():
+    """01_principled_material's emission is a texture through a network: its constant
+    (0.8 white) would light the scene as a lamp; not a light, one line naming the mesh."""
+    import bpy
+    import reference_scenes
+    from lantern.exporters import stage_from_depsgraph
+    import tempfile
+    reference_scenes.build("01_principled_material", tempfile.mkdtemp())
+    stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
+    reader = StageReader(stage)
+    reader.sync(None)
+    assert not [p for p, light in reader.scene.lights.items() if light.kind == "polygon"]
+    lines = [w for w in reader.scene.warning_list() if "node network" in w]
+    assert len(lines) == 1 and "TwoCubes" in lines[0], lines
+
+
 def test_a_mesh_of_more_polygons_than_a_light_holds_is_several_lights_that_light_as_one():
     """289 quads: two lights of polygons that lie together (a shader loops over a
     light's polygons, and llvmpipe ends an invocation's loops after 65,535
