@@ -22,14 +22,18 @@ def warm(presets, stop=lambda: False) -> float:
     the first preset without and with its normal map: the first render always, the
     others until stop() says a request waits (it then makes what it needs itself);
     returns the seconds it took."""
+    from ..bounces import Bounces
     from ..image_io import write_image
     from ..session import Session
     from ..settings import RenderSettings
     from ..usd.default_scene import FEATURE_NORMAL_MAPPED, default_scene, feature_scene
     start = time.perf_counter()
     order = list(dict.fromkeys(presets))
-    with Session(default_scene(), RenderSettings(width=SIZE, height=SIZE,
-                                                 preset=order[0])) as session:
+    # Lit as a new Blender scene asks (Cycles' default bounces, which the exporter
+    # writes): the bounce's programs too.
+    lit = Bounces()
+    with Session(default_scene(), RenderSettings(width=SIZE, height=SIZE, preset=order[0],
+                                                 bounces=lit)) as session:
         for i, preset in enumerate(order):
             if i and stop():
                 return time.perf_counter() - start
@@ -40,7 +44,8 @@ def warm(presets, stop=lambda: False) -> float:
         write_image(texture, np.full((4, 4, 4), 0.5, np.float32))
         stage = feature_scene(texture)
         normal_mapped = stage.GetPrimAtPath(FEATURE_NORMAL_MAPPED)
-        with Session(stage, RenderSettings(width=SIZE, height=SIZE, preset=order[0])) as session:
+        with Session(stage, RenderSettings(width=SIZE, height=SIZE, preset=order[0],
+                                           bounces=lit)) as session:
             for active in (False, True):
                 if stop():
                     break
