@@ -40,7 +40,7 @@ from ..core.emission import SAMPLING
 from ..core.lights import POLYGON
 from ..core.morton import BITS, morton_codes, morton_order
 from .scene import Light
-from .textures import read_image_linear
+from .textures import map_value, read_image_linear
 
 WARNINGS = "<emitters>"          # Scene.warnings key of the meshes not made lights
 COPLANAR = 1.0 - 1e-6           # cos between the normals of a quad's two triangles
@@ -52,8 +52,8 @@ CHUNK = 256
 
 @functools.lru_cache(maxsize=64)
 def _texture_mean(path: str, colorspace: str) -> tuple:
-    """The mean linear RGBA of an image file."""
-    return tuple(float(c) for c in read_image_linear(path, colorspace).reshape(-1, 4).mean(axis=0))
+    """The mean linear RGBA of an image file (read once with its halvings)."""
+    return tuple(float(c) for c in _texture_mips(path, colorspace)[0].reshape(-1, 4).mean(axis=0))
 
 
 def radiance(material) -> np.ndarray:
@@ -62,9 +62,7 @@ def radiance(material) -> np.ndarray:
     ref = material.maps.get("emissiveColor")
     if ref is None:
         return np.asarray(material.emissive, np.float64)
-    mean = np.asarray(_texture_mean(ref.path, ref.colorspace))
-    value = mean[:3] if ref.channel == "rgb" else np.full(3, mean["rgba".index(ref.channel)])
-    return value * np.asarray(ref.scale[:3]) + np.asarray(ref.bias[:3])
+    return map_value(ref, np.asarray(_texture_mean(ref.path, ref.colorspace)))
 
 
 def _merge_quad(a, b):
@@ -89,7 +87,7 @@ def _merge_quad(a, b):
     return quad if np.all(turns > 0) else None
 
 
-@functools.lru_cache(maxsize=16)
+@functools.lru_cache(maxsize=4)     # full-size float images: a few at a time
 def _texture_mips(path: str, colorspace: str) -> tuple:
     """An image's linear RGBA and its box-filtered halvings, down to a texel."""
     levels = [read_image_linear(path, colorspace).astype(np.float32)]
@@ -122,9 +120,7 @@ def triangle_radiance(material, uvs: np.ndarray) -> np.ndarray:
         y = np.mod(1.0 - centre[pick, 1], 1.0) * img.shape[0]     # row 0 = the image's top
         out[pick] = img[np.minimum(y.astype(int), img.shape[0] - 1),
                         np.minimum(x.astype(int), img.shape[1] - 1)]
-    value = out[:, :3] if ref.channel == "rgb" else \
-        np.repeat(out[:, "rgba".index(ref.channel)][:, None], 3, axis=1)
-    return value * np.asarray(ref.scale[:3]) + np.asarray(ref.bias[:3])
+    return map_value(ref, out)
 
 
 def polygons(tris: np.ndarray, normals: np.ndarray, colors=None) -> list:

@@ -42,7 +42,11 @@ def is_srgb(img: np.ndarray, colorspace: str) -> bool:
 
 def read_image_linear(path: str, colorspace: str) -> np.ndarray:
     """float32 (H, W, 4) linear values, row 0 = top of the image."""
-    img = read_rgba(path)
+    return linear(read_rgba(path), colorspace)
+
+
+def linear(img: np.ndarray, colorspace: str) -> np.ndarray:
+    """float32 linear values of RGBA `img` in its file's precision."""
     srgb = is_srgb(img, colorspace)
     if img.dtype.kind in "ui":
         img = img.astype(np.float32) / np.iinfo(img.dtype).max
@@ -50,3 +54,15 @@ def read_image_linear(path: str, colorspace: str) -> np.ndarray:
     if srgb:
         img[..., :3] = srgb_to_linear(img[..., :3])
     return img
+
+
+def map_value(ref, rgba) -> np.ndarray:
+    """What a map (a TextureRef) gives a surface input for linear texel values `rgba`
+    (..., 4): times its scale plus its bias, then the channel it names alone, on all
+    three (UsdUVTexture's outputs), else rgb. The CPU twin of shaders/material.glsl's
+    sample_map, for what reads a map's value off the GPU (a texture's mean)."""
+    v = np.asarray(rgba, np.float64) * np.asarray(ref.scale, np.float64) + \
+        np.asarray(ref.bias, np.float64)
+    if ref.channel in ("r", "g", "b", "a"):
+        return np.repeat(v[..., "rgba".index(ref.channel), None], 3, axis=-1)
+    return v[..., :3]

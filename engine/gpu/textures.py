@@ -32,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..color import to_srgb8
-from ..textures import is_srgb, read_rgba, srgb_to_linear
+from ..textures import is_srgb, linear, map_value, read_rgba, srgb_to_linear
 from .pattern import pattern_images
 
 GL_SRGB8_ALPHA8 = 0x8C43
@@ -120,7 +120,7 @@ class MaterialTextures:
         self._tex = {}
         self._samplers = {}
         self.failed = {}               # path -> warning: images that could not be read
-        self._means = {}               # (path, colorspace) -> its linear mean colour
+        self._means = {}               # (path, colorspace) -> its linear mean RGBA
 
     def get(self, path: str, colorspace: str):
         """(texture, cycles_srgb): whether the shader filters it as Cycles filters an
@@ -135,17 +135,9 @@ class MaterialTextures:
         irradiance field takes for a textured surface its rays hit."""
         key = (ref.path, ref.colorspace)
         if key not in self._means:
-            img = self._image(ref.path)
-            f = img[..., :3].astype(np.float64)
-            if img.dtype.kind in "ui":
-                f /= np.iinfo(img.dtype).max
-            if is_srgb(img, ref.colorspace):
-                f = srgb_to_linear(f)
-            self._means[key] = f.reshape(-1, 3).mean(axis=0)
-        m = self._means[key] * np.asarray(ref.scale[:3]) + np.asarray(ref.bias[:3])
-        if ref.channel in ("r", "g", "b", "a"):
-            m = np.full(3, m["rgba".index(ref.channel)] if ref.channel != "a" else 1.0)
-        return m
+            self._means[key] = linear(self._image(ref.path), ref.colorspace).reshape(
+                -1, 4).mean(axis=0, dtype=np.float64)
+        return map_value(ref, self._means[key])
 
     def _image(self, path):
         """The file's pixels, or a magenta texel when it cannot be read: the one place
@@ -183,12 +175,8 @@ class MaterialTextures:
         elif img.dtype == np.float16 and not srgb:
             tex = self.uploads.texture((w, h), 4, img, kind="textures", dtype="f2")
         else:
-            f = img.astype(np.float32)
-            if img.dtype.kind in "ui":
-                f /= np.iinfo(img.dtype).max
-            if srgb:
-                f[..., :3] = srgb_to_linear(f[..., :3])
-            tex = self.uploads.texture((w, h), 4, f, kind="textures", dtype="f4")
+            tex = self.uploads.texture((w, h), 4, linear(img, colorspace), kind="textures",
+                                       dtype="f4")
         if mips:
             tex.build_mipmaps()
         tex.filter = (self.ctx.LINEAR_MIPMAP_LINEAR, self.ctx.LINEAR)
