@@ -111,11 +111,11 @@ def _emission(name, strength, color=(1.0, 1.0, 1.0)):
     return mat
 
 
-def _room(scene, low, high, materials, skip=()):
-    """Six inward walls of zero thickness meeting at seams, named Floor, Ceiling, WallXn,
-    WallXp, WallYn, WallYp; `materials` maps a name to its material (default "White")."""
+def room_walls(low, high) -> dict:
+    """The corners of six inward quads of zero thickness that close the box from `low`
+    to `high`, meeting at seams: Floor, Ceiling, WallXn, WallXp, WallYn, WallYp."""
     (x0, y0, z0), (x1, y1, z1) = low, high
-    walls = {
+    return {
         "Floor": [(x0, y0, z0), (x1, y0, z0), (x1, y1, z0), (x0, y1, z0)],
         "Ceiling": [(x0, y0, z1), (x0, y1, z1), (x1, y1, z1), (x1, y0, z1)],
         "WallXn": [(x0, y0, z0), (x0, y1, z0), (x0, y1, z1), (x0, y0, z1)],
@@ -123,7 +123,11 @@ def _room(scene, low, high, materials, skip=()):
         "WallYn": [(x0, y0, z0), (x0, y0, z1), (x1, y0, z1), (x1, y0, z0)],
         "WallYp": [(x0, y1, z0), (x1, y1, z0), (x1, y1, z1), (x0, y1, z1)],
     }
-    for name, corners in walls.items():
+
+
+def _room(scene, low, high, materials, skip=()):
+    """room_walls as meshes; `materials` maps a name to its material (default "White")."""
+    for name, corners in room_walls(low, high).items():
         if name not in skip:
             rs._quad(scene, name, corners, materials.get(name, materials["White"]))
 

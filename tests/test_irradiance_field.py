@@ -5,6 +5,7 @@ import pytest
 from pxr import Gf, Sdf, UsdGeom, UsdLux, UsdShade
 
 import shadow_scenes
+import shot_scenes
 from lantern.engine import RenderSettings, Session
 from lantern.engine.bounces import DIRECT, Bounces
 
@@ -147,16 +148,7 @@ def sealed_room_stage():
     reaches far beyond it, under a sun: no opening. The camera inside."""
     stage = shadow_scenes.new_stage(half=12.0)
     white = _material(stage, "white2", (0.8, 0.8, 0.8))
-    x0, y0, z0, x1, y1, z1 = -2, -2, 0.0, 2, 2, 2.6
-    walls = {
-        "floor": [(x0, y0, z0), (x1, y0, z0), (x1, y1, z0), (x0, y1, z0)],
-        "ceiling": [(x0, y0, z1), (x0, y1, z1), (x1, y1, z1), (x1, y0, z1)],
-        "wall_xn": [(x0, y0, z0), (x0, y1, z0), (x0, y1, z1), (x0, y0, z1)],
-        "wall_xp": [(x1, y0, z0), (x1, y0, z1), (x1, y1, z1), (x1, y1, z0)],
-        "wall_yn": [(x0, y0, z0), (x0, y0, z1), (x1, y0, z1), (x1, y0, z0)],
-        "wall_yp": [(x0, y1, z0), (x1, y1, z0), (x1, y1, z1), (x0, y1, z1)],
-    }
-    for name, corners in walls.items():
+    for name, corners in shot_scenes.room_walls((-2, -2, 0.0), (2, 2, 2.6)).items():
         _quad(stage, name, corners, white)
     shadow_scenes.add_light(stage, "sun", strength=4.0, dir=(-0.7, -0.2, -0.6))
     shadow_scenes.add_camera(stage, eye=(-1.8, -1.7, 1.5), target=(1, 0.6, 0.7), aspect=1.5,
