@@ -148,6 +148,28 @@ def test_glass_lets_a_panes_share_of_a_suns_light_through_its_shadow(preset):
         assert two == pytest.approx(one_expected ** 2, abs=2 / 32 + 0.01), (bounces, two)
 
 
+def test_a_tinted_panes_shadow_takes_its_colour_at_each_face():
+    # The same two layers, of glass tinted (1, 0.6, 0.3), as Cycles tints light at each
+    # interface: one layer lets (1 - F0)^2 x the tint through, per channel; two, its
+    # square. The light passes in colour, not as the tint's grey luminance.
+    stage = T.shadow_layers(alpha=1.0)
+    tint = np.array([1.0, 0.6, 0.3])
+    mat = stage.GetPrimAtPath("/root/_materials/glass")
+    mat.CreateAttribute("lantern:transmission", Sdf.ValueTypeNames.Float, custom=True).Set(1.0)
+    shader = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/glass/surface"))
+    shader.GetInput("ior").Set(1.5)
+    shader.GetInput("diffuseColor").Set(Gf.Vec3f(*tint))
+    from lantern.engine.bounces import Bounces
+    result = T_render(stage, "medium", bounces=Bounces(total=12, diffuse=0, glossy=4))
+    lit = T.floor_region(result.rgba, (2.3, 2.9), (-1.9, -1.3))[:3]
+    one = T.floor_region(result.rgba, (1.2, 1.8), (-1.8, -1.2))[:3] / lit
+    two = T.floor_region(result.rgba, (1.2, 1.8), (-0.8, -0.2))[:3] / lit
+    pane = (1.0 - 0.04) ** 2
+    assert one == pytest.approx(pane * tint, abs=1 / 32 + 0.01), one
+    assert two == pytest.approx(pane ** 2 * tint ** 2, abs=2 / 32 + 0.01), two
+    assert one[2] / one[0] == pytest.approx(0.3, rel=0.05)          # its colour
+
+
 def T_render(stage, preset, **settings):
     from lantern.engine import RenderSettings, render_stage
     from lantern.engine.bounces import Bounces
