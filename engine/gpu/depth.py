@@ -49,10 +49,11 @@ class FloatDepthLoader:
         self._callbacks = {}
 
     def load(self, name: str) -> int:
-        if name not in _STORAGE:
-            return self.inner.load(name)
+        address = self.inner.load(name)
+        if name not in _STORAGE or not address:     # (a missing one stays missing)
+            return address
         signature, at = _STORAGE[name]
-        real = _FUNCTYPE(*signature)(self.inner.load(name))
+        real = _FUNCTYPE(*signature)(address)
         multisample = name == "glTexImage2DMultisample"
 
         def storage(*args):
