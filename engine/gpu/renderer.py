@@ -96,7 +96,7 @@ class Renderer:
         self.uploads = Uploads(ctx, gl.proc)
         self.stencil = Stencil(gl.proc)
         self.depth = DepthConvention(gl.proc, self.features.clip_control)
-        self.pool = TargetPool(ctx, self.stencil, self.depth)
+        self.pool = TargetPool(ctx, self.stencil)
         programs = self.programs = gl.programs
         self._programs_seen = (programs.compiled, programs.loaded, programs.seconds)
         self.geometry = Geometry(ctx, self.uploads, programs, self.features)
@@ -137,10 +137,10 @@ class Renderer:
             ClusteredLightPass(ctx, self.pool, programs, self.lights, self.environment,
                                self.light_cull),
             ReflectionPass(ctx, self.pool, programs, self.environment,
-                           self.tracer if self.features.compute else None),
+                           self.tracer if self.features.compute else None, gl.proc),
             GlassPass(ctx, self.pool, programs, self.geometry, self.textures, self.lights,
                       self.environment, self.depth, self.uploads,
-                      self.tracer if self.features.compute else None),
+                      self.tracer if self.features.compute else None, gl.proc),
             TransparencyPass(ctx, self.pool, programs, self.geometry, self.textures,
                              self.lights, self.environment, self.depth),
             SupersamplePass(ctx, self.pool, programs, self.depth),
