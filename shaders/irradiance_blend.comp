@@ -16,6 +16,8 @@ layout(rgba32f, binding = 2) writeonly uniform image2D probe_image;
 uniform sampler2D field_rays;        // x ray, y probe: radiance, signed distance
 uniform mat3 u_rotation;
 uniform int u_rays;
+uniform bool u_bounce;               // not the first update: probes as it left them
+uniform int u_first_probe;           // the first probe of those this dispatch updates
 uniform float u_max_distance;        // distances are clamped here (beyond a cell: seen)
 // The nearest hit within this cosine of a texel's direction (about 14 degrees): what a
 // zero-thickness wall's edge hides from the mean, which rays past the edge pull far.
@@ -33,7 +35,7 @@ ivec2 interior(ivec2 t) {
 }
 
 void main() {
-    int probe = int(gl_WorkGroupID.x);
+    int probe = u_first_probe + int(gl_WorkGroupID.x);
     ivec2 t = ivec2(gl_LocalInvocationID.xy);
     ivec2 src = interior(t);
     vec3 d = oct_decode((vec2(src - 1) + 0.5) / float(FIELD_TEXELS) * 2.0 - 1.0);
@@ -71,7 +73,7 @@ void main() {
     vec2 m = dist_total > 0.0 ? vec2(dist, dist2) / dist_total : vec2(u_max_distance, u_max_distance * u_max_distance);
     imageStore(distance_image, at, vec4(m, nearest, 1.0));
     if (t == ivec2(0)) {
-        vec4 state = probe_state(probe);
+        vec4 state = u_bounce ? probe_state(probe) : vec4(0.0, 0.0, 0.0, 1.0);
         float spacing = min(field_step.x, min(field_step.y, field_step.z));
         bool inside = float(backs) > 0.25 * float(u_rays) && farthest < 1.5 * length(field_step);
         vec3 offset = state.xyz;

@@ -23,6 +23,7 @@ uniform mat3 u_rotation;
 uniform int u_rays;                  // a probe's
 uniform int n_lights;
 uniform bool u_bounce;               // the field read holds a bounce already
+uniform int u_first_probe;           // the first probe of those this dispatch updates
 uniform float u_epsilon;
 uniform vec3 u_view_forward;         // where a headlight shines             // a shadow ray's offset off its surface
 
@@ -35,10 +36,12 @@ bool light_visible(vec3 x, vec3 n) {
 }
 
 void main() {
-    int probe = int(gl_WorkGroupID.y);
+    int probe = u_first_probe + int(gl_WorkGroupID.y);
     int ray = int(gl_WorkGroupID.x) * 64 + int(gl_LocalInvocationID.x);
     if (ray >= u_rays) return;
-    vec3 origin = probe_position(probe_cell(probe), probe_state(probe));
+    // The first update starts from probes at their grid places, on.
+    vec4 state = u_bounce ? probe_state(probe) : vec4(0.0, 0.0, 0.0, 1.0);
+    vec3 origin = probe_position(probe_cell(probe), state);
     vec3 dir = fibonacci_ray(ray, u_rays, u_rotation);
     RtHit hit;
     vec3 radiance = vec3(0.0);
