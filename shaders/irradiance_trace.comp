@@ -41,7 +41,8 @@ void main() {
     if (ray >= u_rays) return;
     // The first update starts from probes at their grid places, on.
     vec4 state = u_bounce ? probe_state(probe) : vec4(0.0, 0.0, 0.0, 1.0);
-    vec3 origin = probe_position(probe_cell(probe), state);
+    int g = probe_grid(probe);
+    vec3 origin = probe_position(g, probe_cell(g, probe), state);
     vec3 dir = fibonacci_ray(ray, u_rays, u_rotation);
     RtHit hit;
     vec3 radiance = vec3(0.0);

@@ -42,8 +42,9 @@ import numpy as np
 from ....core.emission import SAMPLING
 from ....core.presets import PRESETS
 from ...emitters import closed, makes_lights, radiance
+from ...probe_grids import GRIDS, grids, placement
 from ..framegraph import Pass
-from ..programs import UNITS, set_uniform
+from ..programs import UNITS, set_uniform, set_uniform_array
 
 TEXELS = 8                   # shaders/irradiance_field.glsl FIELD_TEXELS
 TILE = TEXELS + 2
@@ -61,13 +62,6 @@ ALL_BARRIERS = 0xFFFFFFFF
 SIDES_BINDING = 15           # shaders/irradiance_trace.comp FieldSides
 FIELD_UNITS = ("field_irradiance", "field_distance", "field_probes", "field_materials",
                "field_rays")
-# Probes sit off their cells' centres by this share of the spacing: walls often lie on
-# the centres' planes (a room as wide as its bounds, split in even cells), and a probe
-# on a wall sees both sides (its rays start in the wall's plane). Off it, the probe sees
-# the wall and is moved from it (shaders/irradiance_blend.comp), on whichever side.
-NUDGE = np.array([0.0371, 0.0253, 0.0419])
-
-
 def would_bounce(frame) -> bool:
     """Whether `frame` asks for the bounce: a diffuse bounce, surfaces, and something
     that lights them (a lamp, the dome, an emissive material)."""
@@ -76,16 +70,6 @@ def would_bounce(frame) -> bool:
         return False
     return bool(scene.lights) or scene.dome is not None or \
         any(max(m.emissive) > 0.0 for m in scene.materials.values())
-
-
-def grid(lo, hi, along_longest: int):
-    """(first probe, spacing, counts) of a grid of cell-centred probes over the box."""
-    lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
-    size = hi - lo
-    spacing = max(float(size.max()), 1e-6) / along_longest
-    counts = np.maximum(np.ceil(size / spacing - 1e-6), 1).astype(int)
-    step = np.where(size > 0, size / counts, spacing)
-    return lo + (0.5 + NUDGE) * step, step, counts
 
 
 def unbind_samplers(ctx):
@@ -106,24 +90,36 @@ def rotation(k: int) -> np.ndarray:
     return q
 
 
+def _rows(values, dtype):
+    """GRIDS rows of `values` (a grid's vector each), the rest 0: a uniform array's."""
+    out = np.zeros((GRIDS,) + np.shape(values[0]), dtype)
+    out[:len(values)] = values
+    return out
+
+
 @dataclass
 class Field:
-    """The field's textures and grid, as a shading program reads them."""
+    """The field's textures and grids (engine/probe_grids.py), as a shading program reads
+    them."""
     irradiance: object
     distance: object
     probes: object
-    lo: np.ndarray
-    step: np.ndarray
-    counts: np.ndarray
+    grids: list
 
     def bind(self, prog):
         unbind_samplers(self.irradiance.ctx)
         self.irradiance.use(UNITS["field_irradiance"])
         self.distance.use(UNITS["field_distance"])
         self.probes.use(UNITS["field_probes"])
-        set_uniform(prog, "field_lo", self.lo.astype(np.float64))
-        set_uniform(prog, "field_step", self.step.astype(np.float64))
-        set_uniform(prog, "field_counts", tuple(int(c) for c in self.counts))
+        g = self.grids
+        set_uniform(prog, "field_grids", len(g))
+        set_uniform_array(prog, "field_lo", _rows([x.first for x in g], np.float32))
+        set_uniform_array(prog, "field_step", _rows([x.step for x in g], np.float32))
+        set_uniform_array(prog, "field_counts", _rows([x.counts for x in g], np.int32))
+        set_uniform_array(prog, "field_first", _rows(
+            np.cumsum([0] + [x.probes for x in g])[:-1], np.int32))
+        set_uniform_array(prog, "field_region_lo", _rows([x.region_lo for x in g], np.float32))
+        set_uniform_array(prog, "field_region_hi", _rows([x.region_hi for x in g], np.float32))
         set_uniform(prog, "field_tiles", TILES_PER_LINE)
         set_uniform(prog, "field_bias", BIAS)
 
@@ -139,7 +135,7 @@ class Build:
     `k` the update under way, `probe` its next probe."""
     key: tuple
     version: int
-    grid: tuple                  # (first probe, spacing, counts)
+    grids: list                  # engine/probe_grids.py Grids
     n: int
     rays: int
     updates: int
@@ -178,6 +174,7 @@ class IrradiancePass(Pass):
         self.build = None            # the Build under way (its updates not all run)
         self.pool = []               # Fields made, reused by later updates and builds
         self.version = 0             # counts what it depends on changing (note)
+        self.bounds = (None, None)   # (version, the traced bounds then)
         self._key = None             # what the last build was made for
         self.stale = True            # what it holds changed since (note)
         self.touched = False         # materials changed since: their table is compared
@@ -201,7 +198,6 @@ class IrradiancePass(Pass):
         # A headlight (the default rig) shines along the view: its field follows it.
         along = tuple(view.camera.forward) if any(
             light.headlight for light in scene.lights.values()) else None
-        key = (bounces.diffuse_bounces, frame.preset.name, along)
         if self._key is not None and not self.stale and self.touched:
             # Only materials changed: the field holds their albedo and emission alone
             # (a pattern's parameters, a roughness, leave it as it is).
@@ -211,6 +207,17 @@ class IrradiancePass(Pass):
         self.touched = False
         if self.stale:
             self.version, self.stale = self.version + 1, False
+        if self.bounds[0] != self.version:
+            # Over what is traced, as its triangles lie (a skinned mesh's drawn box is
+            # padded by its joints': F12's deformed copy and the file's rig would get
+            # two grids).
+            tracer = self.tracer(scene)
+            self.bounds = (self.version, tracer.bounds if tracer.bounds is not None
+                           else view.bounds)
+        # The cascades' place about the camera (None: one grid) is part of what a
+        # field is made for.
+        key = (bounces.diffuse_bounces, frame.preset.name, along,
+               placement(*self.bounds[1], view.camera.position, view.camera.forward))
         progressive = frame.options.progressive_field
         if self.build is not None and self.build.version != self.version:
             self._drop_build()           # made for what has changed since
@@ -231,6 +238,7 @@ class IrradiancePass(Pass):
             frame.timings["field_build"] = self.seconds
         if self.field is not None:
             board["field"] = self.field
+            frame.stats["field_grids"] = len(self.field.grids)
 
     def _serves(self, made, key, progressive: bool) -> bool:
         """Whether a field `made` (key, version, converged) serves a frame asking for
@@ -241,7 +249,7 @@ class IrradiancePass(Pass):
             return False
         if made[0] == key:
             return True
-        return progressive and made[0][0] == key[0] and made[0][2] == key[2] and \
+        return progressive and made[0][0] == key[0] and made[0][2:] == key[2:] and \
             RANK.index(made[0][1]) >= RANK.index(key[1])
 
     def note(self, changes):
@@ -257,11 +265,9 @@ class IrradiancePass(Pass):
         self._drop_build()
         scene, preset = frame.scene, frame.preset.name
         tracer = self.tracer(scene)
-        # Over what is traced, as its triangles lie (a skinned mesh's drawn box is padded
-        # by its joints': F12's deformed copy and the file's rig would get two grids).
-        lo, hi = tracer.bounds if tracer.bounds is not None else view.bounds
-        first, step, counts = grid(lo, hi, PROBES.get(preset, PROBES["medium"]))
-        n, rays = int(np.prod(counts)), RAYS.get(preset, RAYS["medium"])
+        lo, hi = self.bounds[1]
+        made = grids(lo, hi, PROBES.get(preset, PROBES["medium"]), key[3])
+        n, rays = sum(g.probes for g in made), RAYS.get(preset, RAYS["medium"])
         self.table = self._table(scene, tracer.materials)
         materials = self.uploads.texture((self.table.shape[1], 1), 4, self.table, kind="field",
                                          dtype="f4")
@@ -269,7 +275,7 @@ class IrradiancePass(Pass):
         env = self.environment.prepare(scene.dome)
         diagonal = float(np.linalg.norm(np.asarray(hi) - np.asarray(lo)))
         self.build = Build(
-            key=key, version=self.version, grid=(first, step, counts), n=n, rays=rays,
+            key=key, version=self.version, grids=made, n=n, rays=rays,
             updates=updates, forward=np.asarray(view.camera.forward, float),
             epsilon=1e-4 * max(diagonal, 1e-6), ray_tex=self.ctx.texture((rays, n), 4, dtype="f4"),
             materials=materials, sides=self.uploads.buffer(self._instance_sides(scene, tracer),
@@ -287,7 +293,6 @@ class IrradiancePass(Pass):
                                   ["HAS_DOME_MAP"] if b.env is not None else [], compute=True)
         blend = self.programs.get("irradiance_blend.comp", None, [], compute=True)
         tracer = self.tracer(scene)
-        step = b.grid[1]
         traced = 0
         while b.k < b.updates:
             if b.target is None:
@@ -325,7 +330,8 @@ class IrradiancePass(Pass):
             set_uniform(blend, "u_rays", b.rays)
             set_uniform(blend, "u_bounce", b.k > 0)
             set_uniform(blend, "u_first_probe", b.probe)
-            set_uniform(blend, "u_max_distance", 1.5 * float(np.linalg.norm(step)))
+            set_uniform_array(blend, "u_max_distance", _rows(
+                [1.5 * float(np.linalg.norm(g.step)) for g in b.grids], np.float32))
             b.target.irradiance.bind_to_image(0, read=False, write=True)
             b.target.distance.bind_to_image(1, read=False, write=True)
             b.target.probes.bind_to_image(2, read=False, write=True)
@@ -351,9 +357,8 @@ class IrradiancePass(Pass):
             self.field, self.shown = b.prev, (b.key, b.version, done)
 
     def _free(self, b):
-        """A Field of build b's grid that neither frames nor b read, from the pool or new;
-        Fields of other sizes that nothing reads are released."""
-        first, step, counts = b.grid
+        """A Field of build b's size that neither frames nor b read, from the pool or new,
+        set to b's grids; Fields of other sizes that nothing reads are released."""
         lines = -(-b.n // TILES_PER_LINE)
         size = (TILES_PER_LINE * TILE, lines * TILE)
         busy = [f for f in (self.field, b.prev) if f is not None]
@@ -368,9 +373,9 @@ class IrradiancePass(Pass):
                       all(f is not x for x in busy)), None)
         if spare is None:
             spare = Field(self._texture(size, True), self._texture(size, True),
-                          self._texture((TILES_PER_LINE, lines), False), first, step, counts)
+                          self._texture((TILES_PER_LINE, lines), False), b.grids)
             self.pool.append(spare)
-        spare.lo, spare.step, spare.counts = first, step, counts
+        spare.grids = b.grids
         return spare
 
     def _drop_build(self):
