@@ -77,3 +77,34 @@ def test_a_large_ground_gets_cascades_whose_near_light_matches_a_fine_grid(monke
     print(f"bounce error against a fine grid: cascades {near:.3f}, one coarse grid {far:.3f}")
     assert near < 0.05
     assert far > 0.5
+
+
+def _look(stage, eye, target):
+    from pxr import Gf, UsdGeom
+    m = Gf.Matrix4d().SetLookAt(Gf.Vec3d(*eye), Gf.Vec3d(*target), Gf.Vec3d(0, 0, 1))
+    UsdGeom.Camera(stage.GetPrimAtPath("/root/cam")).GetOrderedXformOps()[0].Set(m.GetInverse())
+
+
+def test_the_cascades_follow_the_camera_and_a_viewport_keeps_its_field_until_they_converged():
+    stage = lit_room_stage(100.0)
+    settings = RenderSettings(**SIZE, bounces=Bounces(), progressive_field=True)
+    with Session(stage, settings) as s:
+        while s.render().stats["field_pending"]:
+            pass
+        _look(stage, (-1.6, -1.8, 1.5), TARGET)            # within a step: kept
+        near = s.render()
+        assert near.stats["field_rays"] == 0
+        _look(stage, (1.5, -1.7, 1.5), (1.0, 1.5, 0.7))    # across the room: placed again
+        frames = [s.render()]
+        while frames[-1].stats["field_pending"]:
+            frames.append(s.render())
+    assert len(frames) > 2 and frames[0].stats["field_rays"] > 0
+    # Meanwhile the old field, converged (never a partial one of the new place): the
+    # same image until the last frame.
+    assert sum(f.stats["field_updates"] for f in frames) == 4
+    assert all(np.array_equal(f.rgba, frames[0].rgba) for f in frames[:-1])
+    assert not np.array_equal(frames[-1].rgba, frames[0].rgba)
+    with Session(stage, RenderSettings(**SIZE, bounces=Bounces())) as s:
+        still = s.render()
+    assert still.stats["field_grids"] == 6
+    np.testing.assert_array_equal(frames[-1].rgba, still.rgba)
