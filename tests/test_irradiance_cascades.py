@@ -1,7 +1,6 @@
 """The irradiance field's grids (engine/probe_grids.py): one over small bounds, nested
 camera-centred cascades over large ones."""
 import numpy as np
-import pytest
 
 import shadow_scenes
 import shot_scenes

@@ -1,8 +1,8 @@
 """The irradiance field pass: the light that bounces off diffuse surfaces, as a grid of
-probes over the scene's bounds (Majercik et al. 2019, "Dynamic Diffuse Global
-Illumination with Ray-Traced Irradiance Fields"; 2021, "Scaling Probe-Based Real-Time
-Dynamic GI for Production"). The ambient pass reads it per pixel (shaders/
-irradiance_field.glsl) in place of the dome's diffuse light: the dome reaches surfaces
+probes over the scene's bounds, or cascades about the camera where they are large
+(Majercik et al. 2019, "Dynamic Diffuse Global Illumination with Ray-Traced Irradiance
+Fields"; 2021, "Scaling Probe-Based Real-Time Dynamic GI for Production"). The ambient
+pass reads it per pixel (shaders/irradiance_field.glsl) in place of the dome's diffuse light: the dome reaches surfaces
 through the rays that escape, so the sky is counted once.
 
 An update traces the preset's rays from every probe with the ray tracer
@@ -20,7 +20,8 @@ update meanwhile: an update spread over frames reads the same complete field and
 writes what one frame's writes, so the frames converge to the still's field itself.
 
 The field is kept while nothing it depends on changes (lights, geometry, materials,
-the dome, the bounces, the preset; the grid covers the traced triangles' bounds): stats
+the dome, the bounces, the preset; the grids cover the traced triangles' bounds, and
+where those are large, cascades follow the camera: engine/probe_grids.py): stats
 field_updates counts the updates a frame completed, field_rays the rays it traced
 (a probe's, not their shadow rays), field_pending those left to converge.
 Only on GL 4.3 (compute shaders) and only when the frame's bounces have a diffuse
@@ -62,6 +63,8 @@ ALL_BARRIERS = 0xFFFFFFFF
 SIDES_BINDING = 15           # shaders/irradiance_trace.comp FieldSides
 FIELD_UNITS = ("field_irradiance", "field_distance", "field_probes", "field_materials",
                "field_rays")
+
+
 def would_bounce(frame) -> bool:
     """Whether `frame` asks for the bounce: a diffuse bounce, surfaces, and something
     that lights them (a lamp, the dome, an emissive material)."""
