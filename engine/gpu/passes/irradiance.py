@@ -2,8 +2,9 @@
 probes over the scene's bounds, or cascades about the camera where they are large
 (Majercik et al. 2019, "Dynamic Diffuse Global Illumination with Ray-Traced Irradiance
 Fields"; 2021, "Scaling Probe-Based Real-Time Dynamic GI for Production"). The ambient
-pass reads it per pixel (shaders/irradiance_field.glsl) in place of the dome's diffuse light: the dome reaches surfaces
-through the rays that escape, so the sky is counted once.
+pass reads it per pixel (shaders/irradiance_field.glsl) in place of the dome's diffuse
+light: the dome reaches surfaces through the rays that escape, so the sky is counted
+once.
 
 An update traces the preset's rays from every probe with the ray tracer
 (engine/gpu/raytracer.py; shaders/irradiance_trace.comp), shades each hit with its
