@@ -68,7 +68,8 @@ COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "meshes
             "glass_objects", "glass_draws",
             "pattern_bytes", "programs_pending", "light_clusters", "light_items",
             "clusters_overflowed", "light_tree_pixels", "light_tree_steps", "light_tree_steps_max",
-            "ao_searches", "area_visibility_passes", "field_updates")
+            "ao_searches", "area_visibility_passes", "field_updates", "field_rays",
+            "field_pending", "field_grids")
 
 
 def _shape(material):
