@@ -61,6 +61,28 @@ def occludes(frame) -> bool:
             and frame.options.ambient_occlusion)
 
 
+def search_setup(pool, prog, frame, view, radius: float):
+    """Sets the horizon search's uniforms on `prog` (shaders/ao.glsl, either variant:
+    the occlusion's, or the near field's) for a search within `radius` (scene units);
+    returns (its block, pixels a side; its raw target from the pool, to release)."""
+    preset, (w, h) = frame.preset, frame.size
+    cam = view.camera
+    step = max(int(frame.supersample), 1) * max(int(preset.ao_block), 1)
+    search = (-(-w // step), -(-h // step))
+    frame.stats["ao_searches"] += search[0] * search[1]
+    raw = pool.acquire(search, "rgba32f")
+    view.set_camera(prog)
+    set_uniform(prog, "u_step", step)
+    set_uniform(prog, "radius", radius)
+    set_uniform(prog, "thickness", THICKNESS * radius)
+    # Pixels per world unit at view depth 1 (perspective) or anywhere (orthographic).
+    set_uniform(prog, "pixel_scale", 0.5 * h * float(cam.proj[1][1]))
+    set_uniform(prog, "max_pixels", float((w * w + h * h) ** 0.5))
+    set_uniform(prog, "slices", max(preset.ao_slices, 1))
+    set_uniform(prog, "steps", max(preset.ao_steps, 1))
+    return step, raw
+
+
 class AoPass(Pass):
     name = "ao"
     reads = ("g_depth", "g_normal", "g_mat", "view")
@@ -76,28 +98,14 @@ class AoPass(Pass):
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]
         ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
-        preset, (w, h) = frame.preset, frame.size
         board["g_depth"].use(UNITS["g_depth"])
         board["g_normal"].use(UNITS["g_normal"])
         board["g_mat"].use(UNITS["g_mat"])
         self.environment.lut.use(UNITS["dfg_lut"])
         dome = frame.scene.dome
         distance = getattr(dome, "ao_distance", None) or DEFAULT_DISTANCE
-        cam = view.camera
-        step = max(int(frame.supersample), 1) * max(int(preset.ao_block), 1)
-        search = (-(-w // step), -(-h // step))
-        frame.stats["ao_searches"] = search[0] * search[1]
-        raw = self.pool.acquire(search, "rgba32f")
         prog = screen_program(self.programs, "ao", (), frame.compute)
-        view.set_camera(prog)
-        set_uniform(prog, "u_step", step)
-        set_uniform(prog, "radius", float(distance))
-        set_uniform(prog, "thickness", THICKNESS * float(distance))
-        # Pixels per world unit at view depth 1 (perspective) or anywhere (orthographic).
-        set_uniform(prog, "pixel_scale", 0.5 * h * float(cam.proj[1][1]))
-        set_uniform(prog, "max_pixels", float((w * w + h * h) ** 0.5))
-        set_uniform(prog, "slices", max(preset.ao_slices, 1))
-        set_uniform(prog, "steps", max(preset.ao_steps, 1))
+        step, raw = search_setup(self.pool, prog, frame, view, float(distance))
         run_screen(ctx, self.programs, self.pool, prog, [raw], frame.compute)
         targets = [board["ao"]] + [board[t] for t in self.aov_targets(frame)]
         prog = screen_program(self.programs, "ao_blur", ["WRITE_AOV"] if len(targets) > 1 else [],
