@@ -261,6 +261,11 @@ void screen_pixel(ivec2 cell, out vec4 ao, out vec4 unused1, out vec4 unused2,
     vec3 gathered = vec3(0.0);
     float hidden = 0.0;
 #endif
+#ifdef SPECULAR_ONLY
+    // A frame whose diffuse light is the irradiance field's, which the occlusion does
+    // not dim (passes/ao.py): only the specular lobe's slice is searched.
+    visible = float(slices);
+#else
     for (int s = 0; s < slices; ++s) {
         float phi = (float(s) + rotation) * PI / float(slices);
         Slice sl = search(vec2(cos(phi), sin(phi)), centre, uv, depth, p, v, n, r_px, jitter);
@@ -277,6 +282,7 @@ void screen_pixel(ivec2 cell, out vec4 ao, out vec4 unused1, out vec4 unused2,
     // whole hemisphere, as the occlusion's).
     ao = vec4(PI * gathered / float(slices), hidden / float(slices));
     return;
+#endif
 #endif
     // Not clamped: with few slices one pixel's estimate may pass 1 (a grazing plane's
     // steep slices weigh more than 1); the blur averages it to the true value first.

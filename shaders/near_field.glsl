@@ -29,9 +29,11 @@ void screen_pixel(ivec2 px, out vec4 frag, out vec4 aov_diffuse, out vec4 unused
     frag = texelFetch(u_lit, px, 0);
     float depth = texelFetch(g_depth, px, 0).r;
     if (is_background(depth)) return;
-    Surface s = gbuffer_surface(px, depth);
-    vec4 near = upsampled(u_near, u_step, px, s.p, s.n);
+    vec3 p = position_from_depth((vec2(px) + 0.5) / vec2(textureSize(g_depth, 0)), depth,
+                                 inv_view_proj);
+    vec4 near = upsampled(u_near, u_step, px, p, normalize(texelFetch(g_normal, px, 0).xyz));
     if (near.a <= 0.0) return;
+    Surface s = gbuffer_surface(px, depth);
     vec3 E = field_irradiance_at(s.p + field_eye, s.n, s.v);
     vec3 change = brdf_diffuse(s) * (near.rgb - E * near.a) * bump_dome(s);
     frag.rgb += change;

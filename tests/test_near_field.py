@@ -115,3 +115,25 @@ def test_in_a_sealed_room_the_near_field_bounces_only_what_the_direct_light_leak
           f"{direct.max():.3f}; the near field changes pixels by up to {change:.4f}")
     assert direct.max() < 0.3                 # the leaks the near field may bounce
     assert 0.0 < change <= 0.8 * direct.max()
+
+
+def test_with_the_field_the_ao_pass_searches_the_specular_occlusion_alone():
+    """In a frame whose diffuse light is the field's, nothing reads the diffuse
+    occlusion: the AO pass searches only the specular slice, and the image is the one
+    the whole search gives, bit for bit (a glossy block under a dome, no glossy bounce:
+    its reflections of the dome take the specular occlusion)."""
+    from lantern.engine.gpu.passes import ao
+    stage = red_wall_stage()
+    UsdLux.DomeLight.Get(stage, "/root/dark").CreateIntensityAttr(1.0)
+    shiny = _material(stage, "shiny", (0.5, 0.5, 0.5))
+    shiny.GetPrim().GetChild("surface").GetAttribute("inputs:ior").Set(1.5)
+    shiny.GetPrim().GetChild("surface").GetAttribute("inputs:roughness").Set(0.3)
+    from pxr import UsdShade
+    UsdShade.MaterialBindingAPI.Apply(stage.GetPrimAtPath("/root/box")).Bind(shiny)
+    diffuse_only = Bounces(12, 4, 0)
+    alone = render(stage, bounces=diffuse_only)
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(ao, "diffuse_unused", lambda frame, board: False)
+        whole = render(stage, bounces=diffuse_only)
+    assert "ao" in alone.stats["passes"] and "reflections" not in alone.stats["passes"]
+    assert np.array_equal(alone.rgba, whole.rgba)

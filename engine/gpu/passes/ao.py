@@ -34,8 +34,13 @@ lobe (its roughness from g_mat, its shape from the split-sum table), gives the s
 of the lobe the scene leaves open: the occlusion of the dome's reflections
 (shaders/ao.glsl).
 
-reads: g_depth, g_normal, g_mat, view   writes: ao (RGBA32F: occlusion, specular
-occlusion); its search (RGBA32F: occlusion and the specular share's two sums, scratch)
+In a frame with the irradiance field the diffuse light is the field's, which the
+occlusion does not dim: unless the AO render pass or a material's Ambient Occlusion
+node asks for it, only the specular slice is searched (the occlusion is 1); the
+near field (passes/near_field.py) runs the same search within the probe spacing.
+
+reads: g_depth, g_normal, g_mat, view, field (optional)   writes: ao (RGBA32F:
+occlusion, specular occlusion); its search (RGBA32F: occlusion and the specular share's two sums, scratch)
 comes from the pool at the search's size
 render passes: AO (the blurred occlusion, grey)"""
 from __future__ import annotations
@@ -83,9 +88,19 @@ def search_setup(pool, prog, frame, view, radius: float):
     return step, raw
 
 
+def diffuse_unused(frame, board) -> bool:
+    """Whether nothing reads this frame's diffuse occlusion: its diffuse light is the
+    irradiance field's (passes/irradiance.py), which the occlusion does not dim, and
+    neither the AO render pass nor an Ambient Occlusion node on a base colour asks for
+    it. Only the specular occlusion is searched then."""
+    return "field" in board and "AO" not in frame.aovs and \
+        not any(m.base_occlusion for m in frame.scene.materials.values())
+
+
 class AoPass(Pass):
     name = "ao"
     reads = ("g_depth", "g_normal", "g_mat", "view")
+    optional = ("field",)
     writes = ("ao",)
     aovs = {"AO": ("aov_ao", 0)}
 
@@ -104,7 +119,9 @@ class AoPass(Pass):
         self.environment.lut.use(UNITS["dfg_lut"])
         dome = frame.scene.dome
         distance = getattr(dome, "ao_distance", None) or DEFAULT_DISTANCE
-        prog = screen_program(self.programs, "ao", (), frame.compute)
+        prog = screen_program(self.programs, "ao",
+                              ["SPECULAR_ONLY"] if diffuse_unused(frame, board) else [],
+                              frame.compute)
         step, raw = search_setup(self.pool, prog, frame, view, float(distance))
         run_screen(ctx, self.programs, self.pool, prog, [raw], frame.compute)
         targets = [board["ao"]] + [board[t] for t in self.aov_targets(frame)]
