@@ -18,9 +18,9 @@
 // horizon all round, and blacked out a lone mirror sphere's rim; the AO slices seldom
 // pass through a mirror's direction.) Output: (occlusion, specular occlusion, 0, 0).
 // NEAR_FIELD (passes/near_field.py, a frame with an irradiance field): the same search
-// within the field's probe spacing, run on the lit frame; each sample also brings the
-// lit colour of the sectors it is first to hide (nearest first: a visibility bit mask's
-// indirect light, Therrien et al. 2023). Output: (the irradiance from the hidden
+// within half the field's probe spacing, run on the lit frame; each sample also brings
+// the lit colour of the sectors it is first to hide (nearest first: a visibility bit
+// mask's indirect light, Therrien et al. 2023). Output: (the irradiance from the hidden
 // sectors, the cosine-weighted share they hide): the near field the probes are too
 // coarse to hold.
 uniform sampler2D g_depth;

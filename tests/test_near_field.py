@@ -1,5 +1,5 @@
 """The near field of the diffuse bounce (engine/gpu/passes/near_field.py): the AO pass's
-horizon search, run within a probe spacing over the lit frame, gathers the light of
+horizon search, run within half a probe spacing over the lit frame, gathers the light of
 the surfaces that hide a pixel's hemisphere in place of the irradiance field's over
 those directions. Small stages built with pxr; the field needs compute shaders."""
 import numpy as np
@@ -72,7 +72,7 @@ def test_a_red_wall_bleeds_onto_a_white_block_beside_it():
     bleed_face = gained[face][:, 0].mean() - gained[face][:, 1:].mean(axis=0).max()
     print(f"block's face beside the wall: red {before:.4f} + {red:.4f}, green {green:+.4f}, "
           f"blue {blue:+.4f}; red beyond them {bleed:.4f} (the whole face {bleed_face:.4f})")
-    assert bleed > 0.05 * before
+    assert bleed > 0.03 * before
     assert bleed > bleed_face > 0.0
 
 

@@ -36,8 +36,8 @@ of the lobe the scene leaves open: the occlusion of the dome's reflections
 
 In a frame with the irradiance field the diffuse light is the field's, which the
 occlusion does not dim: unless the AO render pass or a material's Ambient Occlusion
-node asks for it, only the specular slice is searched (the occlusion is 1); the
-near field (passes/near_field.py) runs the same search within the probe spacing.
+node asks for it, only the specular slice is searched (the occlusion is 1); the near
+field (passes/near_field.py) runs the same search within half the probe spacing.
 
 reads: g_depth, g_normal, g_mat, view, field (optional)   writes: ao (RGBA32F:
 occlusion, specular occlusion); its search (RGBA32F: occlusion and the specular share's two sums, scratch)

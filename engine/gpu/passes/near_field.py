@@ -2,7 +2,7 @@
 irradiance field's probes are apart (a block beside a wall, a box's corners), which the
 field (passes/irradiance.py) holds too coarsely or lets leak. The AO pass's horizon
 search (shaders/ao.glsl, its NEAR_FIELD variant: a visibility bit mask, Therrien et al.
-2023, "Screen Space Indirect Lighting with Visibility Bitmask"), run within one probe
+2023, "Screen Space Indirect Lighting with Visibility Bitmask"), run within half a probe
 spacing over the lit frame, marks the sectors of each pixel's hemisphere that nearby
 surfaces hide and gathers their lit colour; then each pixel's diffuse light takes that
 in place of the field's over the same sectors (shaders/near_field.glsl):
@@ -39,8 +39,12 @@ from ..screen import run_screen, screen_program
 from .ambient import GBUFFER, LIGHTING_AOVS, bind_gbuffer, surface_defines
 from .ao import search_setup
 
-# The search's reach, in probe spacings: what lies further the field resolves.
-REACH = 1.0
+# The search's reach, in probe spacings: what lies further the field resolves. Against
+# the Cycles references at medium (HDR-FLIP; the field alone 0.0941 / 0.3344 / 0.1963):
+# half a spacing gave the closed box 0.0919, the sunlit room 0.3280, the emissive panel
+# 0.1943; one spacing 0.0934 / 0.3203 / 0.1967; two 0.1029 / 0.3056 / 0.2258 (the
+# screen's nearest surfaces stand for ever more of the hemisphere they cannot see).
+REACH = 0.5
 
 
 class NearFieldPass(Pass):
