@@ -17,6 +17,12 @@
 // about a bent normal counted a convex surface's few percent of estimator noise as a
 // horizon all round, and blacked out a lone mirror sphere's rim; the AO slices seldom
 // pass through a mirror's direction.) Output: (occlusion, specular occlusion, 0, 0).
+// NEAR_FIELD (passes/near_field.py, a frame with an irradiance field): the same search
+// within half the field's probe spacing, run on the lit frame; each sample also brings
+// the lit colour of the sectors it is first to hide (nearest first: a visibility bit
+// mask's indirect light, Therrien et al. 2023). Output: (the irradiance from the hidden
+// sectors, the cosine-weighted share they hide): the near field the probes are too
+// coarse to hold.
 uniform sampler2D g_depth;
 uniform sampler2D g_normal;
 uniform sampler2D g_mat;       // roughness: the specular lobe (and dfg_lut, lib.glsl)
@@ -32,6 +38,9 @@ uniform int steps;
 // Drawn at 1/u_step of the G-buffer's size per side (a supersampled frame's AO at the
 // output's resolution): each AO pixel searches from the centre sub-pixel of its block.
 uniform int u_step;
+#ifdef NEAR_FIELD
+uniform sampler2D u_lit;       // the lit opaque frame (lit_copy.py), at g_depth's size
+#endif
 
 // A 4x4 Bayer index in [0, 16): the tile's 16 pixels take 16 evenly spaced slice
 // rotations, so the blur's average is a stratified quadrature over the half circle
@@ -54,8 +63,16 @@ vec3 position_at(vec2 w, out bool drawn) {
     vec4 q = vec4(texelFetch(g_depth, b, 0).r, texelFetch(g_depth, b + ivec2(1, 0), 0).r,
                   texelFetch(g_depth, b + ivec2(0, 1), 0).r, texelFetch(g_depth, b + ivec2(1, 1), 0).r);
     float d = mix(mix(q.x, q.y, t.x), mix(q.z, q.w, t.x), t.y);
-    if (is_background(q.x) || is_background(q.y) || is_background(q.z) || is_background(q.w))
+    if (is_background(q.x) || is_background(q.y) || is_background(q.z) || is_background(q.w)) {
+#ifdef NEAR_FIELD
+        // A texel's depth on another texel's ray lies off its surface: at a plane's
+        // edge that lifts its horizon, which would swap the field's light for the
+        // surface's own. The near field takes no sample on a silhouette.
+        drawn = false;
+        return vec3(0.0);
+#endif
         d = texelFetch(g_depth, ivec2(w), 0).r;
+    }
     drawn = !is_background(d);
     return position_from_depth(w / vec2(textureSize(g_depth, 0)), d, inv_view_proj);
 }
@@ -96,7 +113,38 @@ vec3 depth_normal(ivec2 px, vec3 p, vec3 fallback) {
 // occluder for infinitely thick: a cube beside another lost 56% of the dome where
 // Cycles' loses 17%.
 const int SECTORS = 32;
-struct Slice { vec3 side; float angle_n, proj_len; uint hidden; };
+struct Slice { vec3 side; float angle_n, proj_len; uint hidden; vec3 gathered; };
+
+// The cosine-weighted measure of the slice's directions from v up to angle x (signed),
+// about the projected normal at angle nn: the integral of cos(t - nn) |sin t| (GTAO's
+// arc, per side).
+float arc_to(float x, float nn) {
+    float g = -0.25 * cos(2.0 * x - nn) + 0.5 * x * sin(nn);
+    return sign(x) * (g + 0.25 * cos(nn));
+}
+
+// The index of x's lowest set bit (x > 0; findLSB is GLSL 4.00): that bit alone is a
+// power of two, which a float holds exactly, in its exponent.
+int lowest_bit(uint x) { return int(floatBitsToUint(float(x & (~x + 1u))) >> 23) - 127; }
+
+// The cosine-weighted measure of the sectors set in `mask` of the half circle about
+// the projected normal at angle nn.
+float mask_arc(uint mask, float nn) {
+    float lo = nn - 0.5 * PI, sector = PI / float(SECTORS);
+    // Summed run by run of set sectors, found by their bits (a loop over the sectors
+    // would cost its every step on llvmpipe, which runs masked branches): arc_to at
+    // the runs' ends only.
+    uint open = mask;
+    float sum = 0.0;
+    while (open != 0u) {
+        int first = lowest_bit(open);                    // the run's first sector
+        uint hidden_above = ~open & (0xFFFFFFFFu << uint(first));
+        int end = hidden_above == 0u ? SECTORS : lowest_bit(hidden_above);
+        sum += arc_to(lo + float(end) * sector, nn) - arc_to(lo + float(first) * sector, nn);
+        open = end >= SECTORS ? 0u : open & (0xFFFFFFFFu << uint(end));
+    }
+    return sum;
+}
 
 float slice_angle(vec3 d, vec3 side, vec3 v) { return atan(dot(d, side), dot(d, v)); }
 
@@ -112,6 +160,7 @@ Slice search(vec2 dir, vec2 centre, vec2 uv, float depth, vec3 p, vec3 v, vec3 n
     sl.proj_len = length(proj_n);
     sl.angle_n = slice_angle(proj_n, sl.side, v);
     sl.hidden = 0u;
+    sl.gathered = vec3(0.0);
     float lo = sl.angle_n - 0.5 * PI, sector = PI / float(SECTORS);
     for (int side = 0; side < 2; ++side) {
         vec2 d = side == 0 ? dir : -dir;
@@ -148,44 +197,24 @@ Slice search(vec2 dir, vec2 centre, vec2 uv, float depth, vec3 p, vec3 v, vec3 n
             int last = min(int(floor((to - lo) / sector - 0.5)), SECTORS - 1);
             if (last < first) continue;
             int count = last - first + 1;
-            sl.hidden |= (count >= 32 ? 0xFFFFFFFFu : ((1u << uint(count)) - 1u)) << uint(first);
+            uint bits = (count >= 32 ? 0xFFFFFFFFu : ((1u << uint(count)) - 1u)) << uint(first);
+#ifdef NEAR_FIELD
+            // The lit colour of the sectors no nearer sample hid; a surface turned
+            // away from p shows p its unseen side, whose light the frame does not hold.
+            uint fresh = bits & ~sl.hidden;
+            if (fresh != 0u && dot(texelFetch(g_normal, ivec2(w), 0).xyz, -delta) > 0.0)
+                sl.gathered += texelFetch(u_lit, ivec2(w), 0).rgb * mask_arc(fresh, sl.angle_n);
+#endif
+            sl.hidden |= bits;
         }
     }
     return sl;
 }
 
-// The cosine-weighted measure of the slice's directions from v up to angle x (signed),
-// about the projected normal at angle nn: the integral of cos(t - nn) |sin t| (GTAO's
-// arc, per side).
-float arc_to(float x, float nn) {
-    float g = -0.25 * cos(2.0 * x - nn) + 0.5 * x * sin(nn);
-    return sign(x) * (g + 0.25 * cos(nn));
-}
-
-// The index of x's lowest set bit (x > 0; findLSB is GLSL 4.00): that bit alone is a
-// power of two, which a float holds exactly, in its exponent.
-int lowest_bit(uint x) { return int(floatBitsToUint(float(x & (~x + 1u))) >> 23) - 127; }
-
 // The cosine-weighted share of the slice's half circle the scene leaves open, and the
 // share of the angle interval [c - w, c + w] (within the half circle) it leaves open
 // over the share of it the half circle holds (1 if none).
-float open_arc(Slice sl) {
-    float lo = sl.angle_n - 0.5 * PI, sector = PI / float(SECTORS);
-    // Summed run by run of open sectors, found by their bits (a loop over the sectors
-    // would cost its every step on llvmpipe, which runs masked branches): arc_to at
-    // the runs' ends only.
-    uint open = ~sl.hidden;
-    float sum = 0.0;
-    while (open != 0u) {
-        int first = lowest_bit(open);                    // the run's first open sector
-        uint hidden_above = ~open & (0xFFFFFFFFu << uint(first));
-        int end = hidden_above == 0u ? SECTORS : lowest_bit(hidden_above);
-        sum += arc_to(lo + float(end) * sector, sl.angle_n)
-             - arc_to(lo + float(first) * sector, sl.angle_n);
-        open = end >= SECTORS ? 0u : open & (0xFFFFFFFFu << uint(end));
-    }
-    return sum;
-}
+float open_arc(Slice sl) { return mask_arc(~sl.hidden, sl.angle_n); }
 
 float open_interval(Slice sl, float c, float w) {
     float lo = sl.angle_n - 0.5 * PI, sector = PI / float(SECTORS);
@@ -210,6 +239,9 @@ void screen_pixel(ivec2 cell, out vec4 ao, out vec4 unused1, out vec4 unused2,
     ivec2 size = textureSize(g_depth, 0);
     float depth = texelFetch(g_depth, px, 0).r;
     ao = vec4(1.0, 1.0, 0.0, 0.0);
+#ifdef NEAR_FIELD
+    ao = vec4(0.0);                 // nothing gathered, nothing hidden
+#endif
     if (is_background(depth)) return;
     vec2 uv = (vec2(px) + 0.5) / vec2(size);
     vec3 p = position_from_depth(uv, depth, inv_view_proj);
@@ -225,11 +257,33 @@ void screen_pixel(ivec2 cell, out vec4 ao, out vec4 unused1, out vec4 unused2,
     float rotation = (bayer4(cell) + 0.5) / 16.0;
     float jitter = (bayer4(cell.yx + ivec2(1, 2)) + 0.5) / 16.0;
     float visible = 0.0;
+#ifdef NEAR_FIELD
+    vec3 gathered = vec3(0.0);
+    float hidden = 0.0;
+#endif
+#ifdef SPECULAR_ONLY
+    // A frame whose diffuse light is the irradiance field's, which the occlusion does
+    // not dim (passes/ao.py): only the specular lobe's slice is searched.
+    visible = float(slices);
+#else
     for (int s = 0; s < slices; ++s) {
         float phi = (float(s) + rotation) * PI / float(slices);
         Slice sl = search(vec2(cos(phi), sin(phi)), centre, uv, depth, p, v, n, r_px, jitter);
         visible += sl.proj_len < 1e-4 ? 1.0 : sl.proj_len * open_arc(sl);
+#ifdef NEAR_FIELD
+        if (sl.proj_len >= 1e-4) {
+            gathered += sl.proj_len * sl.gathered;
+            hidden += sl.proj_len * mask_arc(sl.hidden, sl.angle_n);
+        }
+#endif
     }
+#ifdef NEAR_FIELD
+    // Irradiance: pi x the radiance's cosine-weighted mean (the measure is 1 over the
+    // whole hemisphere, as the occlusion's).
+    ao = vec4(PI * gathered / float(slices), hidden / float(slices));
+    return;
+#endif
+#endif
     // Not clamped: with few slices one pixel's estimate may pass 1 (a grazing plane's
     // steep slices weigh more than 1); the blur averages it to the true value first.
     ao.x = visible / float(slices);

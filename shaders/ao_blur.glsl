@@ -11,6 +11,7 @@ uniform int u_step;
 uniform sampler2D g_depth;
 uniform sampler2D g_normal;
 uniform mat4 inv_view_proj;
+#include "ao_upsample.glsl"
 
 // A screen pass's body (engine/gpu/screen.py): outputs the occlusion and, with
 // WRITE_AOV, the AO render pass (grey).
@@ -28,28 +29,8 @@ void screen_pixel(ivec2 px, out vec4 ao, out vec4 aov_ao, out vec4 unused2,
     }
     vec3 p = position_from_depth((vec2(px) + 0.5) / vec2(size), depth, inv_view_proj);
     vec3 n = normalize(texelFetch(g_normal, px, 0).xyz);
-    float sum = 0.0, weight = 0.0;
-    float specular = 0.0;
-    ivec2 cells = textureSize(ao_tex, 0);
-    ivec2 home = px / u_step;
-    for (int y = -2; y < 2; ++y) {
-        for (int x = -2; x < 2; ++x) {
-            ivec2 c = clamp(home + ivec2(x, y), ivec2(0), cells - 1);
-            ivec2 q = min(c * u_step + u_step / 2, size - 1);
-            float dq = texelFetch(g_depth, q, 0).r;
-            if (is_background(dq)) continue;
-            vec3 pq = position_from_depth((vec2(q) + 0.5) / vec2(size), dq, inv_view_proj);
-            vec3 nq = normalize(texelFetch(g_normal, q, 0).xyz);
-            float w = same_surface(p, n, pq, nq);
-            vec4 raw = texelFetch(ao_tex, c, 0);
-            sum += raw.x * w;
-            specular += raw.y * w;
-            weight += w;
-        }
-    }
-    vec4 own = texelFetch(ao_tex, home, 0);
-    if (weight <= 1e-6) { sum = own.x; specular = own.y; weight = 1.0; }
-    ao = vec4(clamp(sum / weight, 0.0, 1.0), clamp(specular / weight, 0.0, 1.0), 0.0, 0.0);
+    vec4 raw = upsampled(ao_tex, u_step, px, p, n);
+    ao = vec4(clamp(raw.x, 0.0, 1.0), clamp(raw.y, 0.0, 1.0), 0.0, 0.0);
 #ifdef WRITE_AOV
     aov_ao = vec4(vec3(ao.x), 1.0);
 #endif

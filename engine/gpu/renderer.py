@@ -29,6 +29,7 @@ from .passes.irradiance import IrradiancePass
 from .passes.clustered import ClusteredLightPass
 from .passes.light_cull import LightCullPass
 from .passes.lights import LightPass
+from .passes.near_field import NearFieldPass
 from .passes.post import PostPass
 from .passes.reflections import ReflectionPass
 from .passes.resolve import ResolvePass
@@ -137,6 +138,7 @@ class Renderer:
             self.light_cull,
             ClusteredLightPass(ctx, self.pool, programs, self.lights, self.environment,
                                self.light_cull),
+            NearFieldPass(ctx, self.pool, programs, self.irradiance),
             ReflectionPass(ctx, self.pool, programs, self.environment,
                            self.tracer if self.features.compute else None, gl.proc),
             GlassPass(ctx, self.pool, programs, self.geometry, self.textures, self.lights,

@@ -34,8 +34,13 @@ lobe (its roughness from g_mat, its shape from the split-sum table), gives the s
 of the lobe the scene leaves open: the occlusion of the dome's reflections
 (shaders/ao.glsl).
 
-reads: g_depth, g_normal, g_mat, view   writes: ao (RGBA32F: occlusion, specular
-occlusion); its search (RGBA32F: occlusion and the specular share's two sums, scratch)
+In a frame with the irradiance field the diffuse light is the field's, which the
+occlusion does not dim: unless the AO render pass or a material's Ambient Occlusion
+node asks for it, only the specular slice is searched (the occlusion is 1); the near
+field (passes/near_field.py) runs the same search within half the probe spacing.
+
+reads: g_depth, g_normal, g_mat, view, field (optional)   writes: ao (RGBA32F:
+occlusion, specular occlusion); its search (RGBA32F: occlusion and the specular share's two sums, scratch)
 comes from the pool at the search's size
 render passes: AO (the blurred occlusion, grey)"""
 from __future__ import annotations
@@ -61,9 +66,41 @@ def occludes(frame) -> bool:
             and frame.options.ambient_occlusion)
 
 
+def search_setup(pool, prog, frame, view, radius: float):
+    """Sets the horizon search's uniforms on `prog` (shaders/ao.glsl, either variant:
+    the occlusion's, or the near field's) for a search within `radius` (scene units);
+    returns (its block, pixels a side; its raw target from the pool, to release)."""
+    preset, (w, h) = frame.preset, frame.size
+    cam = view.camera
+    step = max(int(frame.supersample), 1) * max(int(preset.ao_block), 1)
+    search = (-(-w // step), -(-h // step))
+    frame.stats["ao_searches"] += search[0] * search[1]
+    raw = pool.acquire(search, "rgba32f")
+    view.set_camera(prog)
+    set_uniform(prog, "u_step", step)
+    set_uniform(prog, "radius", radius)
+    set_uniform(prog, "thickness", THICKNESS * radius)
+    # Pixels per world unit at view depth 1 (perspective) or anywhere (orthographic).
+    set_uniform(prog, "pixel_scale", 0.5 * h * float(cam.proj[1][1]))
+    set_uniform(prog, "max_pixels", float((w * w + h * h) ** 0.5))
+    set_uniform(prog, "slices", max(preset.ao_slices, 1))
+    set_uniform(prog, "steps", max(preset.ao_steps, 1))
+    return step, raw
+
+
+def diffuse_unused(frame, board) -> bool:
+    """Whether nothing reads this frame's diffuse occlusion: its diffuse light is the
+    irradiance field's (passes/irradiance.py), which the occlusion does not dim, and
+    neither the AO render pass nor an Ambient Occlusion node on a base colour asks for
+    it. Only the specular occlusion is searched then."""
+    return "field" in board and "AO" not in frame.aovs and \
+        not any(m.base_occlusion for m in frame.scene.materials.values())
+
+
 class AoPass(Pass):
     name = "ao"
     reads = ("g_depth", "g_normal", "g_mat", "view")
+    optional = ("field",)
     writes = ("ao",)
     aovs = {"AO": ("aov_ao", 0)}
 
@@ -76,28 +113,16 @@ class AoPass(Pass):
     def execute(self, frame, board):
         ctx, view = self.ctx, board["view"]
         ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
-        preset, (w, h) = frame.preset, frame.size
         board["g_depth"].use(UNITS["g_depth"])
         board["g_normal"].use(UNITS["g_normal"])
         board["g_mat"].use(UNITS["g_mat"])
         self.environment.lut.use(UNITS["dfg_lut"])
         dome = frame.scene.dome
         distance = getattr(dome, "ao_distance", None) or DEFAULT_DISTANCE
-        cam = view.camera
-        step = max(int(frame.supersample), 1) * max(int(preset.ao_block), 1)
-        search = (-(-w // step), -(-h // step))
-        frame.stats["ao_searches"] = search[0] * search[1]
-        raw = self.pool.acquire(search, "rgba32f")
-        prog = screen_program(self.programs, "ao", (), frame.compute)
-        view.set_camera(prog)
-        set_uniform(prog, "u_step", step)
-        set_uniform(prog, "radius", float(distance))
-        set_uniform(prog, "thickness", THICKNESS * float(distance))
-        # Pixels per world unit at view depth 1 (perspective) or anywhere (orthographic).
-        set_uniform(prog, "pixel_scale", 0.5 * h * float(cam.proj[1][1]))
-        set_uniform(prog, "max_pixels", float((w * w + h * h) ** 0.5))
-        set_uniform(prog, "slices", max(preset.ao_slices, 1))
-        set_uniform(prog, "steps", max(preset.ao_steps, 1))
+        prog = screen_program(self.programs, "ao",
+                              ["SPECULAR_ONLY"] if diffuse_unused(frame, board) else [],
+                              frame.compute)
+        step, raw = search_setup(self.pool, prog, frame, view, float(distance))
         run_screen(ctx, self.programs, self.pool, prog, [raw], frame.compute)
         targets = [board["ao"]] + [board[t] for t in self.aov_targets(frame)]
         prog = screen_program(self.programs, "ao_blur", ["WRITE_AOV"] if len(targets) > 1 else [],

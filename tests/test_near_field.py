@@ -1,0 +1,139 @@
+"""The near field of the diffuse bounce (engine/gpu/passes/near_field.py): the AO pass's
+horizon search, run within half a probe spacing over the lit frame, gathers the light of
+the surfaces that hide a pixel's hemisphere in place of the irradiance field's over
+those directions. Small stages built with pxr; the field needs compute shaders."""
+import numpy as np
+import pytest
+from pxr import UsdLux
+
+import shadow_scenes
+from lantern.engine import RenderSettings, Session
+from lantern.engine.bounces import DIRECT, Bounces
+from lantern.engine.gpu.passes import near_field
+from test_irradiance_field import _material, _quad, sealed_room_stage
+
+SIZE = dict(width=96, height=64)
+
+
+def render(stage, near=True, **settings):
+    """The stage's render at medium with Cycles' default bounces (or `settings`'),
+    with the near field or, `near` False, without it (the field alone)."""
+    settings = {**SIZE, "preset": "medium", "bounces": Bounces(), **settings}
+    with pytest.MonkeyPatch.context() as m:
+        if not near:
+            m.setattr(near_field.NearFieldPass, "needed", lambda self, frame: False)
+        with Session(stage, RenderSettings(**settings)) as s:
+            return s.render()
+
+
+def red_wall_stage():
+    """A white block 4 cm from a red wall on a white floor, lit by a sun that lights the
+    wall, the block's faces and the floor; the camera sees the block's front face, its
+    side towards the wall hidden. The field's probes are 0.67 apart: the gap is a few
+    hundredths of their spacing."""
+    stage = shadow_scenes.new_stage(half=2.0)
+    red = _material(stage, "red", (0.8, 0.05, 0.05))
+    _quad(stage, "wall", [(0, -2, 0), (0, 2, 0), (0, 2, 2), (0, -2, 2)], red)
+    shadow_scenes.add_box(stage, center=(0.29, 0.0, 0.25), size=0.5)
+    shadow_scenes.add_light(stage, "sun", aim=(-0.5, 0.4, -1.0), pos=(2, -2, 3),
+                            strength=3.0, shadow=True)
+    shadow_scenes.add_camera(stage, eye=(1.6, -2.2, 1.2), target=(0.2, 0.0, 0.2),
+                             aspect=1.5, far=20.0)
+    UsdLux.DomeLight.Define(stage, "/root/dark").CreateIntensityAttr(0.0)
+    return stage
+
+
+def front_face(result):
+    """The pixels of the block's face towards the camera (normal -y), nearest the wall
+    first: (mask of that face, its left third)."""
+    normal = result.passes["Normal"]
+    face = normal[..., 1] < -0.9
+    cols = np.nonzero(face.any(axis=0))[0]
+    left = face.copy()
+    left[:, cols[0] + (cols[-1] - cols[0] + 1) // 3:] = False
+    return face, left
+
+
+def test_a_red_wall_bleeds_onto_a_white_block_beside_it():
+    """The block's face beside the red wall gains red from the wall, which the field's
+    probes (0.67 apart, the gap 0.04) hold too coarsely: more red than green and blue
+    gained, the more the nearer the wall."""
+    stage = red_wall_stage()
+    passes = frozenset({"Normal"})
+    near, far = render(stage, passes=passes), render(stage, near=False, passes=passes)
+    assert "near_field" in near.stats["passes"] and "near_field" not in far.stats["passes"]
+    face, left = front_face(near)
+    gained = near.rgba[..., :3].astype(np.float64) - far.rgba[..., :3]
+    before = far.rgba[..., 0][left].mean()
+    # The floor's and the wall's light both come nearer than the probes hold; the red
+    # beyond the grey they add is the wall's.
+    red, green, blue = gained[left].mean(axis=0)
+    bleed = red - max(green, blue)
+    bleed_face = gained[face][:, 0].mean() - gained[face][:, 1:].mean(axis=0).max()
+    print(f"block's face beside the wall: red {before:.4f} + {red:.4f}, green {green:+.4f}, "
+          f"blue {blue:+.4f}; red beyond them {bleed:.4f} (the whole face {bleed_face:.4f})")
+    assert bleed > 0.03 * before
+    assert bleed > bleed_face > 0.0
+
+
+def test_direct_mode_has_no_near_field_and_the_same_occlusion():
+    """Without bounces no near field runs, and the AO pass's occlusion is the same bit
+    for bit with and without the field (its search variant is compiled apart)."""
+    stage = red_wall_stage()
+    UsdLux.DomeLight.Get(stage, "/root/dark").CreateIntensityAttr(1.0)
+    passes = frozenset({"AO"})
+    direct, full = render(stage, passes=passes, bounces=DIRECT), render(stage, passes=passes)
+    assert "near_field" not in direct.stats["passes"]
+    assert "near_field" in full.stats["passes"]
+    assert np.array_equal(direct.passes["AO"], full.passes["AO"])
+
+
+def test_a_flat_open_plane_under_the_dome_gains_nothing():
+    """Nothing hides any direction of a flat plane open to the dome: the near field
+    changes no pixel (the field's light is left as it was, bit for bit)."""
+    stage = shadow_scenes.new_stage(half=2.0)
+    shadow_scenes.add_camera(stage, eye=(1.5, -1.5, 1.0), target=(0, 0, 0), aspect=1.5,
+                             far=20.0)
+    UsdLux.DomeLight.Define(stage, "/root/sky").CreateIntensityAttr(1.0)
+    near, far = render(stage), render(stage, near=False)
+    assert "near_field" in near.stats["passes"]
+    assert np.array_equal(near.rgba, far.rgba)
+
+
+def test_in_a_sealed_room_the_near_field_bounces_only_what_the_direct_light_leaks():
+    """The near field brings nothing through a wall: in a closed room under a sun,
+    whose inside only the direct light's seam leaks light (the shadow maps' leaks where
+    walls meet, docs/status.md), it adds at most the walls' albedo (0.8) times the
+    brightest leak, far below a sunlit wall's radiance outside (1.02)."""
+    stage = sealed_room_stage()
+    size = dict(width=48, height=32)
+    direct = render(stage, bounces=DIRECT, **size).rgba[..., :3]
+    near = render(stage, **size).rgba[..., :3]
+    far = render(stage, near=False, **size).rgba[..., :3]
+    change = np.abs(near - far).max()
+    print(f"sealed room: {(direct.max(axis=2) > 1e-4).sum()} pixels leak up to "
+          f"{direct.max():.3f}; the near field changes pixels by up to {change:.4f}")
+    assert direct.max() < 0.3                 # the leaks the near field may bounce
+    assert 0.0 < change <= 0.8 * direct.max()
+
+
+def test_with_the_field_the_ao_pass_searches_the_specular_occlusion_alone():
+    """In a frame whose diffuse light is the field's, nothing reads the diffuse
+    occlusion: the AO pass searches only the specular slice, and the image is the one
+    the whole search gives, bit for bit (a glossy block under a dome, no glossy bounce:
+    its reflections of the dome take the specular occlusion)."""
+    from lantern.engine.gpu.passes import ao
+    stage = red_wall_stage()
+    UsdLux.DomeLight.Get(stage, "/root/dark").CreateIntensityAttr(1.0)
+    shiny = _material(stage, "shiny", (0.5, 0.5, 0.5))
+    shiny.GetPrim().GetChild("surface").GetAttribute("inputs:ior").Set(1.5)
+    shiny.GetPrim().GetChild("surface").GetAttribute("inputs:roughness").Set(0.3)
+    from pxr import UsdShade
+    UsdShade.MaterialBindingAPI.Apply(stage.GetPrimAtPath("/root/box")).Bind(shiny)
+    diffuse_only = Bounces(12, 4, 0)
+    alone = render(stage, bounces=diffuse_only)
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(ao, "diffuse_unused", lambda frame, board: False)
+        whole = render(stage, bounces=diffuse_only)
+    assert "ao" in alone.stats["passes"] and "reflections" not in alone.stats["passes"]
+    assert np.array_equal(alone.rgba, whole.rgba)
