@@ -14,11 +14,11 @@ uniform sampler2D u_near;       // the search's raw (irradiance gathered, share 
 uniform int u_step;
 uniform sampler2D u_lit;        // the lit opaque frame (lit_copy.py)
 #ifdef WRITE_AOVS
-uniform sampler2D u_diffuse;    // the DiffDir render pass so far (passes/ambient.py)
+uniform sampler2D u_diffuse;    // the DiffInd render pass so far (passes/ambient.py)
 #endif
 
 // A screen pass's body (engine/gpu/screen.py): the lit frame and, with WRITE_AOVS,
-// DiffDir, each with the same change.
+// DiffInd, each with the same change.
 void screen_pixel(ivec2 px, out vec4 frag, out vec4 aov_diffuse, out vec4 unused2,
                   out vec4 unused3) {
     aov_diffuse = unused2 = unused3 = vec4(0.0);

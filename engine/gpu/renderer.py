@@ -138,7 +138,7 @@ class Renderer:
             self.light_cull,
             ClusteredLightPass(ctx, self.pool, programs, self.lights, self.environment,
                                self.light_cull),
-            NearFieldPass(ctx, self.pool, programs, self.irradiance),
+            NearFieldPass(ctx, self.pool, programs, self.irradiance, gl.proc),
             ReflectionPass(ctx, self.pool, programs, self.environment,
                            self.tracer if self.features.compute else None, gl.proc),
             GlassPass(ctx, self.pool, programs, self.geometry, self.textures, self.lights,

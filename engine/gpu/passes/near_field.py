@@ -22,12 +22,12 @@ near field (one near bounce).
 
 Only in a frame with the field (a diffuse bounce, GL 4.3); a dispatch in either form of
 the frame (as the glossy bounce's), so both forms give the same image. The change goes
-to DiffDir too, so the render passes still add up to the image. Before the glossy
+to DiffInd too (the bounce's render pass), so the render passes still add up to the image. Before the glossy
 bounce, whose copy of the lit frame then shows it.
 
 reads: g_base, g_normal, g_mat, g_emit, g_depth, hdr, view, field; g_smooth and g_sheen
        (optional)   writes: hdr
-render passes: DiffDir (added to in place)"""
+render passes: DiffInd (added to in place)"""
 from __future__ import annotations
 
 import numpy as np
@@ -52,12 +52,12 @@ class NearFieldPass(Pass):
     reads = GBUFFER + ("hdr", "view", "field")
     optional = ("ao", "g_smooth", "g_sheen")
     writes = ("hdr",)
-    aovs = {"DiffDir": LIGHTING_AOVS["DiffDir"]}    # added to in place
+    aovs = {"DiffInd": LIGHTING_AOVS["DiffInd"]}    # added to in place
 
-    def __init__(self, ctx, pool, programs, field_pass):
+    def __init__(self, ctx, pool, programs, field_pass, proc):
         self.ctx, self.pool, self.programs = ctx, pool, programs
         self.field_pass = field_pass       # passes/irradiance.py: whether a field is made
-        self.lit = LitCopy(ctx, pool)
+        self.lit = LitCopy(ctx, pool, programs, proc, compute=True)   # the field's GL 4.3
 
     def needed(self, frame) -> bool:
         return frame.preset.ao_slices > 0 and self.field_pass.needed(frame)
@@ -71,14 +71,14 @@ class NearFieldPass(Pass):
         board["g_normal"].use(UNITS["g_normal"])
         search = screen_program(self.programs, "ao", ["NEAR_FIELD"], compute=True)
         step, raw = search_setup(self.pool, search, frame, view,
-                                 REACH * float(np.min(field.step)))
+                                 REACH * min(float(np.min(g.step)) for g in field.grids))
         set_uniform(search, "u_lit", UNITS["hdr"])
         run_screen(ctx, self.programs, self.pool, search, [raw], True)
         defines = ["IRRADIANCE_FIELD"] + surface_defines(frame, board)
         targets = [board["hdr"]]
-        if "DiffDir" in frame.aovs:     # it takes the change, read and stored in place
+        if "DiffInd" in frame.aovs:     # it takes the change, read and stored in place
             defines.append("WRITE_AOVS")
-            targets.append(board["aov_diffuse"])
+            targets.append(board["aov_diffuse_indirect"])
         prog = screen_program(self.programs, "near_field", defines, compute=True,
                               outputs=len(targets))
         bind_gbuffer(board, prog, view)
@@ -89,7 +89,7 @@ class NearFieldPass(Pass):
         set_uniform(prog, "u_step", step)
         set_uniform(prog, "u_lit", UNITS["hdr"])
         if len(targets) > 1:
-            board["aov_diffuse"].use(UNITS["visibility_tex"])
+            board["aov_diffuse_indirect"].use(UNITS["visibility_tex"])
             set_uniform(prog, "u_diffuse", UNITS["visibility_tex"])
         run_screen(ctx, self.programs, self.pool, prog, targets, True)
         self.pool.release(raw)
