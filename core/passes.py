@@ -25,9 +25,16 @@ Values, as Blender's (docs/stage_contract.md, "Render passes"):
   AO       the ambient occlusion of the dome's light, grey: 1 unoccluded, also on the
            background
   DiffDir  diffuse light leaving surfaces, albedo included (Cycles divides it out into
-           DiffCol; Lantern has no colour passes): the dome's, occluded, and every
-           light's, shadowed
-  GlossDir the same for the specular lobe and the clearcoat
+           DiffCol; Lantern has no colour passes): every light's, shadowed, and the
+           dome's, occluded, where the frame has no irradiance field
+  DiffInd  the diffuse bounce, albedo included: the irradiance field's light (the
+           bounced light, and the dome and the emitters that are no lights, which
+           reach surfaces through the field); 0 in a frame without a field
+  GlossDir the same as DiffDir for the specular lobe and the clearcoat, and of the
+           glossy bounce the dome met by a reflected ray that escapes (and the dome's
+           reflection where a rough lobe has no field to read)
+  GlossInd the rest of the glossy bounce: the lit frame a reflected ray meets, and
+           the field read along the lobe; 0 in a frame without the glossy bounce
   Env      the world (dome) seen directly where nothing is drawn; 0 on surfaces
   Shadow   light reaching surfaces with shadows over without, summed over the lights
            (luminance, grey): 1 lit or unlit by any light, 0 in full shadow
@@ -35,7 +42,8 @@ Values, as Blender's (docs/stage_contract.md, "Render passes"):
            path, core/cryptomatte.py) and coverage of the objects, materials or
            assets seen in the pixel, two ranks per RGBA layer, by coverage
            (engine/gpu/passes/cryptomatte.py)
-  Without FXAA or post, Combined = DiffDir + GlossDir + Env + Emit.
+  Without FXAA or post, Combined = DiffDir + DiffInd + GlossDir + GlossInd + Env + Emit
+  (docs/passes.md "Direct and indirect light": the split against Cycles').
 Transparent pixels: blended surfaces (docs/stage_contract.md, "Transparency") are in
 Combined only; every pass above holds the opaque surface behind them, so with blended
 surfaces in view Combined is no longer that sum there.
@@ -91,8 +99,12 @@ PASSES = {p.name: p for p in (
     RenderPass("Shadow", 3, "RGB", "COLOR", "use_pass_shadow", True, "Shadow", "shadow"),
     RenderPass("DiffDir", 3, "RGB", "COLOR", "use_pass_diffuse_direct", True,
                "Diffuse Direct", "diffuse_direct"),
+    RenderPass("DiffInd", 3, "RGB", "COLOR", "use_pass_diffuse_indirect", True,
+               "Diffuse Indirect", "diffuse_indirect"),
     RenderPass("GlossDir", 3, "RGB", "COLOR", "use_pass_glossy_direct", True,
                "Glossy Direct", "glossy_direct"),
+    RenderPass("GlossInd", 3, "RGB", "COLOR", "use_pass_glossy_indirect", True,
+               "Glossy Indirect", "glossy_indirect"),
     RenderPass("Env", 3, "RGB", "COLOR", "use_pass_environment", True, "Environment",
                "environment"),
     *(RenderPass(f"{matte}{level:02d}", 4, "RGBA", "COLOR", switch, True,

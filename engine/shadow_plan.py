@@ -38,8 +38,8 @@ def resolution(light, preset) -> int:
 
 class ShadowMap:
     """An atlas's layout and what the lookup needs; `texture` and its two samplers
-    (comparing, raw) once the shadow pass has drawn it (engine/gpu/passes/shadows.py,
-    which also sets the lookup's uniforms)."""
+    (comparing, raw), and `tint` where glass casts into it, once the shadow pass has
+    drawn it (engine/gpu/passes/shadows.py, which also sets the lookup's uniforms)."""
 
     def __init__(self, radial, tiles, mats, rects, texel, far=1.0, splits=(), ranges=(),
                  size=0.0, atlas=(0, 0), anchor=(0.0, 0.0, 0.0)):
@@ -55,6 +55,7 @@ class ShadowMap:
         self.stochastic = False     # drawn with blended casters (shadow.frag)
         self.footprint = (0.0, 0.0)  # their filter's least width: a screen pixel's (lookup)
         self.texture = self.cmp = self.raw = None
+        self.tint = None            # glass casters' colour and nearest depth (rgba16f)
 
     def same_layout(self, other) -> bool:
         return other is not None and self.atlas == other.atlas and \
@@ -67,8 +68,8 @@ class ShadowMap:
 
     def adopt(self, old: "ShadowMap"):
         """Takes over an older map's texture and samplers (same atlas size)."""
-        self.texture, self.cmp, self.raw = old.texture, old.cmp, old.raw
-        old.texture = old.cmp = old.raw = None
+        self.texture, self.cmp, self.raw, self.tint = old.texture, old.cmp, old.raw, old.tint
+        old.texture = old.cmp = old.raw = old.tint = None
 
 
 def _scene_far(bounds, origin, fallback):

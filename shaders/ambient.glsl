@@ -17,8 +17,9 @@ uniform sampler2D ao_tex;
 #endif
 
 // A screen pass's body (engine/gpu/screen.py): the HDR image and, with WRITE_AOVS,
-// the render passes (engine/gpu/passes/ambient.py): the dome's diffuse and glossy
-// light (added to by the light pass) and the background.
+// the render passes (engine/gpu/passes/ambient.py): the diffuse light (the dome's,
+// DiffDir, or under the field the field's, which the pass stores as DiffInd), the
+// glossy light (added to by the light pass) and the background.
 void screen_pixel(ivec2 px, out vec4 frag, out vec4 aov_diffuse, out vec4 aov_glossy,
                   out vec4 aov_env) {
     aov_diffuse = aov_glossy = aov_env = vec4(0.0);

@@ -20,7 +20,8 @@ vec3 forward_light(Surface s, vec3 p, vec3 n, vec3 emissive) {
         vec3 r = diffuse + glossy;
 #ifdef HAS_SHADOW
         if (max(r.r, max(r.g, r.b)) > 0.0)
-            r *= light_shadow(p, n, dot(p, cam_forward));
+            r *= light_shadow(p, n, dot(p, cam_forward)) *
+                 light_shadow_colour(p, n, dot(p, cam_forward));
 #endif
         c += r;
     }

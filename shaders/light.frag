@@ -47,15 +47,15 @@ void main() {
     light_reflected(s, diffuse, glossy);
     vec3 radiance = diffuse + glossy;
     if (max(radiance.r, max(radiance.g, radiance.b)) <= 0.0) discard;
-    float lit = 1.0;
+    vec3 lit = vec3(1.0);        // the shadow, coloured by the glass it passes
 #ifdef HAS_SHADOW
-    lit = light_shadow(p, n, dot(p, cam_forward));
+    lit = light_shadow(p, n, dot(p, cam_forward)) * light_shadow_colour(p, n, dot(p, cam_forward));
 #endif
     frag = vec4(radiance * lit, 0.0);   // NaN or Inf goes through: the resolve pass counts it
 #ifdef WRITE_AOVS
     aov_diffuse = vec4(diffuse * lit, 0.0);
     aov_glossy = vec4(glossy * lit, 0.0);
     float luminance = dot(radiance, vec3(0.2126, 0.7152, 0.0722));
-    aov_shadow = vec4(luminance * lit, luminance, 0.0, 0.0);
+    aov_shadow = vec4(dot(radiance * lit, vec3(0.2126, 0.7152, 0.0722)), luminance, 0.0, 0.0);
 #endif
 }

@@ -58,7 +58,7 @@ uint shade_pixel(ivec2 px) {
     vec3 p = position_from_depth(shaded_pixel / vec2(textureSize(g_depth, 0)), depth,
                                  inv_view_proj);
     vec3 sum_d = vec3(0.0), sum_g = vec3(0.0);
-    float lit = 1.0;
+    vec3 lit = vec3(1.0);        // the shadow, coloured by the glass it passes
     uint steps = 0u;
     Surface s;
 #ifdef SINGLE_LIGHT
@@ -69,7 +69,8 @@ uint shade_pixel(ivec2 px) {
     vec3 radiance = sum_d + sum_g;
     if (max(radiance.r, max(radiance.g, radiance.b)) <= 0.0) return 0u;
 #ifdef HAS_SHADOW
-    lit = light_shadow(s.p, s.n, dot(s.p, cam_forward));
+    lit = light_shadow(s.p, s.n, dot(s.p, cam_forward)) *
+          light_shadow_colour(s.p, s.n, dot(s.p, cam_forward));
 #endif
 #else
     // The cluster's list: lights shaded one by one (HAS_EXACT), then the light tree's
@@ -107,9 +108,9 @@ uint shade_pixel(ivec2 px) {
 #ifdef WRITE_AOVS
     imageStore(aov_diffuse_image, px, imageLoad(aov_diffuse_image, px) + vec4(sum_d * lit, 0.0));
     imageStore(aov_glossy_image, px, imageLoad(aov_glossy_image, px) + vec4(sum_g * lit, 0.0));
-    float luminance = dot(radiance, vec3(0.2126, 0.7152, 0.0722));
-    imageStore(aov_shadow_image, px,
-               imageLoad(aov_shadow_image, px) + vec4(luminance * lit, luminance, 0.0, 0.0));
+    vec3 weights = vec3(0.2126, 0.7152, 0.0722);
+    imageStore(aov_shadow_image, px, imageLoad(aov_shadow_image, px) +
+               vec4(dot(radiance * lit, weights), dot(radiance, weights), 0.0, 0.0));
 #endif
     return steps + area_steps;
 }

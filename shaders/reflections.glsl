@@ -12,6 +12,10 @@
 //         mean radiance: the field as prefiltered radiance, as Majercik et al. 2021 read
 //         it for rough reflections), the dome's reflection where there is no field.
 // The coat keeps the dome's reflection.
+// The render passes (WRITE_AOVS) split the change as Cycles splits light: the dome, met
+// by a ray that escapes or read as the dome's reflection where there is no field, is
+// direct light (GlossDir, added to in place); what the ray meets in the lit frame and
+// the field's light, which has bounced, are GlossInd.
 #include "lib.glsl"
 #include "raytrace.glsl"
 #include "environment.glsl"
@@ -53,23 +57,27 @@ vec3 lit_at(vec2 uv, vec3 h, vec3 d, float t, float cone) {
 
 // The reflection along the ray from camera-relative p (normal n) in direction d, of a
 // lobe with cone half-angle `cone`; `escaped`: the dome over the lobe; `far`: what an
-// off-screen or hidden hit takes.
-vec3 traced_reflection(vec3 p, vec3 n, vec3 d, float cone, vec3 escaped, vec3 far) {
+// off-screen or hidden hit takes. `dome`: whether what it returns is the dome's light
+// (`far_dome`: whether `far` is).
+vec3 traced_reflection(vec3 p, vec3 n, vec3 d, float cone, vec3 escaped, vec3 far,
+                       bool far_dome, out bool dome) {
     float scale = 1.0 + length(p);
     vec3 o = p + n * REFLECT_OFFSET * scale;
     vec2 uv;
     float t;
     int met = frame_hit(o, d, REFLECT_OFFSET * scale, g_depth, uv, t);
+    dome = met == FRAME_ESCAPED || (met != FRAME_SHOWN && far_dome);
     if (met == FRAME_ESCAPED) return escaped;
     return met == FRAME_SHOWN ? lit_at(uv, o + t * d, d, t, cone) : far;
 }
 
 // A screen pass's body (engine/gpu/screen.py), compute form only: the lit frame with
 // the base lobe's reflection of the scene in place of the dome's; with WRITE_AOVS the
-// GlossDir render pass with the same change.
-void screen_pixel(ivec2 px, out vec4 frag, out vec4 aov_glossy, out vec4 unused2,
+// change's direct light added to the GlossDir render pass, and its indirect light the
+// GlossInd pass.
+void screen_pixel(ivec2 px, out vec4 frag, out vec4 aov_glossy, out vec4 aov_glossy_indirect,
                   out vec4 unused3) {
-    aov_glossy = unused2 = unused3 = vec4(0.0);
+    aov_glossy = aov_glossy_indirect = unused3 = vec4(0.0);
 #ifdef WRITE_AOVS
     // Its own texel, read before this invocation stores it: the change goes to GlossDir
     // too, so the render passes still add up to the image.
@@ -90,12 +98,19 @@ void screen_pixel(ivec2 px, out vec4 frag, out vec4 aov_glossy, out vec4 unused2
     vec3 d = normalize(specular_dominant(s.n, s.v, s.roughness));
 #ifdef IRRADIANCE_FIELD
     vec3 far = field_irradiance_along(s.p + u_eye, s.n, s.v, d) / PI;
+    bool far_dome = false;
 #else
     vec3 far = dome * specular_occlusion;
+    bool far_dome = true;
 #endif
     float rough = smoothstep(ROUGH_FROM, ROUGH_TO, s.roughness);
-    vec3 near = rough < 1.0 ? traced_reflection(s.p, s.n, d, lobe_cone(lobe), dome, far) : far;
+    bool near_dome = far_dome;
+    vec3 near = rough < 1.0 ?
+        traced_reflection(s.p, s.n, d, lobe_cone(lobe), dome, far, far_dome, near_dome) : far;
     vec3 change = spec * mix(near, far, rough);
     frag.rgb += change;
-    aov_glossy.rgb += change;
+    vec3 direct = spec * mix(near_dome ? near : vec3(0.0), far_dome ? far : vec3(0.0), rough);
+    aov_glossy.rgb += direct;
+    aov_glossy_indirect.rgb = spec * mix(near_dome ? vec3(0.0) : near,
+                                         far_dome ? vec3(0.0) : far, rough);
 }

@@ -9,6 +9,11 @@
 // (0, 1): stochastic transparency (Enderton et al. 2010). Shadow filtering averages
 // those texels, so a layer of alpha a lets 1 - a of the light through, and layers
 // multiply, as Cycles' transparent shadows do.
+//
+// TINT (glass casters, passes/shadows.py): no depth; the colour target takes the
+// caster's tint, multiplied over every face of glass along the texel's ray (its
+// Fresnel and transmission are the stochastic depth's), and the nearest glass's depth
+// (blended by MIN): the lookup tints receivers behind it.
 in vec3 v_world;
 uniform bool radial;
 uniform vec3 light_pos;        // anchor-relative (0 for radial maps)
@@ -39,7 +44,16 @@ float caster_threshold() {
 }
 #endif
 
+#ifdef TINT
+uniform vec3 u_tint;
+out vec4 tint;
+#endif
+
 void main() {
+#ifdef TINT
+    tint = vec4(u_tint, radial ? clamp(length(v_world - light_pos) / far, 0.0, 1.0) : gl_FragCoord.z);
+    return;
+#endif
 #ifdef ALPHA_TEST
     float alpha = material_alpha(v_uv);
     float cut = u_opacity_threshold > 0.0 ? u_opacity_threshold : caster_threshold();

@@ -32,6 +32,10 @@ uniform float shadow_size;      // light radius, or tan(sun half angle)
 uniform vec2 shadow_footprint;
 uniform int pcf_taps;
 uniform int blocker_taps;
+// Glass casters' colour (passes/shadows.py _draw_tint): rgb the product of their faces'
+// tints along a texel's ray, a the nearest glass's stored depth; none: shadow_tinted off.
+uniform bool shadow_tinted;
+uniform sampler2D shadow_tint;
 
 const float MAX_KERNEL_TEXELS = 48.0;
 
@@ -112,6 +116,32 @@ vec2 vogel(int i, int n, float rot) {
     return r * vec2(cos(th), sin(th));
 }
 
+// The sun's cascade a receiver at view_depth reads (shadow_tiles: beyond them all).
+int shadow_cascade(float view_depth) {
+    int cascade = shadow_tiles;
+    for (int i = shadow_tiles - 1; i >= 0; --i)
+        if (view_depth <= shadow_splits[i]) cascade = i;
+    return cascade;
+}
+
+// The colour the glass between p (normal n) and the light gives its light: the tint
+// map's where p lies behind the nearest glass along the light's ray, else white. One
+// texel, unfiltered: the stochastic depth's filter draws the shadow's edge. Every
+// glass face along the texel's ray tints, also those behind p (docs/status.md).
+vec3 shadow_colour(vec3 p, vec3 n, vec3 light_pos, float view_depth) {
+    if (!shadow_tinted) return vec3(1.0);
+    int cascade = shadow_radial ? 0 : shadow_cascade(view_depth);
+    if (cascade >= shadow_tiles) return vec3(1.0);
+    float texel = shadow_radial ? shadow_texel * length(p - light_pos) : shadow_texels[cascade];
+    vec3 q = p + n * texel;
+    vec2 uv;
+    float z;
+    if (!shadow_uv(q, light_pos, cascade, uv, z)) return vec3(1.0);
+    if (shadow_radial) z = length(q - light_pos) / shadow_far;
+    vec4 t = textureLod(shadow_tint, uv, 0.0);
+    return z > t.a + 1e-4 ? t.rgb : vec3(1.0);
+}
+
 // 1 = lit, 0 = shadowed. p, n: receiver; light_pos: radial lights; dir: direction the
 // sun's light travels; view_depth: the receiver's depth along the camera axis.
 float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) {
@@ -125,9 +155,7 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
         texel = shadow_texel * dist;
         scale = shadow_far;
     } else {
-        cascade = shadow_tiles;
-        for (int i = shadow_tiles - 1; i >= 0; --i)
-            if (view_depth <= shadow_splits[i]) cascade = i;
+        cascade = shadow_cascade(view_depth);
         if (cascade >= shadow_tiles) return 1.0;
         axis = dir;
         texel = shadow_texels[cascade];
@@ -366,6 +394,11 @@ uniform sampler2D area_visibility;  // this light's, filtered (area_visibility.g
 // The loaded light's shadow (lights.glsl's globals), of any of the program's kinds
 // (lights.glsl LIGHT_DISTANT, LIGHT_SPHERE, LIGHT_AREA); AREA_VISIBILITY: an area
 // light's, filtered, at this pixel (the G-buffer's surfaces only).
+// The loaded light's shadow colour: what glass before it gives its light (white: none).
+vec3 light_shadow_colour(vec3 p, vec3 n, float view_depth) {
+    return shadow_colour(p, n, light_pos, view_depth);
+}
+
 float light_shadow(vec3 p, vec3 n, float view_depth) {
 #ifdef AREA_VISIBILITY
     if (n_poly > 0) return texelFetch(area_visibility, ivec2(pixel_centre()), 0).r;

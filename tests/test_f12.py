@@ -150,6 +150,7 @@ def test_f12_writes_every_pass_the_view_layer_asks_for(addon, tmp_path):
     layer = bpy.context.view_layer.name
     for p in provided():
         assert f"{layer}.{blender_name(p.name)}" in parts, (p.name, sorted(parts))
+    assert {f"{layer}.Diffuse Indirect", f"{layer}.Glossy Indirect"} <= set(parts)
     depth, normal = parts[f"{layer}.Depth"], parts[f"{layer}.Normal"]
     ob, ma = parts[f"{layer}.Object Index"], parts[f"{layer}.Material Index"]
     depth, ob, ma = (a.reshape(a.shape[:2]) for a in (depth, ob, ma))

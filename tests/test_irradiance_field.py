@@ -221,3 +221,46 @@ def test_a_lamp_inside_a_sphere_bounces_its_light_by_the_series():
     full, _ = _mean(stage, Bounces())
     assert direct > 0.1
     assert full / direct == pytest.approx(sum(rho ** k for k in range(5)), rel=0.01)
+
+
+def pane_stage(tint=None):
+    """A white floor (albedo 1) in a 2 x 2 x 1.5 m room of black walls open to a blue sky
+    (no lamp), the camera looking down; with `tint`, a glass roof 5 cm thick (IOR 1.5, of
+    that colour) closes it."""
+    stage = shadow_scenes.new_stage(half=1.0)
+    UsdLux.DomeLight.Define(stage, "/root/sky").CreateColorAttr(Gf.Vec3f(0.2, 0.35, 0.8))
+    black = _material(stage, "black", (0.0, 0.0, 0.0))
+    for name, corners in shot_scenes.room_walls((-1, -1, 0), (1, 1, 1.5)).items():
+        if name.startswith("Wall"):
+            _quad(stage, name, corners, black)
+    if tint is not None:
+        glass = _material(stage, "glass", tint)
+        surface = UsdShade.Shader(stage.GetPrimAtPath("/root/_materials/glass/surface"))
+        surface.GetInput("ior").Set(1.5)
+        surface.GetInput("roughness").Set(0.0)
+        glass.GetPrim().CreateAttribute("lantern:transmission", Sdf.ValueTypeNames.Float,
+                                        custom=True).Set(1.0)
+        pane = UsdGeom.Cube.Define(stage, "/root/Roof")
+        pane.AddTranslateOp().Set(Gf.Vec3d(0.0, 0.0, 1.525))
+        pane.AddScaleOp().Set(Gf.Vec3f(1.0, 1.0, 0.025))
+        UsdShade.MaterialBindingAPI.Apply(pane.GetPrim()).Bind(glass)
+    shadow_scenes.add_camera(stage, eye=(0, -0.05, 1.2), target=(0, 0, 0), aspect=1.5)
+    return stage
+
+
+def test_the_field_under_a_glass_roof_lets_the_sky_through_tinted():
+    # The floor's light is the sky's through the opening, by the field (black walls: no
+    # bounce). A glass roof lets it through: a face's Fresnel transmittance twice, 0.915
+    # within the 34 degrees the opening spans from the floor's centre; a tinted roof takes
+    # its colour at each face (tint^2). Until glass passed the field's rays it was a
+    # black lid. Medium: low's coarser grid leaves dark specks on this floor.
+    def floor(stage):
+        with Session(stage, RenderSettings(**SIZE, bounces=Bounces(), preset="medium")) as s:
+            result = s.render()
+        assert result.stats["field_updates"] == 4
+        return result.rgba[8:24, 12:36, :3].mean(axis=(0, 1))
+    bare = floor(pane_stage())
+    clear = floor(pane_stage(tint=(1.0, 1.0, 1.0)))
+    tinted = floor(pane_stage(tint=(1.0, 0.6, 0.3)))
+    assert (clear / bare) == pytest.approx([0.915] * 3, abs=0.05), clear / bare
+    assert (tinted / clear) == pytest.approx([1.0, 0.36, 0.09], rel=0.1), tinted / clear

@@ -131,15 +131,19 @@ def test_under_a_uniform_dome_a_lone_ball_reflects_what_it_did(roughness):
                                rtol=0.01)
 
 
-def test_the_render_passes_take_the_reflection_in_glossdir():
-    """DiffDir + GlossDir + Env + Emit is the image (without FXAA or post) with the glossy
-    bounce too: the reflection's change goes to GlossDir."""
+def test_the_render_passes_take_the_reflected_plane_in_glossind():
+    """DiffDir + DiffInd + GlossDir + GlossInd + Env + Emit is the image (without FXAA
+    or post) with the glossy bounce too. The mirror's reflection of the lit plane is
+    indirect light, as in Cycles: GlossInd holds the plane's red, GlossDir only the
+    sun's highlight and the black dome the escaped rays meet."""
     stage = ball_over_red_plane(0.0)
-    names = frozenset({"DiffDir", "GlossDir", "Env", "Emit"})
+    names = frozenset({"DiffDir", "DiffInd", "GlossDir", "GlossInd", "Env", "Emit"})
     with Session(stage, RenderSettings(width=W, height=H, bounces=Bounces(), preset="low",
                                        passes=names, fxaa=False)) as s:
         result = s.render()
     assert "reflections" in result.stats["passes"]
     total = sum(result.passes[n][..., :3] for n in names)
     np.testing.assert_allclose(total, result.rgba[..., :3], atol=1e-4)
-    assert lower_half(result.passes["GlossDir"])[0] > 0.05     # the plane's red
+    r, g, b = lower_half(result.passes["GlossInd"])
+    assert r > 0.05 and r > 4.0 * g and r > 4.0 * b     # the plane's red
+    assert lower_half(result.passes["GlossDir"]).max() < 0.01

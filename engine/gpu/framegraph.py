@@ -63,6 +63,8 @@ TARGETS = {
     "aov_ao": "rgba32f",       # ambient occlusion (the AO pass)
     "aov_diffuse": "rgba32f",  # diffuse light (the ambient and light passes)
     "aov_glossy": "rgba32f",   # specular and coat light (the same)
+    "aov_diffuse_indirect": "rgba32f",  # the field's diffuse light (the ambient pass)
+    "aov_glossy_indirect": "rgba32f",   # the glossy bounce (the reflection pass)
     "aov_env": "rgba32f",      # the dome seen directly (the ambient pass)
     "aov_shadow": "rgba32f",   # light reaching surfaces: with, without shadows (lights)
     # Cryptomatte's levels, two ranks each, at the image's size (passes/cryptomatte.py).

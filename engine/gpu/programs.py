@@ -43,7 +43,7 @@ UNITS = {name: unit for unit, name in enumerate((
     "dfg_lut", "env_specular", "radiance", "ao_tex", "post_src", "t_pattern4",
     "overlay_image", "overlay_atlas",
     "t_pattern0", "t_pattern1", "t_pattern2", "t_pattern3", "g_smooth", "g_sheen",
-    "sheen_lut", "area_visibility", "visibility_tex"))}
+    "sheen_lut", "area_visibility", "visibility_tex", "shadow_tint"))}
 UNITS.update(zip(("u_joint_xforms", "u_shape_offsets", "u_shape_active", "u_influences",
                   "u_deformed", "u_incidence"), range(UNITS["t_diffuse"], UNITS["t_diffuse"] + 6)))
 # The light tree's nodes: read by the clustered light passes only, which read no material.

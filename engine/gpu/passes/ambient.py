@@ -11,7 +11,8 @@ to that pass. It starts the HDR target.
 reads: g_base, g_normal, g_mat, g_emit, g_depth, view, ao, field (optional), g_smooth (optional:
        the normals before the normal maps, for the bump map correction), g_sheen
        (optional: the sheen lobes)   writes: hdr
-render passes (with the light pass): DiffDir, GlossDir, Env, Shadow: see LIGHTING_AOVS"""
+render passes (with the light and reflection passes): DiffDir, DiffInd, GlossDir, GlossInd,
+               Env, Shadow: see LIGHTING_AOVS"""
 from __future__ import annotations
 
 from ..framegraph import Pass
@@ -21,19 +22,26 @@ from .ao import occludes
 
 GBUFFER = ("g_base", "g_normal", "g_mat", "g_emit", "g_depth")
 
-# The lighting render passes (core/passes.py), all four targets made together when one
+# The lighting render passes (core/passes.py), all their targets made together when one
 # is asked for (the shaders write them as one set of outputs). The ambient pass starts
-# them, the light pass adds to them:
-#   DiffDir   diffuse light leaving the surface, albedo included: the dome's (its
-#             occlusion applied) and every light's (its shadow applied)
-#   GlossDir  the same for the specular lobe and the clearcoat
+# them, the light pass and the reflection pass add to them:
+#   DiffDir   diffuse light leaving the surface, albedo included: every light's (its
+#             shadow applied) and, in a frame without an irradiance field, the dome's
+#             (its occlusion applied)
+#   DiffInd   the same of the irradiance field's light, which replaces the dome's: the
+#             ambient pass's diffuse output goes here when the frame has a field
+#   GlossDir  the specular lobe's and the clearcoat's light: the lights', the dome's
+#             reflection, and the dome a reflected ray meets where it escapes
+#   GlossInd  the rest of the glossy bounce (passes/reflections.py); 0 without it
 #   Env       the dome seen directly where nothing is drawn; 0 on surfaces
 #   Shadow    light reaching the surface with shadows over light without, summed over
 #             the lights (Rec. 709 luminance, grey; 1 where no light reaches)
-# With neither FXAA nor post, Combined = DiffDir + GlossDir + Env + Emit.
-LIGHTING_AOVS = {"DiffDir": ("aov_diffuse", 0), "GlossDir": ("aov_glossy", 0),
+# With neither FXAA nor post, Combined = DiffDir + DiffInd + GlossDir + GlossInd + Env
+# + Emit.
+LIGHTING_AOVS = {"DiffDir": ("aov_diffuse", 0), "DiffInd": ("aov_diffuse_indirect", 0),
+                 "GlossDir": ("aov_glossy", 0), "GlossInd": ("aov_glossy_indirect", 0),
                  "Env": ("aov_env", 0), "Shadow": ("aov_shadow", 0)}
-LIGHTING_TARGETS = ("aov_diffuse", "aov_glossy", "aov_env", "aov_shadow")
+LIGHTING_TARGETS = tuple(target for target, _ in LIGHTING_AOVS.values())
 
 
 def lighting_aovs(frame) -> bool:
@@ -89,13 +97,17 @@ class AmbientPass(Pass):
             if line not in warnings:
                 warnings.append(line)
         aovs = lighting_aovs(frame)
-        # The light pass adds to the Shadow pass, which nothing here writes: it starts
-        # at 0. The other targets this pass writes whole.
+        # This pass's diffuse light is the dome's (DiffDir) or, under the field, all the
+        # field's (DiffInd). The passes it does not write start at 0: the light pass
+        # adds to Shadow, the reflection pass writes GlossInd in the frames it runs.
+        diffuse = "aov_diffuse_indirect" if "field" in board else "aov_diffuse"
+        written = (diffuse, "aov_glossy", "aov_env")
         if aovs:
-            clear = self.pool.framebuffer([board["aov_shadow"]])
+            clear = self.pool.framebuffer([board[n] for n in LIGHTING_TARGETS
+                                           if n not in written])
             clear.use()
             clear.clear(0.0, 0.0, 0.0, 0.0)
-        targets = [board["hdr"]] + ([board[n] for n in LIGHTING_TARGETS[:3]] if aovs else [])
+        targets = [board["hdr"]] + ([board[n] for n in written] if aovs else [])
         ctx.disable(ctx.DEPTH_TEST | ctx.CULL_FACE | ctx.BLEND)
         # The AO pass may run only for its render pass; the image uses it when the
         # preset has occlusion.

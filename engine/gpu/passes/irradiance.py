@@ -24,7 +24,10 @@ today's direct image, with no tracer.
 
 A hit's albedo is its material's base colour times (1 - metallic), its emission the
 material's emission colour, a texture map's mean colour where one is bound (the hit's
-texel is not sampled), the constant where a pattern network feeds them.
+texel is not sampled), the constant where a pattern network feeds them. Glass keeps the
+diffuse share 1 - transmission of its albedo and passes rays and shadow rays straight
+on, weighted by transmission x base colour and Fresnel's transmittance at its IOR (a
+pane's exactly; a curved object's refraction is not followed).
 
 reads: view   writes: field (the Field: bind it into a shading program)"""
 from __future__ import annotations
@@ -49,6 +52,7 @@ PROBES = {"low": 4, "medium": 6, "high": 8, "ultra": 10}
 RAYS = {"low": 64, "medium": 128, "high": 192, "ultra": 256}
 ALL_BARRIERS = 0xFFFFFFFF
 SIDES_BINDING = 15           # shaders/irradiance_trace.comp FieldSides
+MATERIAL_TEXELS = 3          # shaders/irradiance_trace.comp FIELD_MATERIAL
 FIELD_UNITS = ("field_irradiance", "field_distance", "field_probes", "field_materials",
                "field_rays")
 # Probes sit off their cells' centres by this share of the spacing: walls often lie on
@@ -216,6 +220,7 @@ class IrradiancePass(Pass):
                 set_uniform(trace, "u_rays", rays)
                 set_uniform(trace, "n_lights", len(self.lights.index))
                 set_uniform(trace, "u_bounce", k > 0)
+                set_uniform(trace, "u_glass", bool(self.table[0, 2::3, :3].any()))
                 set_uniform(trace, "u_epsilon", 1e-4 * max(diagonal, 1e-6))
                 set_uniform(trace, "u_view_forward", np.asarray(view.camera.forward, float))
                 ray_tex.bind_to_image(0, read=False, write=True)
@@ -272,24 +277,29 @@ class IrradiancePass(Pass):
         return tex
 
     def _table(self, scene, names) -> np.ndarray:
-        """The tracer's materials: albedo, emission, two texels each."""
-        table = np.zeros((1, 2 * max(len(names), 1), 4), np.float32)
+        """The tracer's materials: albedo, (emission, sides), (transmittance colour,
+        IOR): MATERIAL_TEXELS texels each."""
+        k = MATERIAL_TEXELS
+        table = np.zeros((1, k * max(len(names), 1), 4), np.float32)
         for i, name in enumerate(names):
             m = scene.materials.get(name)
             if m is None:
-                table[0, 2 * i, :3] = 0.18
+                table[0, k * i, :3] = 0.18
                 continue
             base = m.maps.get("diffuseColor")
             base = m.diffuse if base is None else self.textures.mean(base)
             emission = m.maps.get("emissiveColor")
             emission = m.emissive if emission is None else self.textures.mean(emission)
-            # Glass: its diffuse share (the field's rays stop at it; what it lets
-            # through is not followed).
-            table[0, 2 * i, :3] = np.asarray(base, np.float32) * (1.0 - m.metallic) * \
+            # Glass: its diffuse share, and what it lets through (its tint).
+            table[0, k * i, :3] = np.asarray(base, np.float32) * (1.0 - m.metallic) * \
                 (1.0 - m.transmission)
-            table[0, 2 * i + 1, :3] = emission
+            table[0, k * i + 1, :3] = emission
             front, back = SAMPLING.get(m.emission_sampling, SAMPLING["auto"])
-            table[0, 2 * i + 1, 3] = front + 2 * back
+            table[0, k * i + 1, 3] = front + 2 * back
+            if m.alpha == "glass":
+                tint = np.clip(np.asarray(base, np.float32), 0.0, 1.0)
+                table[0, k * i + 2, :3] = m.transmission * tint
+                table[0, k * i + 2, 3] = max(m.ior, 1.0 + 1e-4)
         return table
 
     def _instance_sides(self, scene, tracer) -> np.ndarray:

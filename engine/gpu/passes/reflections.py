@@ -19,19 +19,21 @@ Only when the frame's bounces have a glossy bounce (RenderSettings.bounces_for),
 material has a specular lobe (`reflects`), and on
 GL 4.3 (compute shaders, which the tracer needs; the pass is a compute dispatch whatever
 the frame's form, so both forms take it): GL 3.3 and 4.1 reflect the dome and the
-lights only, as with no bounces. The render passes
-take the change in GlossDir (no GlossInd pass of its own), so they add up to the image.
+lights only, as with no bounces. The render passes take the change split as Cycles
+splits light: the dome met by a ray that escapes (or the dome's reflection, where a
+rough lobe has no field to read) is added to GlossDir; what the ray meets in the lit
+frame, and the field's light, are GlossInd; so they add up to the image.
 
 reads: g_base, g_normal, g_mat, g_emit, g_depth, hdr, view, ao, field, g_smooth and
        g_sheen (optional)   writes: hdr
-render passes: GlossDir (added to in place, as the light passes add to it)"""
+render passes: GlossDir (added to in place, as the light passes add to it), GlossInd"""
 from __future__ import annotations
 
 from ..framegraph import Pass
 from ..lit_copy import LitCopy
 from ..programs import UNITS, set_uniform
 from ..screen import run_screen, screen_program
-from .ambient import GBUFFER, LIGHTING_AOVS, bind_gbuffer, surface_defines
+from .ambient import GBUFFER, LIGHTING_AOVS, bind_gbuffer, lighting_aovs, surface_defines
 from .ao import occludes
 
 
@@ -49,7 +51,7 @@ class ReflectionPass(Pass):
     reads = GBUFFER + ("hdr", "view")
     optional = ("ao", "g_smooth", "g_sheen", "field")
     writes = ("hdr",)
-    aovs = {"GlossDir": LIGHTING_AOVS["GlossDir"]}    # added to in place
+    aovs = {name: LIGHTING_AOVS[name] for name in ("GlossDir", "GlossInd")}
 
     def __init__(self, ctx, pool, programs, environment, tracer):
         self.ctx, self.pool, self.programs = ctx, pool, programs
@@ -70,9 +72,9 @@ class ReflectionPass(Pass):
         defines = (["HAS_DOME_MAP"] if env is not None else []) + (["HAS_AO"] if ao else []) + \
             surface_defines(frame, board) + (["IRRADIANCE_FIELD"] if "field" in board else [])
         targets = [board["hdr"]]
-        if "GlossDir" in frame.aovs:   # it takes the change, read and stored in place
+        if lighting_aovs(frame):   # GlossDir read and stored in place, GlossInd written
             defines.append("WRITE_AOVS")
-            targets.append(board["aov_glossy"])
+            targets += [board["aov_glossy"], board["aov_glossy_indirect"]]
         prog = screen_program(self.programs, "reflections", defines, compute=True,
                               outputs=len(targets))
         view = board["view"]
@@ -85,7 +87,7 @@ class ReflectionPass(Pass):
         lit.use(UNITS["hdr"])
         set_uniform(prog, "u_lit", UNITS["hdr"])
         set_uniform(prog, "u_lit_lods", self.lit.lods)
-        if len(targets) > 1:
+        if lighting_aovs(frame):
             board["aov_glossy"].use(UNITS["post_src"])
             set_uniform(prog, "u_glossy", UNITS["post_src"])
         set_uniform(prog, "view_proj", view.view_proj)

@@ -153,6 +153,9 @@ def set_shadow_uniforms(prog, sm, preset, eye):
         set_uniform(prog, "shadow_ranges", pad(sm.ranges, 1.0))
         set_uniform(prog, "shadow_texels", pad(sm.texel, 1.0))
     set_uniform(prog, "shadow_footprint", sm.footprint if sm.stochastic else (0.0, 0.0))
+    set_uniform(prog, "shadow_tinted", sm.tint is not None)
+    if sm.tint is not None:
+        sm.tint.use(UNITS["shadow_tint"])
     set_uniform(prog, "pcf_taps", int(preset.pcf_taps))
     set_uniform(prog, "blocker_taps", int(preset.blocker_taps))
     set_uniform(prog, "contact_eye", np.asarray(eye, np.float64))   # CONTACT_RAYS
@@ -186,6 +189,9 @@ class ShadowPass(Pass):
         scene, view = frame.scene, board["view"]
         moved = self.geometry.moved
         see_through = _see_through(scene, frame.glass_refracts)
+        tinted = frame.glass_refracts and any(
+            frame.scene.materials[c[1]].alpha == "glass"
+            for c in self.geometry.commands.alpha_casters())
         if frame.preset != self.preset:
             # Each preset keeps its own maps (their sizes and cascades differ), so a
             # view that settles from the interactive preset finds its maps drawn.
@@ -218,7 +224,7 @@ class ShadowPass(Pass):
                 sm.inputs = (light, bounds)
                 if sm.same_layout(old):
                     old.inputs, sm = sm.inputs, old
-            used += sm.atlas[0] * sm.atlas[1] * 4
+            used += sm.atlas[0] * sm.atlas[1] * (4 + 8 * tinted)
             if used > SHADOW_BUDGET_BYTES:
                 self._drop(casting[n:])      # these, and every less important one
                 _budget_warning(scene, len(casting) - n, len(casting))
@@ -227,7 +233,7 @@ class ShadowPass(Pass):
             if not tiles:
                 out[path] = old
                 continue
-            self._render(frame, sm, old, light, tiles)
+            self._render(frame, sm, old, light, tiles, tinted)
             self.maps[path] = out[path] = sm
             frame.count("shadow_maps_rendered")
             frame.count("shadow_passes", len(tiles))
@@ -241,9 +247,9 @@ class ShadowPass(Pass):
             sm.footprint = (0.0, pixel) if view.camera.ortho else (pixel, 0.0)
         board["shadow_maps"] = out
 
-    def _render(self, frame, sm, old, light, tiles):
+    def _render(self, frame, sm, old, light, tiles, tinted):
         """Draws the given tiles of the map (all of a new one), each cleared and
-        scissored to its own rectangle."""
+        scissored to its own rectangle; `tinted`: the glass casters' colour too."""
         if sm is old:
             pass                           # drawn again into its own texture
         elif old is not None and old.atlas == sm.atlas:
@@ -283,6 +289,8 @@ class ShadowPass(Pass):
             if self.geometry.points.clouds:
                 frame.count("shadow_draws", self._draw_points(sm, light, clip @ sm.mats[i],
                                                               BIAS @ sm.mats[i]))
+            if tinted:
+                self._draw_tint(frame, sm, light, clip @ sm.mats[i], skip, rect)
         ctx.scissor = None
         ctx.disable(ctx.DEPTH_TEST)
 
@@ -313,6 +321,38 @@ class ShadowPass(Pass):
             blended |= mat.alpha == "blend" or mat.opacity < 1.0
         return blended
 
+    def _draw_tint(self, frame, sm, light, view_proj, skip, rect):
+        """The glass casters' colour into the tile (shadow.frag TINT): each face
+        multiplies its tint (blended DST_COLOR x the tint), the alpha keeps the nearest
+        glass's depth (MIN); cleared to white at the far depth. No depth test: glass
+        behind an opaque caster tints only receivers that caster shadows."""
+        ctx = self.ctx
+        if sm.tint is None:
+            sm.tint = self.pool.acquire(sm.atlas, "rgba16f")
+        fbo = self.pool.framebuffer([sm.tint])
+        fbo.viewport = rect
+        fbo.use()
+        fbo.clear(1.0, 1.0, 1.0, 1.0, viewport=rect)
+        ctx.disable(ctx.DEPTH_TEST)
+        ctx.enable(ctx.BLEND)
+        ctx.blend_func = ctx.DST_COLOR, ctx.ZERO, ctx.ONE, ctx.ONE
+        ctx.blend_equation = ctx.FUNC_ADD, ctx.MIN
+        prog = self.programs.get("shadow.vert", "shadow.frag", ["TINT"])
+        for store, name, first, count, oid, n in self.geometry.commands.alpha_casters():
+            mat = frame.scene.materials[name]
+            if mat.alpha != "glass":
+                continue
+            _set_light(prog, sm, light, skip)
+            set_uniform(prog, "view_proj", view_proj)
+            set_uniform(prog, "u_tint", tuple(float(min(max(c, 0.0), 1.0)) for c in mat.diffuse))
+            prog["u_object"].value = int(oid)
+            store.vao(prog).render(ctx.TRIANGLES, vertices=int(count), first=int(first),
+                                   instances=int(n))
+            frame.count("shadow_draws")
+        ctx.blend_equation = ctx.FUNC_ADD
+        ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA
+        ctx.disable(ctx.BLEND)
+
     def _draw_points(self, sm, light, view_proj, window) -> int:
         """Point clouds into a tile: spheres facing the light (radial maps) or across
         the sun's direction, writing the same depth as meshes do."""
@@ -333,6 +373,9 @@ class ShadowPass(Pass):
                 self._release_map(sm)
 
     def _release_map(self, sm):
+        if sm.tint is not None:
+            self.pool.release(sm.tint)
+            sm.tint = None
         if sm.texture is not None:
             sm.cmp.release()
             sm.raw.release()
@@ -352,22 +395,20 @@ class ShadowPass(Pass):
 
 def glass_caster(mat, refract: bool):
     """A glass material as a shadow caster: blended, of opacity 1 - what a flat pane
-    of it lets through at normal incidence (transmission x (1 - F0)^2 x the tint's
-    luminance: stochastic, grey); opaque without bounces, as Cycles' shadow rays
-    stop at glass. Other materials as they are."""
+    of it lets through at normal incidence, transmission x (1 - F0)^2 (stochastic,
+    grey; its colour is the tint map's, _draw_tint); opaque without bounces, as
+    Cycles' shadow rays stop at glass. Other materials as they are."""
     if mat.alpha != "glass" or not refract:
         return mat
     f0 = ((mat.ior - 1.0) / (mat.ior + 1.0)) ** 2
-    tint = 0.2126 * mat.diffuse[0] + 0.7152 * mat.diffuse[1] + 0.0722 * mat.diffuse[2]
-    through = mat.transmission * (1.0 - f0) ** 2 * min(max(tint, 0.0), 1.0)
-    return replace(mat, opacity=1.0 - through)
+    return replace(mat, opacity=1.0 - mat.transmission * (1.0 - f0) ** 2)
 
 
 def _see_through(scene, refract: bool) -> tuple:
     """What the see-through casters' shadows depend on: their materials' opacity (a
     glass one's, with or without bounces)."""
     return tuple(sorted((name, m.alpha, m.opacity, m.opacity_threshold, m.maps.get("opacity"),
-                         glass_caster(m, refract).opacity)
+                         glass_caster(m, refract).opacity, tuple(m.diffuse))
                         for name, m in scene.materials.items() if m.alpha != "opaque"))
 
 
