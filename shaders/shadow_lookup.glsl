@@ -391,13 +391,14 @@ float area_shadow_factor(vec3 p, vec3 n, vec3 c, vec3 x, vec3 y, vec2 half_exten
 uniform sampler2D area_visibility;  // this light's, filtered (area_visibility.glsl)
 #endif
 
-// The loaded light's shadow (lights.glsl's globals), of any of the program's kinds
-// (lights.glsl LIGHT_DISTANT, LIGHT_SPHERE, LIGHT_AREA); AREA_VISIBILITY: an area
-// light's, filtered, at this pixel (the G-buffer's surfaces only).
 // The loaded light's shadow colour: what glass before it gives its light (white: none).
 vec3 light_shadow_colour(vec3 p, vec3 n, float view_depth) {
     return shadow_colour(p, n, light_pos, view_depth);
 }
+
+// The loaded light's shadow (lights.glsl's globals), of any of the program's kinds
+// (lights.glsl LIGHT_DISTANT, LIGHT_SPHERE, LIGHT_AREA); AREA_VISIBILITY: an area
+// light's, filtered, at this pixel (the G-buffer's surfaces only).
 
 float light_shadow(vec3 p, vec3 n, float view_depth) {
 #ifdef AREA_VISIBILITY
