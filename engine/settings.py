@@ -64,6 +64,11 @@ class RenderSettings:
     # the edit never waits on a compile (stats: programs_pending). Off for final
     # images, which draw every material as it is.
     background_compile: bool = False
+    # A viewport's frames: the irradiance field traces at most its preset's ray budget
+    # a frame and converges over frames to the field a still makes, frames showing its
+    # last complete update meanwhile (stats field_rays, field_pending). Off for final
+    # images, which build it converged.
+    progressive_field: bool = False
     # GL 4.3 and later run the passes that do not rasterise (lighting, ambient
     # occlusion, the dome, post, the supersample reduction, the render passes, the
     # resolve) and skinning as compute shaders, which every shader core of a GPU runs

@@ -16,7 +16,10 @@ layout(rgba32f, binding = 2) writeonly uniform image2D probe_image;
 uniform sampler2D field_rays;        // x ray, y probe: radiance, signed distance
 uniform mat3 u_rotation;
 uniform int u_rays;
-uniform float u_max_distance;        // distances are clamped here (beyond a cell: seen)
+uniform bool u_bounce;               // not the first update: probes as it left them
+uniform int u_first_probe;           // the first probe of those this dispatch updates
+uniform float u_max_distance[FIELD_GRIDS];   // by grid: distances are clamped there
+                                             // (beyond a cell: seen)
 // The nearest hit within this cosine of a texel's direction (about 14 degrees): what a
 // zero-thickness wall's edge hides from the mean, which rays past the edge pull far.
 #define NEAR_CONE 0.97
@@ -33,12 +36,15 @@ ivec2 interior(ivec2 t) {
 }
 
 void main() {
-    int probe = int(gl_WorkGroupID.x);
+    int probe = u_first_probe + int(gl_WorkGroupID.x);
+    int g = probe_grid(probe);
+    float max_distance = u_max_distance[g];
+    vec3 step = field_step[g];
     ivec2 t = ivec2(gl_LocalInvocationID.xy);
     ivec2 src = interior(t);
     vec3 d = oct_decode((vec2(src - 1) + 0.5) / float(FIELD_TEXELS) * 2.0 - 1.0);
     vec3 sum = vec3(0.0);
-    float total = 0.0, dist = 0.0, dist2 = 0.0, dist_total = 0.0, nearest = u_max_distance;
+    float total = 0.0, dist = 0.0, dist2 = 0.0, dist_total = 0.0, nearest = max_distance;
     int backs = 0;
     float nearest_front = 1.0e30, nearest_back = 1.0e30;
     vec3 front_dir = vec3(0.0), back_dir = vec3(0.0);
@@ -51,7 +57,7 @@ void main() {
             sum += c * h.rgb;
             total += c;
             float w = pow(c, 50.0);
-            float s = min(abs(h.w), u_max_distance);
+            float s = min(abs(h.w), max_distance);
             dist += w * s;
             dist2 += w * s * s;
             dist_total += w;
@@ -68,12 +74,12 @@ void main() {
     }
     ivec2 at = probe_tile(probe) * (FIELD_TEXELS + 2) + t;
     imageStore(irradiance_image, at, vec4(total > 0.0 ? FIELD_PI * sum / total : vec3(0.0), 1.0));
-    vec2 m = dist_total > 0.0 ? vec2(dist, dist2) / dist_total : vec2(u_max_distance, u_max_distance * u_max_distance);
+    vec2 m = dist_total > 0.0 ? vec2(dist, dist2) / dist_total : vec2(max_distance, max_distance * max_distance);
     imageStore(distance_image, at, vec4(m, nearest, 1.0));
     if (t == ivec2(0)) {
-        vec4 state = probe_state(probe);
-        float spacing = min(field_step.x, min(field_step.y, field_step.z));
-        bool inside = float(backs) > 0.25 * float(u_rays) && farthest < 1.5 * length(field_step);
+        vec4 state = u_bounce ? probe_state(probe) : vec4(0.0, 0.0, 0.0, 1.0);
+        float spacing = min(step.x, min(step.y, step.z));
+        bool inside = float(backs) > 0.25 * float(u_rays) && farthest < 1.5 * length(step);
         vec3 offset = state.xyz;
         if (inside)
             offset += back_dir * (nearest_back + 0.1 * spacing);
@@ -82,7 +88,7 @@ void main() {
             bool front = nearest_front < nearest_back;
             offset -= (front ? front_dir : back_dir) * (0.2 * spacing - min(nearest_front, nearest_back));
         }
-        offset = clamp(offset, -0.45 * field_step, 0.45 * field_step);
+        offset = clamp(offset, -0.45 * step, 0.45 * step);
         imageStore(probe_image, probe_tile(probe), vec4(offset, inside ? 0.0 : 1.0));
     }
 }

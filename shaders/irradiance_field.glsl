@@ -10,10 +10,20 @@
 // inside a one-texel border that repeats the map's opposite edge (so bilinear filtering
 // wraps across the octahedron's seams); field_tiles tiles a line. field_probes: one
 // texel a probe at its tile's place, (offset from its grid place, 1 on / 0 off).
+//
+// Grids: one over the bounds, or, where the bounds are large, nested cascades about the
+// camera, finest first, the last over the bounds (irradiance.py cascades). Their probes
+// follow each other in the atlas. A point reads the finest that holds it, blended into
+// the next over the cell inside its region's edge.
 #define FIELD_TEXELS 8
-uniform vec3 field_lo;          // probe (0, 0, 0), before its offset
-uniform vec3 field_step;        // probe spacing
-uniform ivec3 field_counts;     // probes along each axis
+#define FIELD_GRIDS 8               // at most (irradiance.py GRIDS)
+uniform int field_grids;            // grids in use
+uniform vec3 field_lo[FIELD_GRIDS];      // a grid's probe (0, 0, 0), before its offset
+uniform vec3 field_step[FIELD_GRIDS];    // its probe spacing
+uniform ivec3 field_counts[FIELD_GRIDS]; // its probes along each axis
+uniform int field_first[FIELD_GRIDS];    // its first probe in the atlas
+uniform vec3 field_region_lo[FIELD_GRIDS];  // where it is whole (its probes' box; far
+uniform vec3 field_region_hi[FIELD_GRIDS];  // beyond, on a side at the bounds' edge)
 uniform int field_tiles;        // tiles a line
 uniform float field_bias;       // the self-shadowing bias (a share of the spacing)
 uniform sampler2D field_irradiance;   // rgb: irradiance E (W/m2 per unit radiance)
@@ -44,16 +54,28 @@ vec3 fibonacci_ray(int i, int n, mat3 rotation) {
     return rotation * vec3(cos(phi) * r, sin(phi) * r, z);
 }
 
-int probe_index(ivec3 c) { return c.x + field_counts.x * (c.y + field_counts.y * c.z); }
+int probe_index(int g, ivec3 c) {
+    return field_first[g] + c.x + field_counts[g].x * (c.y + field_counts[g].y * c.z);
+}
 ivec2 probe_tile(int probe) { return ivec2(probe % field_tiles, probe / field_tiles); }
 
 vec4 probe_state(int probe) { return texelFetch(field_probes, probe_tile(probe), 0); }
 
-vec3 probe_position(ivec3 c, vec4 state) { return field_lo + vec3(c) * field_step + state.xyz; }
+vec3 probe_position(int g, ivec3 c, vec4 state) {
+    return field_lo[g] + vec3(c) * field_step[g] + state.xyz;
+}
 
-ivec3 probe_cell(int probe) {
-    return ivec3(probe % field_counts.x, (probe / field_counts.x) % field_counts.y,
-                 probe / (field_counts.x * field_counts.y));
+int probe_grid(int probe) {
+    int g = 0;
+    for (int i = 1; i < field_grids; ++i)
+        if (probe >= field_first[i]) g = i;
+    return g;
+}
+
+ivec3 probe_cell(int g, int probe) {
+    int i = probe - field_first[g];
+    ivec3 n = field_counts[g];
+    return ivec3(i % n.x, (i / n.x) % n.y, i / (n.x * n.y));
 }
 
 // Where direction d lies in a probe's map, as the atlas' normalised coordinates.
@@ -78,23 +100,26 @@ float field_nearest(vec2 uv) {
 // from its mean and squared distances) that it sees the point, which goes to 0 behind a
 // wall. 0 where no probe sees the point. `along`: the direction whose irradiance is
 // read (n for the surface's own; a reflection's direction for a rough lobe's light).
-vec3 field_irradiance_along(vec3 p, vec3 n, vec3 v, vec3 along) {
-    float spacing = min(field_step.x, min(field_step.y, field_step.z));
+// Grid `grid`'s probes alone.
+vec3 grid_irradiance_along(int grid, vec3 p, vec3 n, vec3 v, vec3 along) {
+    vec3 lo = field_lo[grid], step = field_step[grid];
+    ivec3 counts = field_counts[grid];
+    float spacing = min(step.x, min(step.y, step.z));
     vec3 q = p + (0.2 * n + 0.8 * v) * field_bias * spacing;
-    vec3 g = clamp((q - field_lo) / field_step, vec3(0.0), vec3(field_counts - 1));
-    ivec3 base = min(ivec3(g), max(field_counts - 2, ivec3(0)));
+    vec3 g = clamp((q - lo) / step, vec3(0.0), vec3(counts - 1));
+    ivec3 base = min(ivec3(g), max(counts - 2, ivec3(0)));
     vec3 alpha = clamp(g - vec3(base), 0.0, 1.0);
     vec3 sum = vec3(0.0);
     float total = 0.0;
     for (int i = 0; i < 8; ++i) {
         ivec3 off = ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
-        ivec3 c = min(base + off, field_counts - 1);
-        int probe = probe_index(c);
+        ivec3 c = min(base + off, counts - 1);
+        int probe = probe_index(grid, c);
         vec4 state = probe_state(probe);
         if (state.w < 0.5) continue;                 // switched off: inside geometry
         vec3 tri = mix(1.0 - alpha, alpha, vec3(off));
         float w = tri.x * tri.y * tri.z;
-        vec3 pp = probe_position(c, state);
+        vec3 pp = probe_position(grid, c, state);
         vec3 to_probe = pp - p;
         float len = length(to_probe);
         vec3 dir = len > 0.0 ? to_probe / len : n;
@@ -118,6 +143,28 @@ vec3 field_irradiance_along(vec3 p, vec3 n, vec3 v, vec3 along) {
         total += w;
     }
     return total > 0.0 ? sum / total : vec3(0.0);
+}
+
+// How much grid g holds p: 1 inside its region, falling to 0 over half its cell
+// towards the region's edge (the last grid holds every point).
+float grid_share(int g, vec3 p) {
+    if (g == field_grids - 1) return 1.0;
+    vec3 to_edge = min(p - field_region_lo[g], field_region_hi[g] - p);
+    float cell = max(field_step[g].x, max(field_step[g].y, field_step[g].z));
+    return clamp(min(to_edge.x, min(to_edge.y, to_edge.z)) / (0.5 * cell), 0.0, 1.0);
+}
+
+// The finest grids that hold p, blended.
+vec3 field_irradiance_along(vec3 p, vec3 n, vec3 v, vec3 along) {
+    vec3 sum = vec3(0.0);
+    float left = 1.0;
+    for (int g = 0; g < field_grids && left > 0.0; ++g) {
+        float share = grid_share(g, p);
+        if (share <= 0.0) continue;
+        sum += left * share * grid_irradiance_along(g, p, n, v, along);
+        left *= 1.0 - share;
+    }
+    return sum;
 }
 
 vec3 field_irradiance_at(vec3 p, vec3 n, vec3 v) { return field_irradiance_along(p, n, v, n); }

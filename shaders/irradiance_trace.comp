@@ -31,6 +31,7 @@ uniform mat3 u_rotation;
 uniform int u_rays;                  // a probe's
 uniform int n_lights;
 uniform bool u_bounce;               // the field read holds a bounce already
+uniform int u_first_probe;           // the first probe of those this dispatch updates
 uniform float u_epsilon;
 uniform vec3 u_view_forward;         // where a headlight shines
 uniform bool u_glass;                // some traced material transmits
@@ -91,10 +92,13 @@ vec3 hit_radiance(RtHit hit, vec3 x, vec3 dir) {
 }
 
 void main() {
-    int probe = int(gl_WorkGroupID.y);
+    int probe = u_first_probe + int(gl_WorkGroupID.y);
     int ray = int(gl_WorkGroupID.x) * 64 + int(gl_LocalInvocationID.x);
     if (ray >= u_rays) return;
-    vec3 origin = probe_position(probe_cell(probe), probe_state(probe));
+    // The first update starts from probes at their grid places, on.
+    vec4 state = u_bounce ? probe_state(probe) : vec4(0.0, 0.0, 0.0, 1.0);
+    int g = probe_grid(probe);
+    vec3 origin = probe_position(g, probe_cell(g, probe), state);
     vec3 dir = fibonacci_ray(ray, u_rays, u_rotation);
     vec3 radiance = vec3(0.0), weight = vec3(1.0);
     float distance = 1.0e27, tmin = 0.0;

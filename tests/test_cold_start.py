@@ -143,3 +143,62 @@ def test_the_command_keeps_what_it_made_out_of_the_collections_at_exit(tmp_path)
     assert "no such file" in proc.stderr
     status, frozen = proc.stdout.split()
     assert status == "1" and int(frozen) > 0
+
+
+def test_depth_textures_are_made_32_bit_float_at_once():
+    """ModernGL makes DEPTH_COMPONENT24 textures; the context's loader
+    (engine/gpu/depth.py FloatDepthLoader) has them made DEPTH_COMPONENT32F as they are
+    allocated, multisampled ones with fixed sample places, so the engine's depth
+    targets (the G-buffer's, the shadow maps: 64 MB in the demo's first frame) are
+    allocated once, where re-specifying them made llvmpipe allocate and clear each
+    twice."""
+    import ctypes
+
+    from lantern.engine.gpu.context import run_gl
+    from lantern.engine.gpu.stencil import entry_points
+    GL_TEXTURE_2D, GL_TEXTURE_2D_MULTISAMPLE = 0x0DE1, 0x9100
+    GL_TEXTURE_INTERNAL_FORMAT, GL_TEXTURE_FIXED_SAMPLE_LOCATIONS = 0x1003, 0x9107
+    GL_DEPTH_COMPONENT32F = 0x8CAC
+
+    def formats(made):
+        """{name: (internal format, fixed sample places or None)} of made(gl)'s textures."""
+        def run(gl):
+            fn = entry_points(gl.proc, {
+                "glBindTexture": (None, ctypes.c_uint, ctypes.c_uint),
+                "glGetTexLevelParameteriv": (None, ctypes.c_uint, ctypes.c_int, ctypes.c_uint,
+                                             ctypes.POINTER(ctypes.c_int))})
+
+            def query(tex, target, name):
+                value = ctypes.c_int(-1)
+                fn["glBindTexture"](target, tex.glo)
+                fn["glGetTexLevelParameteriv"](target, 0, name, ctypes.byref(value))
+                fn["glBindTexture"](target, 0)
+                return value.value
+
+            textures, release = made(gl)
+            out = {}
+            for name, tex in textures.items():
+                target = GL_TEXTURE_2D_MULTISAMPLE if tex.samples else GL_TEXTURE_2D
+                out[name] = (query(tex, target, GL_TEXTURE_INTERNAL_FORMAT),
+                             query(tex, target, GL_TEXTURE_FIXED_SAMPLE_LOCATIONS)
+                             if tex.samples else None)
+            release()
+            return out
+        return run_gl(run)
+
+    def modern_gl(gl):
+        textures = {"plain": gl.ctx.depth_texture((64, 32)),
+                    "4 samples": gl.ctx.depth_texture((64, 32), samples=4)}
+        return textures, lambda: [t.release() for t in textures.values()]
+
+    assert formats(modern_gl) == {"plain": (GL_DEPTH_COMPONENT32F, None),
+                                  "4 samples": (GL_DEPTH_COMPONENT32F, 1)}
+
+    def pool_targets(gl):
+        from lantern.engine.gpu.resources import TargetPool
+        pool = TargetPool(gl.ctx, None)
+        return {fmt: pool.acquire((64, 32), fmt) for fmt in ("depth", "depth_ms4")}, \
+            pool.release_all
+
+    assert formats(pool_targets) == {"depth": (GL_DEPTH_COMPONENT32F, None),
+                                     "depth_ms4": (GL_DEPTH_COMPONENT32F, 1)}

@@ -147,3 +147,57 @@ def test_the_render_passes_take_the_reflected_plane_in_glossind():
     r, g, b = lower_half(result.passes["GlossInd"])
     assert r > 0.05 and r > 4.0 * g and r > 4.0 * b     # the plane's red
     assert lower_half(result.passes["GlossDir"]).max() < 0.01
+
+
+def test_the_lit_copys_levels_are_made_by_lantern_not_by_the_driver(monkeypatch):
+    """The copy of the lit frame gets its mip levels from a program of Lantern's
+    (shaders/lit_mips.comp, which the program cache keeps), not from glGenerateMipmap,
+    for which llvmpipe builds a blit shader in every new process (0.15 s of a cold
+    render's CPU). Each texel is the mean of the 2 x 2 above it; an odd last row or
+    column is left out, and a side of 1 is not halved."""
+    import ctypes
+
+    import moderngl
+    from lantern.engine.gpu.context import run_gl
+    from lantern.engine.gpu.resources import TargetPool
+    from lantern.engine.gpu.stencil import entry_points
+
+    generated = []
+    build = moderngl.Texture.build_mipmaps
+    monkeypatch.setattr(moderngl.Texture, "build_mipmaps",
+                        lambda self, *a, **k: (generated.append(self), build(self, *a, **k)))
+    assert "reflections" in render(ball_over_red_plane(0.3), Bounces()).stats["passes"]
+    assert generated == []
+    from lantern.engine.gpu.lit_copy import LitCopy, level_sizes
+
+    def levels(gl):
+        fn = entry_points(gl.proc, {
+            "glBindTexture": (None, ctypes.c_uint, ctypes.c_uint),
+            "glGetTexImage": (None, ctypes.c_uint, ctypes.c_int, ctypes.c_uint, ctypes.c_uint,
+                              ctypes.c_void_p)})
+        out, pool = [], TargetPool(gl.ctx, None)    # framebuffers only
+        for w, h in ((8, 6), (5, 3)):
+            image = np.random.default_rng(w).random((h, w, 4)).astype(np.float32)
+            frame = gl.ctx.texture((w, h), 4, image.tobytes(), dtype="f4")
+            copy = LitCopy(gl.ctx, pool, gl.programs, gl.proc, compute=True)
+            tex = copy.copy(frame)
+            chain = [image]
+            fn["glBindTexture"](0x0DE1, tex.glo)                        # GL_TEXTURE_2D
+            for level, (lw, lh) in enumerate(level_sizes((w, h)), 1):
+                held = np.zeros((lh, lw, 4), np.float32)
+                fn["glGetTexImage"](0x0DE1, level, 0x1908, 0x1406, held.ctypes.data)
+                chain.append(held)                                     # RGBA, FLOAT
+            out.append(chain)
+            copy.release()
+            frame.release()
+        pool.release_all()
+        return out
+
+    for chain in run_gl(levels):
+        for above, level in zip(chain, chain[1:]):
+            h, w = level.shape[:2]
+            rows = np.minimum(2 * np.arange(h)[:, None] + [0, 1], above.shape[0] - 1)
+            cols = np.minimum(2 * np.arange(w)[:, None] + [0, 1], above.shape[1] - 1)
+            mean = above[rows[:, :, None, None], cols[None, None]].mean(axis=(1, 3))
+            np.testing.assert_allclose(level, mean, rtol=1e-6, atol=1e-7)
+

@@ -520,3 +520,34 @@ def test_the_redraw_timer_and_pass_registration(viewport):
                           *((f"CryptoAsset0{k}", 4, "RGBA", "COLOR") for k in range(3))]
     titles = {p.title for p in PASSES.values() if p.provided}
     assert all(name in titles for name, *_ in registered[1:])
+
+
+def test_the_bounce_converges_over_viewport_frames_to_the_stills_image(addon):
+    """With Cycles' default bounces the engine host's viewport frames trace the
+    irradiance field a ray budget at a time (RenderSettings.progressive_field): it
+    renders again, frames not final, until the field converged, and the final frame is
+    the still's image."""
+    import bpy
+    from lantern.engine.gpu.passes.irradiance import BUDGET
+    scene = _scene()
+    scene.cycles.max_bounces = 12
+    vp = Viewport()
+    try:
+        view = _camera_view(scene, bpy.context.evaluated_depsgraph_get())
+        channel = vp.render.host.channel(vp.render.name)
+        frames = []
+
+        class Recorded(type(channel.event)):
+            def set(self):          # on the reader thread, as each frame arrives
+                if channel.latest is not None:
+                    frames.append(channel.latest)
+                super().set()
+        channel.event = Recorded()
+        after, frame = vp.frame(view)
+    finally:
+        vp.close()
+    assert frame.stats["field_pending"] == 0 and frame.stats["field_grids"] == 1
+    converging = [f for f in frames if f.stats.get("field_pending", 0) > 0]
+    assert converging and not any(f.final for f in converging)
+    assert max(f.stats.get("field_rays", 0) for f in frames) <= BUDGET["medium"]
+    np.testing.assert_allclose(after, _fresh(scene, view), atol=2e-3)

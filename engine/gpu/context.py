@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import moderngl
 
 from . import budget, devices
+from .depth import FloatDepthLoader
 from .program_binaries import BinaryLoader
 from .programs import ProgramCache
 
@@ -76,7 +77,10 @@ class GLContext:
         # ModernGL loads its entry points through the program cache's loader, which
         # stands in for compiling and linking (engine/gpu/program_binaries.py).
         self.loader = BinaryLoader(self.backend)
-        self.ctx = moderngl.create_context(standalone=True, context=self.loader, require=GL_FLOOR)
+        # And makes its depth textures 32-bit float as it allocates them (depth.py).
+        self._depth_loader = FloatDepthLoader(self.loader)
+        self.ctx = moderngl.create_context(standalone=True, context=self._depth_loader,
+                                           require=GL_FLOOR)
         self.renderer = str(self.ctx.info.get("GL_RENDERER", ""))
         self.software = devices.is_software(self.renderer)
         try:

@@ -2,7 +2,8 @@
 everywhere, the clip convention the GL offers, and the far-plane clip distance.
 ModernGL makes 24-bit depth textures and knows neither glClipControl nor clip
 distances, so these few calls go through the context backend's entry points, as the
-stencil calls do (engine/gpu/stencil.py).
+stencil calls do (engine/gpu/stencil.py), and the context is made through
+`FloatDepthLoader`, which has ModernGL's depth textures made DEPTH_COMPONENT32F.
 
   GL 4.5 (clip control)   glClipControl(LOWER_LEFT, ZERO_TO_ONE) while Lantern draws:
                           the projection's z / w is the window depth itself.
@@ -16,20 +17,68 @@ import ctypes
 from .stencil import entry_points
 
 GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE, GL_ZERO_TO_ONE = 0x8CA1, 0x935E, 0x935F
-GL_TEXTURE_2D, GL_DEPTH_COMPONENT, GL_FLOAT = 0x0DE1, 0x1902, 0x1406
-GL_DEPTH_COMPONENT32F = 0x8CAC
+GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT32F = 0x81A6, 0x8CAC
 GL_CLIP_DISTANCE0 = 0x3000
-GL_TEXTURE_2D_MULTISAMPLE, GL_SAMPLES, GL_SAMPLE_POSITION = 0x9100, 0x80A9, 0x8E50
+GL_SAMPLES, GL_SAMPLE_POSITION = 0x80A9, 0x8E50
 
 _u, _i = ctypes.c_uint, ctypes.c_int
 _SIGS = {
-    "glBindTexture": (None, _u, _u),
-    "glTexImage2D": (None, _u, _i, _i, _i, _i, _i, _u, _u, ctypes.c_void_p),
     "glEnable": (None, _u), "glDisable": (None, _u),
-    "glTexImage2DMultisample": (None, _u, _i, _u, _i, _i, ctypes.c_ubyte),
     "glGetIntegerv": (None, _u, ctypes.POINTER(_i)),
     "glGetMultisamplefv": (None, _u, _u, ctypes.POINTER(ctypes.c_float)),
 }
+# The calls that make a texture's storage, and where their internal format is.
+_STORAGE = {
+    "glTexImage2D": ((None, _u, _i, _i, _i, _i, _i, _u, _u, ctypes.c_void_p), 2),
+    "glTexImage2DMultisample": ((None, _u, _i, _u, _i, _i, ctypes.c_ubyte), 2),
+}
+_FUNCTYPE = getattr(ctypes, "WINFUNCTYPE", ctypes.CFUNCTYPE)
+
+
+class FloatDepthLoader:
+    """A context backend's loader as ModernGL sees it (`inner`'s entry points), except
+    that a texture's storage asked for as DEPTH_COMPONENT24 (ModernGL's one depth
+    format) is made DEPTH_COMPONENT32F, and a multisampled one with its samples at the
+    same places in every texel. So a depth texture is allocated once, as the engine
+    uses it: re-specifying ModernGL's made llvmpipe allocate and clear it twice (a
+    cold render's 64 MB of shadow maps). Keep it as long as the context: ModernGL
+    calls into its callbacks."""
+
+    def __init__(self, inner):
+        self.inner = inner
+        self._callbacks = {}
+
+    def load(self, name: str) -> int:
+        address = self.inner.load(name)
+        if name not in _STORAGE or not address:     # (a missing one stays missing)
+            return address
+        signature, at = _STORAGE[name]
+        real = _FUNCTYPE(*signature)(address)
+        multisample = name == "glTexImage2DMultisample"
+
+        def storage(*args):
+            if args[at] == GL_DEPTH_COMPONENT24:
+                args = args[:at] + (GL_DEPTH_COMPONENT32F,) + args[at + 1:]
+                if multisample:
+                    args = args[:-1] + (1,)
+            real(*args)
+        callback = _FUNCTYPE(*signature)(storage)
+        self._callbacks[name] = (real, callback)
+        return ctypes.cast(callback, ctypes.c_void_p).value
+
+    load_opengl_function = load      # the name ModernGL asks for first
+
+    def __enter__(self):
+        return self.inner.__enter__()
+
+    def __exit__(self, *exc):
+        return self.inner.__exit__(*exc)
+
+    def release(self):
+        self.inner.release()
+
+    def __getattr__(self, name):
+        return getattr(self.inner, name)
 
 
 class DepthConvention:
@@ -49,26 +98,6 @@ class DepthConvention:
         if self.zero_to_one:
             self._fn["glClipControl"](GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE)
         self._fn["glDisable"](GL_CLIP_DISTANCE0)
-
-    def float_depth(self, texture):
-        """Re-specifies a ModernGL depth texture (DEPTH_COMPONENT24) as
-        DEPTH_COMPONENT32F, same size; its sampling parameters are kept."""
-        w, h = texture.size
-        self._fn["glBindTexture"](GL_TEXTURE_2D, texture.glo)
-        self._fn["glTexImage2D"](GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT32F, w, h, 0,
-                                 GL_DEPTH_COMPONENT, GL_FLOAT, None)
-        self._fn["glBindTexture"](GL_TEXTURE_2D, 0)
-        return texture
-
-    def float_depth_multisample(self, texture):
-        """float_depth for a multisampled ModernGL depth texture (its sample count kept,
-        and its samples at the same places in every texel)."""
-        w, h = texture.size
-        self._fn["glBindTexture"](GL_TEXTURE_2D_MULTISAMPLE, texture.glo)
-        self._fn["glTexImage2DMultisample"](GL_TEXTURE_2D_MULTISAMPLE, texture.samples,
-                                            GL_DEPTH_COMPONENT32F, w, h, 1)
-        self._fn["glBindTexture"](GL_TEXTURE_2D_MULTISAMPLE, 0)
-        return texture
 
     def sample_positions(self, framebuffer) -> list:
         """Where the driver puts a multisampled framebuffer's samples in a texel, each

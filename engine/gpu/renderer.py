@@ -68,7 +68,8 @@ COUNTERS = ("meshes_uploaded", "draw_calls", "culled", "meshes_skinned", "meshes
             "glass_objects", "glass_draws",
             "pattern_bytes", "programs_pending", "light_clusters", "light_items",
             "clusters_overflowed", "light_tree_pixels", "light_tree_steps", "light_tree_steps_max",
-            "ao_searches", "area_visibility_passes", "field_updates")
+            "ao_searches", "area_visibility_passes", "field_updates", "field_rays",
+            "field_pending", "field_grids")
 
 
 def _shape(material):
@@ -96,7 +97,7 @@ class Renderer:
         self.uploads = Uploads(ctx, gl.proc)
         self.stencil = Stencil(gl.proc)
         self.depth = DepthConvention(gl.proc, self.features.clip_control)
-        self.pool = TargetPool(ctx, self.stencil, self.depth)
+        self.pool = TargetPool(ctx, self.stencil)
         programs = self.programs = gl.programs
         self._programs_seen = (programs.compiled, programs.loaded, programs.seconds)
         self.geometry = Geometry(ctx, self.uploads, programs, self.features)
@@ -138,9 +139,9 @@ class Renderer:
             self.light_cull,
             ClusteredLightPass(ctx, self.pool, programs, self.lights, self.environment,
                                self.light_cull, self.contact),
-            ReflectionPass(ctx, self.pool, programs, self.environment, traced),
+            ReflectionPass(ctx, self.pool, programs, self.environment, traced, gl.proc),
             GlassPass(ctx, self.pool, programs, self.geometry, self.textures, self.lights,
-                      self.environment, self.depth, self.uploads, traced),
+                      self.environment, self.depth, self.uploads, traced, gl.proc),
             TransparencyPass(ctx, self.pool, programs, self.geometry, self.textures,
                              self.lights, self.environment, self.depth),
             SupersamplePass(ctx, self.pool, programs, self.depth),

@@ -132,10 +132,9 @@ TEXEL_BYTES = {"depth": 4, "depth_stencil": 8, "depth_ms4": 16,
 
 
 class TargetPool:
-    def __init__(self, ctx, stencil, depth):
+    def __init__(self, ctx, stencil):
         self.ctx = ctx
         self.stencil = stencil
-        self.depth = depth
         self._free = {}            # (size, format) -> [objects]
         self._out = {}             # id(object) -> (key, object)
         self._fbos = {}            # (ids of attachments) -> framebuffer
@@ -161,11 +160,11 @@ class TargetPool:
         if fmt == "depth_stencil":
             return self.stencil.depth_stencil(size)
         if fmt == "depth":
-            tex = self.depth.float_depth(ctx.depth_texture(size))
+            tex = ctx.depth_texture(size)        # 32-bit float (depth.FloatDepthLoader)
             tex.compare_func = ""
         elif fmt == "depth_ms4":
             # Read only with texelFetch: a multisampled texture has no sampling state.
-            return self.depth.float_depth_multisample(ctx.depth_texture(size, samples=4))
+            return ctx.depth_texture(size, samples=4)
         else:
             components, dtype = COLOR_FORMATS[fmt]
             tex = ctx.texture(size, components, dtype=dtype)

@@ -8,7 +8,8 @@ nothing again), the last render request and the shared-memory slots its frames g
 
 The main loop applies every message that has arrived, then renders one frame of the
 scene that most needs one: a new request or edit first (the interactive preset when
-the view is progressive), then a settled view's final frame. Requests that arrive
+the view is progressive), then a settled view's final frame, then the frames that
+converge its irradiance field (RenderSettings.progressive_field). Requests that arrive
 while a frame renders replace the one waiting: a moving view never queues frames.
 A reader thread receives messages meanwhile, so Blender's sends never wait on a
 render."""
@@ -39,6 +40,7 @@ class Scene:
         self.free = []             # slots this process may write
         self.moving = (None, None)  # (scale, seconds) of the last moving frame
         self.compiling = False      # its last frame drew an edited material as it was
+        self.converging = False     # its last frame's irradiance field had rays to go
 
     def session(self, preset):
         """The scene's Session, set to `preset`."""
@@ -154,6 +156,10 @@ class Host:
         if waiting:
             return min(waiting)[1], None
         for name, scene in self.scenes.items():
+            # A viewport's field converges over frames, a ray budget each: the next
+            # frame at once (one a main loop: edits and new views still come first).
+            if scene.request is not None and scene.converging and scene.level == 2:
+                return name, None
             # A frame that drew an edited network's old variant: again once the
             # compiler's helper has made the new one (engine/gpu/compiler.py).
             if scene.request is not None and scene.compiling:
@@ -199,7 +205,8 @@ class Host:
             session = scene.session(preset)
             session.configure(width=w, height=h, transparent=req["transparent"],
                               passes=frozenset(req["passes"]), camera=req.get("camera"),
-                              background_compile=req["progressive"])
+                              background_compile=req["progressive"],
+                              progressive_field=req["progressive"])
             # The image is read straight into the slot, in Blender's bottom-up rows.
             result = session.render(view_matrix=req.get("view"),
                                     projection_matrix=req.get("projection"),
@@ -217,6 +224,7 @@ class Host:
         # Not final while an edited material draws its old variant: Blender keeps
         # polling, and the frame with the new one follows.
         scene.compiling = result.stats.get("programs_pending", 0) > 0
+        scene.converging = result.stats.get("field_pending", 0) > 0
         if not final:
             scene.touched = time.monotonic()    # settling counts from the frame shown
             # GL work and read-back of the moving frame: what the next one's size is
@@ -224,7 +232,8 @@ class Host:
             scene.moving = (scale, result.timings["total"] - result.timings.get("load", 0.0))
         self._send(protocol.FRAME, scene=name, request=req["id"], tag=req.get("tag"), slot=slot,
                    width=w, height=h, layout=frame_layout,
-                   final=final and not scene.compiling, preset=preset,
+                   final=final and not scene.compiling and not scene.converging,
+                   preset=preset,
                    stats=result.stats, timings=result.timings, gpu_timings=result.gpu_timings,
                    warnings=self.notices + result.warnings, cryptomatte=result.cryptomatte)
         self.notices = []

@@ -52,13 +52,14 @@ class GlassPass(TransparencyPass):
     culled = ("back",)                # front faces only: the way in
 
     def __init__(self, ctx, pool, programs, geometry, textures, lights, environment, depth,
-                 uploads, tracer):
+                 uploads, tracer, proc):
         super().__init__(ctx, pool, programs, geometry, textures, lights, environment, depth)
         self.uploads = uploads
         self.tracer = tracer           # scene -> Raytracer (Renderer.tracer); None: no compute
         self.normals = None            # the traced triangles' corner normals (binding 14)
         self._normals_of = None        # what they were made from
-        self.behind = LitCopy(ctx, pool)   # the lit frame's mip-mapped copy
+        # The lit frame's mip-mapped copy.
+        self.behind = LitCopy(ctx, pool, programs, proc, compute=tracer is not None)
         self._frame = None             # this frame's (traced, refract, eye)
 
     def _target(self, frame, board):

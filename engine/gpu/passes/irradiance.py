@@ -1,9 +1,10 @@
 """The irradiance field pass: the light that bounces off diffuse surfaces, as a grid of
-probes over the scene's bounds (Majercik et al. 2019, "Dynamic Diffuse Global
-Illumination with Ray-Traced Irradiance Fields"; 2021, "Scaling Probe-Based Real-Time
-Dynamic GI for Production"). The ambient pass reads it per pixel (shaders/
-irradiance_field.glsl) in place of the dome's diffuse light: the dome reaches surfaces
-through the rays that escape, so the sky is counted once.
+probes over the scene's bounds, or cascades about the camera where they are large
+(Majercik et al. 2019, "Dynamic Diffuse Global Illumination with Ray-Traced Irradiance
+Fields"; 2021, "Scaling Probe-Based Real-Time Dynamic GI for Production"). The ambient
+pass reads it per pixel (shaders/irradiance_field.glsl) in place of the dome's diffuse
+light: the dome reaches surfaces through the rays that escape, so the sky is counted
+once.
 
 An update traces the preset's rays from every probe with the ray tracer
 (engine/gpu/raytracer.py; shaders/irradiance_trace.comp), shades each hit with its
@@ -12,12 +13,18 @@ needed at hits and none leaks), and its albedo times the field as it was (the bo
 so far), or the dome where a ray escapes; then writes each probe's octahedral maps of
 irradiance and of the mean distance and its square (shaders/irradiance_blend.comp),
 moves probes out of walls and switches off those inside geometry. Each update adds
-one bounce: a frame whose field is out of date runs the scene's diffuse bounces of
-them from nothing, so a still and every frame of a sequence render it converged.
+one bounce: a field is the scene's diffuse bounces of them from nothing (a Build). A
+still and every frame of a sequence run all of it in the frame, so they render it
+converged. A viewport's frames (RenderSettings.progressive_field) run at most the
+preset's BUDGET of rays, a block of probes after the last, showing the last complete
+update meanwhile: an update spread over frames reads the same complete field and
+writes what one frame's writes, so the frames converge to the still's field itself.
 
 The field is kept while nothing it depends on changes (lights, geometry, materials,
-the dome, the bounces, the preset; the grid covers the traced triangles' bounds): stats
-field_updates counts the updates a frame ran.
+the dome, the bounces, the preset; the grids cover the traced triangles' bounds, and
+where those are large, cascades follow the camera: engine/probe_grids.py): stats
+field_updates counts the updates a frame completed, field_rays the rays it traced
+(a probe's, not their shadow rays), field_pending those left to converge.
 Only on GL 4.3 (compute shaders) and only when the frame's bounces have a diffuse
 bounce and the scene has surfaces and something that lights them; else the frame is
 today's direct image, with no tracer.
@@ -38,9 +45,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ....core.emission import SAMPLING
+from ....core.presets import PRESETS
 from ...emitters import closed, makes_lights, radiance
+from ...probe_grids import GRIDS, grids, placement
 from ..framegraph import Pass
-from ..programs import UNITS, set_uniform
+from ..programs import UNITS, set_uniform, set_uniform_array
 
 TEXELS = 8                   # shaders/irradiance_field.glsl FIELD_TEXELS
 TILE = TEXELS + 2
@@ -50,16 +59,15 @@ BIAS = 0.3                   # the read's self-shadowing bias, a share of the sp
 # Probes along the bounds' longest side, and rays a probe an update, by preset.
 PROBES = {"low": 4, "medium": 6, "high": 8, "ultra": 10}
 RAYS = {"low": 64, "medium": 128, "high": 192, "ultra": 256}
+# A viewport frame's rays at most (RenderSettings.progressive_field), by preset: the
+# field converges over frames, a block of probes a frame (docs/rendering.md).
+BUDGET = {"low": 4096, "medium": 8192, "high": 12288, "ultra": 16384}
+RANK = tuple(PRESETS)        # presets, coarsest first
 ALL_BARRIERS = 0xFFFFFFFF
 SIDES_BINDING = 15           # shaders/irradiance_trace.comp FieldSides
 MATERIAL_TEXELS = 3          # shaders/irradiance_trace.comp FIELD_MATERIAL
 FIELD_UNITS = ("field_irradiance", "field_distance", "field_probes", "field_materials",
                "field_rays")
-# Probes sit off their cells' centres by this share of the spacing: walls often lie on
-# the centres' planes (a room as wide as its bounds, split in even cells), and a probe
-# on a wall sees both sides (its rays start in the wall's plane). Off it, the probe sees
-# the wall and is moved from it (shaders/irradiance_blend.comp), on whichever side.
-NUDGE = np.array([0.0371, 0.0253, 0.0419])
 
 
 def would_bounce(frame) -> bool:
@@ -70,16 +78,6 @@ def would_bounce(frame) -> bool:
         return False
     return bool(scene.lights) or scene.dome is not None or \
         any(max(m.emissive) > 0.0 for m in scene.materials.values())
-
-
-def grid(lo, hi, along_longest: int):
-    """(first probe, spacing, counts) of a grid of cell-centred probes over the box."""
-    lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
-    size = hi - lo
-    spacing = max(float(size.max()), 1e-6) / along_longest
-    counts = np.maximum(np.ceil(size / spacing - 1e-6), 1).astype(int)
-    step = np.where(size > 0, size / counts, spacing)
-    return lo + (0.5 + NUDGE) * step, step, counts
 
 
 def unbind_samplers(ctx):
@@ -100,30 +98,72 @@ def rotation(k: int) -> np.ndarray:
     return q
 
 
+def _rows(values, dtype):
+    """GRIDS rows of `values` (a grid's vector each), the rest 0: a uniform array's."""
+    out = np.zeros((GRIDS,) + np.shape(values[0]), dtype)
+    out[:len(values)] = values
+    return out
+
+
 @dataclass
 class Field:
-    """The field's textures and grid, as a shading program reads them."""
+    """The field's textures and grids (engine/probe_grids.py), as a shading program reads
+    them."""
     irradiance: object
     distance: object
     probes: object
-    lo: np.ndarray
-    step: np.ndarray
-    counts: np.ndarray
+    grids: list
 
     def bind(self, prog):
         unbind_samplers(self.irradiance.ctx)
         self.irradiance.use(UNITS["field_irradiance"])
         self.distance.use(UNITS["field_distance"])
         self.probes.use(UNITS["field_probes"])
-        set_uniform(prog, "field_lo", self.lo.astype(np.float64))
-        set_uniform(prog, "field_step", self.step.astype(np.float64))
-        set_uniform(prog, "field_counts", tuple(int(c) for c in self.counts))
+        g = self.grids
+        set_uniform(prog, "field_grids", len(g))
+        set_uniform_array(prog, "field_lo", _rows([x.first for x in g], np.float32))
+        set_uniform_array(prog, "field_step", _rows([x.step for x in g], np.float32))
+        set_uniform_array(prog, "field_counts", _rows([x.counts for x in g], np.int32))
+        set_uniform_array(prog, "field_first", _rows(
+            np.cumsum([0] + [x.probes for x in g])[:-1], np.int32))
+        set_uniform_array(prog, "field_region_lo", _rows([x.region_lo for x in g], np.float32))
+        set_uniform_array(prog, "field_region_hi", _rows([x.region_hi for x in g], np.float32))
         set_uniform(prog, "field_tiles", TILES_PER_LINE)
         set_uniform(prog, "field_bias", BIAS)
 
     def release(self):
         for tex in (self.irradiance, self.distance, self.probes):
             tex.release()
+
+
+@dataclass
+class Build:
+    """A field being made: `updates` updates of its grid's n probes, in order, each of
+    `rays` rays a probe, reading the last complete update (`prev`) and writing `target`;
+    `k` the update under way, `probe` its next probe."""
+    key: tuple
+    version: int
+    grids: list                  # engine/probe_grids.py Grids
+    n: int
+    rays: int
+    updates: int
+    forward: np.ndarray          # the view's, for a headlight
+    epsilon: float
+    ray_tex: object
+    materials: object
+    sides: object
+    env: object
+    k: int = 0
+    probe: int = 0
+    prev: object = None
+    target: object = None
+
+    def rays_left(self) -> int:
+        return ((self.updates - self.k) * self.n - self.probe) * self.rays
+
+    def release(self):
+        for res in (self.ray_tex, self.materials, self.sides):
+            res.release()
 
 
 class IrradiancePass(Pass):
@@ -137,13 +177,17 @@ class IrradiancePass(Pass):
         self.textures = textures     # MaterialTextures: a map's mean colour
         self.lights, self.environment = lights, environment
         self.tracer, self.compute = tracer, compute   # tracer(scene): Renderer.tracer
-        self.field = None            # the current Field
-        self.spare = None            # the other one, which an update writes
-        self._key = None             # what the field was made for
+        self.field = None            # the Field frames read: the last complete one
+        self.shown = None            # (key, version, converged) of what it holds
+        self.build = None            # the Build under way (its updates not all run)
+        self.pool = []               # Fields made, reused by later updates and builds
+        self.version = 0             # counts what it depends on changing (note)
+        self.bounds = (None, None)   # (version, the traced bounds then)
+        self._key = None             # what the last build was made for
         self.stale = True            # what it holds changed since (note)
         self.touched = False         # materials changed since: their table is compared
         self.table = None            # the materials' albedo and emission it was built with
-        self.seconds = 0.0           # the last build's CPU seconds (GPU work waited for)
+        self.seconds = 0.0           # the last frame's field CPU seconds (GPU work waited for)
         self.warnings = []           # without compute shaders: that the bounce is off
 
     def needed(self, frame) -> bool:
@@ -162,18 +206,59 @@ class IrradiancePass(Pass):
         # A headlight (the default rig) shines along the view: its field follows it.
         along = tuple(view.camera.forward) if any(
             light.headlight for light in scene.lights.values()) else None
-        key = (bounces.diffuse_bounces, frame.preset.name, along)
-        if self.field is not None and not self.stale and key == self._key and self.touched:
+        if self._key is not None and not self.stale and self.touched:
             # Only materials changed: the field holds their albedo and emission alone
             # (a pattern's parameters, a roughness, leave it as it is).
             tracer = self.tracer(frame.scene)
             self.stale = not np.array_equal(self._table(frame.scene, tracer.materials),
                                             self.table)
         self.touched = False
-        if self.field is None or self.stale or key != self._key:
-            self._build(frame, view, bounces.diffuse_bounces)
-            self._key, self.stale = key, False
-        board["field"] = self.field
+        if self.stale:
+            self.version, self.stale = self.version + 1, False
+        if self.bounds[0] != self.version:
+            # Over what is traced, as its triangles lie (a skinned mesh's drawn box is
+            # padded by its joints': F12's deformed copy and the file's rig would get
+            # two grids).
+            tracer = self.tracer(scene)
+            self.bounds = (self.version, tracer.bounds if tracer.bounds is not None
+                           else view.bounds)
+        # The cascades' place about the camera (None: one grid) is part of what a
+        # field is made for.
+        key = (bounces.diffuse_bounces, frame.preset.name, along,
+               placement(*self.bounds[1], view.camera.position, view.camera.forward))
+        progressive = frame.options.progressive_field
+        if self.build is not None and self.build.version != self.version:
+            self._drop_build()           # made for what has changed since
+        enough = self._serves(self.shown, key, progressive)
+        if not enough and not self._serves(self.build and (self.build.key, self.build.version,
+                                                           True), key, progressive):
+            self._start(frame, view, key, bounces.diffuse_bounces)
+        t0 = time.perf_counter()
+        rays = 0
+        if self.build is not None and (progressive or not enough):
+            budget = BUDGET.get(frame.preset.name, BUDGET["medium"]) if progressive else None
+            rays = self._run(frame, budget)
+        frame.stats["field_rays"] = rays
+        frame.stats["field_pending"] = 0 if self.build is None else self.build.rays_left()
+        if rays:
+            self.ctx.finish()
+            self.seconds = time.perf_counter() - t0
+            frame.timings["field_build"] = self.seconds
+        if self.field is not None:
+            board["field"] = self.field
+            frame.stats["field_grids"] = len(self.field.grids)
+
+    def _serves(self, made, key, progressive: bool) -> bool:
+        """Whether a field `made` (key, version, converged) serves a frame asking for
+        `key`: made for it, as things are now, and converged; or, in a viewport, made
+        with the same bounces and at least the preset's density (the interactive
+        preset of a moving view does not rebuild it)."""
+        if not made or made[1] != self.version or not made[2]:
+            return False
+        if made[0] == key:
+            return True
+        return progressive and made[0][0] == key[0] and made[0][2:] == key[2:] and \
+            RANK.index(made[0][1]) >= RANK.index(key[1])
 
     def note(self, changes):
         """Every sync's changes (Renderer.update: a frame's, or a sync outside one, as
@@ -183,91 +268,129 @@ class IrradiancePass(Pass):
                            or c.shapes or c.skeletons or c.lights or c.dome)
         self.touched |= bool(c.materials)
 
-    def _build(self, frame, view, updates: int):
-        t0 = time.perf_counter()
+    def _start(self, frame, view, key, updates: int):
+        """A new Build for `key` in place of the one under way, if any."""
+        self._drop_build()
         scene, preset = frame.scene, frame.preset.name
         tracer = self.tracer(scene)
-        # Over what is traced, as its triangles lie (a skinned mesh's drawn box is padded
-        # by its joints': F12's deformed copy and the file's rig would get two grids).
-        lo, hi = tracer.bounds if tracer.bounds is not None else view.bounds
-        first, step, counts = grid(lo, hi, PROBES.get(preset, PROBES["medium"]))
-        n = int(np.prod(counts))
-        rays = RAYS.get(preset, RAYS["medium"])
-        self._make(first, step, counts)
-        ray_tex = self.ctx.texture((rays, n), 4, dtype="f4")
+        lo, hi = self.bounds[1]
+        made = grids(lo, hi, PROBES.get(preset, PROBES["medium"]), key[3])
+        n, rays = sum(g.probes for g in made), RAYS.get(preset, RAYS["medium"])
         self.table = self._table(scene, tracer.materials)
         materials = self.uploads.texture((self.table.shape[1], 1), 4, self.table, kind="field",
                                          dtype="f4")
         materials.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
-        sides = self.uploads.buffer(self._instance_sides(scene, tracer), kind="field")
         env = self.environment.prepare(scene.dome)
-        trace = self.programs.get("irradiance_trace.comp", None,
-                                  ["HAS_DOME_MAP"] if env is not None else [], compute=True)
-        blend = self.programs.get("irradiance_blend.comp", None, [], compute=True)
         diagonal = float(np.linalg.norm(np.asarray(hi) - np.asarray(lo)))
-        try:
-            for k in range(updates):
-                R = rotation(k)
-                tracer.bind()
-                sides.bind_to_storage_buffer(SIDES_BINDING)
-                self.field.bind(trace)
-                materials.use(UNITS["field_materials"])
-                if self.lights.texture is not None:
-                    self.lights.texture.use(UNITS["u_lights"])
-                self.environment.bind(trace, scene.dome, env)
-                set_uniform(trace, "has_dome", scene.dome is not None)
-                set_uniform(trace, "u_rotation", R)
-                set_uniform(trace, "u_rays", rays)
-                set_uniform(trace, "n_lights", len(self.lights.index))
-                set_uniform(trace, "u_bounce", k > 0)
-                set_uniform(trace, "u_glass", bool(self.table[0, 2::3, :3].any()))
-                set_uniform(trace, "u_epsilon", 1e-4 * max(diagonal, 1e-6))
-                set_uniform(trace, "u_view_forward", np.asarray(view.camera.forward, float))
-                ray_tex.bind_to_image(0, read=False, write=True)
-                trace.run(-(-rays // GROUP), n)
-                self.ctx.memory_barrier(ALL_BARRIERS)
-                self.field.bind(blend)
-                ray_tex.use(UNITS["field_rays"])
-                set_uniform(blend, "u_rotation", R)
-                set_uniform(blend, "u_rays", rays)
-                set_uniform(blend, "u_max_distance", 1.5 * float(np.linalg.norm(step)))
-                self.spare.irradiance.bind_to_image(0, read=False, write=True)
-                self.spare.distance.bind_to_image(1, read=False, write=True)
-                self.spare.probes.bind_to_image(2, read=False, write=True)
-                blend.run(n, 1)
-                self.ctx.memory_barrier(ALL_BARRIERS)
-                self.field, self.spare = self.spare, self.field
-                frame.count("field_updates")
-        finally:
-            ray_tex.release()
-            materials.release()
-            sides.release()
-        frame.stats["field_probes"] = n
-        frame.stats["field_rays"] = n * rays * updates
-        self.ctx.finish()
-        self.seconds = time.perf_counter() - t0
-        frame.timings["field_build"] = self.seconds
+        self.build = Build(
+            key=key, version=self.version, grids=made, n=n, rays=rays,
+            updates=updates, forward=np.asarray(view.camera.forward, float),
+            epsilon=1e-4 * max(diagonal, 1e-6), ray_tex=self.ctx.texture((rays, n), 4, dtype="f4"),
+            materials=materials, sides=self.uploads.buffer(self._instance_sides(scene, tracer),
+                                                           kind="field"),
+            env=env)
+        self._key = key
 
-    def _make(self, first, step, counts):
-        """Both fields at this grid's size (their textures kept when it is the same),
-        cleared on the GPU: probes on and in place, maps 0."""
-        n = int(np.prod(counts))
-        lines = -(-n // TILES_PER_LINE)
+    def _run(self, frame, budget) -> int:
+        """Runs the build's next probes, update after update, within `budget` rays (None:
+        to the end); returns the rays traced. A probe's update reads the field of the
+        update before, complete: an update spread over frames gives what one frame's
+        gives, and the last, the field a still makes."""
+        b, scene = self.build, frame.scene
+        trace = self.programs.get("irradiance_trace.comp", None,
+                                  ["HAS_DOME_MAP"] if b.env is not None else [], compute=True)
+        blend = self.programs.get("irradiance_blend.comp", None, [], compute=True)
+        tracer = self.tracer(scene)
+        traced = 0
+        while b.k < b.updates:
+            if b.target is None:
+                b.target = self._free(b)
+            count = b.n - b.probe
+            if budget is not None:
+                count = min(count, max((budget - traced) // b.rays, 0))
+                if count == 0 and traced == 0:
+                    count = 1            # a probe's rays above the budget: one a frame
+            if count == 0:
+                break
+            R = rotation(b.k)
+            read = b.prev if b.prev is not None else b.target   # the first reads no field
+            tracer.bind()
+            b.sides.bind_to_storage_buffer(SIDES_BINDING)
+            read.bind(trace)
+            b.materials.use(UNITS["field_materials"])
+            if self.lights.texture is not None:
+                self.lights.texture.use(UNITS["u_lights"])
+            self.environment.bind(trace, scene.dome, b.env)
+            set_uniform(trace, "has_dome", scene.dome is not None)
+            set_uniform(trace, "u_rotation", R)
+            set_uniform(trace, "u_rays", b.rays)
+            set_uniform(trace, "n_lights", len(self.lights.index))
+            set_uniform(trace, "u_bounce", b.k > 0)
+            set_uniform(trace, "u_glass", bool(self.table[0, 2::3, :3].any()))
+            set_uniform(trace, "u_first_probe", b.probe)
+            set_uniform(trace, "u_epsilon", b.epsilon)
+            set_uniform(trace, "u_view_forward", b.forward)
+            b.ray_tex.bind_to_image(0, read=False, write=True)
+            trace.run(-(-b.rays // GROUP), count)
+            self.ctx.memory_barrier(ALL_BARRIERS)
+            read.bind(blend)
+            b.ray_tex.use(UNITS["field_rays"])
+            set_uniform(blend, "u_rotation", R)
+            set_uniform(blend, "u_rays", b.rays)
+            set_uniform(blend, "u_bounce", b.k > 0)
+            set_uniform(blend, "u_first_probe", b.probe)
+            set_uniform_array(blend, "u_max_distance", _rows(
+                [1.5 * float(np.linalg.norm(g.step)) for g in b.grids], np.float32))
+            b.target.irradiance.bind_to_image(0, read=False, write=True)
+            b.target.distance.bind_to_image(1, read=False, write=True)
+            b.target.probes.bind_to_image(2, read=False, write=True)
+            blend.run(count, 1)
+            self.ctx.memory_barrier(ALL_BARRIERS)
+            traced += count * b.rays
+            b.probe += count
+            if b.probe == b.n:
+                self._updated(frame, b)
+        frame.stats["field_probes"] = b.n
+        if b.k == b.updates:
+            self._drop_build()
+        return traced
+
+    def _updated(self, frame, b):
+        """Update k of build b is complete: the next reads it; frames show it when it is
+        the last, or when what they showed is out of date (a viewport's edit shows its
+        first bounce at once; a finer preset's field waits until it converged)."""
+        b.prev, b.target, b.probe, b.k = b.target, None, 0, b.k + 1
+        frame.count("field_updates")
+        done = b.k == b.updates
+        if done or self.shown is None or self.shown[1] != b.version:
+            self.field, self.shown = b.prev, (b.key, b.version, done)
+
+    def _free(self, b):
+        """A Field of build b's size that neither frames nor b read, from the pool or new,
+        set to b's grids; Fields of other sizes that nothing reads are released."""
+        lines = -(-b.n // TILES_PER_LINE)
         size = (TILES_PER_LINE * TILE, lines * TILE)
-        fields = [f for f in (self.field, self.spare) if f is not None]
-        if len(fields) != 2 or fields[0].irradiance.size != size:
-            for f in fields:
+        busy = [f for f in (self.field, b.prev) if f is not None]
+        keep = []
+        for f in self.pool:
+            if f.irradiance.size != size and all(f is not x for x in busy):
                 f.release()
-            fields = [Field(self._texture(size, True), self._texture(size, True),
-                            self._texture((TILES_PER_LINE, lines), False), first, step, counts)
-                      for _ in range(2)]
-        for f in fields:
-            f.lo, f.step, f.counts = first, step, counts
-            for tex, clear in ((f.irradiance, 0.0), (f.distance, 0.0), (f.probes, 1.0)):
-                fbo = self.ctx.framebuffer(color_attachments=[tex])
-                fbo.clear(0.0, 0.0, 0.0, clear)
-                fbo.release()
-        self.field, self.spare = fields
+            else:
+                keep.append(f)
+        self.pool = keep
+        spare = next((f for f in self.pool if f.irradiance.size == size and
+                      all(f is not x for x in busy)), None)
+        if spare is None:
+            spare = Field(self._texture(size, True), self._texture(size, True),
+                          self._texture((TILES_PER_LINE, lines), False), b.grids)
+            self.pool.append(spare)
+        spare.grids = b.grids
+        return spare
+
+    def _drop_build(self):
+        if self.build is not None:
+            self.build.release()
+            self.build = None
 
     def _texture(self, size, linear: bool):
         tex = self.ctx.texture(size, 4, dtype="f4")
@@ -322,7 +445,7 @@ class IrradiancePass(Pass):
         return flags
 
     def release(self):
-        for f in (self.field, self.spare):
-            if f is not None:
-                f.release()
-        self.field = self.spare = None
+        self._drop_build()
+        for f in self.pool:
+            f.release()
+        self.pool, self.field, self.shown = [], None, None

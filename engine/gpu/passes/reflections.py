@@ -53,11 +53,11 @@ class ReflectionPass(Pass):
     writes = ("hdr",)
     aovs = {name: LIGHTING_AOVS[name] for name in ("GlossDir", "GlossInd")}
 
-    def __init__(self, ctx, pool, programs, environment, tracer):
+    def __init__(self, ctx, pool, programs, environment, tracer, proc):
         self.ctx, self.pool, self.programs = ctx, pool, programs
         self.environment = environment
         self.tracer = tracer           # scene -> Raytracer (Renderer.tracer); None: no compute
-        self.lit = LitCopy(ctx, pool)
+        self.lit = LitCopy(ctx, pool, programs, proc, compute=tracer is not None)
 
     def needed(self, frame) -> bool:
         # A dispatch in either form of the frame (RenderSettings.compute), as the field's.
