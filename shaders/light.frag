@@ -1,4 +1,11 @@
 #version 330 core
+#ifdef CONTACT_RAYS
+// The ray tracer's buffers and its watertight test (shadow_lookup.glsl's contact rays):
+// only in a frame that bounces light, which has compute shaders (GL 4.3) and so these.
+#extension GL_ARB_shader_storage_buffer_object : require
+#extension GL_ARB_gpu_shader5 : require
+#extension GL_ARB_gpu_shader_fp64 : require
+#endif
 #include "lib.glsl"
 // One light, added into the HDR target (blend ONE, ONE). Variants, one kind each
 // (lights.glsl): LIGHT_DISTANT (full-screen), LIGHT_SPHERE and LIGHT_SPOT (point, spot:

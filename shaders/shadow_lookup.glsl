@@ -38,6 +38,57 @@ uniform bool shadow_tinted;
 uniform sampler2D shadow_tint;
 
 const float MAX_KERNEL_TEXELS = 48.0;
+
+// The stretch, in map-ambiguous lengths (the bias plus the filter's radius): a receiver
+// at a distance x of a wall meets it along the light at x over the sun's slope, which
+// the filter's lateral reach covers at elevations above about 15 degrees.
+const float CONTACT_REACH = 4.0;
+
+#ifdef CONTACT_RAYS
+// Contact rays (docs/rendering.md, "Shadow seams"). Where an occluder meets its
+// receiver (a wall on a floor, the seams of a room of zero-thickness walls), the bias
+// that keeps a surface from shadowing itself, and a filter that reaches past the
+// occluder's edge, let light through. In a frame that bounces light the scene's ray
+// tracer is built (the irradiance field's), and a short any-hit ray from the receiver
+// towards the light decides that stretch from the triangles themselves: a decision on
+// the geometry, not on the map's texels, so it does not flip with a transform's last
+// bits (it changes only where a ray grazes an edge). Past the stretch the map decides.
+#include "raytrace.glsl"
+uniform vec3 contact_eye;            // the camera's world position: the tracer's frame
+// `lit` (the map's), or 0 where the ray from camera-relative q along `to_light` (unit)
+// meets an opaque surface within `reach`.
+#ifdef CONTACT_SEE_THROUGH
+// A scene with cut-outs, blended surfaces or glass: they cast through the map's tested
+// opacity alone, so the ray passes them. Per tracer material, whether it is opaque
+// (engine/gpu/passes/shadows.py ContactRays).
+layout(std430, binding = 9) readonly buffer ContactOpaque { int contact_opaque[]; };
+// See-through surfaces a ray passes before the map decides alone.
+const int CONTACT_LAYERS = 4;
+
+float contact_limited(float lit, vec3 q, vec3 to_light, float reach) {
+    if (lit <= 0.0) return lit;
+    vec3 o = q + contact_eye;
+    float tmin = 0.0;
+    for (int i = 0; i < CONTACT_LAYERS; ++i) {
+        RtHit hit;
+        if (!rt_closest_hit(o, to_light, tmin, reach, hit)) return lit;
+        int m = rt_hit_material(hit);
+        if (m < 0 || contact_opaque[m] != 0) return 0.0;
+        tmin = hit.t;
+    }
+    return lit;
+}
+#else
+float contact_limited(float lit, vec3 q, vec3 to_light, float reach) {
+    if (lit <= 0.0) return lit;
+    return rt_any_hit(q + contact_eye, to_light, 0.0, reach) ? 0.0 : lit;
+}
+#endif
+#define CONTACT(lit, q, to_light, reach) contact_limited(lit, q, to_light, reach)
+#else
+#define CONTACT(lit, q, to_light, reach) (lit)
+#endif
+
 const float GOLDEN_ANGLE = 2.39996323;
 
 int cube_face(vec3 d) {
@@ -125,6 +176,9 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
     }
     float bias = texel * (1.0 + tan_t) + 1e-4 * ref;
     float inv_NoL = 1.0 / max(NoL, 0.05);
+    vec3 to_light = -axis;
+    float reach = CONTACT_REACH * (bias + 1.5 * texel);
+    if (shadow_radial) reach = min(reach, 0.99 * length(light_pos - q));
     vec3 t = normalize(cross(axis, abs(axis.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
     vec3 b = cross(axis, t);
     // Interleaved gradient noise: rotates the tap pattern per pixel (noise, not bands).
@@ -144,7 +198,7 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
             float plane = ref + clamp(dot(o, n) * inv_NoL, -search * 20.0, search * 20.0);
             if (d < plane - bias) { blockers += 1.0; block_sum += d; }
         }
-        if (blockers == 0.0) return 1.0;
+        if (blockers == 0.0) return CONTACT(1.0, q, to_light, reach);
     }
     float kernel = max(texel * 1.5, 0.75 * (shadow_footprint.x * view_depth + shadow_footprint.y));
     if (blockers > 0.0) {
@@ -164,7 +218,7 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
         float plane = ref + clamp(dot(o, n) * inv_NoL, -kernel * 20.0, kernel * 20.0);
         lit += texture(shadow_cmp, vec3(uv, (plane - bias) / scale));
     }
-    return lit / float(pcf_taps);
+    return CONTACT(lit / float(pcf_taps), q, to_light, reach);
 }
 
 // --- Area lights (rect, disk): PCSS over the light's extent ------------------------
@@ -337,13 +391,14 @@ float area_shadow_factor(vec3 p, vec3 n, vec3 c, vec3 x, vec3 y, vec2 half_exten
 uniform sampler2D area_visibility;  // this light's, filtered (area_visibility.glsl)
 #endif
 
-// The loaded light's shadow (lights.glsl's globals), of any of the program's kinds
-// (lights.glsl LIGHT_DISTANT, LIGHT_SPHERE, LIGHT_AREA); AREA_VISIBILITY: an area
-// light's, filtered, at this pixel (the G-buffer's surfaces only).
 // The loaded light's shadow colour: what glass before it gives its light (white: none).
 vec3 light_shadow_colour(vec3 p, vec3 n, float view_depth) {
     return shadow_colour(p, n, light_pos, view_depth);
 }
+
+// The loaded light's shadow (lights.glsl's globals), of any of the program's kinds
+// (lights.glsl LIGHT_DISTANT, LIGHT_SPHERE, LIGHT_AREA); AREA_VISIBILITY: an area
+// light's, filtered, at this pixel (the G-buffer's surfaces only).
 
 float light_shadow(vec3 p, vec3 n, float view_depth) {
 #ifdef AREA_VISIBILITY

@@ -33,7 +33,7 @@ from .passes.near_field import NearFieldPass
 from .passes.post import PostPass
 from .passes.reflections import ReflectionPass
 from .passes.resolve import ResolvePass
-from .passes.shadows import ShadowPass
+from .passes.shadows import ContactRays, ShadowPass
 from .passes.skinning import SkinningPass
 from .passes.tessellation import TessellationPass
 from .passes.glass import GlassPass
@@ -123,6 +123,8 @@ class Renderer:
                                          self.environment, self.textures, self.tracer,
                                          self.features.compute)
         self.light_cull = LightCullPass(ctx, programs, self.uploads, self.lights)
+        traced = self.tracer if self.features.compute else None   # the passes' rays
+        self.contact = ContactRays(self.uploads, traced)
         self.graph = FrameGraph(ctx, self.pool, [
             self.skinning,
             ViewPass(self.geometry, self.depth),
@@ -134,16 +136,14 @@ class Renderer:
             AoPass(ctx, self.pool, programs, self.environment),
             AmbientPass(ctx, self.pool, programs, self.environment),
             LightPass(ctx, self.pool, programs, self.uploads, self.stencil, self.lights,
-                      self.geometry, self.environment),
+                      self.geometry, self.environment, self.contact),
             self.light_cull,
             ClusteredLightPass(ctx, self.pool, programs, self.lights, self.environment,
-                               self.light_cull),
+                               self.light_cull, self.contact),
             NearFieldPass(ctx, self.pool, programs, self.irradiance, gl.proc),
-            ReflectionPass(ctx, self.pool, programs, self.environment,
-                           self.tracer if self.features.compute else None, gl.proc),
+            ReflectionPass(ctx, self.pool, programs, self.environment, traced, gl.proc),
             GlassPass(ctx, self.pool, programs, self.geometry, self.textures, self.lights,
-                      self.environment, self.depth, self.uploads,
-                      self.tracer if self.features.compute else None, gl.proc),
+                      self.environment, self.depth, self.uploads, traced, gl.proc),
             TransparencyPass(ctx, self.pool, programs, self.geometry, self.textures,
                              self.lights, self.environment, self.depth),
             SupersamplePass(ctx, self.pool, programs, self.depth),
@@ -406,6 +406,7 @@ class Renderer:
     def release(self):
         if self._raytracer is not None:
             self._raytracer.release()
+        self.contact.release()
         self.graph.release()
         self.readback.release()
         self.textures.release()

@@ -37,13 +37,14 @@ IMAGES = ("hdr", "aov_diffuse", "aov_glossy", "aov_shadow")
 class ClusteredLightPass(Pass):
     name = "lights"
     reads = GBUFFER + ("hdr", "view", "clusters")
-    optional = ("shadow_maps", "g_smooth", "g_sheen", "ao")
+    optional = ("shadow_maps", "g_smooth", "g_sheen", "ao", "field")
     writes = ("hdr",)
     aovs = LIGHTING_AOVS
 
-    def __init__(self, ctx, pool, programs, table, environment, cull):
+    def __init__(self, ctx, pool, programs, table, environment, cull, contact):
         self.ctx, self.pool, self.programs, self.table = ctx, pool, programs, table
         self.environment, self.cull = environment, cull
+        self.contact = contact          # shadows.ContactRays
 
     def aov_targets(self, frame):
         return LIGHTING_TARGETS if lighting_aovs(frame) else ()
@@ -95,6 +96,7 @@ class ClusteredLightPass(Pass):
                 self._bind_targets(board, aovs)     # its screen passes used the units
             prog = self._program(board, view, defines + kind_defines([light.kind])
                                  + ["SINGLE_LIGHT", "HAS_SHADOW"]
+                                 + self.contact.defines(frame, board, light)
                                  + ([AREA_VISIBILITY] if visibility is not None else []))
             set_shadow_uniforms(prog, shadow_maps[path], frame.preset, view.origin)
             set_uniform(prog, "light_index", self.table.index[path])

@@ -99,11 +99,13 @@ def cone(light, length: float) -> np.ndarray:
 class LightPass(Pass):
     name = "lights"
     reads = GBUFFER + ("hdr", "view", "shadow_maps")
-    optional = ("g_smooth", "g_sheen", "ao")
+    optional = ("g_smooth", "g_sheen", "ao", "field")
     writes = ("hdr", "depth_stencil")
 
-    def __init__(self, ctx, pool, programs, uploads, stencil, table, geometry, environment):
+    def __init__(self, ctx, pool, programs, uploads, stencil, table, geometry, environment,
+                 contact):
         self.ctx, self.pool, self.programs, self.uploads = ctx, pool, programs, uploads
+        self.contact = contact              # shadows.ContactRays
         self.environment = environment      # the split-sum table every BRDF reads
         self.stencil, self.table, self.geometry = stencil, table, geometry
         self.preset = None                  # the frame's being drawn (its taps, its sphere)
@@ -248,8 +250,10 @@ class LightPass(Pass):
         frame.count("lights_drawn", len(paths))
         frame.count("batched_lights", len(paths))
 
-    def _program(self, frame, board, view, vert, variant, row, sm):
+    def _program(self, frame, board, view, vert, variant, row, sm, light):
+        contact = self.contact.defines(frame, board, light) if sm is not None else []
         prog = self.programs.get(vert, "light.frag", variant + (["HAS_SHADOW"] if sm else [])
+                                 + contact
                                  + (["WRITE_AOVS"] if self._aovs else [])
                                  + surface_defines(frame, board))
         bind_gbuffer(board, prog, view)
@@ -281,7 +285,7 @@ class LightPass(Pass):
         if light.kind == SUN:
             ctx.disable(ctx.DEPTH_TEST)
             self.programs.fullscreen(self._program(frame, board, view, "fullscreen.vert",
-                                                   variant, row, sm))
+                                                   variant, row, sm, light))
             frame.count("lights_drawn")
             return
         use_cone = light.kind == SPOT and light.cone_angle <= CONE_MAX_HALF_ANGLE
@@ -303,7 +307,7 @@ class LightPass(Pass):
             # Its back faces would be clipped away: shade the (scissored) screen instead.
             ctx.disable(ctx.DEPTH_TEST)
             self.programs.fullscreen(self._program(frame, board, view, "fullscreen.vert", variant,
-                                                   row, sm))
+                                                   row, sm, light))
             frame.count("lights_drawn")
             return
         # Stencil marking: depth-fail counting of both faces against the scene depth
@@ -321,7 +325,7 @@ class LightPass(Pass):
         ctx.disable(ctx.DEPTH_TEST)
         ctx.enable(ctx.CULL_FACE)
         ctx.cull_face = "front"
-        prog = self._program(frame, board, view, "volume.vert", variant, row, sm)
+        prog = self._program(frame, board, view, "volume.vert", variant, row, sm, light)
         set_uniform(prog, "mvp", mvp)
         self._vao(prog, vbo).render(ctx.TRIANGLES)
         self.stencil.end()

@@ -45,7 +45,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ....core.lights import SUN
+from ....core.lights import KINDS, SUN
 from ...shadow_plan import importance, plan, stale_tiles
 from ...view import translate
 from ..framegraph import Pass
@@ -82,6 +82,52 @@ def _set_light(prog, sm, light, skip=-1):
     set_origin(prog, sm.anchor)
 
 
+CONTACT_RAYS = "CONTACT_RAYS"     # shaders/shadow_lookup.glsl
+CONTACT_SEE_THROUGH = "CONTACT_SEE_THROUGH"
+OPAQUE_BINDING = 9                # shaders/shadow_lookup.glsl ContactOpaque
+
+
+class ContactRays:
+    """The rays that close the shadow maps' contact leaks (shaders/shadow_lookup.glsl
+    CONTACT_RAYS), shared by the light passes of both forms. Only in a frame that
+    bounces light: the irradiance field is on the board, so the scene's tracer is built
+    (a frame lit directly stays as it was); only for the lights shadow_factor shades
+    (sun, point, spot: an area light's taps march the map along each ray to the light).
+    A ray counts only opaque surfaces: cut-outs, blended surfaces and glass cast
+    through their maps' tested opacity, as before: where a scene has them, a flag per
+    tracer material in one small buffer, uploaded when the flags change."""
+
+    def __init__(self, uploads, tracer):
+        self.uploads = uploads
+        self.tracer = tracer          # scene -> Raytracer (Renderer.tracer); None: no compute
+        self._flags = None
+        self._buffer = None
+
+    def defines(self, frame, board, light) -> list:
+        """[CONTACT_RAYS] (and CONTACT_SEE_THROUGH where some traced material is not
+        opaque, with its flags bound) with the tracer bound, for `light` this frame;
+        else []."""
+        if self.tracer is None or "field" not in board or KINDS[light.kind].area:
+            return []
+        tracer = self.tracer(frame.scene)
+        tracer.bind()
+        materials = frame.scene.materials
+        flags = np.array([name not in materials or materials[name].alpha == "opaque"
+                          for name in tracer.materials] or [True], np.int32)
+        if flags.all():
+            return [CONTACT_RAYS]       # every hit counts: the cheaper any-hit walk
+        if self._flags is None or not np.array_equal(flags, self._flags):
+            self.release()
+            self._flags, self._buffer = flags, self.uploads.buffer(flags, kind="lights")
+        self._buffer.bind_to_storage_buffer(OPAQUE_BINDING)
+        return [CONTACT_RAYS, CONTACT_SEE_THROUGH]
+
+    def release(self):
+        if self._buffer is not None:
+            self._buffer.release()
+        self._flags = self._buffer = None
+
+
 def set_shadow_uniforms(prog, sm, preset, eye):
     """The lookup of map `sm` for camera-relative receivers (the camera at `eye`,
     world)."""
@@ -112,6 +158,7 @@ def set_shadow_uniforms(prog, sm, preset, eye):
         sm.tint.use(UNITS["shadow_tint"])
     set_uniform(prog, "pcf_taps", int(preset.pcf_taps))
     set_uniform(prog, "blocker_taps", int(preset.blocker_taps))
+    set_uniform(prog, "contact_eye", np.asarray(eye, np.float64))   # CONTACT_RAYS
 
 
 class ShadowPass(Pass):
