@@ -25,7 +25,7 @@ the frame (as the glossy bounce's), so both forms give the same image. The chang
 to DiffInd too (the bounce's render pass), so the render passes still add up to the image. Before the glossy
 bounce, whose copy of the lit frame then shows it.
 
-reads: g_base, g_normal, g_mat, g_emit, g_depth, hdr, view, field; g_smooth and g_sheen
+reads: g_base, g_normal, g_mat, g_emit, g_depth, hdr, view; field, g_smooth and g_sheen
        (optional)   writes: hdr
 render passes: DiffInd (added to in place)"""
 from __future__ import annotations
@@ -49,8 +49,10 @@ REACH = 0.5
 
 class NearFieldPass(Pass):
     name = "near_field"
-    reads = GBUFFER + ("hdr", "view", "field")
-    optional = ("ao", "g_smooth", "g_sheen")
+    reads = GBUFFER + ("hdr", "view")
+    # A viewport's field may have no complete update yet: a frame without it (lit
+    # directly meanwhile) has no near field either.
+    optional = ("ao", "g_smooth", "g_sheen", "field")
     writes = ("hdr",)
     aovs = {"DiffInd": LIGHTING_AOVS["DiffInd"]}    # added to in place
 
@@ -63,6 +65,8 @@ class NearFieldPass(Pass):
         return frame.preset.ao_slices > 0 and self.field_pass.needed(frame)
 
     def execute(self, frame, board):
+        if "field" not in board:
+            return
         ctx, view, field = self.ctx, board["view"], board["field"]
         ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
         lit = self.lit.copy(board["hdr"])
