@@ -4,7 +4,10 @@ own, cut where its volume ends), the clustered light pass, the screen passes in 
 (engine/gpu/screen.py) and compute skinning give the images that the light volumes,
 the full-screen fragment passes and transform feedback give, within float16 rounding
 (the G-buffer's targets are half floats). So every bound those tests hold on the
-default form (raster on llvmpipe, compute on a GPU) holds on the other too."""
+default form (raster on llvmpipe, compute on a GPU) holds on the other too. Those tests
+render the reference and calibration scenes in direct mode (their Cycles references and
+closed forms have no bounce), and so do these; the demo's every-pass test at low keeps
+its scene's bounces, so the field's and the reflections' reads are held in both forms."""
 import numpy as np
 import pytest
 
@@ -12,6 +15,7 @@ import calibration
 import reference_scenes
 from lantern.core.passes import PASSES
 from lantern.engine import RenderSettings, render_stage
+from lantern.engine.bounces import DIRECT
 
 RASTER = dict(compute=False, lighting="volumes")
 COMPUTE = dict(compute=True, lighting="clustered", light_error=0.0)
@@ -19,7 +23,8 @@ HALF = 2.0 ** -10            # float16's relative rounding
 
 
 def both(stage, **settings):
-    """(raster, compute) results of one stage, after checking each ran in its form."""
+    """(raster, compute) results of one stage, after checking each ran in its form.
+    The stage's own bounces unless `settings` name them."""
     raster = render_stage(stage, RenderSettings(**settings, **RASTER))
     compute = render_stage(stage, RenderSettings(**settings, **COMPUTE))
     assert "light_cull" not in raster.stats["passes"]
@@ -115,17 +120,22 @@ def test_reference_scenes(name, stage_of):
     import test_looks
     w, h = reference_scenes.SCENES[name].size
     raster, compute = both(stage_of(name), width=w // 2, height=h // 2,
-                           frame=test_looks.FRAMES.get(name))
+                           frame=test_looks.FRAMES.get(name), bounces=DIRECT)
     assert_results_same(raster, compute, name)
 
 
-@pytest.mark.parametrize("preset", ["low", "ultra"])
-def test_every_render_pass_and_the_post_chain(preset, stage_of):
-    """Every render pass, supersampled or not, and each post stage."""
+@pytest.mark.parametrize("preset, bounces", [("low", None), ("ultra", DIRECT)],
+                         ids=["low", "ultra"])
+def test_every_render_pass_and_the_post_chain(preset, bounces, stage_of):
+    """Every render pass, supersampled or not, and each post stage; at low with the
+    demo's bounces (the field and the reflections), at ultra (3x3 supersampled, nine
+    times the reflections' rays) in direct mode."""
     w, h = reference_scenes.SCENES["demo"].size
     raster, compute = both(stage_of("demo"), width=w // 2, height=h // 2, frame=13.0,
                            preset=preset, passes=frozenset(PASSES) - {"Combined"},
-                           exposure=0.5, blur=1.0, grayscale=True, mirror="x")
+                           exposure=0.5, blur=1.0, grayscale=True, mirror="x", bounces=bounces)
+    bounced = raster.stats["field_updates"] > 0 and compute.stats["field_updates"] > 0
+    assert bounced == (bounces is None)
     assert_results_same(raster, compute, f"demo {preset}")
 
 
@@ -137,14 +147,14 @@ def test_calibration_scenes(kind):
     calibration.build_scene(kind)
     stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
     raster, compute = both(stage, width=calibration.SIZE, height=calibration.SIZE,
-                           passes=frozenset({"DiffDir", "GlossDir", "Shadow"}))
+                           passes=frozenset({"DiffDir", "GlossDir", "Shadow"}), bounces=DIRECT)
     assert_results_same(raster, compute, kind)
 
 
 @pytest.mark.parametrize("name", ["transparency_planes", "cutout_shadow", "01_alpha_blend"])
 def test_transparency_scenes(name, stage_of):
     w, h = reference_scenes.SCENES[name].size
-    raster, compute = both(stage_of(name), width=w, height=h, transparent=True)
+    raster, compute = both(stage_of(name), width=w, height=h, transparent=True, bounces=DIRECT)
     assert_results_same(raster, compute, name)
 
 

@@ -181,8 +181,17 @@ def test_a_move_sends_one_transform_among_many(empty_scene):
     """Independent of the scene's size: moving one of 200 objects exports one object
     and sends its translate alone."""
     import bpy
+    from _export_helpers import CUBE_FACES, CUBE_VERTS
+    # 20 cm cubes Cube, Cube.001, ... made through bpy.data, each with its own mesh:
+    # 200 calls of the operator, each updating the whole scene, made this test 5x slower.
+    corners = [(0.1 * x, 0.1 * y, 0.1 * z) for x, y, z in CUBE_VERTS]
     for i in range(200):
-        bpy.ops.mesh.primitive_cube_add(size=0.2, location=(i % 20, i // 20, 0.0))
+        mesh = bpy.data.meshes.new("Cube")
+        mesh.from_pydata(corners, [], CUBE_FACES)
+        cube = bpy.data.objects.new("Cube", mesh)
+        cube.location = (i % 20, i // 20, 0.0)
+        bpy.context.scene.collection.objects.link(cube)
+    bpy.context.view_layer.update()
     synced = Synced()
     try:
         synced.fragments.clear()
