@@ -13,13 +13,22 @@ layout(local_size_x = 10, local_size_y = 10) in;    // FIELD_TEXELS + 2
 layout(rgba32f, binding = 0) writeonly uniform image2D irradiance_image;
 layout(rgba32f, binding = 1) writeonly uniform image2D distance_image;
 layout(rgba32f, binding = 2) writeonly uniform image2D probe_image;
-uniform sampler2D field_rays;        // x ray, y probe: radiance, signed distance
+// The planes of two hits about each texel's direction (irradiance_field.glsl field_planes):
+// the nearest, in the upper atlas, and the nearest off that plane, in the lower.
+layout(rgba32f, binding = 3) writeonly uniform image2D plane_image;
+uniform sampler2D field_rays;        // irradiance_trace.comp's ray_image
 uniform mat3 u_rotation;
 uniform int u_rays;
 uniform float u_max_distance;        // distances are clamped here (beyond a cell: seen)
 // The nearest hit within this cosine of a texel's direction (about 14 degrees): what a
 // zero-thickness wall's edge hides from the mean, which rays past the edge pull far.
 #define NEAR_CONE 0.97
+
+// A hit's plane: its normal, towards the probe, and its offset from the probe along it.
+vec4 hit_plane(int ray, int probe, vec3 r, float distance) {
+    vec3 normal = texelFetch(field_rays, ivec2(u_rays + ray, probe), 0).xyz;
+    return vec4(normal, dot(distance * r, normal));
+}
 
 // The interior texel that border texel t repeats: an edge its mirror image along the
 // edge, a corner the opposite corner.
@@ -39,6 +48,8 @@ void main() {
     vec3 d = oct_decode((vec2(src - 1) + 0.5) / float(FIELD_TEXELS) * 2.0 - 1.0);
     vec3 sum = vec3(0.0);
     float total = 0.0, dist = 0.0, dist2 = 0.0, dist_total = 0.0, nearest = u_max_distance;
+    vec4 plane = vec4(0.0);          // no hit about d: nothing lies behind
+    int nearest_ray = -1;
     int backs = 0;
     float nearest_front = 1.0e30, nearest_back = 1.0e30;
     vec3 front_dir = vec3(0.0), back_dir = vec3(0.0);
@@ -55,7 +66,10 @@ void main() {
             dist += w * s;
             dist2 += w * s * s;
             dist_total += w;
-            if (c > NEAR_CONE) nearest = min(nearest, s);
+            if (c > NEAR_CONE && s < nearest) {
+                nearest = s;
+                nearest_ray = i;
+            }
         }
         if (t == ivec2(0)) {
             float a = abs(h.w);
@@ -69,10 +83,32 @@ void main() {
     ivec2 at = probe_tile(probe) * (FIELD_TEXELS + 2) + t;
     imageStore(irradiance_image, at, vec4(total > 0.0 ? FIELD_PI * sum / total : vec3(0.0), 1.0));
     vec2 m = dist_total > 0.0 ? vec2(dist, dist2) / dist_total : vec2(u_max_distance, u_max_distance * u_max_distance);
-    imageStore(distance_image, at, vec4(m, nearest, 1.0));
+    // The nearest hit off the nearest one's plane: a floor near the probe must not hide
+    // the wall behind it (the floor's plane has the point in front, the wall's behind).
+    float spacing = min(field_step.x, min(field_step.y, field_step.z));
+    float other = u_max_distance;
+    vec4 other_plane = vec4(0.0);
+    if (nearest_ray >= 0) {
+        plane = hit_plane(nearest_ray, probe, fibonacci_ray(nearest_ray, u_rays, u_rotation),
+                          abs(texelFetch(field_rays, ivec2(nearest_ray, probe), 0).w));
+        for (int i = 0; i < u_rays; ++i) {
+            vec3 r = fibonacci_ray(i, u_rays, u_rotation);
+            if (dot(d, r) <= NEAR_CONE) continue;
+            float a = abs(texelFetch(field_rays, ivec2(i, probe), 0).w);
+            if (a >= min(other, u_max_distance)) continue;
+            vec4 candidate = hit_plane(i, probe, r, a);
+            if (dot(candidate.xyz, plane.xyz) < 0.9 || abs(candidate.w - plane.w) > 0.05 * spacing) {
+                other = a;
+                other_plane = candidate;
+            }
+        }
+    }
+    imageStore(distance_image, at, vec4(m, nearest, other));
+    ivec2 lines = ivec2(0, imageSize(plane_image).y / 2);
+    imageStore(plane_image, at, plane);
+    imageStore(plane_image, at + lines, other_plane);
     if (t == ivec2(0)) {
         vec4 state = probe_state(probe);
-        float spacing = min(field_step.x, min(field_step.y, field_step.z));
         bool inside = float(backs) > 0.25 * float(u_rays) && farthest < 1.5 * length(field_step);
         vec3 offset = state.xyz;
         if (inside)

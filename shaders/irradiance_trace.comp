@@ -12,7 +12,9 @@
 #include "raytrace.glsl"
 #include "irradiance_field.glsl"
 layout(local_size_x = 64) in;
-layout(rgba32f, binding = 0) writeonly uniform image2D ray_image;   // x ray, y probe
+// x ray, y probe: (radiance, signed distance); x u_rays + ray: the hit's normal, towards
+// the probe (0 where the ray escaped)
+layout(rgba32f, binding = 0) writeonly uniform image2D ray_image;
 uniform sampler2D field_materials;   // two texels a material: albedo, (emission, sides)
 // Per traced instance (irradiance.py _instance_sides): 4 its faces are made lights where
 // they emit, 8 its mesh is closed. A material's sides (1 front, 2 back: its emission
@@ -43,6 +45,7 @@ void main() {
     RtHit hit;
     vec3 radiance = vec3(0.0);
     float distance = 1.0e27;
+    vec3 facing = vec3(0.0);
     if (!rt_closest_hit(origin, dir, 0.0, RT_FAR, hit)) {
         if (has_dome) radiance = dome_background(dir);
     } else {
@@ -69,6 +72,8 @@ void main() {
         if (u_bounce)
             radiance += albedo / FIELD_PI * field_irradiance_at(x, n, -dir);
         distance = back ? -hit.t : hit.t;
+        facing = n;
     }
     imageStore(ray_image, ivec2(ray, probe), vec4(radiance, distance));
+    imageStore(ray_image, ivec2(u_rays + ray, probe), vec4(facing, 0.0));
 }

@@ -10,7 +10,8 @@ An update traces the preset's rays from every probe with the ray tracer
 emission, the light table's lights (each seen by a shadow ray, so no shadow map is
 needed at hits and none leaks), and its albedo times the field as it was (the bounces
 so far), or the dome where a ray escapes; then writes each probe's octahedral maps of
-irradiance and of the mean distance and its square (shaders/irradiance_blend.comp),
+irradiance, of the mean distance and its square, and of the planes of the nearest hits
+about each direction (which say what a wall hides; shaders/irradiance_blend.comp),
 moves probes out of walls and switches off those inside geometry. Each update adds
 one bounce: a frame whose field is out of date runs the scene's diffuse bounces of
 them from nothing, so a still and every frame of a sequence render it converged.
@@ -50,7 +51,7 @@ RAYS = {"low": 64, "medium": 128, "high": 192, "ultra": 256}
 ALL_BARRIERS = 0xFFFFFFFF
 SIDES_BINDING = 15           # shaders/irradiance_trace.comp FieldSides
 FIELD_UNITS = ("field_irradiance", "field_distance", "field_probes", "field_materials",
-               "field_rays")
+               "field_rays", "field_planes")
 # Probes sit off their cells' centres by this share of the spacing: walls often lie on
 # the centres' planes (a room as wide as its bounds, split in even cells), and a probe
 # on a wall sees both sides (its rays start in the wall's plane). Off it, the probe sees
@@ -102,6 +103,7 @@ class Field:
     irradiance: object
     distance: object
     probes: object
+    planes: object               # two hits' planes per distance texel
     lo: np.ndarray
     step: np.ndarray
     counts: np.ndarray
@@ -111,6 +113,7 @@ class Field:
         self.irradiance.use(UNITS["field_irradiance"])
         self.distance.use(UNITS["field_distance"])
         self.probes.use(UNITS["field_probes"])
+        self.planes.use(UNITS["field_planes"])
         set_uniform(prog, "field_lo", self.lo.astype(np.float64))
         set_uniform(prog, "field_step", self.step.astype(np.float64))
         set_uniform(prog, "field_counts", tuple(int(c) for c in self.counts))
@@ -118,7 +121,7 @@ class Field:
         set_uniform(prog, "field_bias", BIAS)
 
     def release(self):
-        for tex in (self.irradiance, self.distance, self.probes):
+        for tex in (self.irradiance, self.distance, self.probes, self.planes):
             tex.release()
 
 
@@ -190,7 +193,7 @@ class IrradiancePass(Pass):
         n = int(np.prod(counts))
         rays = RAYS.get(preset, RAYS["medium"])
         self._make(first, step, counts)
-        ray_tex = self.ctx.texture((rays, n), 4, dtype="f4")
+        ray_tex = self.ctx.texture((2 * rays, n), 4, dtype="f4")   # radiance, normal
         self.table = self._table(scene, tracer.materials)
         materials = self.uploads.texture((self.table.shape[1], 1), 4, self.table, kind="field",
                                          dtype="f4")
@@ -229,6 +232,7 @@ class IrradiancePass(Pass):
                 self.spare.irradiance.bind_to_image(0, read=False, write=True)
                 self.spare.distance.bind_to_image(1, read=False, write=True)
                 self.spare.probes.bind_to_image(2, read=False, write=True)
+                self.spare.planes.bind_to_image(3, read=False, write=True)
                 blend.run(n, 1)
                 self.ctx.memory_barrier(ALL_BARRIERS)
                 self.field, self.spare = self.spare, self.field
@@ -254,11 +258,13 @@ class IrradiancePass(Pass):
             for f in fields:
                 f.release()
             fields = [Field(self._texture(size, True), self._texture(size, True),
-                            self._texture((TILES_PER_LINE, lines), False), first, step, counts)
+                            self._texture((TILES_PER_LINE, lines), False),
+                            self._texture((size[0], 2 * size[1]), False), first, step, counts)
                       for _ in range(2)]
         for f in fields:
             f.lo, f.step, f.counts = first, step, counts
-            for tex, clear in ((f.irradiance, 0.0), (f.distance, 0.0), (f.probes, 1.0)):
+            for tex, clear in ((f.irradiance, 0.0), (f.distance, 0.0), (f.probes, 1.0),
+                               (f.planes, 0.0)):
                 fbo = self.ctx.framebuffer(color_attachments=[tex])
                 fbo.clear(0.0, 0.0, 0.0, clear)
                 fbo.release()
