@@ -57,6 +57,14 @@ FIELD_UNITS = ("field_irradiance", "field_distance", "field_probes", "field_mate
 # on a wall sees both sides (its rays start in the wall's plane). Off it, the probe sees
 # the wall and is moved from it (shaders/irradiance_blend.comp), on whichever side.
 NUDGE = np.array([0.0371, 0.0253, 0.0419])
+# The outermost probes lie this share of the spacing inside the bounds' faces: where the
+# bounds are a room's walls, floor and ceiling (the closed box, a room's bounds), those
+# probes see what the surfaces there see. Cell-centred probes, half a spacing in, left a
+# floor lit by probes half a spacing above it, which miss the walls' lit lower parts
+# (the emissive panel's floor got half its bounce) and the dim corners (the box's ceiling
+# by the back wall 30% bright). Over the fifth of a spacing within which a probe is moved
+# from a surface (shaders/irradiance_blend.comp), so a box's probes stay where they are.
+INSET = 0.25
 
 
 def would_bounce(frame) -> bool:
@@ -70,13 +78,17 @@ def would_bounce(frame) -> bool:
 
 
 def grid(lo, hi, along_longest: int):
-    """(first probe, spacing, counts) of a grid of cell-centred probes over the box."""
+    """(first probe, spacing, counts) of a grid of probes over the box, `along_longest`
+    of them along its longest side, the outermost INSET of a spacing inside its faces
+    (a flat side: one layer, half a spacing off it)."""
     lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
     size = hi - lo
-    spacing = max(float(size.max()), 1e-6) / along_longest
-    counts = np.maximum(np.ceil(size / spacing - 1e-6), 1).astype(int)
-    step = np.where(size > 0, size / counts, spacing)
-    return lo + (0.5 + NUDGE) * step, step, counts
+    spacing = max(float(size.max()), 1e-6) / (max(along_longest, 2) - 1 + 2 * INSET)
+    cells = np.maximum(np.ceil(size / spacing - 2 * INSET - 1e-6), 1).astype(int)
+    flat = size <= 0
+    step = np.where(flat, spacing, size / (cells + 2 * INSET))
+    counts = np.where(flat, 1, cells + 1)
+    return lo + (np.where(flat, 0.5, INSET) + NUDGE) * step, step, counts
 
 
 def unbind_samplers(ctx):
