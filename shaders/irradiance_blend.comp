@@ -16,6 +16,13 @@ layout(rgba32f, binding = 2) writeonly uniform image2D probe_image;
 // The planes of two hits about each texel's direction (irradiance_field.glsl field_planes):
 // the nearest, in the upper atlas, and the nearest off that plane, in the lower.
 layout(rgba32f, binding = 3) writeonly uniform image2D plane_image;
+// Per texel, what the updates so far saw of the light that does not change from one to
+// the next (emission, the lights, the dome: all but the field's bounces), as its mean over
+// them, and how many updates that mean holds: each update's rays are new (a new rotation),
+// so the field takes that light from all of them, and only its bounces from the last
+// (which brings one more). A probe moved starts it again.
+layout(rgba32f, binding = 4) uniform image2D steady_image;
+shared bool moved;
 uniform sampler2D field_rays;        // irradiance_trace.comp's ray_image
 uniform mat3 u_rotation;
 uniform int u_rays;
@@ -46,7 +53,7 @@ void main() {
     ivec2 t = ivec2(gl_LocalInvocationID.xy);
     ivec2 src = interior(t);
     vec3 d = oct_decode((vec2(src - 1) + 0.5) / float(FIELD_TEXELS) * 2.0 - 1.0);
-    vec3 sum = vec3(0.0);
+    vec3 sum = vec3(0.0), bounced = vec3(0.0);
     float total = 0.0, dist = 0.0, dist2 = 0.0, dist_total = 0.0, nearest = u_max_distance;
     vec4 plane = vec4(0.0);          // no hit about d: nothing lies behind
     int nearest_ray = -1;
@@ -60,6 +67,7 @@ void main() {
         float c = dot(d, r);
         if (c > 0.0) {
             sum += c * h.rgb;
+            bounced += c * texelFetch(field_rays, ivec2(2 * u_rays + i, probe), 0).rgb;
             total += c;
             float w = pow(c, 50.0);
             float s = min(abs(h.w), u_max_distance);
@@ -81,7 +89,6 @@ void main() {
         }
     }
     ivec2 at = probe_tile(probe) * (FIELD_TEXELS + 2) + t;
-    imageStore(irradiance_image, at, vec4(total > 0.0 ? FIELD_PI * sum / total : vec3(0.0), 1.0));
     vec2 m = dist_total > 0.0 ? vec2(dist, dist2) / dist_total : vec2(u_max_distance, u_max_distance * u_max_distance);
     // The nearest hit off the nearest one's plane: a floor near the probe must not hide
     // the wall behind it (the floor's plane has the point in front, the wall's behind).
@@ -120,5 +127,13 @@ void main() {
         }
         offset = clamp(offset, -0.45 * field_step, 0.45 * field_step);
         imageStore(probe_image, probe_tile(probe), vec4(offset, inside ? 0.0 : 1.0));
+        moved = offset != state.xyz || inside != (state.w < 0.5);
     }
+    barrier();
+    vec4 steady = imageLoad(steady_image, at);
+    vec3 mean = total > 0.0 ? (steady.rgb * steady.a + FIELD_PI * sum / total) / (steady.a + 1.0)
+                            : vec3(0.0);
+    imageStore(steady_image, at, vec4(mean, moved ? 0.0 : steady.a + 1.0));
+    imageStore(irradiance_image, at,
+               vec4(mean + (total > 0.0 ? FIELD_PI * bounced / total : vec3(0.0)), 1.0));
 }

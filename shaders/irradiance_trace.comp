@@ -12,8 +12,9 @@
 #include "raytrace.glsl"
 #include "irradiance_field.glsl"
 layout(local_size_x = 64) in;
-// x ray, y probe: (radiance, signed distance); x u_rays + ray: the hit's normal, towards
-// the probe (0 where the ray escaped)
+// x ray, y probe: (the radiance the field does not bring, signed distance); x u_rays +
+// ray: the hit's normal, towards the probe (0 where the ray escaped); x 2 u_rays + ray:
+// the radiance the field brings (its bounces so far)
 layout(rgba32f, binding = 0) writeonly uniform image2D ray_image;
 uniform sampler2D field_materials;   // two texels a material: albedo, (emission, sides)
 // Per traced instance (irradiance.py _instance_sides): 4 its faces are made lights where
@@ -45,7 +46,7 @@ void main() {
     RtHit hit;
     vec3 radiance = vec3(0.0);
     float distance = 1.0e27;
-    vec3 facing = vec3(0.0);
+    vec3 facing = vec3(0.0), bounced = vec3(0.0);
     if (!rt_closest_hit(origin, dir, 0.0, RT_FAR, hit)) {
         if (has_dome) radiance = dome_background(dir);
     } else {
@@ -70,10 +71,11 @@ void main() {
                 radiance += diffuse;
         }
         if (u_bounce)
-            radiance += albedo / FIELD_PI * field_irradiance_at(x, n, -dir);
+            bounced = albedo / FIELD_PI * field_irradiance_at(x, n, -dir);
         distance = back ? -hit.t : hit.t;
         facing = n;
     }
     imageStore(ray_image, ivec2(ray, probe), vec4(radiance, distance));
     imageStore(ray_image, ivec2(u_rays + ray, probe), vec4(facing, 0.0));
+    imageStore(ray_image, ivec2(2 * u_rays + ray, probe), vec4(bounced, 0.0));
 }

@@ -205,7 +205,9 @@ class IrradiancePass(Pass):
         n = int(np.prod(counts))
         rays = RAYS.get(preset, RAYS["medium"])
         self._make(first, step, counts)
-        ray_tex = self.ctx.texture((2 * rays, n), 4, dtype="f4")   # radiance, normal
+        # Per ray: radiance, the hit's normal, the field's bounces (irradiance_trace.comp).
+        ray_tex = self.ctx.texture((3 * rays, n), 4, dtype="f4")
+        steady = self._cleared(self.field.irradiance.size)
         self.table = self._table(scene, tracer.materials)
         materials = self.uploads.texture((self.table.shape[1], 1), 4, self.table, kind="field",
                                          dtype="f4")
@@ -245,12 +247,14 @@ class IrradiancePass(Pass):
                 self.spare.distance.bind_to_image(1, read=False, write=True)
                 self.spare.probes.bind_to_image(2, read=False, write=True)
                 self.spare.planes.bind_to_image(3, read=False, write=True)
+                steady.bind_to_image(4, read=True, write=True)
                 blend.run(n, 1)
                 self.ctx.memory_barrier(ALL_BARRIERS)
                 self.field, self.spare = self.spare, self.field
                 frame.count("field_updates")
         finally:
             ray_tex.release()
+            steady.release()
             materials.release()
             sides.release()
         frame.stats["field_probes"] = n
@@ -275,12 +279,20 @@ class IrradiancePass(Pass):
                       for _ in range(2)]
         for f in fields:
             f.lo, f.step, f.counts = first, step, counts
-            for tex, clear in ((f.irradiance, 0.0), (f.distance, 0.0), (f.probes, 1.0),
+            for tex, alpha in ((f.irradiance, 0.0), (f.distance, 0.0), (f.probes, 1.0),
                                (f.planes, 0.0)):
-                fbo = self.ctx.framebuffer(color_attachments=[tex])
-                fbo.clear(0.0, 0.0, 0.0, clear)
-                fbo.release()
+                self._clear(tex, alpha)
         self.field, self.spare = fields
+
+    def _clear(self, tex, alpha=0.0):
+        fbo = self.ctx.framebuffer(color_attachments=[tex])
+        fbo.clear(0.0, 0.0, 0.0, alpha)
+        fbo.release()
+
+    def _cleared(self, size):
+        tex = self._texture(size, False)
+        self._clear(tex)
+        return tex
 
     def _texture(self, size, linear: bool):
         tex = self.ctx.texture(size, 4, dtype="f4")
