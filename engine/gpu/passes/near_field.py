@@ -49,8 +49,8 @@ REACH = 0.5
 
 class NearFieldPass(Pass):
     name = "near_field"
-    reads = GBUFFER + ("hdr", "view", "field")
-    optional = ("ao", "g_smooth", "g_sheen")
+    reads = GBUFFER + ("hdr", "view")
+    optional = ("ao", "g_smooth", "g_sheen", "field")
     writes = ("hdr",)
     aovs = {"DiffInd": LIGHTING_AOVS["DiffInd"]}    # added to in place
 
@@ -63,7 +63,9 @@ class NearFieldPass(Pass):
         return frame.preset.ao_slices > 0 and self.field_pass.needed(frame)
 
     def execute(self, frame, board):
-        ctx, view, field = self.ctx, board["view"], board["field"]
+        ctx, view, field = self.ctx, board["view"], board.get("field")
+        if field is None:
+            return      # a viewport's field before its first update: the direct image
         ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
         lit = self.lit.copy(board["hdr"])
         lit.use(UNITS["hdr"])
