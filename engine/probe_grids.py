@@ -29,6 +29,16 @@ UNBOUNDED = 1.0e30
 # on a wall sees both sides (its rays start in the wall's plane). Off it, the probe sees
 # the wall and is moved from it (shaders/irradiance_blend.comp), on whichever side.
 NUDGE = np.array([0.0371, 0.0253, 0.0419])
+# The outermost probes lie this share of the spacing inside the bounds' faces: where the
+# bounds are a room's walls, floor and ceiling (the closed box, a room's bounds), those
+# probes see what the surfaces there see. Cell-centred probes, half a spacing in, left a
+# floor lit by probes half a spacing above it, which miss the walls' lit lower parts
+# (the emissive panel's floor got half its bounce) and the dim corners (the box's ceiling
+# by the back wall 30% bright). Over the fifth of a spacing within which a probe is moved
+# from a surface (shaders/irradiance_blend.comp), so a box's probes stay where they are.
+# A cascade takes it along the axes it spans whole (a ground's height: its floor and
+# roof); elsewhere its faces are no surface's, and it keeps its cells' centres.
+INSET = 0.25
 
 
 @dataclass(frozen=True)
@@ -44,14 +54,24 @@ class Grid:
         return int(np.prod(self.counts))
 
 
+def span(size, spacing):
+    """(spacing, counts, first probe as a share of the spacing) along each axis of a box
+    of `size` whose probes lie about `spacing` apart, the outermost INSET of a spacing
+    inside its faces (a flat side: one layer, half a spacing off it)."""
+    cells = np.maximum(np.ceil(size / spacing - 2 * INSET - 1e-6), 1).astype(int)
+    flat = size <= 0
+    step = np.where(flat, spacing, size / (cells + 2 * INSET))
+    return step, np.where(flat, 1, cells + 1), np.where(flat, 0.5, INSET)
+
+
 def grid(lo, hi, along_longest: int):
-    """(first probe, spacing, counts) of a grid of cell-centred probes over the box."""
+    """(first probe, spacing, counts) of a grid of probes over the box, `along_longest`
+    of them along its longest side (span's)."""
     lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
     size = hi - lo
-    spacing = max(float(size.max()), 1e-6) / along_longest
-    counts = np.maximum(np.ceil(size / spacing - 1e-6), 1).astype(int)
-    step = np.where(size > 0, size / counts, spacing)
-    return lo + (0.5 + NUDGE) * step, step, counts
+    spacing = max(float(size.max()), 1e-6) / (max(along_longest, 2) - 1 + 2 * INSET)
+    step, counts, share = span(size, spacing)
+    return lo + (share + NUDGE) * step, step, counts
 
 
 def cascaded(lo, hi) -> bool:
@@ -93,11 +113,11 @@ def grids(lo, hi, along_longest: int, centre=None) -> list:
         short = cells <= along_longest            # axes the grid spans whole
         start = np.floor((centre - 0.5 * side - lo) / spacing + 0.5)
         start = np.where(short, 0.0, np.clip(start, 0.0, cells - along_longest))
-        counts = np.where(short, np.maximum(np.ceil(size / spacing - 1e-6), 1),
-                          along_longest).astype(int)
-        step = np.where(short & (size > 0), size / counts, spacing)
+        whole_step, whole_counts, whole_share = span(size, spacing)
+        counts = np.where(short, whole_counts, along_longest).astype(int)
+        step = np.where(short, whole_step, spacing)
         box_lo = lo + start * step
-        first = box_lo + (0.5 + NUDGE) * step
+        first = box_lo + (np.where(short, whole_share, 0.5) + NUDGE) * step
         last = first + (counts - 1) * step
         region_lo = np.where(short | (start <= 0), -UNBOUNDED, first)
         region_hi = np.where(short | (box_lo + counts * step >= hi - 1e-6 * size), UNBOUNDED,

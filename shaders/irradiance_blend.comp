@@ -3,7 +3,8 @@
 // one invocation a texel of a probe's tile (its border repeats the map's opposite edge),
 // irradiance as the cosine-weighted mean of the rays' radiance (times pi: the mean
 // over the sphere of max(cos, 0) is 1/4), distance and its square weighted by a sharp
-// power of the cosine (Majercik et al. 2019), and the nearest hit about the texel. The tile's first texel also moves its probe
+// power of the cosine (Majercik et al. 2019), and the nearest hits about the texel and
+// their planes. The tile's first texel also moves its probe
 // and switches it off or on (Majercik et al. 2021): a probe whose rays meet many back
 // faces close by lies inside geometry: off, and moved out through the nearest back face;
 // one closer to a surface (either side) than a fifth of the spacing is moved away; never more
@@ -13,7 +14,18 @@ layout(local_size_x = 10, local_size_y = 10) in;    // FIELD_TEXELS + 2
 layout(rgba32f, binding = 0) writeonly uniform image2D irradiance_image;
 layout(rgba32f, binding = 1) writeonly uniform image2D distance_image;
 layout(rgba32f, binding = 2) writeonly uniform image2D probe_image;
-uniform sampler2D field_rays;        // x ray, y probe: radiance, signed distance
+// The planes of two hits about each texel's direction (irradiance_field.glsl field_planes):
+// the nearest, in the upper atlas, and the nearest off that plane, in the lower.
+layout(rgba32f, binding = 3) writeonly uniform image2D plane_image;
+// Per texel, what the build's updates so far saw of the light that does not change from
+// one to the next (emission, the lights, the dome: all but the field's bounces), as its
+// mean over them, and how many updates that mean holds: each update's rays are new (a new
+// rotation), so the field takes that light from all of them, and only its bounces from
+// the last (which brings one more). A probe moved starts it again. Each probe's texels
+// are its own: an update spread over dispatches gives what one dispatch gives.
+layout(rgba32f, binding = 4) uniform image2D steady_image;
+shared bool moved;
+uniform sampler2D field_rays;        // irradiance_trace.comp's ray_image
 uniform mat3 u_rotation;
 uniform int u_rays;
 uniform bool u_bounce;               // not the first update: probes as it left them
@@ -23,6 +35,12 @@ uniform float u_max_distance[FIELD_GRIDS];   // by grid: distances are clamped t
 // The nearest hit within this cosine of a texel's direction (about 14 degrees): what a
 // zero-thickness wall's edge hides from the mean, which rays past the edge pull far.
 #define NEAR_CONE 0.97
+
+// A hit's plane: its normal, towards the probe, and its offset from the probe along it.
+vec4 hit_plane(int ray, int probe, vec3 r, float distance) {
+    vec3 normal = texelFetch(field_rays, ivec2(u_rays + ray, probe), 0).xyz;
+    return vec4(normal, dot(distance * r, normal));
+}
 
 // The interior texel that border texel t repeats: an edge its mirror image along the
 // edge, a corner the opposite corner.
@@ -43,8 +61,10 @@ void main() {
     ivec2 t = ivec2(gl_LocalInvocationID.xy);
     ivec2 src = interior(t);
     vec3 d = oct_decode((vec2(src - 1) + 0.5) / float(FIELD_TEXELS) * 2.0 - 1.0);
-    vec3 sum = vec3(0.0);
+    vec3 sum = vec3(0.0), bounced = vec3(0.0);
     float total = 0.0, dist = 0.0, dist2 = 0.0, dist_total = 0.0, nearest = max_distance;
+    vec4 plane = vec4(0.0);          // no hit about d: nothing lies behind
+    int nearest_ray = -1;
     int backs = 0;
     float nearest_front = 1.0e30, nearest_back = 1.0e30;
     vec3 front_dir = vec3(0.0), back_dir = vec3(0.0);
@@ -55,13 +75,17 @@ void main() {
         float c = dot(d, r);
         if (c > 0.0) {
             sum += c * h.rgb;
+            bounced += c * texelFetch(field_rays, ivec2(2 * u_rays + i, probe), 0).rgb;
             total += c;
             float w = pow(c, 50.0);
             float s = min(abs(h.w), max_distance);
             dist += w * s;
             dist2 += w * s * s;
             dist_total += w;
-            if (c > NEAR_CONE) nearest = min(nearest, s);
+            if (c > NEAR_CONE && s < nearest) {
+                nearest = s;
+                nearest_ray = i;
+            }
         }
         if (t == ivec2(0)) {
             float a = abs(h.w);
@@ -73,12 +97,33 @@ void main() {
         }
     }
     ivec2 at = probe_tile(probe) * (FIELD_TEXELS + 2) + t;
-    imageStore(irradiance_image, at, vec4(total > 0.0 ? FIELD_PI * sum / total : vec3(0.0), 1.0));
     vec2 m = dist_total > 0.0 ? vec2(dist, dist2) / dist_total : vec2(max_distance, max_distance * max_distance);
-    imageStore(distance_image, at, vec4(m, nearest, 1.0));
+    // The nearest hit off the nearest one's plane: a floor near the probe must not hide
+    // the wall behind it (the floor's plane has the point in front, the wall's behind).
+    float spacing = min(step.x, min(step.y, step.z));
+    float other = max_distance;
+    vec4 other_plane = vec4(0.0);
+    if (nearest_ray >= 0) {
+        plane = hit_plane(nearest_ray, probe, fibonacci_ray(nearest_ray, u_rays, u_rotation),
+                          abs(texelFetch(field_rays, ivec2(nearest_ray, probe), 0).w));
+        for (int i = 0; i < u_rays; ++i) {
+            vec3 r = fibonacci_ray(i, u_rays, u_rotation);
+            if (dot(d, r) <= NEAR_CONE) continue;
+            float a = abs(texelFetch(field_rays, ivec2(i, probe), 0).w);
+            if (a >= min(other, max_distance)) continue;
+            vec4 candidate = hit_plane(i, probe, r, a);
+            if (dot(candidate.xyz, plane.xyz) < 0.9 || abs(candidate.w - plane.w) > 0.05 * spacing) {
+                other = a;
+                other_plane = candidate;
+            }
+        }
+    }
+    imageStore(distance_image, at, vec4(m, nearest, other));
+    ivec2 lines = ivec2(0, imageSize(plane_image).y / 2);
+    imageStore(plane_image, at, plane);
+    imageStore(plane_image, at + lines, other_plane);
     if (t == ivec2(0)) {
         vec4 state = u_bounce ? probe_state(probe) : vec4(0.0, 0.0, 0.0, 1.0);
-        float spacing = min(step.x, min(step.y, step.z));
         bool inside = float(backs) > 0.25 * float(u_rays) && farthest < 1.5 * length(step);
         vec3 offset = state.xyz;
         if (inside)
@@ -90,5 +135,13 @@ void main() {
         }
         offset = clamp(offset, -0.45 * step, 0.45 * step);
         imageStore(probe_image, probe_tile(probe), vec4(offset, inside ? 0.0 : 1.0));
+        moved = offset != state.xyz || inside != (state.w < 0.5);
     }
+    barrier();
+    vec4 steady = imageLoad(steady_image, at);
+    vec3 mean = total > 0.0 ? (steady.rgb * steady.a + FIELD_PI * sum / total) / (steady.a + 1.0)
+                            : vec3(0.0);
+    imageStore(steady_image, at, vec4(mean, moved ? 0.0 : steady.a + 1.0));
+    imageStore(irradiance_image, at,
+               vec4(mean + (total > 0.0 ? FIELD_PI * bounced / total : vec3(0.0)), 1.0));
 }

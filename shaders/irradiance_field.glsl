@@ -10,6 +10,10 @@
 // inside a one-texel border that repeats the map's opposite edge (so bilinear filtering
 // wraps across the octahedron's seams); field_tiles tiles a line. field_probes: one
 // texel a probe at its tile's place, (offset from its grid place, 1 on / 0 off).
+// field_distance: per texel (mean distance, mean squared distance, the nearest hit about
+// its direction, the nearest hit off that one's plane); field_planes: two atlases, one
+// above the other: those two hits' planes (normal towards the probe, offset from the probe
+// along it; 0 where there is none).
 //
 // Grids: one over the bounds, or, where the bounds are large, nested cascades about the
 // camera, finest first, the last over the bounds (irradiance.py cascades). Their probes
@@ -27,8 +31,9 @@ uniform vec3 field_region_hi[FIELD_GRIDS];  // beyond, on a side at the bounds' 
 uniform int field_tiles;        // tiles a line
 uniform float field_bias;       // the self-shadowing bias (a share of the spacing)
 uniform sampler2D field_irradiance;   // rgb: irradiance E (W/m2 per unit radiance)
-uniform sampler2D field_distance;     // mean distance, mean squared distance, nearest
+uniform sampler2D field_distance;
 uniform sampler2D field_probes;
+uniform sampler2D field_planes;
 
 const float FIELD_PI = 3.14159265358979;
 
@@ -85,13 +90,25 @@ vec2 field_uv(sampler2D atlas, int probe, vec3 d) {
     return texel / vec2(textureSize(atlas, 0));
 }
 
-// The nearest hit of the four texels about uv: never more than what a ray that way hit
-// (filtering would blend a near wall's edge with the far side beyond it).
-float field_nearest(vec2 uv) {
+// Whether a wall the probe sees hides the point at `from_probe` (r away) from it: about
+// its direction (the four texels about uv, unfiltered: filtering would blend a near wall's
+// edge with the far side beyond it) the probe saw a hit nearer than the point, and the
+// point lies behind that hit's plane. A nearer hit alone is no wall: where the probe sees
+// the point's own surface at a slant, rays a little steeper meet that surface nearer than
+// the point, which lies in front of its plane (a test of distance alone left a floor seen
+// from probes beside a table black in patches).
+bool field_hidden(vec2 uv, vec3 from_probe, float r) {
     ivec2 t = ivec2(floor(uv * vec2(textureSize(field_distance, 0)) - 0.5));
-    return min(min(texelFetch(field_distance, t, 0).b, texelFetch(field_distance, t + ivec2(1, 0), 0).b),
-               min(texelFetch(field_distance, t + ivec2(0, 1), 0).b,
-                   texelFetch(field_distance, t + ivec2(1, 1), 0).b));
+    ivec2 lines = ivec2(0, textureSize(field_planes, 0).y / 2);
+    for (int k = 0; k < 4; ++k) {
+        ivec2 at = t + ivec2(k & 1, k >> 1);
+        vec2 nearest = texelFetch(field_distance, at, 0).ba;
+        vec4 plane = texelFetch(field_planes, at, 0), other = texelFetch(field_planes, at + lines, 0);
+        if ((r > nearest.x && dot(from_probe, plane.xyz) < plane.w) ||
+            (r > nearest.y && dot(from_probe, other.xyz) < other.w))
+            return true;
+    }
+    return false;
 }
 
 // The irradiance at world point p on a surface of normal n seen along v (towards the
@@ -130,7 +147,7 @@ vec3 grid_irradiance_along(int grid, vec3 p, vec3 n, vec3 v, vec3 along) {
         if (r > 0.0) {
             vec2 uv = field_uv(field_distance, probe, from_probe / r);
             vec2 m = textureLod(field_distance, uv, 0.0).rg;
-            if (r > field_nearest(uv) + 0.05 * spacing) continue;   // behind a hit that way
+            if (field_hidden(uv, from_probe, r)) continue;   // behind a wall
             if (r > m.x) {
                 float variance = abs(m.y - m.x * m.x);
                 float d = r - m.x;

@@ -8,21 +8,26 @@
 // passes light straight on, rays and shadow rays alike: a ray that meets it adds what its
 // diffuse share shades and goes on weighted by its transmittance (the tint, and 1 - the
 // dielectric Fresnel at that angle: a flat pane's two faces exactly; a curved object's
-// refraction is not followed), so sky and sun reach what lies under it. Writes
-// (radiance, distance) per ray, to the first surface that is not glass (probes see
-// through glass), distance negative where the ray met a triangle's back (its winding).
+// refraction is not followed), so sky and sun reach what lies under it. Writes per ray
+// its radiance, split in what the field does not bring (emission, the lights, the dome:
+// the same from one update to the next) and the field's bounces, the distance to the first
+// surface that is not glass (probes see through glass), negative where the ray met a
+// triangle's back (its winding), and that surface's normal, towards the probe.
 #include "lib.glsl"
 #include "lights.glsl"
 #include "environment.glsl"
 #include "raytrace.glsl"
 #include "irradiance_field.glsl"
 layout(local_size_x = 64) in;
-layout(rgba32f, binding = 0) writeonly uniform image2D ray_image;   // x ray, y probe
+// x ray, y probe: (the radiance the field does not bring, signed distance); x u_rays +
+// ray: the hit's normal, towards the probe (0 where the ray escaped); x 2 u_rays + ray:
+// the radiance the field brings (its bounces so far)
+layout(rgba32f, binding = 0) writeonly uniform image2D ray_image;
 uniform sampler2D field_materials;   // FIELD_MATERIAL texels a material: albedo,
                                      // (emission, sides), (transmittance colour, ior)
 #define FIELD_MATERIAL 3
 #define FIELD_GLASS_HITS 8           // glass surfaces a ray passes, at most
-// Per traced instance (irradiance.py _instance_sides): 4 its faces are made lights where
+// Per traced instance (field_tables.py instance_sides): 4 its faces are made lights where
 // they emit, 8 its mesh is closed. A material's sides (1 front, 2 back: its emission
 // sampling) of such faces are lights of the light table, which bring their light per
 // pixel: a ray that meets them takes no emission there (engine/emitters.py closed_sides).
@@ -65,8 +70,9 @@ vec3 light_through(vec3 x, vec3 n) {
 }
 
 // The light a ray's hit sends back along -dir: its emission (but where it is a light of
-// the light table), the lights seen from it, and the field's bounce so far.
-vec3 hit_radiance(RtHit hit, vec3 x, vec3 dir) {
+// the light table) and the lights seen from it; `bounced`: the field's bounce so far.
+vec3 hit_radiance(RtHit hit, vec3 x, vec3 dir, out vec3 bounced) {
+    bounced = vec3(0.0);
     vec3 n = rt_hit_normal(hit);
     bool back = dot(n, dir) > 0.0;
     if (back) n = -n;                    // lit on either side, as Cycles' surfaces
@@ -87,7 +93,7 @@ vec3 hit_radiance(RtHit hit, vec3 x, vec3 dir) {
             radiance += diffuse * light_through(x, n);
     }
     if (u_bounce)
-        radiance += albedo / FIELD_PI * field_irradiance_at(x, n, -dir);
+        bounced = albedo / FIELD_PI * field_irradiance_at(x, n, -dir);
     return radiance;
 }
 
@@ -100,7 +106,7 @@ void main() {
     int g = probe_grid(probe);
     vec3 origin = probe_position(g, probe_cell(g, probe), state);
     vec3 dir = fibonacci_ray(ray, u_rays, u_rotation);
-    vec3 radiance = vec3(0.0), weight = vec3(1.0);
+    vec3 radiance = vec3(0.0), bounced = vec3(0.0), weight = vec3(1.0), facing = vec3(0.0);
     float distance = 1.0e27, tmin = 0.0;
     for (int k = 0; k < FIELD_GLASS_HITS; ++k) {
         RtHit hit;
@@ -108,13 +114,21 @@ void main() {
             if (has_dome) radiance += weight * dome_background(dir);
             break;
         }
-        radiance += weight * hit_radiance(hit, origin + hit.t * dir, dir);
+        vec3 hit_bounced;
+        radiance += weight * hit_radiance(hit, origin + hit.t * dir, dir, hit_bounced);
+        bounced += weight * hit_bounced;
         vec3 through = glass_through(hit, dir);
-        distance = dot(rt_hit_normal(hit), dir) > 0.0 ? -hit.t : hit.t;
+        vec3 n = rt_hit_normal(hit);
+        bool back = dot(n, dir) > 0.0;
+        distance = back ? -hit.t : hit.t;
+        facing = back ? -n : n;
         weight *= through;
         if (max(weight.r, max(weight.g, weight.b)) <= 0.0) break;
         tmin = hit.t + u_epsilon;
         distance = 1.0e27;                   // through glass: what lies beyond it
+        facing = vec3(0.0);
     }
     imageStore(ray_image, ivec2(ray, probe), vec4(radiance, distance));
+    imageStore(ray_image, ivec2(u_rays + ray, probe), vec4(facing, 0.0));
+    imageStore(ray_image, ivec2(2 * u_rays + ray, probe), vec4(bounced, 0.0));
 }

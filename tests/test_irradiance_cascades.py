@@ -62,7 +62,10 @@ def _bounce(stage):
 
 
 def test_a_large_ground_gets_cascades_whose_near_light_matches_a_fine_grid(monkeypatch):
-    fine, stats = _bounce(lit_room_stage(4.0))           # 8 m: one grid, NEAR's spacing
+    # One grid whose probes are the finest cascade's (6 at NEAR / 6 apart over 8 m about
+    # the camera): a ground whose outermost probes lie probe_grids.INSET of a spacing in.
+    spacing = NEAR / 6
+    fine, stats = _bounce(lit_room_stage((5 + 2 * probe_grids.INSET) * spacing / 2))
     assert stats["field_grids"] == 1
     cascaded, stats = _bounce(lit_room_stage(100.0))     # 200 m: cascades
     assert stats["field_grids"] == 6

@@ -62,7 +62,7 @@ UNITS.update(ltc_lut=UNITS["post_src"])
 # own passes, which sample no material map.
 UNITS.update(field_irradiance=UNITS["t_metallic"], field_distance=UNITS["t_roughness"],
              field_probes=UNITS["t_emissive"], field_materials=UNITS["t_opacity"],
-             field_rays=UNITS["t_normal"])
+             field_rays=UNITS["t_normal"], field_planes=UNITS["t_pattern0"])
 
 
 class ShaderError(RuntimeError):

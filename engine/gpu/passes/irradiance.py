@@ -11,8 +11,12 @@ An update traces the preset's rays from every probe with the ray tracer
 emission, the light table's lights (each seen by a shadow ray, so no shadow map is
 needed at hits and none leaks), and its albedo times the field as it was (the bounces
 so far), or the dome where a ray escapes; then writes each probe's octahedral maps of
-irradiance and of the mean distance and its square (shaders/irradiance_blend.comp),
-moves probes out of walls and switches off those inside geometry. Each update adds
+irradiance, of the mean distance and its square, and of the planes of the nearest hits
+about each direction (which say what a wall hides; shaders/irradiance_blend.comp),
+moves probes out of walls and switches off those inside geometry. The light at the hits
+that does not change from one update to the next (emission, the lights, the dome) is
+averaged over all the build's updates, each of new rays; only the bounces come from
+the last update (a probe moved starts that mean again). Each update adds
 one bounce: a field is the scene's diffuse bounces of them from nothing (a Build). A
 still and every frame of a sequence run all of it in the frame, so they render it
 converged. A viewport's frames (RenderSettings.progressive_field) run at most the
@@ -44,10 +48,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ....core.emission import SAMPLING
 from ....core.presets import PRESETS
-from ...emitters import closed, makes_lights, radiance
 from ...probe_grids import GRIDS, grids, placement
+from ..field_tables import instance_sides, material_table, transmits
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform, set_uniform_array
 
@@ -65,9 +68,8 @@ BUDGET = {"low": 4096, "medium": 8192, "high": 12288, "ultra": 16384}
 RANK = tuple(PRESETS)        # presets, coarsest first
 ALL_BARRIERS = 0xFFFFFFFF
 SIDES_BINDING = 15           # shaders/irradiance_trace.comp FieldSides
-MATERIAL_TEXELS = 3          # shaders/irradiance_trace.comp FIELD_MATERIAL
 FIELD_UNITS = ("field_irradiance", "field_distance", "field_probes", "field_materials",
-               "field_rays")
+               "field_rays", "field_planes")
 
 
 def would_bounce(frame) -> bool:
@@ -98,6 +100,11 @@ def rotation(k: int) -> np.ndarray:
     return q
 
 
+def atlas_size(n: int) -> tuple:
+    """The size of the atlas of n probes' tiles."""
+    return (TILES_PER_LINE * TILE, -(-n // TILES_PER_LINE) * TILE)
+
+
 def _rows(values, dtype):
     """GRIDS rows of `values` (a grid's vector each), the rest 0: a uniform array's."""
     out = np.zeros((GRIDS,) + np.shape(values[0]), dtype)
@@ -112,6 +119,7 @@ class Field:
     irradiance: object
     distance: object
     probes: object
+    planes: object               # two hits' planes per distance texel
     grids: list
 
     def bind(self, prog):
@@ -119,6 +127,7 @@ class Field:
         self.irradiance.use(UNITS["field_irradiance"])
         self.distance.use(UNITS["field_distance"])
         self.probes.use(UNITS["field_probes"])
+        self.planes.use(UNITS["field_planes"])
         g = self.grids
         set_uniform(prog, "field_grids", len(g))
         set_uniform_array(prog, "field_lo", _rows([x.first for x in g], np.float32))
@@ -132,7 +141,7 @@ class Field:
         set_uniform(prog, "field_bias", BIAS)
 
     def release(self):
-        for tex in (self.irradiance, self.distance, self.probes):
+        for tex in (self.irradiance, self.distance, self.probes, self.planes):
             tex.release()
 
 
@@ -140,7 +149,8 @@ class Field:
 class Build:
     """A field being made: `updates` updates of its grid's n probes, in order, each of
     `rays` rays a probe, reading the last complete update (`prev`) and writing `target`;
-    `k` the update under way, `probe` its next probe."""
+    `k` the update under way, `probe` its next probe. `steady`: per atlas texel, the mean
+    over the updates so far of the light they do not bring (shaders/irradiance_blend.comp)."""
     key: tuple
     version: int
     grids: list                  # engine/probe_grids.py Grids
@@ -150,6 +160,7 @@ class Build:
     forward: np.ndarray          # the view's, for a headlight
     epsilon: float
     ray_tex: object
+    steady: object
     materials: object
     sides: object
     env: object
@@ -162,7 +173,7 @@ class Build:
         return ((self.updates - self.k) * self.n - self.probe) * self.rays
 
     def release(self):
-        for res in (self.ray_tex, self.materials, self.sides):
+        for res in (self.ray_tex, self.steady, self.materials, self.sides):
             res.release()
 
 
@@ -210,8 +221,8 @@ class IrradiancePass(Pass):
             # Only materials changed: the field holds their albedo and emission alone
             # (a pattern's parameters, a roughness, leave it as it is).
             tracer = self.tracer(frame.scene)
-            self.stale = not np.array_equal(self._table(frame.scene, tracer.materials),
-                                            self.table)
+            self.stale = not np.array_equal(
+                material_table(frame.scene, tracer.materials, self.textures), self.table)
         self.touched = False
         if self.stale:
             self.version, self.stale = self.version + 1, False
@@ -276,17 +287,23 @@ class IrradiancePass(Pass):
         lo, hi = self.bounds[1]
         made = grids(lo, hi, PROBES.get(preset, PROBES["medium"]), key[3])
         n, rays = sum(g.probes for g in made), RAYS.get(preset, RAYS["medium"])
-        self.table = self._table(scene, tracer.materials)
+        self.table = material_table(scene, tracer.materials, self.textures)
         materials = self.uploads.texture((self.table.shape[1], 1), 4, self.table, kind="field",
                                          dtype="f4")
         materials.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
         env = self.environment.prepare(scene.dome)
         diagonal = float(np.linalg.norm(np.asarray(hi) - np.asarray(lo)))
+        steady = self._texture(atlas_size(n), False)
+        fbo = self.ctx.framebuffer(color_attachments=[steady])
+        fbo.clear(0.0, 0.0, 0.0, 0.0)    # no update's light yet
+        fbo.release()
         self.build = Build(
             key=key, version=self.version, grids=made, n=n, rays=rays,
             updates=updates, forward=np.asarray(view.camera.forward, float),
-            epsilon=1e-4 * max(diagonal, 1e-6), ray_tex=self.ctx.texture((rays, n), 4, dtype="f4"),
-            materials=materials, sides=self.uploads.buffer(self._instance_sides(scene, tracer),
+            epsilon=1e-4 * max(diagonal, 1e-6),
+            # Per ray: radiance, the hit's normal, the field's bounces (irradiance_trace.comp).
+            ray_tex=self.ctx.texture((3 * rays, n), 4, dtype="f4"), steady=steady,
+            materials=materials, sides=self.uploads.buffer(instance_sides(scene, tracer),
                                                            kind="field"),
             env=env)
         self._key = key
@@ -326,7 +343,7 @@ class IrradiancePass(Pass):
             set_uniform(trace, "u_rays", b.rays)
             set_uniform(trace, "n_lights", len(self.lights.index))
             set_uniform(trace, "u_bounce", b.k > 0)
-            set_uniform(trace, "u_glass", bool(self.table[0, 2::3, :3].any()))
+            set_uniform(trace, "u_glass", transmits(self.table))
             set_uniform(trace, "u_first_probe", b.probe)
             set_uniform(trace, "u_epsilon", b.epsilon)
             set_uniform(trace, "u_view_forward", b.forward)
@@ -344,6 +361,8 @@ class IrradiancePass(Pass):
             b.target.irradiance.bind_to_image(0, read=False, write=True)
             b.target.distance.bind_to_image(1, read=False, write=True)
             b.target.probes.bind_to_image(2, read=False, write=True)
+            b.target.planes.bind_to_image(3, read=False, write=True)
+            b.steady.bind_to_image(4, read=True, write=True)
             blend.run(count, 1)
             self.ctx.memory_barrier(ALL_BARRIERS)
             traced += count * b.rays
@@ -368,8 +387,7 @@ class IrradiancePass(Pass):
     def _free(self, b):
         """A Field of build b's size that neither frames nor b read, from the pool or new,
         set to b's grids; Fields of other sizes that nothing reads are released."""
-        lines = -(-b.n // TILES_PER_LINE)
-        size = (TILES_PER_LINE * TILE, lines * TILE)
+        size = atlas_size(b.n)
         busy = [f for f in (self.field, b.prev) if f is not None]
         keep = []
         for f in self.pool:
@@ -382,7 +400,8 @@ class IrradiancePass(Pass):
                       all(f is not x for x in busy)), None)
         if spare is None:
             spare = Field(self._texture(size, True), self._texture(size, True),
-                          self._texture((TILES_PER_LINE, lines), False), b.grids)
+                          self._texture((TILES_PER_LINE, size[1] // TILE), False),
+                          self._texture((size[0], 2 * size[1]), False), b.grids)
             self.pool.append(spare)
         spare.grids = b.grids
         return spare
@@ -398,51 +417,6 @@ class IrradiancePass(Pass):
         tex.filter = (f, f)
         tex.repeat_x = tex.repeat_y = False
         return tex
-
-    def _table(self, scene, names) -> np.ndarray:
-        """The tracer's materials: albedo, (emission, sides), (transmittance colour,
-        IOR): MATERIAL_TEXELS texels each."""
-        k = MATERIAL_TEXELS
-        table = np.zeros((1, k * max(len(names), 1), 4), np.float32)
-        for i, name in enumerate(names):
-            m = scene.materials.get(name)
-            if m is None:
-                table[0, k * i, :3] = 0.18
-                continue
-            base = m.maps.get("diffuseColor")
-            base = m.diffuse if base is None else self.textures.mean(base)
-            emission = m.maps.get("emissiveColor")
-            emission = m.emissive if emission is None else self.textures.mean(emission)
-            # Glass: its diffuse share, and what it lets through (its tint).
-            table[0, k * i, :3] = np.asarray(base, np.float32) * (1.0 - m.metallic) * \
-                (1.0 - m.transmission)
-            table[0, k * i + 1, :3] = emission
-            front, back = SAMPLING.get(m.emission_sampling, SAMPLING["auto"])
-            table[0, k * i + 1, 3] = front + 2 * back
-            if m.alpha == "glass":
-                tint = np.clip(np.asarray(base, np.float32), 0.0, 1.0)
-                table[0, k * i + 2, :3] = m.transmission * tint
-                table[0, k * i + 2, 3] = max(m.ior, 1.0 + 1e-4)
-        return table
-
-    def _instance_sides(self, scene, tracer) -> np.ndarray:
-        """Per traced instance, the sides of its emitting faces that are lights of the
-        light table (engine/emitters.py: 1 front, 2 back, 4 where its mesh's faces are
-        made lights at all, 8 where the mesh is closed): a ray meeting them takes no
-        emission there, which the lights bring per pixel; the other sides' emission (the
-        inside of a closed emitter, a skinned one's, sampling None's) comes through the
-        field, as Cycles finds it by BSDF sampling."""
-        memo = {}
-        flags = np.zeros(max(len(tracer.instances), 1), np.int32)
-        for i, (path, _) in enumerate(tracer.instances):
-            key = scene.instances[path].mesh_key
-            if key not in memo:
-                mesh = scene.meshes[key]
-                emits = any(float(radiance(scene.materials[name]).max()) > 0.0
-                            for name in mesh.materials if name in scene.materials)
-                memo[key] = (4 * makes_lights(mesh) + 8 * closed(mesh)) if emits else 0
-            flags[i] = memo[key]
-        return flags
 
     def release(self):
         self._drop_build()
