@@ -156,13 +156,21 @@ def sealed_room_stage():
     return stage
 
 
-def test_the_bounce_does_not_leak_into_a_sealed_room():
+@pytest.mark.parametrize("size", [
+    SIZE,
+    pytest.param(dict(width=160, height=120), marks=pytest.mark.xfail(strict=True, reason=(
+        "the field leaks 0.19 of a sunlit wall into the floor's corner by the camera at "
+        "this size (25 pixels), since the grid's outer probes moved a quarter spacing in "
+        "and walls hide points by their planes: a floor coplanar with the ground outside "
+        "(docs/status.md)"))),
+])
+def test_the_bounce_does_not_leak_into_a_sealed_room(size):
     # Neither the field, its near field nor, in a frame that bounces light, the direct
     # light (contact rays close the shadow maps' seams: tests/test_shadow_seams.py) lets
     # the sun in.
     stage = sealed_room_stage()
     sun_radiance = 0.8 * 4.0 / np.pi          # a white wall in the sun
-    with Session(stage, RenderSettings(**SIZE, bounces=Bounces())) as s:
+    with Session(stage, RenderSettings(**size, bounces=Bounces())) as s:
         full = s.render()
     assert full.stats["field_updates"] == 4 and full.stats["field_probes"] > 8
     assert full.rgba[..., :3].max() < 1e-4 * sun_radiance
