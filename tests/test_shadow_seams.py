@@ -1,5 +1,5 @@
 """Contact rays (docs/rendering.md, "Shadow seams"): in a frame that bounces light, a short
-ray from each receiver towards a sun, point or spot light decides, from the triangles
+ray from each receiver towards a sun decides, from the triangles
 themselves, the stretch where the shadow map's bias and filter let light through where
 an occluder meets its receiver. A frame lit directly stays as it was."""
 import numpy as np

@@ -119,7 +119,7 @@ def test_a_point_instancer_renders_like_its_instances_authored_one_by_one(hard_c
 
 def test_with_the_bounce_a_point_instancer_still_renders_like_its_instances(hard_case):
     # A frame that bounces light also traces contact rays from every receiver towards
-    # the sun and the point light (docs/rendering.md, "Shadow seams"): decisions on the
+    # the sun (docs/rendering.md, "Shadow seams"): decisions on the
     # triangles, which must not flip with the matrices' last bits as the map's did.
     from lantern.engine.bounces import Bounces
     settings = RenderSettings(width=W, height=H, bounces=Bounces())

@@ -45,7 +45,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ....core.lights import KINDS, SUN
+from ....core.lights import SUN
 from ...shadow_plan import importance, plan, stale_tiles
 from ...view import translate
 from ..framegraph import Pass
@@ -91,8 +91,10 @@ class ContactRays:
     """The rays that close the shadow maps' contact leaks (shaders/shadow_lookup.glsl
     CONTACT_RAYS), shared by the light passes of both forms. Only in a frame that
     bounces light: the irradiance field is on the board, so the scene's tracer is built
-    (a frame lit directly stays as it was); only for the lights shadow_factor shades
-    (sun, point, spot: an area light's taps march the map along each ray to the light).
+    (a frame lit directly stays as it was); only for suns, whose maps leak at a sunlit
+    room's seams. A point or spot light's program with the walk beside its sphere's
+    polygon integral took llvmpipe minutes to compile at its first draw (the demo), and
+    an area light's taps march the map along each ray to the light instead.
     A ray counts only opaque surfaces: cut-outs, blended surfaces and glass cast
     through their maps' tested opacity, as before: where a scene has them, a flag per
     tracer material in one small buffer, uploaded when the flags change."""
@@ -107,7 +109,7 @@ class ContactRays:
         """[CONTACT_RAYS] (and CONTACT_SEE_THROUGH where some traced material is not
         opaque, with its flags bound) with the tracer bound, for `light` this frame;
         else []."""
-        if self.tracer is None or "field" not in board or KINDS[light.kind].area:
+        if self.tracer is None or "field" not in board or light.kind != SUN:
             return []
         tracer = self.tracer(frame.scene)
         tracer.bind()
