@@ -14,7 +14,7 @@ reads: the G-buffer and g_depth, the light table, the light's shadow map
 writes: a texture of the G-buffer's size (x: visibility), released by the caller"""
 from __future__ import annotations
 
-from ....core.lights import DISK, RECT
+from ....core.lights import DISK, POLYGON, RECT
 from ..programs import UNITS, set_uniform
 from ..screen import run_screen, screen_program
 from .ambient import bind_gbuffer, surface_defines
@@ -24,8 +24,9 @@ DEFINE = "AREA_VISIBILITY"          # the light programs' variant that reads the
 
 
 def filtered(light) -> bool:
-    """Whether a light's shadow goes through this filter (rect and disk area lights)."""
-    return light.kind in (RECT, DISK)
+    """Whether a light's shadow goes through this filter (rect and disk area lights, and
+    emissive meshes, shadowed as an area light over their box: engine/emitters.py)."""
+    return light.kind in (RECT, DISK, POLYGON)
 
 
 def area_visibility(ctx, pool, programs, frame, board, view, sm, row):
