@@ -193,12 +193,10 @@ def table_matrix(table, nov, roughness) -> np.ndarray:
     return np.array([[t[0], 0.0, t[1]], [0.0, 1.0, 0.0], [t[2], 0.0, t[3]]])
 
 
-def lobe_over_polygon(v, roughness, polygon, n=1 << 20):
-    """The integral of the GGX lobe's f cos (F = 1) over a convex planar polygon
-    (vertices (k, 3) about the shaded point, in the lobe's frame), by sampling D: the
-    reference the shaders' LTC integral is tested against."""
-    alpha = float(ggx_alpha(roughness))
-    l, _, weight = ggx_samples(v, alpha, n)
+def polygon_hits(l, polygon):
+    """Which directions l (n, 3) from the origin meet a convex planar polygon (vertices
+    (k, 3) about the origin): with ggx_samples, the GGX lobe integrated over a polygon
+    by sampling, the reference the shaders' LTC integral is tested against."""
     polygon = np.asarray(polygon, float)
     normal = np.cross(polygon[1] - polygon[0], polygon[2] - polygon[0])
     denom = l @ normal
@@ -209,4 +207,4 @@ def lobe_over_polygon(v, roughness, polygon, n=1 << 20):
     for k in range(len(polygon)):
         a, b = polygon[k], polygon[(k + 1) % len(polygon)]
         hit &= (np.cross(b - a, points - a) @ normal) >= 0.0
-    return float(np.sum(weight * hit) / n)
+    return hit
