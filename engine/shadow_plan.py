@@ -56,6 +56,7 @@ class ShadowMap:
         self.footprint = (0.0, 0.0)  # their filter's least width: a screen pixel's (lookup)
         self.texture = self.cmp = self.raw = None
         self.tint = None            # glass casters' colour and nearest depth (rgba16f)
+        self.exit = self.exit_raw = None  # area lights: the casters' far sides (shadow_exits)
 
     def same_layout(self, other) -> bool:
         return other is not None and self.atlas == other.atlas and \
@@ -69,7 +70,8 @@ class ShadowMap:
     def adopt(self, old: "ShadowMap"):
         """Takes over an older map's texture and samplers (same atlas size)."""
         self.texture, self.cmp, self.raw, self.tint = old.texture, old.cmp, old.raw, old.tint
-        old.texture = old.cmp = old.raw = old.tint = None
+        self.exit, self.exit_raw = old.exit, old.exit_raw
+        old.texture = old.cmp = old.raw = old.tint = old.exit = old.exit_raw = None
 
 
 def _scene_far(bounds, origin, fallback):

@@ -10,6 +10,9 @@
 // those texels, so a layer of alpha a lets 1 - a of the light through, and layers
 // multiply, as Cycles' transparent shadows do.
 //
+// EXIT (an area light's second layer, passes/shadow_exits.py): the nearest surface
+// beyond the map's own, where the first caster along the texel's ray ends.
+//
 // TINT (glass casters, passes/shadows.py): no depth; the colour target takes the
 // caster's tint, multiplied over every face of glass along the texel's ray (its
 // Fresnel and transmission are the stochastic depth's), and the nearest glass's depth
@@ -44,6 +47,10 @@ float caster_threshold() {
 }
 #endif
 
+#ifdef EXIT
+uniform sampler2D shadow_raw;  // the map's own depth
+#endif
+
 #ifdef TINT
 uniform vec3 u_tint;
 out vec4 tint;
@@ -59,6 +66,11 @@ void main() {
     float cut = u_opacity_threshold > 0.0 ? u_opacity_threshold : caster_threshold();
     if (alpha < cut) discard;
 #endif
-    if (radial) gl_FragDepth = clamp(length(v_world - light_pos) / far, 0.0, 1.0);
-    else gl_FragDepth = gl_FragCoord.z;
+    float depth = radial ? clamp(length(v_world - light_pos) / far, 0.0, 1.0) : gl_FragCoord.z;
+#ifdef EXIT
+    // The map's own surface again (a program of its own may round it a little apart).
+    if (depth <= texelFetch(shadow_raw, ivec2(gl_FragCoord.xy), 0).r * (1.0 + 1e-5) + 1e-7)
+        discard;
+#endif
+    gl_FragDepth = depth;
 }

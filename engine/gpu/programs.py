@@ -58,6 +58,9 @@ UNITS.update(edge_depth=UNITS["g_base"], edge_marks=UNITS["g_normal"], separable
 # No shading program reads post-processing's source: the area lights' table takes its
 # unit (shaders/ltc.glsl).
 UNITS.update(ltc_lut=UNITS["post_src"])
+# Only the area visibility's blur reads visibility_tex, and it reads no shadow map: an
+# area light's exit layer takes its unit (passes/shadow_exits.py).
+UNITS.update(shadow_exit=UNITS["visibility_tex"])
 # The irradiance field (passes/irradiance.py): read by the ambient pass and the field's
 # own passes, which sample no material map.
 UNITS.update(field_irradiance=UNITS["t_metallic"], field_distance=UNITS["t_roughness"],

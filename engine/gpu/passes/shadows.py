@@ -51,6 +51,7 @@ from ...view import translate
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
 from .gbuffer import filter_defines, set_material
+from .shadow_exits import draw_exits, has_exits, release_exits
 from .view import set_origin
 
 # Every shadow map of a frame together (32-bit depth texels): under llvmpipe they are
@@ -156,6 +157,8 @@ def set_shadow_uniforms(prog, sm, preset, eye):
         set_uniform(prog, "shadow_ranges", pad(sm.ranges, 1.0))
         set_uniform(prog, "shadow_texels", pad(sm.texel, 1.0))
     set_uniform(prog, "shadow_footprint", sm.footprint if sm.stochastic else (0.0, 0.0))
+    if sm.exit is not None:
+        sm.exit_raw.use(UNITS["shadow_exit"])
     set_uniform(prog, "shadow_tinted", sm.tint is not None)
     if sm.tint is not None:
         sm.tint.use(UNITS["shadow_tint"])
@@ -227,7 +230,7 @@ class ShadowPass(Pass):
                 sm.inputs = (light, bounds)
                 if sm.same_layout(old):
                     old.inputs, sm = sm.inputs, old
-            used += sm.atlas[0] * sm.atlas[1] * (4 + 8 * tinted)
+            used += sm.atlas[0] * sm.atlas[1] * (4 + 4 * has_exits(light) + 8 * tinted)
             if used > SHADOW_BUDGET_BYTES:
                 self._drop(casting[n:])      # these, and every less important one
                 _budget_warning(scene, len(casting) - n, len(casting))
@@ -294,6 +297,10 @@ class ShadowPass(Pass):
                                                               BIAS @ sm.mats[i]))
             if tinted:
                 self._draw_tint(frame, sm, light, clip @ sm.mats[i], skip, rect)
+            if has_exits(light):
+                frame.count("shadow_draws", draw_exits(
+                    ctx, self.pool, self.programs, self.geometry, sm,
+                    lambda p: _set_light(p, sm, light, skip), clip @ sm.mats[i], rect))
         ctx.scissor = None
         ctx.disable(ctx.DEPTH_TEST)
 
@@ -376,6 +383,7 @@ class ShadowPass(Pass):
                 self._release_map(sm)
 
     def _release_map(self, sm):
+        release_exits(self.pool, sm)
         if sm.tint is not None:
             self.pool.release(sm.tint)
             sm.tint = None

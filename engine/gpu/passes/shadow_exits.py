@@ -1,0 +1,51 @@
+"""Where the first caster behind each texel of an area light's shadow map ends: a
+second depth layer, the nearest surface beyond the map's own (depth peeling: the same
+opaque casters drawn again, every fragment at or before the map's depth discarded;
+shaders/shadow.frag EXIT). The lookup's march (shaders/shadow_lookup.glsl
+area_shadow_factor) takes a point of a receiver's ray to the light for a point inside
+an occluder only between the two layers, a closed caster's entry and exit. With one
+layer, a point up to 1.5 march steps behind the map's surface counted as inside, so a
+ray passing just beside a thin slab, or beside a solid's silhouette as the light's
+centre sees it, was shadowed: the emissive table's outer penumbra was 30-60% too dark
+(docs/rendering.md, "Area-light penumbrae"). An open caster (one plane) has no exit of
+its own: the layer then holds what lies behind it, and the 1.5 steps bound it as
+before; cut-out and blended casters are not peeled either. Only area lights march, so
+only their maps have the layer (its memory counts in the shadow budget)."""
+from __future__ import annotations
+
+from ....core.lights import DISK, POLYGON, RECT
+from ..programs import UNITS, set_uniform
+
+
+def has_exits(light) -> bool:
+    """Whether a light's map gets the exit layer (the lights whose lookup marches)."""
+    return light.kind in (RECT, DISK, POLYGON)
+
+
+def draw_exits(ctx, pool, programs, geometry, sm, set_light, view_proj, rect) -> int:
+    """The exit layer of one tile (`rect`, pixels) of map `sm`, whose own depth is
+    drawn; `set_light(prog)` sets what a caster draw needs of the light. Returns the
+    draws. Leaves the depth test on."""
+    if sm.exit is None:
+        sm.exit = pool.acquire(sm.atlas, "depth")
+        sm.exit_raw = ctx.sampler(texture=sm.exit, filter=(ctx.NEAREST, ctx.NEAREST),
+                                  compare_func="", repeat_x=False, repeat_y=False)
+    fbo = pool.framebuffer(depth=sm.exit)
+    fbo.viewport = rect
+    fbo.use()
+    fbo.clear(depth=1.0, viewport=rect)
+    ctx.enable(ctx.DEPTH_TEST)
+    ctx.depth_func = "<"
+    prog = programs.get("shadow.vert", "shadow.frag",
+                        geometry.commands.object_defines() + ["EXIT"])
+    set_light(prog)
+    set_uniform(prog, "view_proj", view_proj)
+    sm.raw.use(UNITS["shadow_raw"])          # the map's own depth, which it peels
+    return geometry.commands.draw_casters(prog)
+
+
+def release_exits(pool, sm):
+    if sm.exit is not None:
+        sm.exit_raw.release()
+        pool.release(sm.exit)
+        sm.exit = sm.exit_raw = None
