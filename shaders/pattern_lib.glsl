@@ -227,11 +227,52 @@ vec3 pt_blend(int type, float t, vec3 c1, vec3 c2) {
     return c1 + t * (2.0 * c2 - vec3(1.0));
 }
 
-// Cycles' svm_checker: 1 on the cells where the parities of x, y, z agree.
+// The mean of (-1)^floor(x) (+1 on the even cells) under a tent of half-width h (in x's
+// units): the second difference of its second integral, over h^2. The integral of the
+// square wave is a triangle wave, and its integral floor(x / 2) + a piecewise
+// quadratic of x mod 2; a narrow tent (whose difference would lose float's bits)
+// takes the box of the same spread (width h sqrt 2: the first difference), a tent
+// narrower still the point.
+float pt_square_integral2(float x) {
+    float u = mod(x, 2.0);
+    float over = max(u - 1.0, 0.0);
+    return floor(x * 0.5) + 0.5 * u * u - over * over;
+}
+float pt_square_filtered(float x, float h) {
+    x = mod(x, 2.0);
+    if (h >= 0.05)
+        return (pt_square_integral2(x + h) - 2.0 * pt_square_integral2(x)
+                + pt_square_integral2(x - h)) / (h * h);
+    float w = 1.41421356 * h;
+    if (w >= 1e-4)
+        return ((1.0 - abs(1.0 - mod(x + 0.5 * w, 2.0)))
+                - (1.0 - abs(1.0 - mod(x - 0.5 * w, 2.0)))) / w;
+    return x < 1.0 ? 1.0 : -1.0;
+}
+
+// Cycles' svm_checker (1 on the cells where the parities of x, y, z agree, 0 on the
+// others) as Cycles' pixel filter averages it: one sample a pixel of the 0/1 cells
+// steps along their edges and flickers where a pixel spans many cells (the grazing
+// floor's grey). The checker is (1 - the product of the three axes' square waves) / 2,
+// and each axis is averaged alone under a tent of the filter's spread (variance),
+// which the pixel's derivatives map to that axis. The spread: Cycles'
+// Blackman-Harris over its reach R (material.glsl u_pixel_filter, its cosine terms a_n)
+// has variance R^2 (1/3 + 2 / (pi^2 a_0) sum a_n / n^2) (0.28 R standard deviation);
+// in a supersampled image (reach 0), whose pixel filter comes after, the fragment's
+// box (1/12).
 float pt_checker(vec3 p) {
     p = (p + 0.000001) * 0.999999;
-    ivec3 i = ivec3(abs(floor(p)));
-    return ((i.x % 2 == i.y % 2) == (i.z % 2 == 1)) ? 1.0 : 0.0;
+    float r = u_pixel_filter_reach;
+    vec4 a = u_pixel_filter;
+    float variance = r > 0.0
+        ? r * r * (1.0 / 3.0 + 2.0 / (9.8696044 * a.x) * (a.y + a.z / 4.0 + a.w / 9.0))
+        : 1.0 / 12.0;
+    float half_width = sqrt(6.0 * variance);          // pixels: a tent of that variance
+    vec3 dx = dFdx(p), dy = dFdy(p);
+    vec3 h = half_width * sqrt(dx * dx + dy * dy);
+    float waves = pt_square_filtered(p.x, h.x) * pt_square_filtered(p.y, h.y)
+                  * pt_square_filtered(p.z, h.z);
+    return 0.5 - 0.5 * waves;
 }
 
 // Cycles' svm_gradient, clamped to [0, 1] as the node does.

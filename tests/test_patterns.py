@@ -84,6 +84,18 @@ def test_node_family_within_flip_of_cycles(name):
     assert flip < FLIP_BOUND
 
 
+def test_checker_cells_are_averaged_as_cycles_pixel_filter_at_medium():
+    """A preset without supersampling (medium: one sample a pixel) draws the checker's
+    cells as Cycles' pixel filter averages them (shaders/pattern_lib.glsl pt_checker):
+    the mapping scene's six checker quads at medium, their mean within the pattern
+    bound (0.025; 0.146 when one sample a pixel read the 0/1 cells, each quad 0.07 to
+    0.18; the Normal mapping's quad is the worst, 0.063)."""
+    _, per_tile, _ = lantern_flip("mapping", preset="medium")
+    checkers = {mat: f for mat, f in per_tile.items() if "checker" in mat}
+    assert len(checkers) == 6
+    assert np.mean(list(checkers.values())) < FLIP_BOUND, checkers
+
+
 def test_network_is_written_on_the_mtlx_context_with_preview_fallback():
     from pxr import UsdShade
     stage, _ = exported("color")

@@ -4,8 +4,9 @@ every committed Cycles reference is there, finite, at that size, and in the mode
 claims. The accuracy goals are the bench's (bench/bench_shots.py); the engine cannot meet
 them all yet (glass is drawn refracted since the glass pass: tests/test_glass.py holds its
 closed forms; the emitter's goal is asserted in tests/test_emitters.py). What the bounce
-reaches so far is held here: the closed box and the emissive panel in full mode at
-medium, under bounds the field met (HDR-FLIP against the committed references)."""
+reaches so far is held here: the closed box, the emissive panel and the glass ball in
+full mode at medium, under bounds the field met (HDR-FLIP against the committed
+references)."""
 import numpy as np
 import pytest
 
@@ -56,8 +57,10 @@ def test_full_reference_carries_the_bounce_the_direct_one_lacks(name):
 # HDR-FLIP at medium in full mode (Cycles' default bounces) against the committed
 # reference, and the bound each holds (2026-11-28: closed box 0.0705, emissive panel
 # 0.149; before the field's plane test, its probes at the bounds' faces and its mean of
-# the steady light over the updates, 0.094 and 0.196).
-FULL_MODE_BOUNDS = {"cornell_box": 0.080, "emissive_table": 0.160}
+# the steady light over the updates, 0.094 and 0.196). The glass ball at Cycles' 4 spp
+# (0.071): 0.0656 since the checker's cells take the pixel filter and the light a
+# leaving interface reflects inside is followed (0.1137 before).
+FULL_MODE_BOUNDS = {"cornell_box": 0.080, "emissive_table": 0.160, "glass_sphere": 0.071}
 
 
 @pytest.mark.parametrize("name", sorted(FULL_MODE_BOUNDS))

@@ -169,8 +169,8 @@ class _Writer:
             emit(f"    float {p}_fac = pt_checker({arg('vector', 'vector')} * "
                  f"{arg('scale', 'float')});")
             self.vars[(node.name, "fac")] = (f"{p}_fac", "float")
-            out("color", "color", f"{p}_fac > 0.5 ? {arg('color1', 'color')} : "
-                f"{arg('color2', 'color')}")
+            out("color", "color", f"mix({arg('color2', 'color')}, {arg('color1', 'color')}, "
+                f"{p}_fac)")
         elif kind == "gradient":
             t = GRADIENT_TYPES.index(settings.get("gradient_type", "LINEAR"))
             out("fac", "float", f"pt_gradient({t}, {arg('vector', 'vector')})")
