@@ -33,9 +33,10 @@ uniform bool u_bounce;               // not the first update: probes as it left 
 uniform int u_first_probe;           // the first probe of those this dispatch updates
 uniform float u_max_distance[FIELD_GRIDS];   // by grid: distances are clamped there
                                              // (beyond a cell: seen)
-// The nearest hit within this cosine of a texel's direction (about 14 degrees): what a
-// zero-thickness wall's edge hides from the mean, which rays past the edge pull far.
-#define NEAR_CONE 0.97
+// The nearest hit within this cosine of a texel's direction: what a zero-thickness wall's
+// edge hides from the mean, which rays past the edge pull far. A cone that holds about
+// the same number of the build's rays whatever their count (irradiance.py near_cone).
+uniform float u_near_cone;
 
 // A hit's plane: its normal, towards the probe, and its offset from the probe along it.
 vec4 hit_plane(int ray, int probe, vec3 r, float distance) {
@@ -100,7 +101,7 @@ void main() {
             dist += w * s;
             dist2 += w * s * s;
             dist_total += w;
-            if (c > NEAR_CONE && s < nearest) {
+            if (c > u_near_cone && s < nearest) {
                 nearest = s;
                 nearest_ray = i;
             }
@@ -126,7 +127,7 @@ void main() {
     if (nearest < max_distance) {
         for (int i = 0; i < u_rays; ++i) {
             vec3 r = fibonacci_ray(i, u_rays, u_rotation);
-            if (dot(d, r) <= NEAR_CONE) continue;
+            if (dot(d, r) <= u_near_cone) continue;
             float a = abs(texelFetch(field_rays, ivec2(i, probe), 0).w);
             if (a >= min(other, max_distance)) continue;
             vec4 candidate = hit_plane(i, probe, r, a);

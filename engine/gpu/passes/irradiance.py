@@ -62,6 +62,9 @@ BIAS = 0.3                   # the read's self-shadowing bias, a share of the sp
 # Probes along the bounds' longest side, and rays a probe an update, by preset.
 PROBES = {"low": 4, "medium": 6, "high": 8, "ultra": 10}
 RAYS = {"low": 64, "medium": 128, "high": 192, "ultra": 256}
+# The rays of a build's updates that a texel's cone of nearest hits holds, on average
+# (near_cone): the wall test's evidence (shaders/irradiance_field.glsl field_hidden).
+NEAR_RAYS = 4
 # A viewport frame's rays at most (RenderSettings.progressive_field), by preset: the
 # field converges over frames, a block of probes a frame (docs/rendering.md).
 BUDGET = {"low": 4096, "medium": 8192, "high": 12288, "ultra": 16384}
@@ -98,6 +101,18 @@ def rotation(k: int) -> np.ndarray:
     if np.linalg.det(q) < 0:
         q[:, 0] *= -1
     return q
+
+
+def near_cone(rays: int) -> float:
+    """The cosine of the cone about a texel's direction that holds NEAR_RAYS of a
+    probe's `rays` (all its build's updates'), on average: the texels' nearest hits are
+    those of all the updates traced from the probe's place (shaders/irradiance_blend.comp).
+    Fixed over the build. One update's one or two rays in a cone of 14 degrees met a wall
+    that a probe sees at a grazing angle beyond a point it hides (the hit 3.7 m away, the
+    point 2.2 m: a sealed room's floor lit by a sunlit wall through it), and none at all
+    in a third of a texel's cones at 64 rays; where rays abound, a narrower cone finds
+    fewer nearer surfaces past whose edge a point is seen (a floor by a table's edge)."""
+    return 1.0 - 2.0 * NEAR_RAYS / rays
 
 
 def atlas_size(n: int) -> tuple:
@@ -356,6 +371,7 @@ class IrradiancePass(Pass):
             set_uniform(blend, "u_rays", b.rays)
             set_uniform(blend, "u_bounce", b.k > 0)
             set_uniform(blend, "u_first_probe", b.probe)
+            set_uniform(blend, "u_near_cone", near_cone(b.rays * b.updates))
             set_uniform_array(blend, "u_max_distance", _rows(
                 [1.5 * float(np.linalg.norm(g.step)) for g in b.grids], np.float32))
             b.target.irradiance.bind_to_image(0, read=False, write=True)
