@@ -4,7 +4,8 @@
 // irradiance as the cosine-weighted mean of the rays' radiance (times pi: the mean
 // over the sphere of max(cos, 0) is 1/4), distance and its square weighted by a sharp
 // power of the cosine (Majercik et al. 2019), and the nearest hits about the texel and
-// their planes. The tile's first texel also moves its probe
+// their planes, over the rays of all the build's updates traced from the probe's place
+// (as the steady light below). The tile's first texel also moves its probe
 // and switches it off or on (Majercik et al. 2021): a probe whose rays meet many back
 // faces close by lies inside geometry: off, and moved out through the nearest back face;
 // one closer to a surface (either side) than a fifth of the spacing is moved away; never more
@@ -32,14 +33,20 @@ uniform bool u_bounce;               // not the first update: probes as it left 
 uniform int u_first_probe;           // the first probe of those this dispatch updates
 uniform float u_max_distance[FIELD_GRIDS];   // by grid: distances are clamped there
                                              // (beyond a cell: seen)
-// The nearest hit within this cosine of a texel's direction (about 14 degrees): what a
-// zero-thickness wall's edge hides from the mean, which rays past the edge pull far.
-#define NEAR_CONE 0.97
+// The nearest hit within this cosine of a texel's direction: what a zero-thickness wall's
+// edge hides from the mean, which rays past the edge pull far. A cone that holds about
+// the same number of the build's rays whatever their count (irradiance.py near_cone).
+uniform float u_near_cone;
 
 // A hit's plane: its normal, towards the probe, and its offset from the probe along it.
 vec4 hit_plane(int ray, int probe, vec3 r, float distance) {
     vec3 normal = texelFetch(field_rays, ivec2(u_rays + ray, probe), 0).xyz;
     return vec4(normal, dot(distance * r, normal));
+}
+
+// Whether a hit's plane is another surface's than `plane`'s (turned or moved from it).
+bool off_plane(vec4 candidate, vec4 plane, float spacing) {
+    return dot(candidate.xyz, plane.xyz) < 0.9 || abs(candidate.w - plane.w) > 0.05 * spacing;
 }
 
 // The interior texel that border texel t repeats: an edge its mirror image along the
@@ -61,10 +68,22 @@ void main() {
     ivec2 t = ivec2(gl_LocalInvocationID.xy);
     ivec2 src = interior(t);
     vec3 d = oct_decode((vec2(src - 1) + 0.5) / float(FIELD_TEXELS) * 2.0 - 1.0);
+    ivec2 at = probe_tile(probe) * (FIELD_TEXELS + 2) + t;
+    ivec2 lines = ivec2(0, imageSize(plane_image).y / 2);
+    // The nearest hits of the build's updates so far, where they were traced from this
+    // place (the steady light's count: a probe moved starts it again). Walls do not change
+    // from one update to the next and each update's rays are new, so a texel's cone holds
+    // all their rays: one update's one or two there can meet a wall seen at a grazing
+    // angle far beyond a point it hides, where others meet it nearer.
+    vec4 steady = imageLoad(steady_image, at);
+    bool earlier = u_bounce && steady.a > 0.0;
+    vec4 seen = earlier ? texelFetch(field_distance, at, 0) : vec4(max_distance);
+    vec4 seen_plane = earlier ? texelFetch(field_planes, at, 0) : vec4(0.0);
+    vec4 seen_other = earlier ? texelFetch(field_planes, at + lines, 0) : vec4(0.0);
     vec3 sum = vec3(0.0), bounced = vec3(0.0);
-    float total = 0.0, dist = 0.0, dist2 = 0.0, dist_total = 0.0, nearest = max_distance;
-    vec4 plane = vec4(0.0);          // no hit about d: nothing lies behind
-    int nearest_ray = -1;
+    float total = 0.0, dist = 0.0, dist2 = 0.0, dist_total = 0.0, nearest = seen.b;
+    vec4 plane = seen_plane;         // (0: no hit about d, nothing lies behind)
+    int nearest_ray = -1;            // the nearest hit, where it is this update's
     int backs = 0;
     float nearest_front = 1.0e30, nearest_back = 1.0e30;
     vec3 front_dir = vec3(0.0), back_dir = vec3(0.0);
@@ -82,7 +101,7 @@ void main() {
             dist += w * s;
             dist2 += w * s * s;
             dist_total += w;
-            if (c > NEAR_CONE && s < nearest) {
+            if (c > u_near_cone && s < nearest) {
                 nearest = s;
                 nearest_ray = i;
             }
@@ -96,30 +115,38 @@ void main() {
             } else if (a < nearest_front) { nearest_front = a; front_dir = r; }
         }
     }
-    ivec2 at = probe_tile(probe) * (FIELD_TEXELS + 2) + t;
     vec2 m = dist_total > 0.0 ? vec2(dist, dist2) / dist_total : vec2(max_distance, max_distance * max_distance);
     // The nearest hit off the nearest one's plane: a floor near the probe must not hide
     // the wall behind it (the floor's plane has the point in front, the wall's behind).
     float spacing = min(step.x, min(step.y, step.z));
     float other = max_distance;
     vec4 other_plane = vec4(0.0);
-    if (nearest_ray >= 0) {
+    if (nearest_ray >= 0)
         plane = hit_plane(nearest_ray, probe, fibonacci_ray(nearest_ray, u_rays, u_rotation),
                           abs(texelFetch(field_rays, ivec2(nearest_ray, probe), 0).w));
+    if (nearest < max_distance) {
         for (int i = 0; i < u_rays; ++i) {
             vec3 r = fibonacci_ray(i, u_rays, u_rotation);
-            if (dot(d, r) <= NEAR_CONE) continue;
+            if (dot(d, r) <= u_near_cone) continue;
             float a = abs(texelFetch(field_rays, ivec2(i, probe), 0).w);
             if (a >= min(other, max_distance)) continue;
             vec4 candidate = hit_plane(i, probe, r, a);
-            if (dot(candidate.xyz, plane.xyz) < 0.9 || abs(candidate.w - plane.w) > 0.05 * spacing) {
+            if (off_plane(candidate, plane, spacing)) {
                 other = a;
                 other_plane = candidate;
             }
         }
+        // The earlier updates' two: the nearest is another's where this update's is nearer.
+        if (seen.b < other && off_plane(seen_plane, plane, spacing)) {
+            other = seen.b;
+            other_plane = seen_plane;
+        }
+        if (seen.a < other && off_plane(seen_other, plane, spacing)) {
+            other = seen.a;
+            other_plane = seen_other;
+        }
     }
     imageStore(distance_image, at, vec4(m, nearest, other));
-    ivec2 lines = ivec2(0, imageSize(plane_image).y / 2);
     imageStore(plane_image, at, plane);
     imageStore(plane_image, at + lines, other_plane);
     if (t == ivec2(0)) {
@@ -138,7 +165,6 @@ void main() {
         moved = offset != state.xyz || inside != (state.w < 0.5);
     }
     barrier();
-    vec4 steady = imageLoad(steady_image, at);
     vec3 mean = total > 0.0 ? (steady.rgb * steady.a + FIELD_PI * sum / total) / (steady.a + 1.0)
                             : vec3(0.0);
     imageStore(steady_image, at, vec4(mean, moved ? 0.0 : steady.a + 1.0));

@@ -11,7 +11,8 @@
 // wraps across the octahedron's seams); field_tiles tiles a line. field_probes: one
 // texel a probe at its tile's place, (offset from its grid place, 1 on / 0 off).
 // field_distance: per texel (mean distance, mean squared distance, the nearest hit about
-// its direction, the nearest hit off that one's plane); field_planes: two atlases, one
+// its direction, the nearest hit off that one's plane: those two of all the build's
+// updates' rays, irradiance_blend.comp); field_planes: two atlases, one
 // above the other: those two hits' planes (normal towards the probe, offset from the probe
 // along it; 0 where there is none).
 //

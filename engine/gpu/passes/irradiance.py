@@ -12,7 +12,8 @@ emission, the light table's lights (each seen by a shadow ray, so no shadow map 
 needed at hits and none leaks), and its albedo times the field as it was (the bounces
 so far), or the dome where a ray escapes; then writes each probe's octahedral maps of
 irradiance, of the mean distance and its square, and of the planes of the nearest hits
-about each direction (which say what a wall hides; shaders/irradiance_blend.comp),
+about each direction, of all the build's updates (which say what a wall hides;
+near_cone, shaders/irradiance_blend.comp),
 moves probes out of walls and switches off those inside geometry. The light at the hits
 that does not change from one update to the next (emission, the lights, the dome) is
 averaged over all the build's updates, each of new rays; only the bounces come from
@@ -62,6 +63,9 @@ BIAS = 0.3                   # the read's self-shadowing bias, a share of the sp
 # Probes along the bounds' longest side, and rays a probe an update, by preset.
 PROBES = {"low": 4, "medium": 6, "high": 8, "ultra": 10}
 RAYS = {"low": 64, "medium": 128, "high": 192, "ultra": 256}
+# The rays of a build's updates that a texel's cone of nearest hits holds, on average
+# (near_cone): the wall test's evidence (shaders/irradiance_field.glsl field_hidden).
+NEAR_RAYS = 4
 # A viewport frame's rays at most (RenderSettings.progressive_field), by preset: the
 # field converges over frames, a block of probes a frame (docs/rendering.md).
 BUDGET = {"low": 4096, "medium": 8192, "high": 12288, "ultra": 16384}
@@ -98,6 +102,19 @@ def rotation(k: int) -> np.ndarray:
     if np.linalg.det(q) < 0:
         q[:, 0] *= -1
     return q
+
+
+def near_cone(rays: int) -> float:
+    """The cosine of the cone about a texel's direction that holds NEAR_RAYS of a
+    probe's `rays` on average (all its build's updates': a texel's nearest hits are
+    those of every update traced from the probe's place, shaders/irradiance_blend.comp);
+    fixed over a build. A fixed 14 degrees held one or two of an update's 128 rays and
+    none in over a third of the texels at 64: a wall a probe sees at a grazing angle was
+    met beyond a point it hides, or not at all (a sealed room's floor lit through its
+    walls). Now e^-4 of the cones hold none (64 rays: 29 degrees; 512: 10). Where rays
+    abound the cone narrows: 14 degrees at 512 rays hid more points seen past a nearer
+    surface's edge (the table under a ball, the floor by a table's legs)."""
+    return 1.0 - 2.0 * NEAR_RAYS / rays
 
 
 def atlas_size(n: int) -> tuple:
@@ -356,6 +373,7 @@ class IrradiancePass(Pass):
             set_uniform(blend, "u_rays", b.rays)
             set_uniform(blend, "u_bounce", b.k > 0)
             set_uniform(blend, "u_first_probe", b.probe)
+            set_uniform(blend, "u_near_cone", near_cone(b.rays * b.updates))
             set_uniform_array(blend, "u_max_distance", _rows(
                 [1.5 * float(np.linalg.norm(g.step)) for g in b.grids], np.float32))
             b.target.irradiance.bind_to_image(0, read=False, write=True)
