@@ -5,10 +5,12 @@ and the irradiance field built from nothing) and as a steady frame (its field ke
 then a viewport's frames after a light moved, with the ray budget a frame
 (RenderSettings.progressive_field) and without it (the whole field in the frame):
 each frame's time and how many frames the field takes to converge.
-Prints figures; asserts nothing.
+Times are wall seconds and, beside them, the process's CPU seconds (llvmpipe's threads
+included), which a shared machine disturbs less. Prints figures; asserts nothing.
 
-    nice -n 5 .venv/bin/python bench/bench_bounce.py
+    nice -n 5 .venv/bin/python bench/bench_bounce.py [--size 1920x1080] [--no-viewport]
 """
+import argparse
 import pathlib
 import platform
 import sys
@@ -25,22 +27,23 @@ from lantern.engine.bounces import DIRECT  # noqa: E402
 REPEATS = 3
 
 
-def frames(stage, bounces):
-    """(first render's seconds, its field build seconds, best steady seconds, stats)."""
-    with Session(stage, RenderSettings(width=640, height=360, preset="medium",
-                                       bounces=bounces)) as session:
+def frames(stage, bounces, size):
+    """(first render's seconds and CPU seconds, its field build seconds, best steady
+    seconds and CPU seconds, stats)."""
+    settings = RenderSettings(width=size[0], height=size[1], preset="medium", bounces=bounces)
+    with Session(stage, settings) as session:
         session.render()                            # programs made, trees built
-    with Session(stage, RenderSettings(width=640, height=360, preset="medium",
-                                       bounces=bounces)) as session:
-        t0 = time.perf_counter()
+    with Session(stage, settings) as session:
+        t0, c0 = time.perf_counter(), time.process_time()
         first = session.render()
-        still = time.perf_counter() - t0
+        still, still_cpu = time.perf_counter() - t0, time.process_time() - c0
         steady = []
         for _ in range(REPEATS):
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             session.render()
-            steady.append(time.perf_counter() - t0)
-    return still, first.timings.get("field_build", 0.0), min(steady), first.stats
+            steady.append((time.perf_counter() - t0, time.process_time() - c0))
+    best = min(steady)
+    return (still, still_cpu), first.timings.get("field_build", 0.0), best, first.stats
 
 
 def _nudge(stage):
@@ -79,14 +82,22 @@ def viewport(stage, progressive):
 
 def main():
     from pxr import Usd
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--size", default=(640, 360),
+                        type=lambda t: tuple(map(int, t.split("x"))))
+    parser.add_argument("--no-viewport", action="store_true")
+    args = parser.parse_args()
     with tempfile.TemporaryDirectory() as folder:
         stage = Usd.Stage.Open(export_demo(folder))
-        print(f"{time.strftime('%Y-%m-%d %H:%M')}, {platform.node()}, demo at 640x360 medium")
+        print(f"{time.strftime('%Y-%m-%d %H:%M')}, {platform.node()}, demo at "
+              f"{args.size[0]}x{args.size[1]} medium")
         for label, bounces in (("direct (bounces 0)", DIRECT), ("scene's bounces", None)):
-            still, build, steady, stats = frames(stage, bounces)
-            print(f"{label}: still {still:.2f} s (field {build:.2f} s, "
+            (still, still_cpu), build, (steady, steady_cpu), stats = frames(stage, bounces, args.size)
+            print(f"{label}: still {still:.2f} s, CPU {still_cpu:.2f} s (field {build:.2f} s, "
                   f"{stats.get('field_probes', 0)} probes, {stats.get('field_rays', 0)} rays), "
-                  f"steady frame {steady:.3f} s")
+                  f"steady frame {steady:.3f} s, CPU {steady_cpu:.3f} s")
+        if args.no_viewport:
+            return
         for label, progressive in (("viewport, ray budget", True), ("viewport, no budget", False)):
             seconds, rays, field = viewport(stage, progressive)
             print(f"{label}: after a light moved, {len(seconds)} frame(s) to converge, "
