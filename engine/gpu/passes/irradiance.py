@@ -50,6 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ....core.presets import PRESETS
+from ...bounces import surfaces_light_each_other
 from ...probe_grids import GRIDS, grids, placement
 from ..field_tables import instance_sides, material_table, transmits
 from ..framegraph import Pass
@@ -77,13 +78,15 @@ FIELD_UNITS = ("field_irradiance", "field_distance", "field_probes", "field_mate
 
 
 def would_bounce(frame) -> bool:
-    """Whether `frame` asks for the bounce: a diffuse bounce, surfaces, and something
-    that lights them (a lamp, the dome, an emissive material)."""
+    """Whether `frame` asks for the bounce: a diffuse bounce, something that lights the
+    surfaces (a lamp, the dome, an emissive material), and surfaces that light each
+    other (engine/bounces.py)."""
     scene = frame.scene
     if frame.options.bounces_for(scene).diffuse_bounces <= 0 or not scene.instances:
         return False
-    return bool(scene.lights) or scene.dome is not None or \
+    lit = bool(scene.lights) or scene.dome is not None or \
         any(max(m.emissive) > 0.0 for m in scene.materials.values())
+    return lit and surfaces_light_each_other(scene)
 
 
 def unbind_samplers(ctx):
