@@ -87,17 +87,18 @@ float contact_limited(float lit, vec3 q, vec3 to_light, float reach) {
 #define CONTACT(lit, q, to_light, reach) contact_limited(lit, q, to_light, reach)
 
 // Where the ray is not needed: a sun's ray runs along one column of its map, and an
-// occluder within its reach is a surface in front of the receiver there. Where every
-// texel the blocker search read (and q's own) holds the receiver's own plane, to
-// float precision, the map shows nothing but the receiver around q (open ground):
-// nothing meets it there, and the map's "lit" stands. A wall at a seam, a ball on the
-// floor, a curved receiver: off its plane, so the ray decides. The plane's depth at a
-// texel's centre is `own_ref + dot(own_grad, centre - uv_q)`, world units: the map
-// is read nearest, so the centre's, not the tap's, depth is what a lone plane leaves.
-bool on_own_plane(float d, vec2 uv, vec2 uv_q, float own_ref, vec2 own_grad, float tol) {
+// occluder within its reach is a surface in front of the receiver there. Where no
+// texel the blocker search read (nor q's own) holds a surface in front of the
+// receiver's own plane, to float precision, nothing meets the receiver around q (open
+// ground; a convex surface, which bends away from its plane), and the map's "lit"
+// stands. A wall at a seam, a ball on the floor, a concave corner: in front of the
+// plane, so the ray decides. The plane's depth at a texel's centre is
+// `own_ref + dot(own_grad, centre - uv_q)`, world units: the map is read nearest, so
+// the centre's, not the tap's, depth is what a lone plane leaves there.
+bool behind_own_plane(float d, vec2 uv, vec2 uv_q, float own_ref, vec2 own_grad, float tol) {
     vec2 size = vec2(textureSize(shadow_raw, 0));
     vec2 centre = (floor(uv * size) + 0.5) / size;
-    return abs(d - own_ref - dot(own_grad, centre - uv_q)) <= tol;
+    return d - own_ref - dot(own_grad, centre - uv_q) >= -tol;
 }
 #else
 #define CONTACT(lit, q, to_light, reach) (lit)
@@ -203,8 +204,9 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
     float search = shadow_radial ? 2.0 * shadow_size : shadow_size * ref;
     search = clamp(search, texel, max_kernel);
     float blockers = 0.0, block_sum = 0.0;
-    // Whether the map holds the receiver's plane alone around q (on_own_plane): then a
-    // contact ray would meet nothing. Only a sun's search (its rays are the map's columns).
+    // Whether the map holds nothing in front of the receiver's plane around q
+    // (behind_own_plane): then a contact ray would meet nothing. Only a sun's search
+    // (its rays are its map's columns).
     bool alone = false;
 #ifdef CONTACT_RAYS
     vec2 uv_q = uv, own_grad = vec2(0.0);
@@ -217,8 +219,8 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
         mat3 m = mat3(shadow_mats[cascade]);
         mat2 uv_of_tb = mat2((m * t).xy * zw, (m * b).xy * zw);
         own_grad = inverse(transpose(uv_of_tb)) * vec2(dot(t, n), dot(b, n)) / NoL;
-        alone = on_own_plane(texture(shadow_raw, uv_q).r * scale, uv_q, uv_q, own_ref,
-                             own_grad, own_tol);
+        alone = behind_own_plane(texture(shadow_raw, uv_q).r * scale, uv_q, uv_q, own_ref,
+                                 own_grad, own_tol);
     }
 #endif
     if (shadow_size > 0.0) {
@@ -230,7 +232,7 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
             float plane = ref + clamp(dot(o, n) * inv_NoL, -search * 20.0, search * 20.0);
             if (d < plane - bias) { blockers += 1.0; block_sum += d; }
 #ifdef CONTACT_RAYS
-            alone = alone && on_own_plane(d, uv, uv_q, own_ref, own_grad, own_tol);
+            alone = alone && behind_own_plane(d, uv, uv_q, own_ref, own_grad, own_tol);
 #endif
         }
         if (blockers == 0.0) return alone ? 1.0 : CONTACT(1.0, q, to_light, reach);

@@ -17,7 +17,8 @@ SUN_RADIANCE = 0.8 * 4.0 / np.pi     # a white wall of the sealed room in its su
 def with_sun_angle(stage, angle):
     """`stage` with its one sun's angular diameter set to `angle` degrees: a sun with a
     size runs the blocker search, where the ray is left out on open ground (the map
-    showing the receiver's own plane alone: shaders/shadow_lookup.glsl on_own_plane)."""
+    showing nothing in front of the receiver's own plane: shaders/shadow_lookup.glsl
+    behind_own_plane)."""
     sun = next(p for p in stage.Traverse() if p.IsA(UsdLux.DistantLight))
     UsdLux.DistantLight(sun).GetAngleAttr().Set(float(angle))
     return stage
