@@ -99,6 +99,17 @@ def diffuse_unused(frame, board) -> bool:
         not any(m.base_occlusion for m in frame.scene.materials.values())
 
 
+def occlusion_unused(frame, board) -> bool:
+    """Whether nothing reads this frame's occlusion at all: not its diffuse occlusion
+    (diffuse_unused), nor its specular occlusion: the glossy bounce's pass
+    (passes/reflections.py) reflects the scene in place of the base lobe's dome
+    reflection, and no surface has a coat, whose dome reflection it would dim. The pass
+    then searches nothing and leaves no occlusion on the board (the passes after it
+    read it as optional: without it, nothing occluded)."""
+    return diffuse_unused(frame, board) and "reflections" in frame.stats["passes"] and \
+        not any(m.clearcoat > 0.0 for m in frame.scene.materials.values())
+
+
 class AoPass(Pass):
     name = "ao"
     reads = ("g_depth", "g_normal", "g_mat", "view")
@@ -113,6 +124,9 @@ class AoPass(Pass):
         return occludes(frame) or "AO" in frame.aovs
 
     def execute(self, frame, board):
+        if occlusion_unused(frame, board):
+            self.pool.release(board.pop("ao"))
+            return
         ctx, view = self.ctx, board["view"]
         ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
         board["g_depth"].use(UNITS["g_depth"])
