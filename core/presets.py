@@ -51,7 +51,7 @@ PRESETS = {p.name: p for p in (
     Preset("low", "Low", "Fastest: smallest shadow maps, fewest filter taps, light occlusion, FXAA",
            1.0, 16, 1, 512, 8, 8, 2, 2, 4, 2, 2, 4, 1, False, True),
     Preset("medium", "Medium", "Balanced quality and speed, FXAA",
-           4.0, 32, 1, 1024, 16, 12, 3, 3, 8, 2, 3, 6, 1, False, True),
+           4.0, 32, 1, 1024, 16, 12, 3, 3, 8, 2, 2, 6, 1, False, True),
     Preset("high", "High", "Larger shadow maps, 2x2 supersampling (F12 and command line)",
            8.0, 32, 2, 2048, 16, 12, 4, 4, 12, 1, 1, 12, 2, True, False),
     Preset("ultra", "Ultra", "Closest to Cycles, slowest: 3x3 supersampling",
