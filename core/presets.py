@@ -11,9 +11,9 @@ ao_block: the search runs once per ao_block x ao_block pixels of the image, whic
 blur fills in depth-aware (occlusion varies over the AO distance, far wider than a
 pixel: docs/rendering.md, "Presets").
 near_block / near_steps: the same for the diffuse bounce's near-field search
-(engine/gpu/passes/near_field.py, over ao_slices directions); medium searches 3 x 3
-blocks with 6 samples a side, a third of the AO's 2 x 2 blocks and 8 samples, at the
-same error against Cycles (docs/rendering.md, "Steady frame with the bounce").
+(engine/gpu/passes/near_field.py, over ao_slices directions); medium takes 6 samples a
+side to the AO's 8, at the same error against Cycles (docs/rendering.md, "Steady frame
+with the bounce": coarser blocks broke a PointInstancer's parity with its instances).
 supersample: the image is drawn this many times wider and taller and filtered down
 with Cycles' pixel filter (anti-aliasing; 1: not). edge_samples: a supersampled image's
 geometric edges are placed by four depth samples a sub-pixel (multisampled depth), not by
