@@ -10,6 +10,10 @@ horizon-search directions (rays) and depth samples per side (0 slices: no AO).
 ao_block: the search runs once per ao_block x ao_block pixels of the image, which the
 blur fills in depth-aware (occlusion varies over the AO distance, far wider than a
 pixel: docs/rendering.md, "Presets").
+near_block / near_steps: the same for the diffuse bounce's near-field search
+(engine/gpu/passes/near_field.py, over ao_slices directions); medium takes 6 samples a
+side to the AO's 8, at the same error against Cycles (docs/rendering.md, "Steady frame
+with the bounce": coarser blocks broke a PointInstancer's parity with its instances).
 supersample: the image is drawn this many times wider and taller and filtered down
 with Cycles' pixel filter (anti-aliasing; 1: not). edge_samples: a supersampled image's
 geometric edges are placed by four depth samples a sub-pixel (multisampled depth), not by
@@ -36,6 +40,8 @@ class Preset:
     ao_slices: int
     ao_steps: int
     ao_block: int
+    near_block: int
+    near_steps: int
     supersample: int
     edge_samples: bool
     fxaa: bool
@@ -43,13 +49,13 @@ class Preset:
 
 PRESETS = {p.name: p for p in (
     Preset("low", "Low", "Fastest: smallest shadow maps, fewest filter taps, light occlusion, FXAA",
-           1.0, 16, 1, 512, 8, 8, 2, 2, 4, 2, 1, False, True),
+           1.0, 16, 1, 512, 8, 8, 2, 2, 4, 2, 2, 4, 1, False, True),
     Preset("medium", "Medium", "Balanced quality and speed, FXAA",
-           4.0, 32, 1, 1024, 16, 12, 3, 3, 8, 2, 1, False, True),
+           4.0, 32, 1, 1024, 16, 12, 3, 3, 8, 2, 2, 6, 1, False, True),
     Preset("high", "High", "Larger shadow maps, 2x2 supersampling (F12 and command line)",
-           8.0, 32, 2, 2048, 16, 12, 4, 4, 12, 1, 2, True, False),
+           8.0, 32, 2, 2048, 16, 12, 4, 4, 12, 1, 1, 12, 2, True, False),
     Preset("ultra", "Ultra", "Closest to Cycles, slowest: 3x3 supersampling",
-           16.0, 32, 2, 4096, 32, 16, 4, 8, 16, 1, 3, True, False),
+           16.0, 32, 2, 4096, 32, 16, 4, 8, 16, 1, 1, 16, 3, True, False),
 )}
 DEFAULT = "medium"
 

@@ -96,6 +96,21 @@ float contact_limited(float lit, vec3 q, vec3 to_light, float reach) {
 }
 #endif
 #define CONTACT(lit, q, to_light, reach) contact_limited(lit, q, to_light, reach)
+
+// Where the ray is not needed: a sun's ray runs along one column of its map, and an
+// occluder within its reach is a surface in front of the receiver there. Where no
+// texel the blocker search read (nor q's own) holds a surface in front of the
+// receiver's own plane, to float precision, nothing meets the receiver around q (open
+// ground; a convex surface, which bends away from its plane), and the map's "lit"
+// stands. A wall at a seam, a ball on the floor, a concave corner: in front of the
+// plane, so the ray decides. The plane's depth at a texel's centre is
+// `own_ref + dot(own_grad, centre - uv_q)`, world units: the map is read nearest, so
+// the centre's, not the tap's, depth is what a lone plane leaves there.
+bool behind_own_plane(float d, vec2 uv, vec2 uv_q, float own_ref, vec2 own_grad, float tol) {
+    vec2 size = vec2(textureSize(shadow_raw, 0));
+    vec2 centre = (floor(uv * size) + 0.5) / size;
+    return d - own_ref - dot(own_grad, centre - uv_q) >= -tol;
+}
 #else
 #define CONTACT(lit, q, to_light, reach) (lit)
 #endif
@@ -200,16 +215,38 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
     float search = shadow_radial ? 2.0 * shadow_size : shadow_size * ref;
     search = clamp(search, texel, max_kernel);
     float blockers = 0.0, block_sum = 0.0;
+    // Whether the map holds nothing in front of the receiver's plane around q
+    // (behind_own_plane): then a contact ray would meet nothing. Only a sun's search
+    // (its rays are its map's columns).
+    bool alone = false;
+#ifdef CONTACT_RAYS
+    vec2 uv_q = uv, own_grad = vec2(0.0);
+    float own_ref = ref + texel * (0.5 + 1.5 * sin_t) / NoL;  // p's plane under q
+    float own_tol = 0.05 * texel + 1e-5 * scale;
+    if (!shadow_radial && shadow_size > 0.0 && NoL >= 0.05) {
+        // The plane's depth gradient over the tile's uv, from its gradient over the
+        // light's tangent plane (t, b): along o it changes by dot(o, n) / NoL.
+        vec2 zw = shadow_rects[cascade].zw;
+        mat3 m = mat3(shadow_mats[cascade]);
+        mat2 uv_of_tb = mat2((m * t).xy * zw, (m * b).xy * zw);
+        own_grad = inverse(transpose(uv_of_tb)) * vec2(dot(t, n), dot(b, n)) / NoL;
+        alone = behind_own_plane(texture(shadow_raw, uv_q).r * scale, uv_q, uv_q, own_ref,
+                                 own_grad, own_tol);
+    }
+#endif
     if (shadow_size > 0.0) {
         for (int i = 0; i < blocker_taps; ++i) {
             vec3 o = (t * vogel(i, blocker_taps, rot).x + b * vogel(i, blocker_taps, rot).y) * search;
             float z;
-            if (!shadow_uv(q + o, light_pos, cascade, uv, z)) continue;
+            if (!shadow_uv(q + o, light_pos, cascade, uv, z)) { alone = false; continue; }
             float d = texture(shadow_raw, uv).r * scale;
             float plane = ref + clamp(dot(o, n) * inv_NoL, -search * 20.0, search * 20.0);
             if (d < plane - bias) { blockers += 1.0; block_sum += d; }
+#ifdef CONTACT_RAYS
+            alone = alone && behind_own_plane(d, uv, uv_q, own_ref, own_grad, own_tol);
+#endif
         }
-        if (blockers == 0.0) return CONTACT(1.0, q, to_light, reach);
+        if (blockers == 0.0) return alone ? 1.0 : CONTACT(1.0, q, to_light, reach);
     }
     float kernel = max(texel * 1.5, 0.75 * (shadow_footprint.x * view_depth + shadow_footprint.y));
     if (blockers > 0.0) {

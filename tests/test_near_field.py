@@ -4,7 +4,7 @@ the surfaces that hide a pixel's hemisphere in place of the irradiance field's o
 those directions. Small stages built with pxr; the field needs compute shaders."""
 import numpy as np
 import pytest
-from pxr import UsdLux
+from pxr import Sdf, UsdLux
 
 import shadow_scenes
 from lantern.engine import RenderSettings, Session
@@ -119,4 +119,32 @@ def test_with_the_field_the_ao_pass_searches_the_specular_occlusion_alone():
         m.setattr(ao, "diffuse_unused", lambda frame, board: False)
         whole = render(stage, bounces=diffuse_only)
     assert "ao" in alone.stats["passes"] and "reflections" not in alone.stats["passes"]
+    assert np.array_equal(alone.rgba, whole.rgba)
+
+
+@pytest.mark.parametrize("coat", [0.0, 1.0])
+def test_with_the_field_and_the_glossy_bounce_the_ao_pass_searches_only_for_a_coat(coat):
+    """With the glossy bounce too, the base lobe reflects the scene, not the dome: only
+    a coat's dome reflection takes the specular occlusion. Without a coat nothing reads
+    the occlusion and the AO pass searches nothing; the image is the one the search
+    gives, bit for bit. With one, it searches."""
+    from pxr import UsdShade
+    from lantern.engine.gpu.passes import ao
+    stage = red_wall_stage()
+    UsdLux.DomeLight.Get(stage, "/root/dark").CreateIntensityAttr(1.0)
+    shiny = _material(stage, "shiny", (0.5, 0.5, 0.5))
+    surface = shiny.GetPrim().GetChild("surface")
+    surface.GetAttribute("inputs:ior").Set(1.5)
+    surface.GetAttribute("inputs:roughness").Set(0.3)
+    UsdShade.Shader(surface).CreateInput("clearcoat", Sdf.ValueTypeNames.Float).Set(coat)
+    UsdShade.MaterialBindingAPI.Apply(stage.GetPrimAtPath("/root/box")).Bind(shiny)
+    searches = []
+    search_setup = ao.search_setup
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(ao, "search_setup", lambda *a: searches.append(1) or search_setup(*a))
+        alone = render(stage)
+        m.setattr(ao, "occlusion_unused", lambda frame, board: False)
+        whole = render(stage)
+    assert "reflections" in alone.stats["passes"]
+    assert len(searches) == (2 if coat else 1)      # the AO pass's own searches
     assert np.array_equal(alone.rgba, whole.rgba)

@@ -66,13 +66,15 @@ def occludes(frame) -> bool:
             and frame.options.ambient_occlusion)
 
 
-def search_setup(pool, prog, frame, view, radius: float):
+def search_setup(pool, prog, frame, view, radius: float, block: int, steps: int):
     """Sets the horizon search's uniforms on `prog` (shaders/ao.glsl, either variant:
-    the occlusion's, or the near field's) for a search within `radius` (scene units);
-    returns (its block, pixels a side; its raw target from the pool, to release)."""
+    the occlusion's, or the near field's) for a search within `radius` (scene units),
+    once per `block` x `block` pixels, `steps` samples a side (the preset's, for the
+    one or the other); returns (its block, pixels a side, of the drawn image; its raw
+    target from the pool, to release)."""
     preset, (w, h) = frame.preset, frame.size
     cam = view.camera
-    step = max(int(frame.supersample), 1) * max(int(preset.ao_block), 1)
+    step = max(int(frame.supersample), 1) * max(int(block), 1)
     search = (-(-w // step), -(-h // step))
     frame.stats["ao_searches"] += search[0] * search[1]
     raw = pool.acquire(search, "rgba32f")
@@ -84,7 +86,7 @@ def search_setup(pool, prog, frame, view, radius: float):
     set_uniform(prog, "pixel_scale", 0.5 * h * float(cam.proj[1][1]))
     set_uniform(prog, "max_pixels", float((w * w + h * h) ** 0.5))
     set_uniform(prog, "slices", max(preset.ao_slices, 1))
-    set_uniform(prog, "steps", max(preset.ao_steps, 1))
+    set_uniform(prog, "steps", max(int(steps), 1))
     return step, raw
 
 
@@ -95,6 +97,17 @@ def diffuse_unused(frame, board) -> bool:
     it. Only the specular occlusion is searched then."""
     return "field" in board and "AO" not in frame.aovs and \
         not any(m.base_occlusion for m in frame.scene.materials.values())
+
+
+def occlusion_unused(frame, board) -> bool:
+    """Whether nothing reads this frame's occlusion at all: not its diffuse occlusion
+    (diffuse_unused), nor its specular occlusion: the glossy bounce's pass
+    (passes/reflections.py) reflects the scene in place of the base lobe's dome
+    reflection, and no surface has a coat, whose dome reflection it would dim. The pass
+    then searches nothing and leaves no occlusion on the board (the passes after it
+    read it as optional: without it, nothing occluded)."""
+    return diffuse_unused(frame, board) and "reflections" in frame.stats["passes"] and \
+        not any(m.clearcoat > 0.0 for m in frame.scene.materials.values())
 
 
 class AoPass(Pass):
@@ -111,6 +124,9 @@ class AoPass(Pass):
         return occludes(frame) or "AO" in frame.aovs
 
     def execute(self, frame, board):
+        if occlusion_unused(frame, board):
+            self.pool.release(board.pop("ao"))
+            return
         ctx, view = self.ctx, board["view"]
         ctx.disable(ctx.BLEND | ctx.DEPTH_TEST | ctx.CULL_FACE)
         board["g_depth"].use(UNITS["g_depth"])
@@ -122,7 +138,8 @@ class AoPass(Pass):
         prog = screen_program(self.programs, "ao",
                               ["SPECULAR_ONLY"] if diffuse_unused(frame, board) else [],
                               frame.compute)
-        step, raw = search_setup(self.pool, prog, frame, view, float(distance))
+        step, raw = search_setup(self.pool, prog, frame, view, float(distance),
+                                 frame.preset.ao_block, frame.preset.ao_steps)
         run_screen(ctx, self.programs, self.pool, prog, [raw], frame.compute)
         targets = [board["ao"]] + [board[t] for t in self.aov_targets(frame)]
         prog = screen_program(self.programs, "ao_blur", ["WRITE_AOV"] if len(targets) > 1 else [],

@@ -75,7 +75,8 @@ class NearFieldPass(Pass):
         board["g_normal"].use(UNITS["g_normal"])
         search = screen_program(self.programs, "ao", ["NEAR_FIELD"], compute=True)
         step, raw = search_setup(self.pool, search, frame, view,
-                                 REACH * min(float(np.min(g.step)) for g in field.grids))
+                                 REACH * min(float(np.min(g.step)) for g in field.grids),
+                                 frame.preset.near_block, frame.preset.near_steps)
         set_uniform(search, "u_lit", UNITS["hdr"])
         run_screen(ctx, self.programs, self.pool, search, [raw], True)
         defines = ["IRRADIANCE_FIELD"] + surface_defines(frame, board)
