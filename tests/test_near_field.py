@@ -90,8 +90,11 @@ def test_direct_mode_has_no_near_field_and_the_same_occlusion():
 
 def test_a_flat_open_plane_under_the_dome_gains_nothing():
     """Nothing hides any direction of a flat plane open to the dome: the near field
-    changes no pixel (the field's light is left as it was, bit for bit)."""
+    changes no pixel (the field's light is left as it was, bit for bit). A box under
+    the plane, out of view, makes the scene one that bounces (a plane alone builds no
+    field: engine/bounces.py)."""
     stage = shadow_scenes.new_stage(half=2.0)
+    shadow_scenes.add_box(stage, center=(0.0, 0.0, -3.0), size=0.5)
     shadow_scenes.add_camera(stage, eye=(1.5, -1.5, 1.0), target=(0, 0, 0), aspect=1.5,
                              far=20.0)
     UsdLux.DomeLight.Define(stage, "/root/sky").CreateIntensityAttr(1.0)
