@@ -17,6 +17,7 @@
 uniform sampler2DShadow shadow_cmp;
 uniform sampler2D shadow_raw;
 uniform sampler2D shadow_exit;  // area lights: where the first caster ends (shadow_exits.py)
+uniform bool shadow_exits;      // the map has that layer (else its far sides are unknown)
 uniform bool shadow_radial;
 uniform int shadow_tiles;
 uniform mat4 shadow_mats[6];    // camera-relative position -> tile uv, depth in [0, 1]
@@ -359,7 +360,8 @@ vec2 map_layers(vec3 w, vec3 c) {
     vec2 uv;
     float z;
     if (!shadow_uv(w, c, 0, uv, z)) return vec2(NO_SURFACE);
-    return vec2(texture(shadow_raw, uv).r, texture(shadow_exit, uv).r) * shadow_far;
+    return vec2(texture(shadow_raw, uv).r * shadow_far,
+                shadow_exits ? texture(shadow_exit, uv).r * shadow_far : NO_SURFACE);
 }
 
 // The filtered (bilinear compare) visibility along the ray from c through w.

@@ -10,7 +10,9 @@ centre sees it, was shadowed: the emissive table's outer penumbra was 30-60% too
 (docs/rendering.md, "Area-light penumbrae"). An open caster (one plane) has no exit of
 its own: the layer then holds what lies behind it, and the 1.5 steps bound it as
 before; cut-out and blended casters are not peeled either. Only area lights march, so
-only their maps have the layer (its memory counts in the shadow budget)."""
+only their maps have the layer, and only while the shadow budget has room for it after
+every map's own depth (passes/shadows.py): at ultra the demo's four maps fill it, and a
+layer that took a light's own map from it would cost that light its shadow."""
 from __future__ import annotations
 
 from ....core.lights import DISK, POLYGON, RECT
@@ -22,24 +24,51 @@ def has_exits(light) -> bool:
     return light.kind in (RECT, DISK, POLYGON)
 
 
-def draw_exits(ctx, pool, programs, geometry, sm, set_light, view_proj, rect) -> int:
-    """The exit layer of one tile (`rect`, pixels) of map `sm`, whose own depth is
-    drawn; `set_light(prog)` sets what a caster draw needs of the light. Returns the
-    draws. Leaves the depth test on."""
+def give_exits(ctx, pool, programs, geometry, maps, drawn, room, clip, set_light) -> int:
+    """Exit layers for the area lights' maps of `maps` (light path -> (light, its
+    ShadowMap), most important first) while `room` bytes of the shadow budget last,
+    after every map's own depth: a map left without one marches as it did before the
+    layer (shadow_lookup.glsl shadow_exits). `drawn`: the tiles each map drew this frame,
+    whose layers are drawn again; a map given a layer now draws it whole.
+    `set_light(prog, light, sm)` sets what a caster draw needs. Returns the draws."""
+    draws = 0
+    for path, (light, sm) in maps.items():
+        if not has_exits(light):
+            continue
+        size = 4 * sm.atlas[0] * sm.atlas[1]
+        if size > room:
+            release_exits(pool, sm)
+            continue
+        room -= size
+        tiles = range(sm.tiles) if sm.exit is None else drawn.get(path, ())
+        for i in tiles:
+            draws += _draw_tile(ctx, pool, programs, geometry, sm, i,
+                                lambda prog: set_light(prog, light, sm), clip @ sm.mats[i])
+    ctx.scissor = None
+    ctx.disable(ctx.DEPTH_TEST)
+    return draws
+
+
+def _draw_tile(ctx, pool, programs, geometry, sm, tile, set_light, view_proj) -> int:
+    """The exit layer of one tile of map `sm`, whose own depth is drawn."""
     if sm.exit is None:
         sm.exit = pool.acquire(sm.atlas, "depth")
         sm.exit_raw = ctx.sampler(texture=sm.exit, filter=(ctx.NEAREST, ctx.NEAREST),
                                   compare_func="", repeat_x=False, repeat_y=False)
+    (tw, th), (x, y, sx, sy) = sm.atlas, sm.rects[tile]
+    rect = (round(x * tw), round(y * th), round(sx * tw), round(sy * th))
     fbo = pool.framebuffer(depth=sm.exit)
     fbo.viewport = rect
     fbo.use()
     fbo.clear(depth=1.0, viewport=rect)
+    ctx.scissor = rect
     ctx.enable(ctx.DEPTH_TEST)
     ctx.depth_func = "<"
     prog = programs.get("shadow.vert", "shadow.frag",
                         geometry.commands.object_defines() + ["EXIT"])
     set_light(prog)
     set_uniform(prog, "view_proj", view_proj)
+    geometry.bind_objects(UNITS["u_objects"])
     sm.raw.use(UNITS["shadow_raw"])          # the map's own depth, which it peels
     return geometry.commands.draw_casters(prog)
 

@@ -51,7 +51,7 @@ from ...view import translate
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
 from .gbuffer import filter_defines, set_material
-from .shadow_exits import draw_exits, has_exits, release_exits
+from .shadow_exits import give_exits, release_exits
 from .view import set_origin
 
 # Every shadow map of a frame together (32-bit depth texels): under llvmpipe they are
@@ -157,6 +157,7 @@ def set_shadow_uniforms(prog, sm, preset, eye):
         set_uniform(prog, "shadow_ranges", pad(sm.ranges, 1.0))
         set_uniform(prog, "shadow_texels", pad(sm.texel, 1.0))
     set_uniform(prog, "shadow_footprint", sm.footprint if sm.stochastic else (0.0, 0.0))
+    set_uniform(prog, "shadow_exits", sm.exit is not None)
     if sm.exit is not None:
         sm.exit_raw.use(UNITS["shadow_exit"])
     set_uniform(prog, "shadow_tinted", sm.tint is not None)
@@ -210,7 +211,7 @@ class ShadowPass(Pass):
         if see_through != self._see_through:
             self._drop(list(self.maps))  # a cut-out or blended material changed: all again
             self._see_through = see_through
-        out, used = {}, 0
+        out, drawn, used = {}, {}, 0
         casting = list(self.lights.casting)       # worked out once per light change
         kept = set(casting)
         # A light that no longer casts, or changed (stale: drawn again below).
@@ -230,7 +231,7 @@ class ShadowPass(Pass):
                 sm.inputs = (light, bounds)
                 if sm.same_layout(old):
                     old.inputs, sm = sm.inputs, old
-            used += sm.atlas[0] * sm.atlas[1] * (4 + 4 * has_exits(light) + 8 * tinted)
+            used += sm.atlas[0] * sm.atlas[1] * (4 + 8 * tinted)
             if used > SHADOW_BUDGET_BYTES:
                 self._drop(casting[n:])      # these, and every less important one
                 _budget_warning(scene, len(casting) - n, len(casting))
@@ -241,10 +242,17 @@ class ShadowPass(Pass):
                 continue
             self._render(frame, sm, old, light, tiles, tinted)
             self.maps[path] = out[path] = sm
+            drawn[path] = tiles
             frame.count("shadow_maps_rendered")
             frame.count("shadow_passes", len(tiles))
         else:
             scene.warnings.pop(BUDGET_WARNING, None)
+        clip = ZERO_TO_ONE if self.depth.zero_to_one else np.eye(4)
+        frame.count("shadow_draws", give_exits(
+            self.ctx, self.pool, self.programs, self.geometry,
+            {p: (scene.lights[p], sm) for p, sm in out.items()}, drawn,
+            SHADOW_BUDGET_BYTES - used, clip,
+            lambda prog, light, sm: _set_light(prog, sm, light, self._emitter_object(light))))
         frame.count("shadow_maps", len(out))
         frame.count("unshadowed_lights", len(casting) - len(out))
         # A screen pixel's width per unit of view depth (perspective) or in all (ortho).
@@ -297,10 +305,6 @@ class ShadowPass(Pass):
                                                               BIAS @ sm.mats[i]))
             if tinted:
                 self._draw_tint(frame, sm, light, clip @ sm.mats[i], skip, rect)
-            if has_exits(light):
-                frame.count("shadow_draws", draw_exits(
-                    ctx, self.pool, self.programs, self.geometry, sm,
-                    lambda p: _set_light(p, sm, light, skip), clip @ sm.mats[i], rect))
         ctx.scissor = None
         ctx.disable(ctx.DEPTH_TEST)
 
