@@ -50,6 +50,28 @@ void set_polygon() {
     for (int i = 0; i < ltc_out_n; ++i) ltc_poly[i] = ltc_out[i];
 }
 
+// A cone of directions about the shaded point as ltc_poly: the light of a sphere, or of
+// a disk facing the point (lights.glsl sphere_light), is the light of the cone it fills,
+// of axis c (unit, in the lobes' frame) and half-angle a. Taken as the disk at unit
+// distance that fills it (Heitz and Hill 2017), drawn as the SPHERE_SIDES-gon of its
+// area: on the cone's edge within 1% of the disk's radius, so a highlight's outline is
+// the disk's within 1%.
+#define SPHERE_SIDES 16
+void set_cone(vec3 c, float sin_a, float cos_a) {
+    const float step_angle = 2.0 * PI / float(SPHERE_SIDES);
+    const float area_scale = 1.0130016;     // sqrt(2 pi / (n sin(2 pi / n))), n = 16
+    vec3 e1 = normalize(cross(c, abs(c.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
+    vec3 e2 = cross(c, e1);
+    vec2 turn = vec2(cos(step_angle), sin(step_angle));
+    vec2 q = vec2(sin_a * area_scale, 0.0);
+    ltc_in_n = SPHERE_SIDES;
+    for (int i = 0; i < SPHERE_SIDES; ++i) {
+        ltc_in[i] = cos_a * c + q.x * e1 + q.y * e2;
+        q = vec2(q.x * turn.x - q.y * turn.y, q.x * turn.y + q.y * turn.x);
+    }
+    set_polygon();
+}
+
 // The form factor of ltc_out (above the horizon): the clamped cosine's share of it,
 // (1 / 2 pi) sum over edges of the angle they span times their plane's normal's z.
 // atan(|a x b|, a.b) keeps small angles exact, as acos does not.
