@@ -336,8 +336,8 @@ def cone_cases():
 
 
 # The largest error allowed in the share, by lobe, at n.v >= 0.4 and at n.v 0.15.
-# Measured 2026-11-28 (2 cores, llvmpipe): Lambert 2e-5 (the 16-gon of the disk's
-# area; 2e-5 relative down to caps of 1e-4 rad); GGX 0.0049, 0.0016, 0.0135 and 0.0030
+# Measured 2026-11-28 (2 cores, llvmpipe): Lambert 3e-5 (the 16-gon of the disk's
+# area; 3e-5 relative down to caps of 0.01 rad); GGX 0.0049, 0.0016, 0.0135 and 0.0030
 # at n.v >= 0.4 (2.9% relative at most) and 0.0042, 0.016, 0.104 and 0.0035 at n.v
 # 0.15. At roughness 0.05 the worst is the distant sphere (a cap of 0.01 rad, the
 # lobe's own size), where the LTC's shape is the polygons' (BOUND's 0.004); at 0.4 and
