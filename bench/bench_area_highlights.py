@@ -19,6 +19,7 @@ from bench_cycles_shadows import warm_render  # noqa: E402
 from image_metrics import mean_flip  # noqa: E402
 from lantern.core.presets import PRESETS  # noqa: E402
 from lantern.engine import RenderSettings, read_exr  # noqa: E402
+from lantern.engine.bounces import DIRECT  # noqa: E402
 from lantern.exporters import stage_from_depsgraph  # noqa: E402
 
 
@@ -49,7 +50,8 @@ def main():
         stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
         row = f"{name:<11}"
         for preset in PRESETS:
-            settings = RenderSettings(width=width, height=height, preset=preset)
+            settings = RenderSettings(width=width, height=height, preset=preset,
+                                      bounces=DIRECT)           # the references
             result, ms = warm_render(stage, settings)
             row += f"  {preset} {mean_flip(result.rgba, reference):.4f} ({ms:.0f})"
             if out is not None and preset == "medium":

@@ -100,9 +100,10 @@ float spot_mask(vec3 p, vec3 l, float d) {
 // What an emitter in direction l (unit) from s sends towards the viewer: Ed and Es,
 // the irradiance its diffuse and specular parts bring (the bump's visibility taken),
 // and its specular lobes widened by `widen` (a sphere's size, Karis 2013; 0 for the
-// sun, whose roughness at most 1 the min leaves as it is). Suns, sphere lights and the
-// light tree's groups (light_tree.glsl) all end here, so a pass that shades any of
-// them evaluates the BRDF once.
+// sun and points, whose roughness at most 1 the min leaves as it is). Suns, points and
+// the light tree's lights and groups (light_tree.glsl) all end here, so a pass that
+// shades any of them evaluates the BRDF once; sphere lights one by one have the
+// sphere form (sphere_light).
 void point_reflected(Surface s, vec3 l, vec3 Ed, vec3 Es, float widen,
                      out vec3 diffuse, out vec3 glossy) {
     float a = ggx_alpha(s.roughness), ac = ggx_alpha(s.coat_roughness);
@@ -122,9 +123,10 @@ void distant_light(Surface s, out vec3 diffuse, out vec3 glossy) {
     point_reflected(s, l, E * light_diffuse, E * light_specular, 0.0, diffuse, glossy);
 }
 
-// The loaded sphere light (point or spot) seen from s, for point_reflected: its
-// direction l, its diffuse and specular irradiance and its lobes' widening; false
-// where it adds nothing (beyond its range, below the horizon).
+// The loaded sphere light (point or spot) seen from s as a point, for point_reflected
+// (a point, and the light tree's lights): its direction l, its diffuse and specular
+// irradiance and its lobes' widening by its size; false where it adds nothing (beyond
+// its range, below the horizon).
 bool sphere_emitter(Surface s, out vec3 l, out vec3 Ed, out vec3 Es, out float widen) {
     vec3 to_light = light_pos - s.p;
     float d2 = dot(to_light, to_light);
@@ -146,22 +148,20 @@ bool sphere_emitter(Surface s, out vec3 l, out vec3 Ed, out vec3 Es, out float w
     return true;
 }
 
-void sphere_light(Surface s, out vec3 diffuse, out vec3 glossy) {
-    diffuse = glossy = vec3(0.0);
-    vec3 l, Ed, Es;
-    float widen;
-    if (sphere_emitter(s, l, Ed, Es, widen)) point_reflected(s, l, Ed, Es, widen, diffuse, glossy);
+// The frame (t, b, n) of s's lobes (lib.glsl Lobe), from world directions.
+mat3 lobe_frame(Surface s) {
+    vec3 t = s.v - s.n * dot(s.n, s.v);
+    float len = length(t);
+    t = len > 1e-5 ? t / len
+                   : normalize(cross(s.n, abs(s.n.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
+    return transpose(mat3(t, cross(s.n, t), s.n));
 }
 
 // Polygon k of the loaded area light about s, in the frame (t, b, n) of s's lobes
 // (lib.glsl Lobe), clipped to s's horizon: ltc_poly (ltc.glsl). `row`: the table row
 // that holds it (the light's own, or one of its polygon rows), n its corners.
 void area_polygon(Surface s, int row, int n) {
-    vec3 t = s.v - s.n * dot(s.n, s.v);
-    float len = length(t);
-    t = len > 1e-5 ? t / len
-                   : normalize(cross(s.n, abs(s.n.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
-    mat3 to_frame = transpose(mat3(t, cross(s.n, t), s.n));
+    mat3 to_frame = lobe_frame(s);
     ltc_in_n = n;
     for (int i = 0; i < n; ++i)
         ltc_in[i] = to_frame * (light_pos + light_table(row, 8 + i).xyz - s.p);
@@ -172,26 +172,69 @@ void area_polygon(Surface s, int row, int n) {
 // (Lambert's lobe), the base's GGX lobe and the coat's each their share of the polygon
 // by their LTC (ltc.glsl) times their albedo at n.v (their Fresnel averaged over the
 // lobe, as the split-sum's), the microfiber sheen its own LTC exactly (sheen.glsl).
+// The lobes' shares come from one loop, as many turns as s has lobes: one copy of the
+// integral in a program. With a copy a lobe, straight after a sphere light's cone
+// (set_cone), llvmpipe took 40 s, not 1.4, to compile the sphere light's volume.
 void polygon_reflected(Surface s, vec3 L, inout vec3 diffuse, inout vec3 glossy) {
     // The bump map correction towards the light's centre for the diffuse integral, and
     // along the mirror direction for the glossy lobes.
     vec3 to_centre = normalize(light_pos - s.p);
     float visible = bump_visible(s, to_centre);
-    vec3 E = L * (PI * ltc_share(mat3(1.0))) * light_diffuse * visible;
-    diffuse += E * brdf_diffuse(s) * bump_shadowing(s, to_centre);
+    // Lobe k: 0 Lambert's, 1 the base's GGX, 2 the coat's, 3 the sheen's.
+    mat3 inverses[4] = mat3[4](mat3(1.0), ltc_inverse(s.NoV, s.roughness),
+                               ltc_inverse(s.NoV, s.coat_roughness), mat3(1.0));
+    int last = s.coat > 0.0 ? 2 : 1;
 #ifdef SHEEN
-    if (s.sheen_mode == 2) {
-        diffuse += E * brdf_sheen(s, to_centre);
-    } else if (max(s.sheen.r, max(s.sheen.g, s.sheen.b)) > 0.0) {
-        mat3 sheen_inverse = mat3(vec3(s.sheen_a, 0.0, 0.0), vec3(0.0, s.sheen_a, 0.0),
-                                  vec3(s.sheen_b, 0.0, 1.0));
-        diffuse += L * light_diffuse * visible * s.sheen * s.sheen_albedo * ltc_share(sheen_inverse);
+    if (s.sheen_mode != 2 && max(s.sheen.r, max(s.sheen.g, s.sheen.b)) > 0.0) {
+        inverses[3] = mat3(vec3(s.sheen_a, 0.0, 0.0), vec3(0.0, s.sheen_a, 0.0),
+                           vec3(s.sheen_b, 0.0, 1.0));
+        last = 3;
     }
 #endif
-    vec3 lobes = s.under_coat * s.spec_albedo * ltc_share(ltc_inverse(s.NoV, s.roughness));
-    if (s.coat > 0.0)
-        lobes += vec3(s.coat_albedo * ltc_share(ltc_inverse(s.NoV, s.coat_roughness)));
+    vec4 share = vec4(0.0);
+    for (int k = 0; k <= last; ++k)
+        if (k != 2 || s.coat > 0.0) share[k] = ltc_share(inverses[k]);
+    vec3 E = L * (PI * share[0]) * light_diffuse * visible;
+    diffuse += E * brdf_diffuse(s) * bump_shadowing(s, to_centre);
+#ifdef SHEEN
+    if (s.sheen_mode == 2)
+        diffuse += E * brdf_sheen(s, to_centre);
+    else
+        diffuse += L * light_diffuse * visible * s.sheen * s.sheen_albedo * share[3];
+#endif
+    vec3 lobes = s.under_coat * s.spec_albedo * share[1] + vec3(s.coat_albedo * share[2]);
     glossy += L * light_specular * bump_visible(s, reflect(-s.v, s.n)) * lobes;
+}
+
+// A sphere light (point or spot) of radius r > 0, by the light of the cone it fills
+// seen from s (ltc.glsl set_cone) through the area lights' LTC (polygon_reflected):
+// Blender's sphere (soft falloff off) fills the cone of its visible cap, sin a = r / d;
+// with soft falloff, Cycles' disk of radius r at the light facing s, tan a = r / d.
+// Either sends radiance I / (pi r^2), so wherever the cone is above s's horizon the
+// diffuse light is I cos / d^2 and I cos / (d^2 + r^2), Blender's two falloffs, and its
+// highlight is the sphere's disk, not a widened lobe. Inside the sphere, the half-space
+// towards its centre. A point (r = 0) is its limit: f cos I / d^2 (point_reflected).
+void sphere_light(Surface s, out vec3 diffuse, out vec3 glossy) {
+    diffuse = glossy = vec3(0.0);
+    vec3 l, Ed, Es;
+    float widen;
+    if (light_radius <= 0.0) {
+        if (sphere_emitter(s, l, Ed, Es, widen)) point_reflected(s, l, Ed, Es, widen, diffuse, glossy);
+        return;
+    }
+    vec3 to_light = light_pos - s.p;
+    float d = length(to_light), r = light_radius;
+    if (d > light_range) return;
+    l = d > 1e-6 ? to_light / d : s.n;
+    float h = soft_falloff ? sqrt(d * d + r * r) : max(d, r);
+    float sin_a = r / h;
+    float cos_a = soft_falloff ? d / h : sqrt(max(1.0 - sin_a * sin_a, 0.0));
+    vec3 L = light_color / (PI * r * r);
+#ifdef LIGHT_SPOT
+    if (is_spot) L *= spot_mask(s.p, l, d);
+#endif
+    set_cone(lobe_frame(s) * l, sin_a, cos_a);
+    if (ltc_poly_n >= 3) polygon_reflected(s, L, diffuse, glossy);
 }
 
 // The node after i in a depth-first walk of an implicit complete tree (children 2i+1,

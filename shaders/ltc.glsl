@@ -50,6 +50,38 @@ void set_polygon() {
     for (int i = 0; i < ltc_out_n; ++i) ltc_poly[i] = ltc_out[i];
 }
 
+// A cone of directions about the shaded point as ltc_poly: the light of a sphere, or of
+// a disk facing the point (lights.glsl sphere_light), is the light of the cone it fills,
+// of axis c (unit, in the lobes' frame) and half-angle a. Taken as the disk at unit
+// distance that fills it (Heitz and Hill 2017), drawn as the SPHERE_SIDES-gon of its
+// area: on the cone's edge within 1% of the disk's radius, so a highlight's outline is
+// the disk's within 1%.
+#define SPHERE_SIDES 16
+// The 16-gon's corners about a unit disk's centre, scaled to the disk's area by
+// sqrt(2 pi / (n sin(2 pi / n))) = 1.0130016: written out, each corner one product
+// with the frame, so that every program puts them on the same floats. Stepped round by
+// a rotation at run time (a chain the compiler may fold and reorder as it likes in each
+// program), they came out an ulp apart between the light volumes' and the clustered
+// pass's programs, and the form factor of a small cone (edges that nearly cancel)
+// magnified that a thousandfold and more.
+#define RIM_1 1.0130016
+#define RIM_2 0.93589139
+#define RIM_3 0.71630025
+#define RIM_4 0.38765892
+const vec2 SPHERE_RIM[SPHERE_SIDES] = vec2[SPHERE_SIDES](
+    vec2(RIM_1, 0.0), vec2(RIM_2, RIM_4), vec2(RIM_3, RIM_3), vec2(RIM_4, RIM_2),
+    vec2(0.0, RIM_1), vec2(-RIM_4, RIM_2), vec2(-RIM_3, RIM_3), vec2(-RIM_2, RIM_4),
+    vec2(-RIM_1, 0.0), vec2(-RIM_2, -RIM_4), vec2(-RIM_3, -RIM_3), vec2(-RIM_4, -RIM_2),
+    vec2(0.0, -RIM_1), vec2(RIM_4, -RIM_2), vec2(RIM_3, -RIM_3), vec2(RIM_2, -RIM_4));
+void set_cone(vec3 c, float sin_a, float cos_a) {
+    vec3 u = normalize(cross(c, abs(c.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
+    vec3 e1 = sin_a * u, e2 = sin_a * cross(c, u), centre = cos_a * c;
+    ltc_in_n = SPHERE_SIDES;
+    for (int i = 0; i < SPHERE_SIDES; ++i)
+        ltc_in[i] = centre + SPHERE_RIM[i].x * e1 + SPHERE_RIM[i].y * e2;
+    set_polygon();
+}
+
 // The form factor of ltc_out (above the horizon): the clamped cosine's share of it,
 // (1 / 2 pi) sum over edges of the angle they span times their plane's normal's z.
 // atan(|a x b|, a.b) keeps small angles exact, as acos does not.

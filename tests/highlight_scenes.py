@@ -8,7 +8,10 @@ default pixel filter) and tests/test_area_highlights.py.
 - disk: the same with a 0.9 m disk light;
 - rect_rough: the rect scene with a floor of roughness 0.4;
 - rect_unshadowed: the rect scene, its light casting no shadow (the highlight alone:
-  the sphere's shadow falls across it in the others).
+  the sphere's shadow falls across it in the others);
+- sphere: a point light of radius 0.3 m (a sphere light; Blender's soft falloff, its
+  default) 1.5 m to the side, so that the sphere's shadow misses its reflection, over a
+  floor of roughness 0.05, where its highlight is a disk.
 A black world: only the light lights them."""
 import reference_scenes as rs
 
@@ -19,10 +22,12 @@ GOLD = dict(color=(1.0, 0.766, 0.336), roughness=0.25, metallic=1.0)
 LIGHTS = {
     "rect": dict(shape='RECTANGLE', size=2.0, size_y=0.4, energy=200.0),
     "disk": dict(shape='DISK', size=0.9, energy=200.0),
+    "sphere": dict(type='POINT', radius=0.3, energy=300.0, at=(1.5, 3.0, 1.5)),
 }
 # name: (light, floor roughness, shadow)
 SCENES = {"rect": ("rect", 0.15, True), "disk": ("disk", 0.15, True),
-          "rect_rough": ("rect", 0.4, True), "rect_unshadowed": ("rect", 0.15, False)}
+          "rect_rough": ("rect", 0.4, True), "rect_unshadowed": ("rect", 0.15, False),
+          "sphere": ("sphere", 0.05, True)}
 LIGHT_AT = (0.0, 3.0, 1.5)          # facing straight down, behind the sphere
 CAMERA = ((0.0, -5.0, 0.6), (0.0, 0.0, 0.3))
 
@@ -43,12 +48,16 @@ def build(name, workdir=None):
     rs._camera(scene, *CAMERA)
     rs._world(scene, strength=0.0)
     spec = LIGHTS[light_kind]
-    data = bpy.data.lights.new("Area", 'AREA')
-    data.shape, data.size, data.energy = spec["shape"], spec["size"], spec["energy"]
+    data = bpy.data.lights.new("Area", spec.get("type", 'AREA'))
+    data.energy = spec["energy"]
+    if data.type == 'AREA':
+        data.shape, data.size = spec["shape"], spec["size"]
+    else:
+        data.shadow_soft_size = spec["radius"]
     if "size_y" in spec:
         data.size_y = spec["size_y"]
     data.use_shadow = shadow
     light = bpy.data.objects.new("Area", data)
-    light.location = LIGHT_AT
+    light.location = spec.get("at", LIGHT_AT)
     scene.collection.objects.link(light)
     return scene

@@ -93,10 +93,9 @@ class ContactRays:
     CONTACT_RAYS), shared by the light passes of both forms. Only in a frame that
     bounces light: the irradiance field is on the board, so the scene's tracer is built
     (a frame lit directly stays as it was); only for suns, whose maps leak at a sunlit
-    room's seams. A point or spot light's program with the walk took llvmpipe minutes
-    to compile at its first draw on the demo (beside a sphere-light polygon form since
-    taken out; not tried again), and an area light's taps march the map along each ray
-    to the light instead.
+    room's seams. A point or spot light's program with the walk beside its sphere's
+    polygon integral took llvmpipe minutes to compile at its first draw (the demo), and
+    an area light's taps march the map along each ray to the light instead.
     A ray counts only opaque surfaces: cut-outs, blended surfaces and glass cast
     through their maps' tested opacity, as before: where a scene has them, a flag per
     tracer material in one small buffer, uploaded when the flags change."""
