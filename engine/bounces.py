@@ -57,28 +57,45 @@ def surfaces_light_each_other(scene, tolerance: float = 1e-5) -> bool:
     `tolerance`: of the scene's size, how far past a face's plane a point may lie."""
     if scene.points or any(max(m.emissive) > 0.0 for m in scene.materials.values()):
         return True
-    points, triangles, closed = [], [], True
+    placed = []                          # (mesh, its world matrices)
     for inst in scene.instances.values():
         mesh = scene.meshes[inst.mesh_key]
         if mesh.skin is not None or mesh.patches is not None or inst.shapes:
             return True
+        placed.append((mesh, np.asarray(inst.worlds if inst.worlds is not None
+                                        else [inst.world], np.float64)))
+    points = sum(len(m.vertices) * len(w) for m, w in placed)
+    if points * sum(len(m.indices) // 3 * len(w) for m, w in placed) > PAIRS_LIMIT:
+        return True
+    lamps = np.array([light.position for light in scene.lights.values()
+                      if light.kind != SUN], np.float64).reshape(-1, 3)
+    # Asked every frame: the answer is kept while the geometry and the lamps are the same.
+    key = (tuple((hash(m.vertices.tobytes()), hash(m.indices.tobytes()), w.tobytes())
+                 for m, w in placed), lamps.tobytes(), tolerance)
+    if _LAST[0] != key:
+        _LAST[:] = [key, _faces_see_each_other(placed, lamps, tolerance)]
+    return _LAST[1]
+
+
+_LAST = [None, True]                     # (key, answer) of the last scene asked about
+
+
+def _faces_see_each_other(placed, lamps, tolerance) -> bool:
+    """surfaces_light_each_other's test on (mesh, world matrices) pairs."""
+    points, triangles, closed = [], [], True
+    for mesh, worlds in placed:
         closed = closed and _closed(mesh)
         local = mesh.vertices[:, :3].astype(np.float64)
         corners = mesh.indices.reshape(-1, 3)
-        for world in (inst.worlds if inst.worlds is not None else [inst.world]):
-            world = np.asarray(world, np.float64)
+        for world in worlds:
             p = local @ world[:3, :3].T + world[:3, 3]
             points.append(p)
             triangles.append(p[corners])
     p, tri = np.concatenate(points), np.concatenate(triangles)
-    if len(p) * len(tri) > PAIRS_LIMIT:
-        return True
     normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     length = np.linalg.norm(normals, axis=1)
     tri, normals = tri[length > 0.0], normals[length > 0.0] / length[length > 0.0, None]
     tol = tolerance * (float(np.ptp(p, axis=0).max()) or 1.0)
-    lamps = np.array([light.position for light in scene.lights.values()
-                      if light.kind != SUN], np.float64).reshape(-1, 3)
     lamp_inside = np.ones(len(lamps), bool)
     solid = False
     for k in range(0, len(tri), BLOCK):
