@@ -58,6 +58,11 @@ class ShadowMap:
         self.tint = None            # glass casters' colour and nearest depth (rgba16f)
         self.exit = self.exit_raw = None  # area lights: the casters' far sides (shadow_exits)
 
+    def tile_pixels(self, tile: int) -> tuple:
+        """Tile `tile`'s rectangle in the atlas, pixels (x, y, width, height)."""
+        (tw, th), (x, y, sx, sy) = self.atlas, self.rects[tile]
+        return (round(x * tw), round(y * th), round(sx * tw), round(sy * th))
+
     def same_layout(self, other) -> bool:
         return other is not None and self.atlas == other.atlas and \
             np.array_equal(self.anchor, other.anchor) and \

@@ -32,6 +32,7 @@ def give_exits(ctx, pool, programs, geometry, maps, drawn, room, clip, set_light
     whose layers are drawn again; a map given a layer now draws it whole.
     `set_light(prog, light, sm)` sets what a caster draw needs. Returns the draws."""
     draws = 0
+    geometry.bind_objects(UNITS["u_objects"])
     for path, (light, sm) in maps.items():
         if not has_exits(light):
             continue
@@ -49,26 +50,29 @@ def give_exits(ctx, pool, programs, geometry, maps, drawn, room, clip, set_light
     return draws
 
 
-def _draw_tile(ctx, pool, programs, geometry, sm, tile, set_light, view_proj) -> int:
-    """The exit layer of one tile of map `sm`, whose own depth is drawn."""
-    if sm.exit is None:
-        sm.exit = pool.acquire(sm.atlas, "depth")
-        sm.exit_raw = ctx.sampler(texture=sm.exit, filter=(ctx.NEAREST, ctx.NEAREST),
-                                  compare_func="", repeat_x=False, repeat_y=False)
-    (tw, th), (x, y, sx, sy) = sm.atlas, sm.rects[tile]
-    rect = (round(x * tw), round(y * th), round(sx * tw), round(sy * th))
-    fbo = pool.framebuffer(depth=sm.exit)
+def start_tile(ctx, fbo, rect):
+    """Draws from here into `rect` (pixels) of the depth target `fbo`: that tile
+    cleared to the far depth, scissored, depth-tested nearest first. A map's own depth
+    (passes/shadows.py) and its exit layer alike."""
     fbo.viewport = rect
     fbo.use()
     fbo.clear(depth=1.0, viewport=rect)
     ctx.scissor = rect
     ctx.enable(ctx.DEPTH_TEST)
     ctx.depth_func = "<"
+
+
+def _draw_tile(ctx, pool, programs, geometry, sm, tile, set_light, view_proj) -> int:
+    """The exit layer of one tile of map `sm`, whose own depth is drawn."""
+    if sm.exit is None:
+        sm.exit = pool.acquire(sm.atlas, "depth")
+        sm.exit_raw = ctx.sampler(texture=sm.exit, filter=(ctx.NEAREST, ctx.NEAREST),
+                                  compare_func="", repeat_x=False, repeat_y=False)
+    start_tile(ctx, pool.framebuffer(depth=sm.exit), sm.tile_pixels(tile))
     prog = programs.get("shadow.vert", "shadow.frag",
                         geometry.commands.object_defines() + ["EXIT"])
     set_light(prog)
     set_uniform(prog, "view_proj", view_proj)
-    geometry.bind_objects(UNITS["u_objects"])
     sm.raw.use(UNITS["shadow_raw"])          # the map's own depth, which it peels
     return geometry.commands.draw_casters(prog)
 

@@ -51,7 +51,7 @@ from ...view import translate
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
 from .gbuffer import filter_defines, set_material
-from .shadow_exits import give_exits, release_exits
+from .shadow_exits import give_exits, release_exits, start_tile
 from .view import set_origin
 
 # Every shadow map of a frame together (32-bit depth texels): under llvmpipe they are
@@ -246,11 +246,10 @@ class ShadowPass(Pass):
             frame.count("shadow_passes", len(tiles))
         else:
             scene.warnings.pop(BUDGET_WARNING, None)
-        clip = ZERO_TO_ONE if self.depth.zero_to_one else np.eye(4)
         frame.count("shadow_draws", give_exits(
             self.ctx, self.pool, self.programs, self.geometry,
             {p: (scene.lights[p], sm) for p, sm in out.items()}, drawn,
-            SHADOW_BUDGET_BYTES - used, clip,
+            SHADOW_BUDGET_BYTES - used, self._clip(),
             lambda prog, light, sm: _set_light(prog, sm, light, self._emitter_object(light))))
         frame.count("shadow_maps", len(out))
         frame.count("unshadowed_lights", len(casting) - len(out))
@@ -278,7 +277,6 @@ class ShadowPass(Pass):
             sm.raw = ctx.sampler(texture=sm.texture, filter=(ctx.NEAREST, ctx.NEAREST),
                                  compare_func="", repeat_x=False, repeat_y=False)
         ctx = self.ctx
-        tw, th = sm.atlas
         fbo = self.pool.framebuffer(depth=sm.texture)
         ctx.disable(ctx.BLEND | ctx.CULL_FACE)   # single-sided planes cast too
         prog = self.programs.get("shadow.vert", "shadow.frag",
@@ -286,16 +284,10 @@ class ShadowPass(Pass):
         self.geometry.bind_objects(UNITS["u_objects"])
         skip = self._emitter_object(light)
         _set_light(prog, sm, light, skip)
-        clip = ZERO_TO_ONE if self.depth.zero_to_one else np.eye(4)
+        clip = self._clip()
         for i in tiles:
-            x, y, sx, sy = sm.rects[i]
-            rect = (round(x * tw), round(y * th), round(sx * tw), round(sy * th))
-            fbo.viewport = rect
-            fbo.use()
-            fbo.clear(depth=1.0, viewport=rect)
-            ctx.scissor = rect
-            ctx.enable(ctx.DEPTH_TEST)
-            ctx.depth_func = "<"
+            rect = sm.tile_pixels(i)
+            start_tile(ctx, fbo, rect)
             set_uniform(prog, "view_proj", clip @ sm.mats[i])
             frame.count("shadow_draws", self.geometry.commands.draw_casters(prog))
             sm.stochastic |= self._draw_see_through(frame, sm, light, clip @ sm.mats[i], skip)
@@ -306,6 +298,10 @@ class ShadowPass(Pass):
                 self._draw_tint(frame, sm, light, clip @ sm.mats[i], skip, rect)
         ctx.scissor = None
         ctx.disable(ctx.DEPTH_TEST)
+
+    def _clip(self):
+        """GL's projection to this context's clip convention (engine/gpu/depth.py)."""
+        return ZERO_TO_ONE if self.depth.zero_to_one else np.eye(4)
 
     def _emitter_object(self, light) -> int:
         """The object id of the mesh an emissive polygon light comes from (it casts
