@@ -57,17 +57,17 @@ const float CONTACT_REACH = 4.0;
 // bits (it changes only where a ray grazes an edge). Past the stretch the map decides.
 #include "raytrace.glsl"
 uniform vec3 contact_eye;            // the camera's world position: the tracer's frame
-// The ray's origin (world) for camera-relative q: pulled towards the camera by
-// CONTACT_PULL of its distance, along the line of sight, which is free, since the camera
-// sees the point; the ray reaches that much further. A point the G-buffer gives just
-// past a seam's wall (outside a closed room) starts inside again.
+// The ray starts at camera-relative q pulled towards the camera by CONTACT_PULL of its
+// distance, along the line of sight, which is free, since the camera sees the point,
+// and reaches that much further (CONTACT below): a point the G-buffer gives just past a
+// seam's wall (outside a closed room) starts inside again.
 const float CONTACT_PULL = 1e-3;
-vec3 contact_origin(vec3 q) {
+vec3 contact_origin(vec3 q) {                // world
     return q * (1.0 - CONTACT_PULL) + contact_eye;
 }
 
-// `lit` (the map's), or 0 where the ray from camera-relative q along `to_light` (unit)
-// meets an opaque surface within `reach`.
+// `lit` (the map's), or 0 where the ray from camera-relative q (pulled) along
+// `to_light` (unit) meets an opaque surface within `reach`.
 #ifdef CONTACT_SEE_THROUGH
 // A scene with cut-outs, blended surfaces or glass: they cast through the map's tested
 // opacity alone, so the ray passes them. Per tracer material, whether it is opaque
@@ -80,7 +80,6 @@ float contact_limited(float lit, vec3 q, vec3 to_light, float reach) {
     if (lit <= 0.0) return lit;
     vec3 o = contact_origin(q);
     float tmin = 0.0;
-    reach += CONTACT_PULL * length(q);
     for (int i = 0; i < CONTACT_LAYERS; ++i) {
         RtHit hit;
         if (!rt_closest_hit(o, to_light, tmin, reach, hit)) return lit;
@@ -93,10 +92,10 @@ float contact_limited(float lit, vec3 q, vec3 to_light, float reach) {
 #else
 float contact_limited(float lit, vec3 q, vec3 to_light, float reach) {
     if (lit <= 0.0) return lit;
-    return rt_any_hit(contact_origin(q), to_light, 0.0, reach + CONTACT_PULL * length(q)) ? 0.0 : lit;
+    return rt_any_hit(contact_origin(q), to_light, 0.0, reach) ? 0.0 : lit;
 }
 #endif
-#define CONTACT(lit, q, to_light, reach) contact_limited(lit, q, to_light, reach)
+#define CONTACT(lit, q, to_light, reach) contact_limited(lit, q, to_light, (reach) + CONTACT_PULL * length(q))
 
 // Where the ray is not needed: a sun's ray runs along one column of its map, and an
 // occluder within its reach is a surface in front of the receiver there. Where no
