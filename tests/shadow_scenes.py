@@ -61,7 +61,8 @@ def add_box(stage, center=(0, 0, 0.5), size=1.0, name="box"):
 
 
 def add_camera(stage, eye, target, focal=20.0, hap=36.0, aspect=16 / 9, far=200.0,
-               ortho_width=None):
+               ortho_width=None, up=(0, 0, 1), near=0.05):
+    """`up`: the image's up, given where the camera looks straight down (along z)."""
     cam = UsdGeom.Camera.Define(stage, "/root/cam")
     cam.CreateFocalLengthAttr(focal)
     if ortho_width is not None:
@@ -71,8 +72,8 @@ def add_camera(stage, eye, target, focal=20.0, hap=36.0, aspect=16 / 9, far=200.
     else:
         cam.CreateHorizontalApertureAttr(hap)
         cam.CreateVerticalApertureAttr(hap / aspect)
-    cam.CreateClippingRangeAttr(Gf.Vec2f(0.05, far))
-    m = Gf.Matrix4d().SetLookAt(Gf.Vec3d(*eye), Gf.Vec3d(*target), Gf.Vec3d(0, 0, 1))
+    cam.CreateClippingRangeAttr(Gf.Vec2f(near, far))
+    m = Gf.Matrix4d().SetLookAt(Gf.Vec3d(*eye), Gf.Vec3d(*target), Gf.Vec3d(*up))
     cam.AddTransformOp().Set(m.GetInverse())
     return cam
 

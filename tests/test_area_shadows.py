@@ -124,20 +124,15 @@ SLAB_W, SLAB_H, SLAB_SPAN = 96, 72, 3.2
 
 
 def _slab_scene(shadow):
-    from pxr import Gf, UsdGeom, UsdLux
+    from pxr import Gf
     import shadow_scenes
     stage = shadow_scenes.new_stage(5.0)
     slab = shadow_scenes.add_box(stage, center=(0, 0, 0), size=1.0, name="slab")
     slab.AddTranslateOp().Set(Gf.Vec3d(*((SLAB_LO + SLAB_HI) / 2)))
     slab.AddScaleOp().Set(Gf.Vec3f(*(SLAB_HI - SLAB_LO)))
     shadow_scenes.add_light(stage, "area", shadow=shadow, pos=(0, 0, LIGHT_Z), size=LIGHT_SIZE)
-    cam = UsdGeom.Camera.Define(stage, "/root/cam")
-    cam.CreateProjectionAttr(UsdGeom.Tokens.orthographic)
-    cam.CreateHorizontalApertureAttr(SLAB_SPAN * 10)
-    cam.CreateVerticalApertureAttr(SLAB_SPAN * 10 * SLAB_H / SLAB_W)
-    cam.CreateClippingRangeAttr(Gf.Vec2f(0.05, 20.0))
-    m = Gf.Matrix4d().SetLookAt(Gf.Vec3d(0, 0, 5), Gf.Vec3d(0, 0, 0), Gf.Vec3d(0, 1, 0))
-    cam.AddTransformOp().Set(m.GetInverse())
+    shadow_scenes.add_camera(stage, eye=(0, 0, 5), target=(0, 0, 0), aspect=SLAB_W / SLAB_H,
+                             far=20.0, ortho_width=SLAB_SPAN, up=(0, 1, 0))
     return stage
 
 

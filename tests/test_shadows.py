@@ -6,7 +6,6 @@ import math
 
 import numpy as np
 import pytest
-from pxr import Gf, UsdGeom
 
 import calibration
 import shadow_scenes as ss
@@ -16,14 +15,9 @@ from lantern.engine.bounces import DIRECT
 BOX_LO, BOX_HI = np.array([-0.5, -0.5, 0.0]), np.array([0.5, 0.5, 1.0])
 
 
-def top_down_camera(stage, width_m):
-    cam = UsdGeom.Camera.Define(stage, "/root/cam")
-    cam.CreateProjectionAttr(UsdGeom.Tokens.orthographic)
-    cam.CreateHorizontalApertureAttr(width_m * 10)
-    cam.CreateVerticalApertureAttr(width_m * 10)
-    cam.CreateClippingRangeAttr(Gf.Vec2f(0.1, 100.0))
-    m = Gf.Matrix4d().SetLookAt(Gf.Vec3d(0, 0, 20), Gf.Vec3d(0, 0, 0), Gf.Vec3d(0, 1, 0))
-    cam.AddTransformOp().Set(m.GetInverse())
+def top_down_camera(stage, width_m, aspect=1.0):
+    ss.add_camera(stage, eye=(0, 0, 20), target=(0, 0, 0), aspect=aspect, far=100.0,
+                  ortho_width=width_m, up=(0, 1, 0), near=0.1)
 
 
 def plane_points(w, h, width_m):
@@ -137,13 +131,7 @@ def test_contact_shadow_has_no_gap_at_640x360():
     UsdShade.MaterialBindingAPI(stage.GetPrimAtPath("/root/box")).Bind(red)
     direction = np.array([math.sin(math.radians(50)), 0.0, -math.cos(math.radians(50))])  # towards +X
     ss.add_light(stage, "sun", dir=tuple(direction), strength=3.0, angle=0.0)
-    cam = UsdGeom.Camera.Define(stage, "/root/cam")
-    cam.CreateProjectionAttr(UsdGeom.Tokens.orthographic)
-    cam.CreateHorizontalApertureAttr(width * 10)
-    cam.CreateVerticalApertureAttr(width * 10 * h / w)
-    cam.CreateClippingRangeAttr(Gf.Vec2f(0.1, 100.0))
-    m = Gf.Matrix4d().SetLookAt(Gf.Vec3d(0, 0, 20), Gf.Vec3d(0, 0, 0), Gf.Vec3d(0, 1, 0))
-    cam.AddTransformOp().Set(m.GetInverse())
+    top_down_camera(stage, width, aspect=w / h)
     rgba = render(stage, w, h).rgba
     gaps = []
     for row in range(h // 2 - 20, h // 2 + 21, 5):  # rows through the box's middle
