@@ -62,7 +62,7 @@ TILES_PER_LINE = 64
 GROUP = 64                   # shaders/irradiance_trace.comp's local size
 BIAS = 0.3                   # the read's self-shadowing bias, a share of the spacing
 # Probes along the bounds' longest side, and rays a probe an update, by preset.
-PROBES = {"low": 4, "medium": 6, "high": 8, "ultra": 10}
+PROBES = {"low": 4, "medium": 8, "high": 10, "ultra": 12}
 RAYS = {"low": 64, "medium": 128, "high": 192, "ultra": 256}
 # The rays of a build's updates that a texel's cone of nearest hits holds, on average
 # (near_cone): the wall test's evidence (shaders/irradiance_field.glsl field_hidden).
