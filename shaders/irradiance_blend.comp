@@ -1,17 +1,18 @@
 #version 430 core
 // The irradiance field's maps from one update's rays (engine/gpu/passes/irradiance.py):
-// one invocation a texel of a probe's tile (its border repeats the map's opposite edge),
-// irradiance as the cosine-weighted mean of the rays' radiance (times pi: the mean
-// over the sphere of max(cos, 0) is 1/4), distance and its square weighted by a sharp
-// power of the cosine (Majercik et al. 2019), and the nearest hits about the texel and
-// their planes, over the rays of all the build's updates traced from the probe's place
-// (as the steady light below). The tile's first texel also moves its probe
+// one invocation a texel of a probe's 8 x 8 map, which also writes the tile's border
+// texels that repeat it (the map's opposite edge: copies, not made again), irradiance
+// as the cosine-weighted mean of the rays' radiance (times pi: the mean over the sphere
+// of max(cos, 0) is 1/4), distance and its square weighted by a sharp power of the
+// cosine (Majercik et al. 2019), and the nearest hits about the texel and their planes,
+// over the rays of all the build's updates traced from the probe's place (as the
+// steady light below). The map's first texel also moves its probe
 // and switches it off or on (Majercik et al. 2021): a probe whose rays meet many back
 // faces close by lies inside geometry: off, and moved out through the nearest back face;
 // one closer to a surface (either side) than a fifth of the spacing is moved away; never more
 // than 0.45 of the spacing from its grid place.
 #include "irradiance_field.glsl"
-layout(local_size_x = 10, local_size_y = 10) in;    // FIELD_TEXELS + 2
+layout(local_size_x = 8, local_size_y = 8) in;      // FIELD_TEXELS
 layout(rgba32f, binding = 0) writeonly uniform image2D irradiance_image;
 layout(rgba32f, binding = 1) writeonly uniform image2D distance_image;
 layout(rgba32f, binding = 2) writeonly uniform image2D probe_image;
@@ -49,15 +50,18 @@ bool off_plane(vec4 candidate, vec4 plane, float spacing) {
     return dot(candidate.xyz, plane.xyz) < 0.9 || abs(candidate.w - plane.w) > 0.05 * spacing;
 }
 
-// The interior texel that border texel t repeats: an edge its mirror image along the
-// edge, a corner the opposite corner.
-ivec2 interior(ivec2 t) {
+// Where the tile holds interior texel s (1..N), its own place and the border texels
+// that repeat it (an edge's its mirror image along the edge, a corner's the opposite
+// corner), as offsets in the tile: `count` of the four.
+int places(ivec2 s, out ivec2 at[4]) {
     const int N = FIELD_TEXELS;
-    bool ex = t.x == 0 || t.x == N + 1, ey = t.y == 0 || t.y == N + 1;
-    if (ex && ey) return ivec2(t.x == 0 ? N : 1, t.y == 0 ? N : 1);
-    if (ex) return ivec2(t.x == 0 ? 1 : N, N + 1 - t.y);
-    if (ey) return ivec2(N + 1 - t.x, t.y == 0 ? 1 : N);
-    return t;
+    int count = 0;
+    at[count++] = s;
+    if (s.x == 1 || s.x == N) at[count++] = ivec2(s.x == 1 ? 0 : N + 1, N + 1 - s.y);
+    if (s.y == 1 || s.y == N) at[count++] = ivec2(N + 1 - s.x, s.y == 1 ? 0 : N + 1);
+    if ((s.x == 1 || s.x == N) && (s.y == 1 || s.y == N))
+        at[count++] = ivec2(s.x == 1 ? N + 1 : 0, s.y == 1 ? N + 1 : 0);
+    return count;
 }
 
 void main() {
@@ -66,9 +70,9 @@ void main() {
     float max_distance = u_max_distance[g];
     vec3 step = field_step[g];
     ivec2 t = ivec2(gl_LocalInvocationID.xy);
-    ivec2 src = interior(t);
-    vec3 d = oct_decode((vec2(src - 1) + 0.5) / float(FIELD_TEXELS) * 2.0 - 1.0);
-    ivec2 at = probe_tile(probe) * (FIELD_TEXELS + 2) + t;
+    vec3 d = oct_decode((vec2(t) + 0.5) / float(FIELD_TEXELS) * 2.0 - 1.0);
+    ivec2 tile = probe_tile(probe) * (FIELD_TEXELS + 2);
+    ivec2 at = tile + t + 1;
     ivec2 lines = ivec2(0, imageSize(plane_image).y / 2);
     // The nearest hits of the build's updates so far, where they were traced from this
     // place (the steady light's count: a probe moved starts it again). Walls do not change
@@ -146,9 +150,7 @@ void main() {
             other_plane = seen_other;
         }
     }
-    imageStore(distance_image, at, vec4(m, nearest, other));
-    imageStore(plane_image, at, plane);
-    imageStore(plane_image, at + lines, other_plane);
+    vec4 distances = vec4(m, nearest, other);
     if (t == ivec2(0)) {
         vec4 state = u_bounce ? probe_state(probe) : vec4(0.0, 0.0, 0.0, 1.0);
         bool inside = float(backs) > 0.25 * float(u_rays) && farthest < 1.5 * length(step);
@@ -167,7 +169,16 @@ void main() {
     barrier();
     vec3 mean = total > 0.0 ? (steady.rgb * steady.a + FIELD_PI * sum / total) / (steady.a + 1.0)
                             : vec3(0.0);
-    imageStore(steady_image, at, vec4(mean, moved ? 0.0 : steady.a + 1.0));
-    imageStore(irradiance_image, at,
-               vec4(mean + (total > 0.0 ? FIELD_PI * bounced / total : vec3(0.0)), 1.0));
+    vec4 kept = vec4(mean, moved ? 0.0 : steady.a + 1.0);
+    vec4 irradiance = vec4(mean + (total > 0.0 ? FIELD_PI * bounced / total : vec3(0.0)), 1.0);
+    ivec2 where[4];
+    int count = places(t + 1, where);
+    for (int i = 0; i < count; ++i) {
+        ivec2 p = tile + where[i];
+        imageStore(distance_image, p, distances);
+        imageStore(plane_image, p, plane);
+        imageStore(plane_image, p + lines, other_plane);
+        imageStore(steady_image, p, kept);
+        imageStore(irradiance_image, p, irradiance);
+    }
 }

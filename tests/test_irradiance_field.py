@@ -315,3 +315,35 @@ def test_the_field_under_a_glass_roof_lets_the_sky_through_tinted():
     tinted = floor(pane_stage(tint=(1.0, 0.6, 0.3)))
     assert (clear / bare) == pytest.approx([0.915] * 3, abs=0.05), clear / bare
     assert (tinted / clear) == pytest.approx([1.0, 0.36, 0.09], rel=0.1), tinted / clear
+
+
+def test_each_probes_tile_border_repeats_its_maps_opposite_edge():
+    """The blend makes a probe's 8 x 8 texels once and writes each edge texel again to
+    the tile's border, mirrored (shaders/irradiance_blend.comp places): the border is
+    what bilinear reads across an octahedral map's edge need. Checked on every probe's
+    irradiance and distance tiles against the mirror image of its interior."""
+    from lantern.engine.gpu.context import run_gl
+    from lantern.engine.gpu.passes.irradiance import TEXELS, TILE, TILES_PER_LINE
+    with Session(room_stage((12, 4, 4)), RenderSettings(**SIZE, preset="low")) as s:
+        s.render()
+        field = s._renderer.irradiance.field
+
+        def read(tex):
+            w, h = tex.size
+            return np.frombuffer(tex.read(), np.float32).reshape(h, w, 4)
+        maps = run_gl(lambda gl: [read(field.irradiance), read(field.distance)])
+        probes = sum(g.probes for g in field.grids)
+    n = TEXELS
+    for atlas in maps:
+        for probe in range(probes):
+            y0, x0 = (probe // TILES_PER_LINE) * TILE, (probe % TILES_PER_LINE) * TILE
+            tile = atlas[y0:y0 + TILE, x0:x0 + TILE]       # [y, x]
+            inner = tile[1:n + 1, 1:n + 1]
+            assert np.abs(inner).sum() > 0, probe
+            np.testing.assert_array_equal(tile[1:n + 1, 0], inner[::-1, 0])      # x = 0
+            np.testing.assert_array_equal(tile[1:n + 1, n + 1], inner[::-1, -1])  # x = N + 1
+            np.testing.assert_array_equal(tile[0, 1:n + 1], inner[0, ::-1])       # y = 0
+            np.testing.assert_array_equal(tile[n + 1, 1:n + 1], inner[-1, ::-1])  # y = N + 1
+            for (ty, tx), (sy, sx) in (((0, 0), (n, n)), ((0, n + 1), (n, 1)),
+                                       ((n + 1, 0), (1, n)), ((n + 1, n + 1), (1, 1))):
+                np.testing.assert_array_equal(tile[ty, tx], tile[sy, sx])
