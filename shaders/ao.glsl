@@ -234,9 +234,11 @@ float open_interval(Slice sl, float c, float w) {
 void screen_pixel(ivec2 cell, out vec4 ao, out vec4 unused1, out vec4 unused2,
                   out vec4 unused3) {
     unused1 = unused2 = unused3 = vec4(0.0);
-    ivec2 px = cell * u_step + u_step / 2;
-    vec2 centre = vec2(px) + 0.5;
     ivec2 size = textureSize(g_depth, 0);
+    // A block the image's edge cuts (a size that is not a multiple of the step) searches
+    // from its last whole sub-pixel: its centre would lie outside the G-buffer.
+    ivec2 px = min(cell * u_step + u_step / 2, size - 1);
+    vec2 centre = vec2(px) + 0.5;
     float depth = texelFetch(g_depth, px, 0).r;
     ao = vec4(1.0, 1.0, 0.0, 0.0);
 #ifdef NEAR_FIELD
