@@ -29,8 +29,8 @@ def render(stage, near=True, **settings):
 def red_wall_stage():
     """A white block 4 cm from a red wall on a white floor, lit by a sun that lights the
     wall, the block's faces and the floor; the camera sees the block's front face, its
-    side towards the wall hidden. The field's probes are 0.67 apart: the gap is a few
-    hundredths of their spacing."""
+    side towards the wall hidden. The field's probes are 0.53 apart at medium, 1.14 at
+    low: the gap is a few hundredths of their spacing."""
     stage = shadow_scenes.new_stage(half=2.0)
     red = _material(stage, "red", (0.8, 0.05, 0.05))
     _quad(stage, "wall", [(0, -2, 0), (0, 2, 0), (0, 2, 2), (0, -2, 2)], red)
@@ -56,11 +56,13 @@ def front_face(result):
 
 def test_a_red_wall_bleeds_onto_a_white_block_beside_it():
     """The block's face beside the red wall gains red from the wall, which the field's
-    probes (0.67 apart, the gap 0.04) hold too coarsely: more red than green and blue
-    gained, the more the nearer the wall."""
+    probes (at low 1.14 apart, the gap 0.04) hold too coarsely: more red than green and
+    blue gained, the more the nearer the wall. (Medium's probes, 0.53 apart, hold more
+    of it: the near field adds 2.4% there, 4.8% at low.)"""
     stage = red_wall_stage()
     passes = frozenset({"Normal"})
-    near, far = render(stage, passes=passes), render(stage, near=False, passes=passes)
+    near, far = (render(stage, passes=passes, preset="low"),
+                 render(stage, near=False, passes=passes, preset="low"))
     assert "near_field" in near.stats["passes"] and "near_field" not in far.stats["passes"]
     face, left = front_face(near)
     gained = near.rgba[..., :3].astype(np.float64) - far.rgba[..., :3]
