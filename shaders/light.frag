@@ -1,7 +1,8 @@
 #version 330 core
 #ifdef CONTACT_RAYS
-// The ray tracer's buffers and its watertight test (shadow_lookup.glsl's contact rays):
-// only in a frame that bounces light, which has compute shaders (GL 4.3) and so these.
+// The ray tracer's watertight test (precise, and doubles) and the table of what a
+// contact ray sees through (shadow_lookup.glsl's contact rays): only in a frame that
+// bounces light, which has GL 4.3 and so these.
 #extension GL_ARB_shader_storage_buffer_object : require
 #extension GL_ARB_gpu_shader5 : require
 #extension GL_ARB_gpu_shader_fp64 : require

@@ -17,12 +17,13 @@ bool brute_force(vec3 origin, vec3 dir, float tmin, float tmax, bool any, out Rt
     int i = 0, tri = 0, end = 0;
     RtRay local;
     bool entered = false;
+    ivec4 base = rt_bases();
     while (i < u_instances) {
         if (!entered) {
             vec3 o, d;
-            rt_enter(i, origin, dir, o, d);
+            rt_enter(base, i, origin, dir, o, d);
             local = rt_ray(o, d);
-            ivec4 info = floatBitsToInt(rt_instance(i, 6));
+            ivec4 info = rt_instance_info(base, i);
             tri = info.y;
             end = info.y + info.z;
             entered = true;
@@ -30,8 +31,8 @@ bool brute_force(vec3 origin, vec3 dir, float tmin, float tmax, bool any, out Rt
         if (tri == end) { i += 1; entered = false; continue; }
         float t;
         vec2 bc;
-        if (rt_triangle(local, rt_triangles[3 * tri].xyz, rt_triangles[3 * tri + 1].xyz,
-                        rt_triangles[3 * tri + 2].xyz, tmin, hit.t, t, bc) &&
+        if (rt_triangle(local, rt_corner(base, tri, 0), rt_corner(base, tri, 1),
+                        rt_corner(base, tri, 2), tmin, hit.t, t, bc) &&
                 rt_before(t, i, tri, hit)) {
             hit = RtHit(t, i, tri, bc);
             if (any) return true;

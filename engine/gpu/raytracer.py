@@ -15,7 +15,10 @@ Triangles of a subdivision surface tessellated on the GPU are its patches' corne
 two a patch (the limit surface at the cage refined `levels` times, engine/scene.py
 PatchData): the tessellation the passes draw depends on the view, a tree must not.
 
-Buffers (shaders/raytrace.glsl declares them at these bindings; `bind` binds them):
+Arrays, one after another in one RGBA32UI texture of WIDTH vec4 a line (RtData: llvmpipe
+serves a walk's lane-divergent reads faster from a texture than from a storage buffer,
+shaders/raytrace.glsl), its first vec4 where each starts; shaders/raytrace.glsl reads
+them, `bind` binds the texture:
   nodes      every bottom tree, NODE_FLOATS floats a node, miss links absolute
   triangles  3 vec4 each: corners in object space; v0.w the material (an index into
              `materials`), v1.w the triangle's index in its mesh, as int bits
@@ -32,9 +35,10 @@ import numpy as np
 
 from ...core.transforms import SINGULAR, affine_inverse, cross, transform_aabbs
 from .. import bvh
-from .programs import set_uniform
+from .programs import UNITS, set_uniform
 
-BINDINGS = {"nodes": 10, "triangles": 11, "instances": 12, "top": 13}
+SECTIONS = ("nodes", "triangles", "instances", "top")   # rt_bases()' x, y, z, w
+WIDTH = 4096                      # shaders/raytrace.glsl RT_WIDTH_BITS
 INSTANCE_VEC4 = 7
 FAR = 3.0e38                      # shaders/raytrace.glsl RT_FAR
 GROUP, MAX_GROUPS = 64, 65535     # shaders/trace.comp's local size; groups per dimension
@@ -45,6 +49,92 @@ SHADER_STORAGE_BARRIER_BIT, BUFFER_UPDATE_BARRIER_BIT = 0x2000, 0x200
 TOP_PAD = 1.0e-5
 # Mesh keys whose corners move under a fixed topology (engine/usd/read.py): refitted.
 DEFORMED = ("skinned", "varying")
+
+
+def _words(data) -> np.ndarray:
+    """(n, 4) uint32: float32 records (ints among them as bits), as their words."""
+    data = np.asarray(data)
+    if data.dtype != np.uint32:
+        data = np.ascontiguousarray(data, np.float32).view(np.uint32)
+    return np.ascontiguousarray(data).reshape(-1, 4)
+
+
+class RtData:
+    """The arrays (SECTIONS) as one texture of 32-bit words, WIDTH vec4 a line, after a
+    header vec4 of where each starts. A section written again at its size changes only
+    its lines (a refit's trees and corners); a new size lays the texture out again."""
+
+    def __init__(self, ctx, uploads):
+        self.ctx, self.uploads = ctx, uploads
+        self.arrays = {name: None for name in SECTIONS}   # (n, 4) uint32 each
+        self.texture = None
+        self._words = None            # the texture's contents, (lines * WIDTH, 4) uint32
+        self._starts = {}
+        self._relayout = True
+        self._dirty = []              # (first, end) vec4 ranges written since the upload
+
+    @property
+    def empty(self) -> bool:
+        return self.arrays["nodes"] is None
+
+    def set(self, name, data):
+        words = _words(data)
+        old = self.arrays[name]
+        self.arrays[name] = words
+        if old is None or len(old) != len(words) or self._relayout:
+            self._relayout = True
+        else:
+            self.write(name, 0, words)
+
+    def write(self, name, first, data):
+        """Vec4s from `first` of section `name`, in place."""
+        words = _words(data)
+        self.arrays[name][first:first + len(words)] = words
+        if not self._relayout:
+            at = self._starts[name] + first
+            self._words[at:at + len(words)] = words
+            self._dirty.append((at, at + len(words)))
+
+    def flush(self):
+        """Brings the texture up to the arrays: laid out again, or the lines written."""
+        if self.empty:
+            return
+        if self._relayout:
+            sizes = [len(self.arrays[name]) for name in SECTIONS]
+            starts = np.cumsum([1] + sizes)[:-1]
+            self._starts = dict(zip(SECTIONS, (int(x) for x in starts)))
+            lines = -(-int(starts[-1] + sizes[-1]) // WIDTH)
+            self._words = np.zeros((lines * WIDTH, 4), np.uint32)
+            self._words[0] = starts
+            for name in SECTIONS:
+                self._words[self._starts[name]:self._starts[name] + len(self.arrays[name])] = \
+                    self.arrays[name]
+            texels = self._words.reshape(lines, WIDTH, 4)
+            if self.texture is not None and self.texture.size == (WIDTH, lines):
+                self.uploads.write_texture(self.texture, texels, kind="raytrace")
+            else:
+                if self.texture is not None:
+                    self.texture.release()
+                self.texture = self.uploads.texture((WIDTH, lines), 4, texels,
+                                                    kind="raytrace", dtype="u4")
+                # Nearest: an integer texture with a linear filter is incomplete (reads 0).
+                self.texture.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
+            self._relayout, self._dirty = False, []
+            return
+        for first, end in self._dirty:
+            y0, y1 = first // WIDTH, -(-end // WIDTH)
+            self.uploads.write_texture(self.texture, self._words[y0 * WIDTH:y1 * WIDTH],
+                                       kind="raytrace", viewport=(0, y0, WIDTH, y1 - y0))
+        self._dirty = []
+
+    def bind(self):
+        self.flush()
+        self.texture.use(UNITS["rt_data"])
+
+    def release(self):
+        if self.texture is not None:
+            self.texture.release()
+        self.__init__(self.ctx, self.uploads)
 
 
 @dataclass
@@ -103,7 +193,7 @@ class Raytracer:
         self._left_out = []           # instances not traced, a line each
         self.counts = Counter()       # bottom_builds, refits, top_builds; triangles
         self.seconds = Counter()      # the same work's CPU seconds (uploads included); trace
-        self.buffers = {name: None for name in BINDINGS}
+        self.data = RtData(ctx, uploads)
         self._placed = None           # what the top tree was built from
         self._lo = self._hi = None    # every bottom tree's boxes (_pack)
         self.bounds = None            # (lo, hi) world box of every traced triangle, or None
@@ -151,7 +241,7 @@ class Raytracer:
                     self._write_bottom(b)
             self.counts["refits"] += len(refits)
             self.seconds["refits"] += time.perf_counter() - t0
-        if rebuilt or self.buffers["nodes"] is None:     # (empty buffers: nothing traced)
+        if rebuilt or self.data.empty:                   # (empty: nothing traced yet)
             t0 = time.perf_counter()
             self._pack()
             self.seconds["bottom_builds"] += time.perf_counter() - t0
@@ -211,16 +301,14 @@ class Raytracer:
             b.tree.lo, b.tree.hi = self._lo[span], self._hi[span]
             nodes[span] = b.tree.packed(b.first_node)
             triangles[b.first_triangle:b.first_triangle + len(b.triangles)] = b.triangles
-        self._upload("nodes", nodes)
-        self._upload("triangles", triangles)
+        self.data.set("nodes", nodes)
+        self.data.set("triangles", triangles)
         self._placed = None
 
     def _write_bottom(self, b):
         """A refitted tree and its triangles, in place."""
-        self.uploads.write(self.buffers["nodes"], b.tree.packed(b.first_node), kind="raytrace",
-                           offset=b.first_node * bvh.NODE_FLOATS * 4)
-        self.uploads.write(self.buffers["triangles"], b.triangles, kind="raytrace",
-                           offset=b.first_triangle * 48)
+        self.data.write("nodes", b.first_node * bvh.NODE_FLOATS // 4, b.tree.packed(b.first_node))
+        self.data.write("triangles", 3 * b.first_triangle, b.triangles)
 
     def _place(self, scene, force: bool):
         """The instance records and the top tree, built again when an instance moved,
@@ -269,31 +357,20 @@ class Raytracer:
             self.bounds = (lo.min(axis=0), hi.max(axis=0))
             pad = TOP_PAD * (np.maximum(np.abs(lo), np.abs(hi)) + (hi - lo))
             top = bvh.build(lo - pad, hi + pad).packed()
-            self._upload("instances", records)
+            self.data.set("instances", records)
         else:
             self._first, self.instances = np.zeros(0, np.int64), []
             self.bounds = None
             top = np.zeros((1, bvh.NODE_FLOATS), np.float32)     # miss link 0: empty
-            self._upload("instances", np.zeros(INSTANCE_VEC4 * 4, np.float32))
-        self._upload("top", top)
+            self.data.set("instances", np.zeros(INSTANCE_VEC4 * 4, np.float32))
+        self.data.set("top", top)
         self.counts["top_builds"] += 1
         self.seconds["top_builds"] += time.perf_counter() - t0
 
-    def _upload(self, name, data):
-        data = np.ascontiguousarray(data, np.float32)
-        old = self.buffers[name]
-        if old is not None and old.size >= data.nbytes:
-            self.uploads.write(old, data, kind="raytrace")
-            return
-        if old is not None:
-            old.release()
-        self.buffers[name] = self.uploads.buffer(data, kind="raytrace")
-
     # --- using it ------------------------------------------------------------------
     def bind(self):
-        """Binds the buffers where shaders/raytrace.glsl reads them."""
-        for name, binding in BINDINGS.items():
-            self.buffers[name].bind_to_storage_buffer(binding)
+        """Binds the arrays' texture where shaders/raytrace.glsl reads it."""
+        self.data.bind()
 
     @property
     def warnings(self) -> list:
@@ -346,8 +423,5 @@ class Raytracer:
                     out[:, 0, 3].view(np.int32).copy(), material, out[:, 2, :3].copy())
 
     def release(self):
-        for name, buffer in self.buffers.items():
-            if buffer is not None:
-                buffer.release()
-            self.buffers[name] = None
+        self.data.release()
         self.bottoms.clear()
