@@ -28,9 +28,11 @@ _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.M)
 # Sampler name -> texture unit, for every sampler of every program. The G-buffer and
 # the light pass share units 0-8 (and the smooth normals), materials 9-14 and a pattern
 # graph's images (engine/gpu/pattern.py), then the object and light tables, the
-# environment, ambient occlusion, post-processing and overlay inputs. Every unit stays
-# below 32: llvmpipe reports 32 fragment units, and a fragment sampler on unit 32 or
-# above read another unit's texture there (a second network image read the first).
+# environment, ambient occlusion, post-processing and overlay inputs. A material's maps
+# and a network's images stay below 32: llvmpipe reports 32 fragment units, and a
+# network's second image on unit 32 read another unit's texture there. The units above
+# (area visibility, the exit layer, the shadow tint, the ray tracer's arrays) are read
+# right there, as their tests check (test_area_shadows, test_glass, test_shots).
 # Programs that never share a draw may share units: the skinning programs (transform
 # feedback: no material, no lighting) take the material maps' units, and a network's
 # images 5-8 those of programs that draw no material (the environment's prefilter, the
