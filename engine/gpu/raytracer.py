@@ -84,9 +84,9 @@ class RtData:
         if old is None or len(old) != len(words) or self._relayout:
             self._relayout = True
         else:
-            self.write(name, 0, words)
+            self.put(name, 0, words)
 
-    def write(self, name, first, data):
+    def put(self, name, first, data):
         """Vec4s from `first` of section `name`, in place."""
         words = _words(data)
         self.arrays[name][first:first + len(words)] = words
@@ -307,8 +307,8 @@ class Raytracer:
 
     def _write_bottom(self, b):
         """A refitted tree and its triangles, in place."""
-        self.data.write("nodes", b.first_node * bvh.NODE_FLOATS // 4, b.tree.packed(b.first_node))
-        self.data.write("triangles", 3 * b.first_triangle, b.triangles)
+        self.data.put("nodes", b.first_node * bvh.NODE_FLOATS // 4, b.tree.packed(b.first_node))
+        self.data.put("triangles", 3 * b.first_triangle, b.triangles)
 
     def _place(self, scene, force: bool):
         """The instance records and the top tree, built again when an instance moved,
