@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.lights import SUN
+from .mesh_topology import closed
 
 
 @dataclass(frozen=True)
@@ -82,9 +83,9 @@ _LAST = [None, True]                     # (key, answer) of the last scene asked
 
 def _faces_see_each_other(placed, lamps, tolerance) -> bool:
     """surfaces_light_each_other's test on (mesh, world matrices) pairs."""
-    points, triangles, closed = [], [], True
+    points, triangles, all_closed = [], [], True
     for mesh, worlds in placed:
-        closed = closed and _closed(mesh)
+        all_closed = all_closed and closed(mesh)
         local = mesh.vertices[:, :3].astype(np.float64)
         corners = mesh.indices.reshape(-1, 3)
         for world in worlds:
@@ -111,14 +112,4 @@ def _faces_see_each_other(placed, lamps, tolerance) -> bool:
         lamp_inside &= ((lamp_side > tol) | (inner == 0.0)).all(axis=1)
     # A solid's faces see only the outside when it is closed: an open one (a room with
     # an opening, a box without its lid) lets the light in to bounce inside.
-    return solid and (not closed or bool(lamp_inside.any()))
-
-
-def _closed(mesh) -> bool:
-    """Whether a mesh is closed: each edge (between its corners' positions: a cube's
-    faces may have points of their own) borne by exactly two triangles."""
-    _, ids = np.unique(mesh.vertices[:, :3], axis=0, return_inverse=True)
-    tri = ids.reshape(-1)[mesh.indices.reshape(-1, 3)]
-    edges = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
-    _, counts = np.unique(edges, axis=0, return_counts=True)
-    return bool(len(counts)) and bool((counts == 2).all())
+    return solid and (not all_closed or bool(lamp_inside.any()))

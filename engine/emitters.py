@@ -39,6 +39,7 @@ import numpy as np
 from ..core.emission import SAMPLING
 from ..core.lights import POLYGON
 from ..core.morton import BITS, morton_codes, morton_order
+from .mesh_topology import closed
 from .scene import Light
 from .textures import map_value, read_image_linear
 
@@ -217,16 +218,6 @@ def _chunks(polys: list) -> list:
     else:
         order = morton_order(centres)
     return [[polys[i] for i in order[k:k + CHUNK]] for k in range(0, len(polys), CHUNK)]
-
-
-def closed(mesh) -> bool:
-    """Whether a mesh's triangles close a volume: each edge (between points of equal
-    position) shared by exactly two."""
-    _, point = np.unique(mesh.vertices[:, :3], axis=0, return_inverse=True)
-    tris = point.reshape(-1)[mesh.indices].reshape(-1, 3)
-    edges = np.sort(np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]), axis=1)
-    _, counts = np.unique(edges, axis=0, return_counts=True)
-    return len(counts) > 0 and bool(np.all(counts == 2))
 
 
 def makes_lights(mesh) -> bool:

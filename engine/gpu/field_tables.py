@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 
 from ...core.emission import SAMPLING
-from ..emitters import closed, makes_lights, radiance
+from ..emitters import makes_lights, radiance
+from ..mesh_topology import closed
 
 MATERIAL_TEXELS = 3          # shaders/irradiance_trace.comp FIELD_MATERIAL
 
