@@ -62,70 +62,74 @@ def _words(data) -> np.ndarray:
 class RtData:
     """The arrays (SECTIONS) as one texture of 32-bit words, WIDTH vec4 a line, after a
     header vec4 of where each starts. A section written again at its size changes only
-    its lines (a refit's trees and corners); a new size lays the texture out again."""
+    its lines (a refit's trees and corners); a new size lays the texture out again, and
+    until then the section waits in `_pending`: the texture's contents (`_words`) are the
+    only copy of the others."""
 
     def __init__(self, ctx, uploads):
         self.ctx, self.uploads = ctx, uploads
-        self.arrays = {name: None for name in SECTIONS}   # (n, 4) uint32 each
         self.texture = None
         self._words = None            # the texture's contents, (lines * WIDTH, 4) uint32
-        self._starts = {}
-        self._relayout = True
+        self._spans = {}              # section -> (first vec4, vec4s) in _words
+        self._pending = {}            # section -> its (n, 4) words, at a new size
         self._dirty = []              # (first, end) vec4 ranges written since the upload
 
     @property
     def empty(self) -> bool:
-        return self.arrays["nodes"] is None
+        return self._words is None and "nodes" not in self._pending
 
     def set(self, name, data):
         words = _words(data)
-        old = self.arrays[name]
-        self.arrays[name] = words
-        if old is None or len(old) != len(words) or self._relayout:
-            self._relayout = True
-        else:
+        if name in self._spans and name not in self._pending and \
+                self._spans[name][1] == len(words):
             self.put(name, 0, words)
+        else:
+            self._pending[name] = words
 
     def put(self, name, first, data):
         """Vec4s from `first` of section `name`, in place."""
         words = _words(data)
-        self.arrays[name][first:first + len(words)] = words
-        if not self._relayout:
-            at = self._starts[name] + first
-            self._words[at:at + len(words)] = words
-            self._dirty.append((at, at + len(words)))
+        if name in self._pending:
+            self._pending[name][first:first + len(words)] = words
+            return
+        at = self._spans[name][0] + first
+        self._words[at:at + len(words)] = words
+        self._dirty.append((at, at + len(words)))
 
     def flush(self):
         """Brings the texture up to the arrays: laid out again, or the lines written."""
-        if self.empty:
-            return
-        if self._relayout:
-            sizes = [len(self.arrays[name]) for name in SECTIONS]
-            starts = np.cumsum([1] + sizes)[:-1]
-            self._starts = dict(zip(SECTIONS, (int(x) for x in starts)))
-            lines = -(-int(starts[-1] + sizes[-1]) // WIDTH)
-            self._words = np.zeros((lines * WIDTH, 4), np.uint32)
-            self._words[0] = starts
-            for name in SECTIONS:
-                self._words[self._starts[name]:self._starts[name] + len(self.arrays[name])] = \
-                    self.arrays[name]
-            texels = self._words.reshape(lines, WIDTH, 4)
-            if self.texture is not None and self.texture.size == (WIDTH, lines):
-                self.uploads.write_texture(self.texture, texels, kind="raytrace")
-            else:
-                if self.texture is not None:
-                    self.texture.release()
-                self.texture = self.uploads.texture((WIDTH, lines), 4, texels,
-                                                    kind="raytrace", dtype="u4")
-                # Nearest: an integer texture with a linear filter is incomplete (reads 0).
-                self.texture.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
-            self._relayout, self._dirty = False, []
+        if self._pending:
+            self._lay_out()
             return
         for first, end in self._dirty:
             y0, y1 = first // WIDTH, -(-end // WIDTH)
             self.uploads.write_texture(self.texture, self._words[y0 * WIDTH:y1 * WIDTH],
                                        kind="raytrace", viewport=(0, y0, WIDTH, y1 - y0))
         self._dirty = []
+
+    def _lay_out(self):
+        arrays = {name: self._pending[name] if name in self._pending else
+                  self._words[self._spans[name][0]:sum(self._spans[name])]
+                  for name in SECTIONS}
+        sizes = [len(arrays[name]) for name in SECTIONS]
+        starts = np.cumsum([1] + sizes)[:-1]
+        self._spans = {name: (int(a), n) for name, a, n in zip(SECTIONS, starts, sizes)}
+        lines = -(-int(starts[-1] + sizes[-1]) // WIDTH)
+        words = np.zeros((lines * WIDTH, 4), np.uint32)
+        words[0] = starts
+        for name, (a, n) in self._spans.items():
+            words[a:a + n] = arrays[name]
+        self._words, self._pending, self._dirty = words, {}, []
+        texels = words.reshape(lines, WIDTH, 4)
+        if self.texture is not None and self.texture.size == (WIDTH, lines):
+            self.uploads.write_texture(self.texture, texels, kind="raytrace")
+            return
+        if self.texture is not None:
+            self.texture.release()
+        self.texture = self.uploads.texture((WIDTH, lines), 4, texels, kind="raytrace",
+                                            dtype="u4")
+        # Nearest: an integer texture with a linear filter is incomplete (reads 0).
+        self.texture.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
 
     def bind(self):
         self.flush()
