@@ -19,8 +19,8 @@
 #define RT_NO_HIT (-1)
 #define RT_FAR 3.0e38
 
-// Every array in one texture of 32-bit words (engine/gpu/raytracer.py RtData), RT_WIDTH
-// vec4 a line: a walk's reads are lane-divergent gathers, which llvmpipe serves from a
+// Every array in one texture of 32-bit words (engine/gpu/raytracer.py RtData), 4,096
+// (1 << RT_WIDTH_BITS) vec4 a line: a walk's reads are lane-divergent gathers, which llvmpipe serves from a
 // texture about 6 times faster than from a storage buffer when they are all a loop does
 // (in the walk: any-hit rays 10-35% faster, closest-hit ones the same, the field's
 // build 15%). Words, not floats: ints ride in them as bits, read unconverted.

@@ -298,7 +298,7 @@ float shadow_factor(vec3 p, vec3 n, vec3 light_pos, vec3 dir, float view_depth) 
 //     too dark at its outer edge; with a whole step's margin past it, where the
 //     crossing now stands, still 10-35%. Half a step is kept for a box's far side,
 //     which one texel reads short by its silhouettes: a margin of none left the
-//     penumbra of a box 3-6% too bright.)
+//     penumbra of a box 4-6% too bright.)
 // Compares are against the receiver's tangent plane along each ray (receiver-plane
 // depth, exact for a planar receiver), never beyond the map's range.
 const float AREA_SEARCH = 1.0;

@@ -63,12 +63,12 @@ UNITS.update(ltc_lut=UNITS["post_src"])
 # Only the area visibility's blur reads visibility_tex, and it reads no shadow map: an
 # area light's exit layer takes its unit (passes/shadow_exits.py).
 UNITS.update(shadow_exit=UNITS["visibility_tex"])
-# The irradiance field (passes/irradiance.py): read by the ambient pass and the field's
-# own passes, which sample no material map.
 # The ray tracer's arrays (raytracer.py RtData): read by the light passes (contact
 # rays), glass, reflections and the field's trace, which between them sample every
 # unit below; after the last.
 UNITS.update(rt_data=max(UNITS.values()) + 1)
+# The irradiance field (passes/irradiance.py): read by the ambient pass and the field's
+# own passes, which sample no material map.
 UNITS.update(field_irradiance=UNITS["t_metallic"], field_distance=UNITS["t_roughness"],
              field_probes=UNITS["t_emissive"], field_materials=UNITS["t_opacity"],
              field_rays=UNITS["t_normal"], field_planes=UNITS["t_pattern0"])
