@@ -28,6 +28,8 @@ import threading
 
 import numpy as np
 
+from . import color_cache
+
 DISPLAY = "sRGB"
 STANDARD = "Standard"
 
@@ -65,8 +67,9 @@ def to_display8(rgba: np.ndarray, view: str = STANDARD, look: str | None = None,
 def check(view: str = STANDARD, look: str | None = None, exposure: float = 0.0) -> None:
     """Raise ColorManagementError now for settings to_display8 could not apply (no
     config, an unknown view or look). Their transform is then built on a thread of its
-    own, for the image written later: OpenColorIO builds it without Python's lock (AgX:
-    70-100 ms), beside the stage read and the first frame."""
+    own, for the image written later. OpenColorIO holds Python's lock while it parses
+    the config's LUT files (AgX: 120 ms), so what spares a new process that is the
+    transform kept in the cache folder (color_cache.py: 15 ms)."""
     if view != STANDARD or look or exposure != 0.0:
         _check_names(_config(), view, look)
         # Not a daemon: a process that ends meanwhile waits for it (at most the build)
@@ -168,6 +171,11 @@ def _built_processor(view, look, exposure):
     import PyOpenColorIO as ocio
     config = _config()
     _check_names(config, view, look)
+    # Kept from an earlier process (the config's LUT files are slow to parse).
+    entry = color_cache.key(config, config_path(), (view, look, exposure))
+    processor = color_cache.stored(config, entry)
+    if processor is not None:
+        return processor.getDefaultCPUProcessor()
     group = ocio.GroupTransform()
     source = ocio.ROLE_SCENE_LINEAR
     if exposure != 0.0:
@@ -183,4 +191,6 @@ def _built_processor(view, look, exposure):
         source = result
     group.appendTransform(ocio.DisplayViewTransform(src=source, display=DISPLAY, view=view,
                                                     looksBypass=True))
-    return config.getProcessor(group).getDefaultCPUProcessor()
+    processor = config.getProcessor(group)
+    color_cache.store(config, entry, processor)
+    return processor.getDefaultCPUProcessor()

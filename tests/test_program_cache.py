@@ -146,7 +146,7 @@ def test_the_compilers_helper_stores_a_binary_or_says_why_it_cannot(tmp_path, mo
     """engine/gpu/compiler.py's helper makes a program into the cache folder, where the
     render process finds it; a helper whose GL differs from the render context's is
     not used (what was handed over is then compiled in place)."""
-    from lantern.engine.gpu import program_binaries
+    from lantern.core import cache_folder
     from lantern.engine.gpu.compiler import BackgroundCompiler
     from lantern.engine.gpu.context import run_gl
     monkeypatch.setenv("LANTERN_PROGRAM_CACHE_DIR", str(tmp_path))
@@ -156,7 +156,7 @@ def test_the_compilers_helper_stores_a_binary_or_says_why_it_cannot(tmp_path, mo
         info = gl.ctx.info
         return info["GL_VENDOR"], info["GL_RENDERER"], info["GL_VERSION"], gl.loader.active
     *same, active = run_gl(driver)
-    if not active or program_binaries.disabled():
+    if not active or cache_folder.disabled():
         pytest.skip("this driver stores no program binaries")
     helper = BackgroundCompiler(tuple(same))
     try:

@@ -3,7 +3,7 @@ render process's, and a ProgramCache that stores what it makes in the persistent
 program cache. Started by engine/host/boot.py with `compiler` for its handle."""
 import sys
 
-from . import program_binaries
+from ...core import cache_folder
 from .compiler import receive, send
 from .context import GLContext
 
@@ -15,7 +15,7 @@ def main() -> int:
     inp, out = sys.stdin.buffer, sys.stdout.buffer
     sys.stdout = sys.stderr            # nothing else may write to the channel
     gl = GLContext()
-    if program_binaries.disabled() or not gl.loader.active:
+    if cache_folder.disabled() or not gl.loader.active:
         return 1
     info = gl.ctx.info
     send(out, (info["GL_VENDOR"], info["GL_RENDERER"], info["GL_VERSION"]))

@@ -19,10 +19,8 @@ sources (defines already inserted), transform-feedback varyings, and the GL vend
 renderer and version strings. It is written atomically (temp name, then rename). An
 entry that is truncated, damaged, from another key, or rejected by the driver is
 ignored and rebuilt, logged only at debug level (`lantern --debug`); a folder that
-cannot be written costs the speed-up, never a render. LANTERN_NO_PROGRAM_CACHE=1
-turns the cache off; LANTERN_PROGRAM_CACHE_DIR moves it: the tests keep theirs in a
-temporary folder, and Blender's side (addon/host.py) gives the engine process the
-extension's own user folder, which Blender removes with the extension."""
+cannot be written costs the speed-up, never a render. The folder, and the variables
+that move it or turn it off, are core/cache_folder.py's."""
 from __future__ import annotations
 
 import ctypes
@@ -30,8 +28,9 @@ import hashlib
 import logging
 import os
 import struct
-import sys
 
+
+from ...core.cache_folder import disabled
 from ...core.files import atomic_write_bytes
 from .stencil import entry_points
 
@@ -63,27 +62,6 @@ _SIGS = dict(_HOOKED, **{
     "glProgramBinary": (None, _u, _u, ctypes.c_void_p, _i),
 })
 _FUNCTYPE = getattr(ctypes, "WINFUNCTYPE", ctypes.CFUNCTYPE)
-
-
-def disabled() -> bool:
-    return os.environ.get("LANTERN_NO_PROGRAM_CACHE", "").strip() not in ("", "0")
-
-
-def cache_folder() -> str:
-    """LANTERN_PROGRAM_CACHE_DIR, else the user's cache folder for Lantern's programs
-    (XDG_CACHE_HOME or ~/.cache on Linux, ~/Library/Caches on macOS, LOCALAPPDATA on
-    Windows)."""
-    explicit = os.environ.get("LANTERN_PROGRAM_CACHE_DIR")
-    if explicit:
-        return explicit
-    home = os.path.expanduser("~")
-    if sys.platform == "win32":
-        base = os.environ.get("LOCALAPPDATA") or os.path.join(home, "AppData", "Local")
-        return os.path.join(base, "lantern", "Cache", "programs")
-    if sys.platform == "darwin":
-        return os.path.join(home, "Library", "Caches", "lantern", "programs")
-    return os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.join(home, ".cache"),
-                        "lantern", "programs")
 
 
 def entry_key(sources, varyings, driver) -> bytes:

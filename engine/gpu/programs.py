@@ -17,6 +17,7 @@ import time
 
 import numpy as np
 
+from ...core import cache_folder
 from . import program_binaries
 
 log = logging.getLogger(__name__)
@@ -243,9 +244,9 @@ class ProgramCache:
     def _binaries(self):
         """The context's BinaryLoader when the persistent cache is on and the driver
         stores binaries, else None."""
-        if self.binaries is None or program_binaries.disabled() or not self.binaries.active:
+        if self.binaries is None or cache_folder.disabled() or not self.binaries.active:
             return None
-        folder = program_binaries.cache_folder()
+        folder = cache_folder.cache_folder()
         if self._store is None or self._store.folder != folder:
             self._store = program_binaries.ProgramStore(folder)
         if self._driver is None:
