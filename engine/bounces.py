@@ -70,15 +70,7 @@ def surfaces_light_each_other(scene, tolerance: float = 1e-5) -> bool:
         return True
     lamps = np.array([light.position for light in scene.lights.values()
                       if light.kind != SUN], np.float64).reshape(-1, 3)
-    # Asked every frame: the answer is kept while the geometry and the lamps are the same.
-    key = (tuple((hash(m.vertices.tobytes()), hash(m.indices.tobytes()), w.tobytes())
-                 for m, w in placed), lamps.tobytes(), tolerance)
-    if _LAST[0] != key:
-        _LAST[:] = [key, _faces_see_each_other(placed, lamps, tolerance)]
-    return _LAST[1]
-
-
-_LAST = [None, True]                     # (key, answer) of the last scene asked about
+    return _faces_see_each_other(placed, lamps, tolerance)
 
 
 def _faces_see_each_other(placed, lamps, tolerance) -> bool:

@@ -142,6 +142,23 @@ def test_a_plane_or_a_cube_alone_does_not_bounce_and_a_box_on_a_plane_does():
             assert s.render().stats["field_updates"] == 4, kw
 
 
+def test_a_session_asks_again_whether_its_surfaces_light_each_other_after_an_edit():
+    """The pass keeps its answer between frames (comparing every face with every point
+    each frame cost the steady frame) and asks again once the geometry changed: a plane
+    alone builds no field; a box added on it in the same Session does; the box taken
+    away, no field again."""
+    stage = shadow_scenes.new_stage(half=3.0)
+    shadow_scenes.add_light(stage, "spot", pos=(0.5, -0.3, 3.0), aim=(0.5, -0.3, 0.0),
+                            cone=20.0, power=300.0)
+    shadow_scenes.add_camera(stage, eye=(0, -6, 4), target=(0, 0, 0), far=30.0)
+    with Session(stage, RenderSettings(**SIZE, bounces=Bounces())) as s:
+        assert s.render().stats["field_updates"] == 0
+        shadow_scenes.add_box(stage)
+        assert s.render().stats["field_updates"] == 4
+        stage.RemovePrim("/root/box")
+        assert s.render().stats["field_updates"] == 0
+
+
 def test_the_field_updates_only_when_what_it_holds_changes():
     stage = room_stage((12, 4, 4))
     with Session(stage, RenderSettings(**SIZE)) as s:

@@ -77,16 +77,16 @@ FIELD_UNITS = ("field_irradiance", "field_distance", "field_probes", "field_mate
                "field_rays", "field_planes")
 
 
-def would_bounce(frame) -> bool:
+def would_bounce(frame, light_each_other=surfaces_light_each_other) -> bool:
     """Whether `frame` asks for the bounce: a diffuse bounce, something that lights the
     surfaces (a lamp, the dome, an emissive material), and surfaces that light each
-    other (engine/bounces.py)."""
+    other (`light_each_other(scene)`: engine/bounces.py's, or the pass's kept answer)."""
     scene = frame.scene
     if frame.options.bounces_for(scene).diffuse_bounces <= 0 or not scene.instances:
         return False
     lit = bool(scene.lights) or scene.dome is not None or \
         any(max(m.emissive) > 0.0 for m in scene.materials.values())
-    return lit and surfaces_light_each_other(scene)
+    return lit and light_each_other(scene)
 
 
 def unbind_samplers(ctx):
@@ -220,9 +220,10 @@ class IrradiancePass(Pass):
         self.table = None            # the materials' albedo and emission it was built with
         self.seconds = 0.0           # the last frame's field CPU seconds (GPU work waited for)
         self.warnings = []           # without compute shaders: that the bounce is off
+        self.lit_each_other = None   # surfaces_light_each_other's answer (None: ask again)
 
     def needed(self, frame) -> bool:
-        if not would_bounce(frame):
+        if not would_bounce(frame, self._light_each_other):
             return False
         if not self.compute:
             line = ("bounces: the diffuse bounce needs compute shaders (GL 4.3), which this "
@@ -291,6 +292,13 @@ class IrradiancePass(Pass):
         return progressive and made[0][0] == key[0] and made[0][2:] == key[2:] and \
             RANK.index(made[0][1]) >= RANK.index(key[1])
 
+    def _light_each_other(self, scene) -> bool:
+        """surfaces_light_each_other, asked again only after the geometry, the lights or
+        the materials changed (note): it compares every face with every point."""
+        if self.lit_each_other is None:
+            self.lit_each_other = surfaces_light_each_other(scene)
+        return self.lit_each_other
+
     def note(self, changes):
         """Every sync's changes (Renderer.update: a frame's, or a sync outside one, as
         a host's or a tool's): the field is stale once what it holds changed."""
@@ -298,6 +306,9 @@ class IrradiancePass(Pass):
         self.stale |= bool(c.meshes or c.dropped_meshes or c.instances or c.dropped_instances
                            or c.shapes or c.skeletons or c.lights or c.dome)
         self.touched |= bool(c.materials)
+        if c.meshes or c.dropped_meshes or c.instances or c.dropped_instances or c.points \
+                or c.shapes or c.skeletons or c.lights or c.materials:
+            self.lit_each_other = None
 
     def _start(self, frame, view, key, updates: int):
         """A new Build for `key` in place of the one under way, if any."""
