@@ -73,6 +73,18 @@ def surfaces_light_each_other(scene, tolerance: float = 1e-5) -> bool:
     return _faces_see_each_other(placed, lamps, tolerance)
 
 
+def would_bounce(frame, light_each_other=surfaces_light_each_other) -> bool:
+    """Whether `frame` asks for the bounce: a diffuse bounce, something that lights the
+    surfaces (a lamp, the dome, an emissive material), and surfaces that light each
+    other (`light_each_other(scene)`: surfaces_light_each_other, or a kept answer)."""
+    scene = frame.scene
+    if frame.options.bounces_for(scene).diffuse_bounces <= 0 or not scene.instances:
+        return False
+    lit = bool(scene.lights) or scene.dome is not None or \
+        any(max(m.emissive) > 0.0 for m in scene.materials.values())
+    return lit and light_each_other(scene)
+
+
 def _faces_see_each_other(placed, lamps, tolerance) -> bool:
     """surfaces_light_each_other's test on (mesh, world matrices) pairs."""
     points, triangles, all_closed = [], [], True

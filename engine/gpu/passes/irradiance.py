@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ....core.presets import PRESETS
-from ...bounces import surfaces_light_each_other
+from ...bounces import surfaces_light_each_other, would_bounce
 from ...probe_grids import GRIDS, grids, placement
 from ..field_tables import instance_sides, material_table, transmits
 from ..framegraph import Pass
@@ -75,18 +75,6 @@ ALL_BARRIERS = 0xFFFFFFFF
 SIDES_BINDING = 15           # shaders/irradiance_trace.comp FieldSides
 FIELD_UNITS = ("field_irradiance", "field_distance", "field_probes", "field_materials",
                "field_rays", "field_planes")
-
-
-def would_bounce(frame, light_each_other=surfaces_light_each_other) -> bool:
-    """Whether `frame` asks for the bounce: a diffuse bounce, something that lights the
-    surfaces (a lamp, the dome, an emissive material), and surfaces that light each
-    other (`light_each_other(scene)`: engine/bounces.py's, or the pass's kept answer)."""
-    scene = frame.scene
-    if frame.options.bounces_for(scene).diffuse_bounces <= 0 or not scene.instances:
-        return False
-    lit = bool(scene.lights) or scene.dome is not None or \
-        any(max(m.emissive) > 0.0 for m in scene.materials.values())
-    return lit and light_each_other(scene)
 
 
 def unbind_samplers(ctx):
