@@ -67,9 +67,9 @@ def to_display8(rgba: np.ndarray, view: str = STANDARD, look: str | None = None,
 def check(view: str = STANDARD, look: str | None = None, exposure: float = 0.0) -> None:
     """Raise ColorManagementError now for settings to_display8 could not apply (no
     config, an unknown view or look). Their transform is then built on a thread of its
-    own, for the image written later. OpenColorIO holds Python's lock while it parses
-    the config's LUT files (AgX: 120 ms), so what spares a new process that is the
-    transform kept in the cache folder (color_cache.py: 15 ms)."""
+    own, for the image written later. OpenColorIO holds Python's lock while it builds
+    (AgX: 120 ms, parsing its LUT), so the thread overlaps little: what spares a new
+    process the build is the transform kept in the cache folder (color_cache.py)."""
     if view != STANDARD or look or exposure != 0.0:
         _check_names(_config(), view, look)
         # Not a daemon: a process that ends meanwhile waits for it (at most the build)
@@ -168,14 +168,16 @@ def _processor(view, look, exposure):
 
 @functools.lru_cache(maxsize=16)
 def _built_processor(view, look, exposure):
-    import PyOpenColorIO as ocio
     config = _config()
     _check_names(config, view, look)
-    # Kept from an earlier process (the config's LUT files are slow to parse).
-    entry = color_cache.key(config, config_path(), (view, look, exposure))
-    processor = color_cache.stored(config, entry)
-    if processor is not None:
-        return processor.getDefaultCPUProcessor()
+    return color_cache.kept(config, config_path(), (view, look, exposure),
+                            lambda: _transform(config, view, look, exposure)
+                            ).getDefaultCPUProcessor()
+
+
+def _transform(config, view, look, exposure):
+    """Blender's display transform: exposure, look, then the view."""
+    import PyOpenColorIO as ocio
     group = ocio.GroupTransform()
     source = ocio.ROLE_SCENE_LINEAR
     if exposure != 0.0:
@@ -191,6 +193,4 @@ def _built_processor(view, look, exposure):
         source = result
     group.appendTransform(ocio.DisplayViewTransform(src=source, display=DISPLAY, view=view,
                                                     looksBypass=True))
-    processor = config.getProcessor(group)
-    color_cache.store(config, entry, processor)
-    return processor.getDefaultCPUProcessor()
+    return group

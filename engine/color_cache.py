@@ -67,6 +67,20 @@ _RANGE_HAS = {"getMinInValue": "hasMinInValue", "getMaxInValue": "hasMaxInValue"
               "getMinOutValue": "hasMinOutValue", "getMaxOutValue": "hasMaxOutValue"}
 
 
+def kept(config, config_path: str, names: tuple, transform):
+    """The processor of `config` for `names` (view, look, exposure): the one stored by an
+    earlier process, else the config's for `transform()` (a Transform), stored for the
+    next."""
+    if cache_folder.disabled():
+        return config.getProcessor(transform())
+    name = key(config, config_path, names)
+    processor = stored(config, name)
+    if processor is None:
+        processor = config.getProcessor(transform())
+        store(config, name, processor)
+    return processor
+
+
 def key(config, config_path: str, names: tuple) -> str:
     """The entry's name for the transform `names` (view, look, exposure) of `config`."""
     import PyOpenColorIO as ocio
@@ -89,8 +103,6 @@ def _path(name: str) -> str:
 def stored(config, name: str):
     """The processor stored as `name`, or None where there is none (or it cannot be
     read: logged at debug level)."""
-    if cache_folder.disabled():
-        return None
     path = _path(name)
     try:
         with np.load(path, allow_pickle=False) as entry:
@@ -107,8 +119,6 @@ def stored(config, name: str):
 def store(config, name: str, processor) -> bool:
     """Keeps `processor` as `name` if its ops are all of _OPS's kinds and the processor
     rebuilt from them maps PROBE as it does; False where it is not kept."""
-    if cache_folder.disabled():
-        return False
     try:
         return _store(config, name, processor)
     except Exception as error:     # noqa: BLE001  (the cache never costs a render)

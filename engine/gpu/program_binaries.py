@@ -29,7 +29,6 @@ import logging
 import os
 import struct
 
-
 from ...core.cache_folder import disabled
 from ...core.files import atomic_write_bytes
 from .stencil import entry_points
