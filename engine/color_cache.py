@@ -27,6 +27,7 @@ from ..core.files import atomic_write_bytes
 log = logging.getLogger(__name__)
 
 FORMAT = 1
+KEEP = 16                    # entries kept in the folder, those used last
 # Colours the rebuilt processor must map exactly as the config's: a grey ramp over the
 # range a render holds (negative, 0, 1e-6 to 1e4) and pseudo-random colours over it.
 _RAMP = np.concatenate([[-1.0, 0.0], np.geomspace(1e-6, 1e4, 190)])
@@ -105,6 +106,12 @@ def stored(config, name: str):
     read: logged at debug level)."""
     path = _path(name)
     try:
+        os.utime(path)               # used now: pruning keeps it
+    except FileNotFoundError:
+        return None
+    except OSError:                  # a folder this process may only read: used as it is
+        pass
+    try:
         with np.load(path, allow_pickle=False) as entry:
             ops = json.loads(str(entry["ops"]))
             arrays = {k: entry[k] for k in entry.files if k != "ops"}
@@ -156,10 +163,29 @@ def _store(config, name, processor):
     try:
         os.makedirs(cache_folder.cache_folder(), exist_ok=True)
         atomic_write_bytes(_path(name), buffer.getvalue(), suffix=".npz")
+        _prune()
     except OSError as error:
         log.debug("colour cache: %s cannot be written (%s)", _path(name), error)
         return False
     return True
+
+
+def _prune():
+    """Keeps the KEEP entries used last (an entry is 2 MB with AgX's LUT, and each
+    exposure is an entry of its own): the others are removed."""
+    folder = cache_folder.cache_folder()
+    entries = []
+    for name in os.listdir(folder):
+        if name.startswith("colour-") and name.endswith(".npz"):
+            try:
+                entries.append((os.stat(os.path.join(folder, name)).st_mtime_ns, name))
+            except FileNotFoundError:        # another process pruned it meanwhile
+                pass
+    for _, name in sorted(entries)[:-KEEP]:
+        try:
+            os.remove(os.path.join(folder, name))
+        except FileNotFoundError:
+            pass
 
 
 def _mapped(processor) -> np.ndarray:

@@ -119,3 +119,38 @@ def test_the_entrys_name_follows_the_configs_files(tmp_path):
     stat = lut.stat()
     os.utime(lut, ns=(stat.st_atime_ns, stat.st_mtime_ns + 10**9))
     assert color_cache.key(config, path, names) != before
+
+
+def test_the_folder_keeps_the_entries_used_last(cache, monkeypatch):
+    """Each exposure is an entry of its own (2 MB with AgX): the folder keeps KEEP, those
+    used last, and reading an entry uses it."""
+    from lantern.engine import color, color_cache
+    monkeypatch.setattr(color_cache, "KEEP", 2)
+
+    def entry(exposure):
+        name = color_cache.key(color._config(), color.config_path(), ("AgX", "", exposure))
+        return cache / f"colour-{name}.npz"
+    for exposure in (0.0, 1.0):
+        color.display_rgb(hdr_image(), "AgX", None, exposure)
+    os.utime(entry(0.0), ns=(1, 1))                      # the older of the two ...
+    os.utime(entry(1.0), ns=(2, 2))
+    color._built_processor.cache_clear()
+    color.display_rgb(hdr_image(), "AgX", None, 0.0)     # ... read again: used now
+    color.display_rgb(hdr_image(), "AgX", None, 2.0)     # a third: the least used goes
+    assert entries(cache) == sorted([entry(0.0).name, entry(2.0).name])
+
+
+def test_an_entry_in_a_folder_this_process_may_only_read_is_used(cache, monkeypatch):
+    """Marking an entry used can fail (a shared cache mounted read-only): it is read all
+    the same."""
+    from lantern.engine import color, color_cache
+    first = color.display_rgb(hdr_image(), "AgX")
+    color._built_processor.cache_clear()
+
+    def read_only(*args, **kwargs):
+        raise PermissionError("read-only file system")
+    monkeypatch.setattr(color_cache.os, "utime", read_only)
+    built = []
+    monkeypatch.setattr(color_cache, "store", lambda *a: built.append(a) or False)
+    assert np.array_equal(first, color.display_rgb(hdr_image(), "AgX"))
+    assert built == []                   # read from the entry, not built again
