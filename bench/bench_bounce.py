@@ -29,7 +29,8 @@ REPEATS = 3
 
 def frames(stage, bounces, size):
     """(first render's seconds and CPU seconds, its field build seconds, best steady
-    seconds and CPU seconds, stats)."""
+    seconds and CPU seconds, stats): a still, then a viewport's frames of the same view
+    (progressive_field: the field kept, no final gather)."""
     settings = RenderSettings(width=size[0], height=size[1], preset="medium", bounces=bounces)
     with Session(stage, settings) as session:
         session.render()                            # programs made, trees built
@@ -37,6 +38,8 @@ def frames(stage, bounces, size):
         t0, c0 = time.perf_counter(), time.process_time()
         first = session.render()
         still, still_cpu = time.perf_counter() - t0, time.process_time() - c0
+        # A viewport's steady frame: the field kept, no final gather (a still's).
+        session.configure(progressive_field=True)
         steady = []
         for _ in range(REPEATS):
             t0, c0 = time.perf_counter(), time.process_time()

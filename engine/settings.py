@@ -69,6 +69,12 @@ class RenderSettings:
     # last complete update meanwhile (stats field_rays, field_pending). Off for final
     # images, which build it converged.
     progressive_field: bool = False
+    # The diffuse bounce's last step gathered per pixel: rays from each block of pixels
+    # shaded at their hits as the field's probes shade theirs (engine/gpu/passes/
+    # near_field.py), in place of the field's coarse light. None: in final images, not in
+    # a viewport's frames (progressive_field), which show the field with the screen's
+    # near field.
+    final_gather: bool | None = None
     # GL 4.3 and later run the passes that do not rasterise (lighting, ambient
     # occlusion, the dome, post, the supersample reduction, the render passes, the
     # resolve) and skinning as compute shaders, which every shader core of a GPU runs
@@ -89,6 +95,10 @@ class RenderSettings:
     # How often light bounces (Cycles' Light Paths). None: the stage's /Render/Settings,
     # else direct light only (a stage that names no bounces, as Storm draws it).
     bounces: Bounces | None = None
+
+    def gathers(self) -> bool:
+        """Whether a frame with an irradiance field gathers its last bounce per pixel."""
+        return not self.progressive_field if self.final_gather is None else self.final_gather
 
     def bounces_for(self, scene) -> Bounces:
         """The bounces a render of `scene` takes: these settings', else the stage's,

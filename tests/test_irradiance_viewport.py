@@ -21,6 +21,9 @@ def _converge(session):
 
 
 def _still(stage, **settings):
+    """A still's image of the field alone: a viewport's frames show the field, to which a
+    still adds its final gather (test_a_still_gathers_its_last_bounce_a_viewport_does_not)."""
+    settings.setdefault("final_gather", False)
     with Session(stage, RenderSettings(**SIZE, **settings)) as s:
         return s.render()
 
@@ -80,7 +83,26 @@ def test_a_moving_views_coarser_preset_keeps_the_field_and_a_still_is_converged_
         s.configure(preset="low")
         low = s.render()
     assert final.stats["field_pending"] == 0
-    np.testing.assert_array_equal(final.rgba, _still(stage).rgba)
+    # Stills, as F12 makes them: with their final gather.
+    np.testing.assert_array_equal(final.rgba, _still(stage, final_gather=None).rgba)
     # A still at a coarser preset than the field's is made at its own.
     assert low.stats["field_updates"] == 4
-    np.testing.assert_array_equal(low.rgba, _still(stage, preset="low").rgba)
+    np.testing.assert_array_equal(low.rgba, _still(stage, preset="low", final_gather=None).rgba)
+
+
+def test_a_still_gathers_its_last_bounce_a_viewport_does_not():
+    """A still (F12, the command line, a sequence's frame) gathers the diffuse bounce per
+    block of pixels over the field it builds; a viewport's frames show the field with the
+    screen's near field, and final_gather turns the gather on or off either way."""
+    stage = room_stage((12, 4, 4))
+    with Session(stage, RenderSettings(**SIZE)) as s:
+        gathered = s.render()
+    plain = _still(stage)
+    assert gathered.stats["gather_rays"] > 0 and "gather_rays" not in plain.stats
+    assert not np.array_equal(gathered.rgba, plain.rgba)
+    with Session(stage, RenderSettings(**SIZE, progressive_field=True)) as s:
+        frames = _converge(s)
+    assert all("gather_rays" not in f.stats for f in frames)
+    with Session(stage, RenderSettings(**SIZE, progressive_field=True, final_gather=True)) as s:
+        assert s.render().stats.get("gather_rays", 0) == 0      # no complete field yet
+        assert _converge(s)[-1].stats["gather_rays"] > 0

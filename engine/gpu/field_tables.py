@@ -1,16 +1,66 @@
 """The irradiance field's tables of what its rays meet (engine/gpu/passes/irradiance.py,
-shaders/irradiance_trace.comp): per traced material, its albedo, emission and what it
-lets through; per traced instance, which sides of its emitting faces are lights of the
-light table."""
+shaders/irradiance_trace.comp, and the final gather's, shaders/gather_trace.comp; both
+shade hits by shaders/field_hits.glsl): per traced material, its albedo, emission and
+what it lets through; per traced instance, which sides of its emitting faces are lights
+of the light table.
+
+A hit's albedo is its material's base colour times (1 - metallic), its emission the
+material's emission colour, a texture map's mean colour where one is bound (the hit's
+texel is not sampled), the constant where a pattern network feeds them. Glass keeps the
+diffuse share 1 - transmission of its albedo and passes rays and shadow rays straight
+on, weighted by transmission x base colour and Fresnel's transmittance at its IOR (a
+pane's exactly; a curved object's refraction is not followed)."""
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from ...core.emission import SAMPLING
 from ..emitters import makes_lights, radiance
 from ..mesh_topology import closed
+from .programs import UNITS, set_uniform
 
-MATERIAL_TEXELS = 3          # shaders/irradiance_trace.comp FIELD_MATERIAL
+MATERIAL_TEXELS = 3          # shaders/field_hits.glsl FIELD_MATERIAL
+SIDES_BINDING = 15           # shaders/field_hits.glsl FieldSides
+
+
+@dataclass
+class HitTables:
+    """What shaders/field_hits.glsl shades a traced hit with, made with a field's build:
+    the materials' table (a texture), the instances' sides (a storage buffer), the dome's
+    map (None: its spherical harmonics), the view's forward (a headlight's), the rays'
+    epsilon, and whether some material transmits."""
+    materials: object
+    sides: object
+    env: object
+    forward: np.ndarray
+    epsilon: float
+    glass: bool
+
+    def defines(self) -> list:
+        return ["HAS_DOME_MAP"] if self.env is not None else []
+
+    def bind(self, prog, scene, field, tracer, lights, environment, bounce: bool):
+        """Into `prog`: these tables, the tracer, the light table, the dome and `field`
+        (read at hits where `bounce`)."""
+        tracer.bind()
+        self.sides.bind_to_storage_buffer(SIDES_BINDING)
+        field.bind(prog)
+        self.materials.use(UNITS["field_materials"])
+        if lights.texture is not None:
+            lights.texture.use(UNITS["u_lights"])
+        environment.bind(prog, scene.dome, self.env)
+        set_uniform(prog, "has_dome", scene.dome is not None)
+        set_uniform(prog, "n_lights", len(lights.index))
+        set_uniform(prog, "u_bounce", bounce)
+        set_uniform(prog, "u_glass", self.glass)
+        set_uniform(prog, "u_epsilon", self.epsilon)
+        set_uniform(prog, "u_view_forward", self.forward)
+
+    def release(self):
+        self.materials.release()
+        self.sides.release()
 
 
 def material_table(scene, names, textures) -> np.ndarray:

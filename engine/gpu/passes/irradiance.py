@@ -34,12 +34,7 @@ Only on GL 4.3 (compute shaders) and only when the frame's bounces have a diffus
 bounce and the scene has surfaces and something that lights them; else the frame is
 today's direct image, with no tracer.
 
-A hit's albedo is its material's base colour times (1 - metallic), its emission the
-material's emission colour, a texture map's mean colour where one is bound (the hit's
-texel is not sampled), the constant where a pattern network feeds them. Glass keeps the
-diffuse share 1 - transmission of its albedo and passes rays and shadow rays straight
-on, weighted by transmission x base colour and Fresnel's transmittance at its IOR (a
-pane's exactly; a curved object's refraction is not followed).
+What a hit is shaded with (albedo, emission, glass): engine/gpu/field_tables.py.
 
 reads: view   writes: field (the Field: bind it into a shading program)"""
 from __future__ import annotations
@@ -52,7 +47,7 @@ import numpy as np
 from ....core.presets import PRESETS
 from ...bounces import surfaces_light_each_other, would_bounce
 from ...probe_grids import GRIDS, grids, placement
-from ..field_tables import instance_sides, material_table, transmits
+from ..field_tables import HitTables, instance_sides, material_table, transmits
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform, set_uniform_array
 
@@ -72,7 +67,6 @@ NEAR_RAYS = 4
 BUDGET = {"low": 4096, "medium": 8192, "high": 12288, "ultra": 16384}
 RANK = tuple(PRESETS)        # presets, coarsest first
 ALL_BARRIERS = 0xFFFFFFFF
-SIDES_BINDING = 15           # shaders/irradiance_trace.comp FieldSides
 FIELD_UNITS = ("field_irradiance", "field_distance", "field_probes", "field_materials",
                "field_rays", "field_planes")
 
@@ -165,13 +159,9 @@ class Build:
     n: int
     rays: int
     updates: int
-    forward: np.ndarray          # the view's, for a headlight
-    epsilon: float
     ray_tex: object
     steady: object
-    materials: object
-    sides: object
-    env: object
+    hits: HitTables              # what its rays' hits are shaded with
     k: int = 0
     probe: int = 0
     prev: object = None
@@ -181,8 +171,9 @@ class Build:
         return ((self.updates - self.k) * self.n - self.probe) * self.rays
 
     def release(self):
-        for res in (self.ray_tex, self.steady, self.materials, self.sides):
-            res.release()
+        for res in (self.ray_tex, self.steady, self.hits):
+            if res is not None:
+                res.release()
 
 
 class IrradiancePass(Pass):
@@ -209,6 +200,8 @@ class IrradiancePass(Pass):
         self.seconds = 0.0           # the last frame's field CPU seconds (GPU work waited for)
         self.warnings = []           # without compute shaders: that the bounce is off
         self.lit_each_other = None   # surfaces_light_each_other's answer (None: ask again)
+        self.hits = None             # the HitTables of the field shown: bind_hits
+        self.fewer = None            # the field shown's update before it (None: one bounce)
 
     def needed(self, frame) -> bool:
         if not would_bounce(frame, self._light_each_other):
@@ -310,21 +303,20 @@ class IrradiancePass(Pass):
         materials = self.uploads.texture((self.table.shape[1], 1), 4, self.table, kind="field",
                                          dtype="f4")
         materials.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
-        env = self.environment.prepare(scene.dome)
         diagonal = float(np.linalg.norm(np.asarray(hi) - np.asarray(lo)))
         steady = self._texture(atlas_size(n), False)
         fbo = self.ctx.framebuffer(color_attachments=[steady])
         fbo.clear(0.0, 0.0, 0.0, 0.0)    # no update's light yet
         fbo.release()
         self.build = Build(
-            key=key, version=self.version, grids=made, n=n, rays=rays,
-            updates=updates, forward=np.asarray(view.camera.forward, float),
-            epsilon=1e-4 * max(diagonal, 1e-6),
+            key=key, version=self.version, grids=made, n=n, rays=rays, updates=updates,
             # Per ray: radiance, the hit's normal, the field's bounces (irradiance_trace.comp).
             ray_tex=self.ctx.texture((3 * rays, n), 4, dtype="f4"), steady=steady,
-            materials=materials, sides=self.uploads.buffer(instance_sides(scene, tracer),
-                                                           kind="field"),
-            env=env)
+            hits=HitTables(materials, self.uploads.buffer(instance_sides(scene, tracer),
+                                                          kind="field"),
+                           self.environment.prepare(scene.dome),
+                           np.asarray(view.camera.forward, float),
+                           1e-4 * max(diagonal, 1e-6), transmits(self.table)))
         self._key = key
 
     def _run(self, frame, budget) -> int:
@@ -334,7 +326,7 @@ class IrradiancePass(Pass):
         gives, and the last, the field a still makes."""
         b, scene = self.build, frame.scene
         trace = self.programs.get("irradiance_trace.comp", None,
-                                  ["HAS_DOME_MAP"] if b.env is not None else [], compute=True)
+                                  b.hits.defines(), compute=True)
         blend = self.programs.get("irradiance_blend.comp", None, [], compute=True)
         tracer = self.tracer(scene)
         traced = 0
@@ -350,22 +342,10 @@ class IrradiancePass(Pass):
                 break
             R = rotation(b.k)
             read = b.prev if b.prev is not None else b.target   # the first reads no field
-            tracer.bind()
-            b.sides.bind_to_storage_buffer(SIDES_BINDING)
-            read.bind(trace)
-            b.materials.use(UNITS["field_materials"])
-            if self.lights.texture is not None:
-                self.lights.texture.use(UNITS["u_lights"])
-            self.environment.bind(trace, scene.dome, b.env)
-            set_uniform(trace, "has_dome", scene.dome is not None)
+            b.hits.bind(trace, scene, read, tracer, self.lights, self.environment, b.k > 0)
             set_uniform(trace, "u_rotation", R)
             set_uniform(trace, "u_rays", b.rays)
-            set_uniform(trace, "n_lights", len(self.lights.index))
-            set_uniform(trace, "u_bounce", b.k > 0)
-            set_uniform(trace, "u_glass", transmits(self.table))
             set_uniform(trace, "u_first_probe", b.probe)
-            set_uniform(trace, "u_epsilon", b.epsilon)
-            set_uniform(trace, "u_view_forward", b.forward)
             b.ray_tex.bind_to_image(0, read=False, write=True)
             trace.run(-(-b.rays // GROUP), count)
             self.ctx.memory_barrier(ALL_BARRIERS)
@@ -398,9 +378,14 @@ class IrradiancePass(Pass):
         """Update k of build b is complete: the next reads it; frames show it when it is
         the last, or when what they showed is out of date (a viewport's edit shows its
         first bounce at once; a finer preset's field waits until it converged)."""
+        before = b.prev
         b.prev, b.target, b.probe, b.k = b.target, None, 0, b.k + 1
         frame.count("field_updates")
         done = b.k == b.updates
+        if done:
+            # The field of one bounce fewer: a traced gather's hits read it, so that a
+            # pixel gets the scene's bounces and not one more (bind_hits).
+            self.fewer = before
         if done or self.shown is None or self.shown[1] != b.version:
             self.field, self.shown = b.prev, (b.key, b.version, done)
 
@@ -408,7 +393,7 @@ class IrradiancePass(Pass):
         """A Field of build b's size that neither frames nor b read, from the pool or new,
         set to b's grids; Fields of other sizes that nothing reads are released."""
         size = atlas_size(b.n)
-        busy = [f for f in (self.field, b.prev) if f is not None]
+        busy = [f for f in (self.field, b.prev, self.fewer) if f is not None]
         keep = []
         for f in self.pool:
             if f.irradiance.size != size and all(f is not x for x in busy):
@@ -426,10 +411,29 @@ class IrradiancePass(Pass):
         spare.grids = b.grids
         return spare
 
+    def bind_hits(self, prog, frame):
+        """Into `prog`, for the final gather: the shown field's HitTables and its field of
+        one bounce fewer (shaders/field_hits.glsl). False where no field is complete."""
+        if self.field is None or self.hits is None:
+            return False
+        read = self.fewer if self.fewer is not None else self.field
+        self.hits.bind(prog, frame.scene, read, self.tracer(frame.scene), self.lights,
+                       self.environment, self.fewer is not None)
+        return True
+
     def _drop_build(self):
         if self.build is not None:
-            self.build.release()
+            b = self.build
+            if b.k == b.updates:         # complete: its tables shade the final gather's hits
+                self._release_hits()
+                self.hits, b.hits = b.hits, None
+            b.release()
             self.build = None
+
+    def _release_hits(self):
+        if self.hits is not None:
+            self.hits, old = None, self.hits
+            old.release()
 
     def _texture(self, size, linear: bool):
         tex = self.ctx.texture(size, 4, dtype="f4")
@@ -440,6 +444,7 @@ class IrradiancePass(Pass):
 
     def release(self):
         self._drop_build()
+        self._release_hits()
         for f in self.pool:
             f.release()
-        self.pool, self.field, self.shown = [], None, None
+        self.pool, self.field, self.shown, self.fewer = [], None, None, None

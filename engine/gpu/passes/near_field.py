@@ -45,6 +45,12 @@ from .ao import search_setup
 # 0.1943; one spacing 0.0934 / 0.3203 / 0.1967; two 0.1029 / 0.3056 / 0.2258 (the
 # screen's nearest surfaces stand for ever more of the hemisphere they cannot see).
 REACH = 0.5
+# The final gather (a still's): rays a block, and at most this many a frame (blocks grow
+# past the preset's near_block where the image holds more). Against the Cycles
+# references at medium (docs/rendering.md "Final gather").
+GATHER_RAYS = {"low": 16, "medium": 32, "high": 64, "ultra": 128}
+GATHER_BUDGET = {"low": 65536, "medium": 131072, "high": 262144, "ultra": 524288}
+GATHER_GROUP = 64                 # shaders/gather_trace.comp's local size
 
 
 class NearFieldPass(Pass):
@@ -73,12 +79,16 @@ class NearFieldPass(Pass):
         lit.use(UNITS["hdr"])
         board["g_depth"].use(UNITS["g_depth"])
         board["g_normal"].use(UNITS["g_normal"])
-        search = screen_program(self.programs, "ao", ["NEAR_FIELD"], compute=True)
-        step, raw = search_setup(self.pool, search, frame, view,
-                                 REACH * min(float(np.min(g.step)) for g in field.grids),
-                                 frame.preset.near_block, frame.preset.near_steps)
-        set_uniform(search, "u_lit", UNITS["hdr"])
-        run_screen(ctx, self.programs, self.pool, search, [raw], True)
+        if frame.options.gathers() and self.field_pass.hits is not None:
+            step, raw = self._gather(frame, board, view)
+        else:
+            search = screen_program(self.programs, "ao", ["NEAR_FIELD"], compute=True)
+            step, raw = search_setup(self.pool, search, frame, view,
+                                     REACH * min(float(np.min(g.step)) for g in field.grids),
+                                     frame.preset.near_block, frame.preset.near_steps)
+            set_uniform(search, "u_lit", UNITS["hdr"])
+            run_screen(ctx, self.programs, self.pool, search, [raw], True)
+        lit.use(UNITS["hdr"])            # the composite's (the gather binds its own units)
         defines = ["IRRADIANCE_FIELD"] + surface_defines(frame, board)
         targets = [board["hdr"]]
         if "DiffInd" in frame.aovs:     # it takes the change, read and stored in place
@@ -98,6 +108,46 @@ class NearFieldPass(Pass):
             set_uniform(prog, "u_diffuse", UNITS["visibility_tex"])
         run_screen(ctx, self.programs, self.pool, prog, targets, True)
         self.pool.release(raw)
+
+    def _gather(self, frame, board, view):
+        """The final gather (shaders/gather_trace.comp, then near_trace.glsl's mean per
+        block) into a raw target at its block size: the preset's rays a block, blocks of
+        near_block pixels a side or larger, so that a frame traces at most GATHER_BUDGET
+        rays. Returns (block, raw)."""
+        name = frame.preset.name
+        rays = GATHER_RAYS.get(name, GATHER_RAYS["medium"])
+        w, h = frame.size
+        step = max(int(frame.supersample), 1) * max(int(frame.preset.near_block), 1)
+        while -(-w // step) * -(-h // step) * rays > GATHER_BUDGET.get(name, GATHER_BUDGET["medium"]):
+            step += 1
+        blocks = (-(-w // step), -(-h // step))
+        hits = self.field_pass.hits
+        trace = self.programs.get("gather_trace.comp", None, hits.defines(), compute=True)
+        self.field_pass.bind_hits(trace, frame)
+        # Positions camera-relative (not view.set_camera's origin: the light table's
+        # positions stay in world space, as the field's probes read them).
+        set_uniform(trace, "inv_view_proj", view.inv_view_proj)
+        set_uniform(trace, "cam_forward", view.camera.forward)
+        set_uniform(trace, "cam_ortho", bool(view.camera.ortho))
+        set_uniform(trace, "field_eye", view.origin)
+        set_uniform(trace, "u_step", step)
+        set_uniform(trace, "u_gather_rays", rays)
+        set_uniform(trace, "u_blocks", blocks)
+        board["g_depth"].use(UNITS["g_depth"])
+        board["g_normal"].use(UNITS["g_normal"])
+        traced = self.pool.acquire((blocks[0] * rays, blocks[1]), "rgba32f")
+        traced.bind_to_image(0, read=False, write=True)
+        trace.run(-(-blocks[0] * rays // GATHER_GROUP), blocks[1])
+        self.ctx.memory_barrier()
+        raw = self.pool.acquire(blocks, "rgba32f")
+        mean = screen_program(self.programs, "near_trace", [], compute=True)
+        traced.use(UNITS["post_src"])
+        set_uniform(mean, "u_gather_rays_tex", UNITS["post_src"])
+        set_uniform(mean, "u_gather_rays", rays)
+        run_screen(self.ctx, self.programs, self.pool, mean, [raw], True)
+        self.pool.release(traced)
+        frame.stats["gather_rays"] = blocks[0] * blocks[1] * rays
+        return step, raw
 
     def release(self):
         self.lit.release()

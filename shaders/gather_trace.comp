@@ -1,0 +1,79 @@
+#version 430 core
+// The final gather's rays (engine/gpu/passes/near_field.py, a still's): the diffuse
+// bounce at each block of u_step x u_step pixels gathered by rays from the surface seen
+// at its centre sub-pixel, in place of the irradiance field's coarse light, so that it
+// sees what the probes cannot resolve and the screen does not show (the floor under a
+// table, the faces a box turns to the floor's light). One invocation a ray, as the
+// field's probes trace theirs (irradiance_trace.comp): u_gather_rays rays a block spread
+// over its hemisphere by the cosine, each shaded as a probe's (field_hits.glsl
+// traced_radiance: the hit's emission, the lights seen by shadow rays, the field of one
+// bounce fewer, glass passed through; the dome where a ray escapes), so the pixel gets
+// the scene's bounces. near_trace.glsl takes each block's mean.
+#include "lib.glsl"
+#include "lights.glsl"
+#include "environment.glsl"
+#include "raytrace.glsl"
+#include "irradiance_field.glsl"
+#include "field_hits.glsl"
+layout(local_size_x = 64) in;
+#ifndef GATHER_PULL
+#define GATHER_PULL 1e-3
+#endif
+// x block.x * u_gather_rays + ray, y block.y: (radiance, 1), or 0 where the block's
+// centre sees the background.
+layout(rgba32f, binding = 0) writeonly uniform image2D ray_image;
+uniform sampler2D g_depth;
+uniform sampler2D g_normal;
+uniform mat4 inv_view_proj;
+uniform vec3 cam_forward;
+uniform bool cam_ortho;
+uniform vec3 field_eye;         // the camera's world position: positions are relative to it
+uniform int u_step;
+uniform int u_gather_rays;
+uniform ivec2 u_blocks;
+
+// A 4x4 Bayer index in [0, 16), as ao.glsl's: neighbouring blocks turn their rays apart,
+// so the upsampling's 4x4 blur (ao_upsample.glsl) averages 16 rotations.
+float gather_bayer(ivec2 p) {
+    const int b[16] = int[16](0, 8, 2, 10, 12, 4, 14, 6, 3, 11, 1, 9, 15, 7, 13, 5);
+    return float(b[(p.y & 3) * 4 + (p.x & 3)]);
+}
+
+void main() {
+    int column = int(gl_GlobalInvocationID.x);
+    ivec2 block = ivec2(column / u_gather_rays, gl_GlobalInvocationID.y);
+    int ray = column - block.x * u_gather_rays;
+    if (block.x >= u_blocks.x || block.y >= u_blocks.y) return;
+    ivec2 at = ivec2(column, block.y);
+    ivec2 size = textureSize(g_depth, 0);
+    ivec2 px = min(block * u_step + u_step / 2, size - 1);
+    float depth = texelFetch(g_depth, px, 0).r;
+    if (is_background(depth)) {
+        imageStore(ray_image, at, vec4(0.0));
+        return;
+    }
+    vec3 p = position_from_depth((vec2(px) + 0.5) / vec2(size), depth, inv_view_proj);
+    vec3 n = normalize(texelFetch(g_normal, px, 0).xyz);
+    // The side the camera sees: a surface seen from behind (inside a closed emitter, a
+    // single-sided wall's back) gathers over its own hemisphere, as it is shaded.
+    vec3 v = cam_ortho ? -cam_forward : normalize(-p);
+    if (dot(n, v) < 0.0) n = -n;
+    // Off the surface, towards the camera by a thousandth of the depth: a position
+    // rebuilt from depth may lie a little behind its surface, and a ray from there would
+    // start past a wall (a sealed room's floor by its wall saw the sun outside).
+    float z = cam_ortho ? 1.0 : max(dot(p, cam_forward), 1e-6);
+    vec3 x = p + field_eye + n * u_epsilon + v * (GATHER_PULL * z);
+    vec3 t = normalize(abs(n.z) < 0.999 ? cross(n, vec3(0.0, 0.0, 1.0)) : cross(n, vec3(1.0, 0.0, 0.0)));
+    vec3 b = cross(n, t);
+    // Stratified over the unit disc's area (Malley: the cosine), turned per block.
+    float turn = (gather_bayer(block) + 0.5) / 16.0;
+    float shift = (gather_bayer(block.yx + ivec2(1, 2)) + 0.5) / 16.0;
+    float u = (float(ray) + shift) / float(u_gather_rays);
+    float phi = 2.0 * PI * fract(float(ray) * 0.6180339887498949 + turn);
+    float r = sqrt(u);
+    vec3 dir = t * (r * cos(phi)) + b * (r * sin(phi)) + n * sqrt(max(1.0 - u, 0.0));
+    vec3 bounced, facing;
+    float distance;
+    vec3 radiance = traced_radiance(x, dir, true, bounced, distance, facing);
+    imageStore(ray_image, at, vec4(radiance + bounced, 1.0));
+}
