@@ -11,6 +11,14 @@ in place of the field's over the same sectors (shaders/near_field.glsl):
 
 so no light is counted twice, and a pixel nothing nearby hides is left as it was.
 
+A still (RenderSettings.gathers(): F12, the command line, a sequence's frame) gathers
+instead from the scene's triangles, over the whole hemisphere: the final gather
+(shaders/gather_trace.comp, one ray an invocation, each shaded at its hit as the field's
+probes shade theirs, with the field of one bounce fewer; near_trace.glsl's mean per
+block), whose share is 1, so its pixels take the gathered light in place of the field's.
+It sees what the probes are too coarse for and the screen does not show (the floor under
+a table); a viewport's frames keep the screen's search, which costs a frame far less.
+
 The lit colour is the current frame's, after the ambient and light passes (the direct
 light, emission, and the field's bounce at the surfaces seen): a still, a sequence's
 frame and the viewport's each gather from themselves, with no history to reproject or
