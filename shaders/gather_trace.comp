@@ -32,13 +32,6 @@ uniform int u_step;
 uniform int u_gather_rays;
 uniform ivec2 u_blocks;
 
-// A 4x4 Bayer index in [0, 16), as ao.glsl's: neighbouring blocks turn their rays apart,
-// so the upsampling's 4x4 blur (ao_upsample.glsl) averages 16 rotations.
-float gather_bayer(ivec2 p) {
-    const int b[16] = int[16](0, 8, 2, 10, 12, 4, 14, 6, 3, 11, 1, 9, 15, 7, 13, 5);
-    return float(b[(p.y & 3) * 4 + (p.x & 3)]);
-}
-
 void main() {
     int column = int(gl_GlobalInvocationID.x);
     ivec2 block = ivec2(column / u_gather_rays, gl_GlobalInvocationID.y);
@@ -65,9 +58,11 @@ void main() {
     vec3 x = p + field_eye + n * u_epsilon + v * (GATHER_PULL * z);
     vec3 t = normalize(abs(n.z) < 0.999 ? cross(n, vec3(0.0, 0.0, 1.0)) : cross(n, vec3(1.0, 0.0, 0.0)));
     vec3 b = cross(n, t);
-    // Stratified over the unit disc's area (Malley: the cosine), turned per block.
-    float turn = (gather_bayer(block) + 0.5) / 16.0;
-    float shift = (gather_bayer(block.yx + ivec2(1, 2)) + 0.5) / 16.0;
+    // Stratified over the unit disc's area (Malley: the cosine), turned per block by a
+    // Bayer index (lib.glsl): neighbouring blocks turn their rays apart, so the
+    // upsampling's 4x4 blur (ao_upsample.glsl) averages 16 turns.
+    float turn = (float(bayer4(uvec2(block))) + 0.5) / 16.0;
+    float shift = (float(bayer4(uvec2(block.yx + ivec2(1, 2)))) + 0.5) / 16.0;
     float u = (float(ray) + shift) / float(u_gather_rays);
     float phi = 2.0 * PI * fract(float(ray) * 0.6180339887498949 + turn);
     float r = sqrt(u);
