@@ -8,7 +8,7 @@
 // over its hemisphere by the cosine, each shaded as a probe's (field_hits.glsl
 // traced_radiance: the hit's emission, the lights seen by shadow rays, the field of one
 // bounce fewer, glass passed through; the dome where a ray escapes), so the pixel gets
-// the scene's bounces. near_trace.glsl takes each block's mean.
+// the scene's bounces. gather_mean.glsl takes each block's mean.
 #include "lib.glsl"
 #include "lights.glsl"
 #include "environment.glsl"
@@ -16,9 +16,6 @@
 #include "irradiance_field.glsl"
 #include "field_hits.glsl"
 layout(local_size_x = 64) in;
-#ifndef GATHER_PULL
-#define GATHER_PULL 1e-3
-#endif
 // x block.x * u_gather_rays + ray, y block.y: (radiance, 1), or 0 where the block's
 // centre sees the background.
 layout(rgba32f, binding = 0) writeonly uniform image2D ray_image;
@@ -51,11 +48,11 @@ void main() {
     // single-sided wall's back) gathers over its own hemisphere, as it is shaded.
     vec3 v = cam_ortho ? -cam_forward : normalize(-p);
     if (dot(n, v) < 0.0) n = -n;
-    // Off the surface, towards the camera by a thousandth of the depth: a position
-    // rebuilt from depth may lie a little behind its surface, and a ray from there would
-    // start past a wall (a sealed room's floor by its wall saw the sun outside).
-    float z = cam_ortho ? 1.0 : max(dot(p, cam_forward), 1e-6);
-    vec3 x = p + field_eye + n * u_epsilon + v * (GATHER_PULL * z);
+    // Pulled towards the camera, as the contact rays start (raytrace.glsl
+    // rt_seen_origin): a position rebuilt from depth may lie a little behind its surface,
+    // and a ray from there would start past a wall (a sealed room's floor by its wall saw
+    // the sun outside).
+    vec3 x = rt_seen_origin(p, field_eye) + n * u_epsilon;
     vec3 t = normalize(abs(n.z) < 0.999 ? cross(n, vec3(0.0, 0.0, 1.0)) : cross(n, vec3(1.0, 0.0, 0.0)));
     vec3 b = cross(n, t);
     // Stratified over the unit disc's area (Malley: the cosine), turned per block by a

@@ -197,6 +197,13 @@ bool rt_walk(vec3 origin, vec3 dir, float tmin, float tmax, bool any, out RtHit 
     return hit.instance != RT_NO_HIT;
 }
 
+// A ray from a point the camera sees (a G-buffer position, camera-relative q): it starts
+// at q pulled towards the camera by RT_SEEN_PULL of its distance, along the line of
+// sight, which is free, since the camera sees the point: a point the G-buffer gives just
+// past a seam's wall (outside a closed room) starts inside again. World space.
+const float RT_SEEN_PULL = 1e-3;
+vec3 rt_seen_origin(vec3 q, vec3 eye) { return q * (1.0 - RT_SEEN_PULL) + eye; }
+
 bool rt_closest_hit(vec3 origin, vec3 dir, float tmin, float tmax, out RtHit hit) {
     return rt_walk(origin, dir, tmin, tmax, false, hit);
 }

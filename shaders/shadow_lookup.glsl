@@ -57,14 +57,9 @@ const float CONTACT_REACH = 4.0;
 // bits (it changes only where a ray grazes an edge). Past the stretch the map decides.
 #include "raytrace.glsl"
 uniform vec3 contact_eye;            // the camera's world position: the tracer's frame
-// The ray starts at camera-relative q pulled towards the camera by CONTACT_PULL of its
-// distance, along the line of sight, which is free, since the camera sees the point,
-// and reaches that much further (CONTACT below): a point the G-buffer gives just past a
-// seam's wall (outside a closed room) starts inside again.
-const float CONTACT_PULL = 1e-3;
-vec3 contact_origin(vec3 q) {                // world
-    return q * (1.0 - CONTACT_PULL) + contact_eye;
-}
+// The ray starts at camera-relative q pulled towards the camera (raytrace.glsl
+// rt_seen_origin) and reaches that much further (CONTACT below).
+vec3 contact_origin(vec3 q) { return rt_seen_origin(q, contact_eye); }      // world
 
 // `lit` (the map's), or 0 where the ray from camera-relative q (pulled) along
 // `to_light` (unit) meets an opaque surface within `reach`.
@@ -95,7 +90,7 @@ float contact_limited(float lit, vec3 q, vec3 to_light, float reach) {
     return rt_any_hit(contact_origin(q), to_light, 0.0, reach) ? 0.0 : lit;
 }
 #endif
-#define CONTACT(lit, q, to_light, reach) contact_limited(lit, q, to_light, (reach) + CONTACT_PULL * length(q))
+#define CONTACT(lit, q, to_light, reach) contact_limited(lit, q, to_light, (reach) + RT_SEEN_PULL * length(q))
 
 // Where the ray is not needed: a sun's ray runs along one column of its map, and an
 // occluder within its reach is a surface in front of the receiver there. Where no
