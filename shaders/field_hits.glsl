@@ -3,7 +3,7 @@
 // there (every light of the light table, seen by a shadow ray, and the field's
 // irradiance: the bounces so far). Glass (a material that transmits) passes shadow rays
 // straight on, weighted by its transmittance. Shared by the probes' rays
-// (irradiance_trace.comp) and the near field's traced gather (near_trace.glsl). Include
+// (irradiance_trace.comp) and the final gather's (gather_trace.comp). Include
 // after lib.glsl, lights.glsl, environment.glsl, raytrace.glsl and irradiance_field.glsl.
 uniform sampler2D field_materials;   // FIELD_MATERIAL texels a material: albedo,
                                      // (emission, sides), (transmittance colour, ior)
@@ -85,7 +85,7 @@ vec3 hit_radiance(RtHit hit, vec3 x, vec3 dir, bool from_surface, out vec3 bounc
     // probes read less well there: the smaller of the two, the back one at most half way
     // to the ray's start (a sealed room's walls took neither's leak).
     vec3 step = field_step[0];
-    float reach = 0.8 * field_bias * min(step.x, min(step.y, step.z));
+    float reach = FIELD_BIAS_ALONG_V * field_bias * min(step.x, min(step.y, step.z));
     vec3 behind = -dir * min(1.0, 0.5 * hit.t / max(reach, 1e-6));
     bounced = albedo / FIELD_PI * min(field_irradiance_at(x, n, behind),
                                       field_irradiance_at(x, n, n));
@@ -93,8 +93,9 @@ vec3 hit_radiance(RtHit hit, vec3 x, vec3 dir, bool from_surface, out vec3 bounc
 }
 
 // The light a ray from `origin` along unit `dir` brings (`from_surface`: hit_radiance's):
-// each surface it meets shaded by hit_radiance, through glass (weighted by its transmittance) to the first surface that
-// is not glass; the dome where it escapes (has_dome: environment.glsl). `bounced`: the
+// each surface it meets shaded by hit_radiance, through glass (weighted by its
+// transmittance) to the first surface that is not glass; the dome where it escapes
+// (has_dome: environment.glsl). `bounced`: the
 // share the field brought; `distance`: to that first opaque surface (1e27 where the ray
 // escaped), negative where it met the surface's back (its winding); `facing`: that
 // surface's normal towards the origin (0 where none).

@@ -31,6 +31,8 @@ uniform vec3 field_region_lo[FIELD_GRIDS];  // where it is whole (its probes' bo
 uniform vec3 field_region_hi[FIELD_GRIDS];  // beyond, on a side at the bounds' edge)
 uniform int field_tiles;        // tiles a line
 uniform float field_bias;       // the self-shadowing bias (a share of the spacing)
+const float FIELD_BIAS_ALONG_N = 0.2;   // of it along the normal,
+const float FIELD_BIAS_ALONG_V = 0.8;   // and along v, towards the viewer
 uniform sampler2D field_irradiance;   // rgb: irradiance E (W/m2 per unit radiance)
 uniform sampler2D field_distance;
 uniform sampler2D field_probes;
@@ -123,7 +125,7 @@ vec3 grid_irradiance_along(int grid, vec3 p, vec3 n, vec3 v, vec3 along) {
     vec3 lo = field_lo[grid], step = field_step[grid];
     ivec3 counts = field_counts[grid];
     float spacing = min(step.x, min(step.y, step.z));
-    vec3 q = p + (0.2 * n + 0.8 * v) * field_bias * spacing;
+    vec3 q = p + (FIELD_BIAS_ALONG_N * n + FIELD_BIAS_ALONG_V * v) * field_bias * spacing;
     vec3 g = clamp((q - lo) / step, vec3(0.0), vec3(counts - 1));
     ivec3 base = min(ivec3(g), max(counts - 2, ivec3(0)));
     vec3 alpha = clamp(g - vec3(base), 0.0, 1.0);
