@@ -284,11 +284,11 @@ class IrradiancePass(Pass):
         """Every sync's changes (Renderer.update: a frame's, or a sync outside one, as
         a host's or a tool's): the field is stale once what it holds changed."""
         c = changes
-        self.stale |= bool(c.meshes or c.dropped_meshes or c.instances or c.dropped_instances
-                           or c.shapes or c.skeletons or c.lights or c.dome)
+        moved = bool(c.meshes or c.dropped_meshes or c.instances or c.dropped_instances
+                     or c.shapes or c.skeletons or c.lights)
+        self.stale |= moved or bool(c.dome)
         self.touched |= bool(c.materials)
-        if c.meshes or c.dropped_meshes or c.instances or c.dropped_instances or c.points \
-                or c.shapes or c.skeletons or c.lights or c.materials:
+        if moved or c.points or c.materials:
             self.lit_each_other = None
 
     def _start(self, frame, view, key, updates: int):
@@ -383,9 +383,7 @@ class IrradiancePass(Pass):
         frame.count("field_updates")
         done = b.k == b.updates
         if done:
-            # The field of one bounce fewer: a traced gather's hits read it, so that a
-            # pixel gets the scene's bounces and not one more (bind_hits).
-            self.fewer = before
+            self.fewer = before      # the gather's hits read it: the scene's bounces, no more
         if done or self.shown is None or self.shown[1] != b.version:
             self.field, self.shown = b.prev, (b.key, b.version, done)
 
@@ -411,15 +409,17 @@ class IrradiancePass(Pass):
         spare.grids = b.grids
         return spare
 
+    def gather_tables(self):
+        """The shown field's HitTables, for a final gather, where that field is complete
+        and made for the scene as it is (else None: the field's light stays)."""
+        done = self.shown is not None and self.shown[2] and self.shown[1] == self.version
+        return self.hits if done else None
+
     def bind_hits(self, prog, frame):
-        """Into `prog`, for the final gather: the shown field's HitTables and its field of
-        one bounce fewer (shaders/field_hits.glsl). False where no field is complete."""
-        if self.field is None or self.hits is None:
-            return False
+        """Into `prog`: gather_tables and the field of one bounce fewer (field_hits.glsl)."""
         read = self.fewer if self.fewer is not None else self.field
         self.hits.bind(prog, frame.scene, read, self.tracer(frame.scene), self.lights,
                        self.environment, self.fewer is not None)
-        return True
 
     def _drop_build(self):
         if self.build is not None:
@@ -431,8 +431,8 @@ class IrradiancePass(Pass):
             self.build = None
 
     def _release_hits(self):
-        if self.hits is not None:
-            self.hits, old = None, self.hits
+        self.hits, old = None, self.hits
+        if old is not None:
             old.release()
 
     def _texture(self, size, linear: bool):

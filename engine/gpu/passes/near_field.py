@@ -14,7 +14,7 @@ so no light is counted twice, and a pixel nothing nearby hides is left as it was
 A still (RenderSettings.gathers(): F12, the command line, a sequence's frame) gathers
 instead from the scene's triangles, over the whole hemisphere: the final gather
 (shaders/gather_trace.comp, one ray an invocation, each shaded at its hit as the field's
-probes shade theirs, with the field of one bounce fewer; near_trace.glsl's mean per
+probes shade theirs, with the field of one bounce fewer; gather_mean.glsl's mean per
 block), whose share is 1, so its pixels take the gathered light in place of the field's.
 It sees what the probes are too coarse for and the screen does not show (the floor under
 a table); a viewport's frames keep the screen's search, which costs a frame far less.
@@ -87,8 +87,9 @@ class NearFieldPass(Pass):
         lit.use(UNITS["hdr"])
         board["g_depth"].use(UNITS["g_depth"])
         board["g_normal"].use(UNITS["g_normal"])
-        if frame.options.gathers() and self.field_pass.hits is not None:
-            step, raw = self._gather(frame, board, view)
+        hits = self.field_pass.gather_tables() if frame.options.gathers() else None
+        if hits is not None:
+            step, raw = self._gather(frame, view, hits)
         else:
             search = screen_program(self.programs, "ao", ["NEAR_FIELD"], compute=True)
             step, raw = search_setup(self.pool, search, frame, view,
@@ -96,7 +97,6 @@ class NearFieldPass(Pass):
                                      frame.preset.near_block, frame.preset.near_steps)
             set_uniform(search, "u_lit", UNITS["hdr"])
             run_screen(ctx, self.programs, self.pool, search, [raw], True)
-        lit.use(UNITS["hdr"])            # the composite's (the gather binds its own units)
         defines = ["IRRADIANCE_FIELD"] + surface_defines(frame, board)
         targets = [board["hdr"]]
         if "DiffInd" in frame.aovs:     # it takes the change, read and stored in place
@@ -117,19 +117,19 @@ class NearFieldPass(Pass):
         run_screen(ctx, self.programs, self.pool, prog, targets, True)
         self.pool.release(raw)
 
-    def _gather(self, frame, board, view):
-        """The final gather (shaders/gather_trace.comp, then near_trace.glsl's mean per
+    def _gather(self, frame, view, hits):
+        """The final gather (shaders/gather_trace.comp, then gather_mean.glsl's mean per
         block) into a raw target at its block size: the preset's rays a block, blocks of
         near_block pixels a side or larger, so that a frame traces at most GATHER_BUDGET
         rays. Returns (block, raw)."""
         name = frame.preset.name
         rays = GATHER_RAYS.get(name, GATHER_RAYS["medium"])
+        budget = GATHER_BUDGET.get(name, GATHER_BUDGET["medium"])
         w, h = frame.size
         step = max(int(frame.supersample), 1) * max(int(frame.preset.near_block), 1)
-        while -(-w // step) * -(-h // step) * rays > GATHER_BUDGET.get(name, GATHER_BUDGET["medium"]):
+        while -(-w // step) * -(-h // step) * rays > budget:
             step += 1
         blocks = (-(-w // step), -(-h // step))
-        hits = self.field_pass.hits
         trace = self.programs.get("gather_trace.comp", None, hits.defines(), compute=True)
         self.field_pass.bind_hits(trace, frame)
         # Positions camera-relative (not view.set_camera's origin: the light table's
@@ -141,14 +141,12 @@ class NearFieldPass(Pass):
         set_uniform(trace, "u_step", step)
         set_uniform(trace, "u_gather_rays", rays)
         set_uniform(trace, "u_blocks", blocks)
-        board["g_depth"].use(UNITS["g_depth"])
-        board["g_normal"].use(UNITS["g_normal"])
         traced = self.pool.acquire((blocks[0] * rays, blocks[1]), "rgba32f")
         traced.bind_to_image(0, read=False, write=True)
         trace.run(-(-blocks[0] * rays // GATHER_GROUP), blocks[1])
         self.ctx.memory_barrier()
         raw = self.pool.acquire(blocks, "rgba32f")
-        mean = screen_program(self.programs, "near_trace", [], compute=True)
+        mean = screen_program(self.programs, "gather_mean", [], compute=True)
         traced.use(UNITS["post_src"])
         set_uniform(mean, "u_gather_rays_tex", UNITS["post_src"])
         set_uniform(mean, "u_gather_rays", rays)
