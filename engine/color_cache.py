@@ -35,12 +35,8 @@ PROBE = np.concatenate([np.repeat(_RAMP[:, None], 3, 1),
                         np.random.default_rng(7).choice(_RAMP, (4096, 3))]).astype(np.float32)
 
 
-def _enum(value):
-    return int(value)
-
-
 # Per kind of op: its parameters (getter, setter, kind of value): "a" an array, "e" an
-# enum, "f" a number, "b" a flag, "s" a string. Direction is every op's.
+# enum, "f" a number, "b" a flag. Direction is every op's.
 _OPS = {
     "MatrixTransform": [("getMatrix", "setMatrix", "a"), ("getOffset", "setOffset", "a")],
     "LogTransform": [("getBase", "setBase", "f")],
@@ -63,7 +59,7 @@ _OPS = {
                        ("getMaxOutValue", "setMaxOutValue", "f")],
     "FixedFunctionTransform": [("getStyle", "setStyle", "e"), ("getParams", "setParams", "a")],
 }
-# A range's bounds may be unset (no clamp on that side): kept as NaN, set only where set.
+# A range's bounds may be unset (no clamp on that side): kept as None, set only where set.
 _RANGE_HAS = {"getMinInValue": "hasMinInValue", "getMaxInValue": "hasMaxInValue",
               "getMinOutValue": "hasMinOutValue", "getMaxOutValue": "hasMaxOutValue"}
 
@@ -140,7 +136,7 @@ def _store(config, name, processor):
         if kind not in _OPS:
             log.debug("colour cache: a %s op is not kept; built from the config", kind)
             return False
-        params = {"direction": _enum(op.getDirection())}
+        params = {"direction": int(op.getDirection())}
         for getter, _, sort in _OPS[kind]:
             if kind == "RangeTransform" and getter in _RANGE_HAS and \
                     not getattr(op, _RANGE_HAS[getter])():
@@ -150,7 +146,7 @@ def _store(config, name, processor):
             if sort == "a":
                 arrays[f"{len(ops)}.{getter}"] = np.asarray(value)
             else:
-                params[getter] = _enum(value) if sort == "e" else \
+                params[getter] = int(value) if sort == "e" else \
                     bool(value) if sort == "b" else float(value)
         ops.append([kind, params])
     rebuilt = config.getProcessor(_group(ops, arrays))
