@@ -106,3 +106,10 @@ def test_a_still_gathers_its_last_bounce_a_viewport_does_not():
     with Session(stage, RenderSettings(**SIZE, progressive_field=True, final_gather=True)) as s:
         assert s.render().stats.get("gather_rays", 0) == 0      # no complete field yet
         assert _converge(s)[-1].stats["gather_rays"] > 0
+        # After an edit, not until the field is made again for the scene as it is (the
+        # field shown meanwhile, and its tables, are the old scene's).
+        light = UsdGeom.Xformable(stage.GetPrimAtPath("/root/point"))
+        light.GetOrderedXformOps()[0].Set(Gf.Vec3d(-0.5, 0.5, 2.0))
+        frames = _converge(s)
+        assert frames[0].stats.get("gather_rays", 0) == 0
+        assert frames[-1].stats["gather_rays"] > 0
