@@ -15,6 +15,7 @@ uniform sampler2D field_materials;   // FIELD_MATERIAL texels a material: albedo
 // pixel: a ray that meets them takes no emission there (engine/emitters.py closed_sides).
 layout(std430, binding = 15) readonly buffer FieldSides { int field_sides[]; };
 uniform int n_lights;
+uniform vec3 field_eye;             // the camera's world position
 uniform bool u_bounce;               // the field read holds a bounce already
 uniform float u_epsilon;
 uniform vec3 u_view_forward;         // where a headlight shines
@@ -82,13 +83,18 @@ vec3 hit_radiance(RtHit hit, vec3 x, vec3 dir, bool from_surface, out vec3 bounc
     }
     // Back along a ray that started on a surface, the read's bias can reach past that
     // surface (reading probes beyond it); along the hit's normal it cannot, but a wall's
-    // probes read less well there: the smaller of the two, the back one at most half way
-    // to the ray's start (a sealed room's walls took neither's leak).
+    // probes read less well there; a hit a few centimetres from the ray's start, in a
+    // room's corner, reads by both the probes outside beyond the next wall, and towards
+    // the camera (which sees the ray's start; only where the hit faces it) it does not.
+    // The least of the three, the back one at most half way to the ray's start (a
+    // sealed room's walls took none's leak: tests/test_irradiance_field.py).
     vec3 step = field_step[0];
     float reach = FIELD_BIAS_ALONG_V * field_bias * min(step.x, min(step.y, step.z));
     vec3 behind = -dir * min(1.0, 0.5 * hit.t / max(reach, 1e-6));
-    bounced = albedo / FIELD_PI * min(field_irradiance_at(x, n, behind),
-                                      field_irradiance_at(x, n, n));
+    vec3 E = min(field_irradiance_at(x, n, behind), field_irradiance_at(x, n, n));
+    vec3 to_eye = field_eye - x;
+    if (dot(to_eye, n) > 0.0) E = min(E, field_irradiance_at(x, n, normalize(to_eye)));
+    bounced = albedo / FIELD_PI * E;
     return radiance;
 }
 

@@ -24,7 +24,6 @@ uniform sampler2D g_normal;
 uniform mat4 inv_view_proj;
 uniform vec3 cam_forward;
 uniform bool cam_ortho;
-uniform vec3 field_eye;         // the camera's world position: positions are relative to it
 uniform int u_step;
 uniform int u_gather_rays;
 uniform ivec2 u_blocks;

@@ -41,12 +41,14 @@ class HitTables:
     def defines(self) -> list:
         return ["HAS_DOME_MAP"] if self.env is not None else []
 
-    def bind(self, prog, scene, field, tracer, lights, environment, bounce: bool):
+    def bind(self, prog, scene, field, tracer, lights, environment, bounce: bool,
+             light=None):
         """Into `prog`: these tables, the tracer, the light table, the dome and `field`
-        (read at hits where `bounce`)."""
+        (read at hits where `bounce`; `light`: another Field of its grids whose light is
+        read through `field`'s distances and walls)."""
         tracer.bind()
         self.sides.bind_to_storage_buffer(SIDES_BINDING)
-        field.bind(prog)
+        field.bind(prog, light)
         self.materials.use(UNITS["field_materials"])
         if lights.texture is not None:
             lights.texture.use(UNITS["u_lights"])

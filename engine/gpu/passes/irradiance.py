@@ -124,9 +124,11 @@ class Field:
     planes: object               # two hits' planes per distance texel
     grids: list
 
-    def bind(self, prog):
+    def bind(self, prog, irradiance=None):
+        """`irradiance`: another Field of the same grids whose light is read (with this
+        one's distances, probes and walls)."""
         unbind_samplers(self.irradiance.ctx)
-        self.irradiance.use(UNITS["field_irradiance"])
+        (irradiance or self).irradiance.use(UNITS["field_irradiance"])
         self.distance.use(UNITS["field_distance"])
         self.probes.use(UNITS["field_probes"])
         self.planes.use(UNITS["field_planes"])
@@ -416,10 +418,13 @@ class IrradiancePass(Pass):
         return self.hits if done else None
 
     def bind_hits(self, prog, frame):
-        """Into `prog`: gather_tables and the field of one bounce fewer (field_hits.glsl)."""
-        read = self.fewer if self.fewer is not None else self.field
-        self.hits.bind(prog, frame.scene, read, self.tracer(frame.scene), self.lights,
-                       self.environment, self.fewer is not None)
+        """Into `prog`: gather_tables and the light of the field of one bounce fewer
+        (field_hits.glsl), read through the shown field's distances and walls: those
+        hold the nearest hits of all the build's updates, which the wall test's cone is
+        sized for (near_cone); the update before the last's held fewer, and at low (64
+        rays a probe) let 0.1 of a sunlit wall into the sealed test room."""
+        self.hits.bind(prog, frame.scene, self.field, self.tracer(frame.scene), self.lights,
+                       self.environment, self.fewer is not None, light=self.fewer)
 
     def _drop_build(self):
         if self.build is not None:
