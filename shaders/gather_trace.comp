@@ -10,6 +10,9 @@
 // bounce fewer, glass passed through; the dome where a ray escapes), so the pixel gets
 // the scene's bounces. gather_mean.glsl takes each block's mean.
 #include "lib.glsl"
+// Hits take the lights' diffuse light alone (field_hits.glsl): an area light's glossy
+// lobes, integrated over its polygon, would be computed and dropped.
+#define LIGHTS_DIFFUSE_ONLY
 #include "lights.glsl"
 #include "environment.glsl"
 #include "raytrace.glsl"

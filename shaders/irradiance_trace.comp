@@ -14,6 +14,9 @@
 // surface that is not glass (probes see through glass), negative where the ray met a
 // triangle's back (its winding), and that surface's normal, towards the probe.
 #include "lib.glsl"
+// Hits take the lights' diffuse light alone (field_hits.glsl): an area light's glossy
+// lobes, integrated over its polygon, would be computed and dropped.
+#define LIGHTS_DIFFUSE_ONLY
 #include "lights.glsl"
 #include "environment.glsl"
 #include "raytrace.glsl"

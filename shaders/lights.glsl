@@ -191,6 +191,9 @@ void polygon_reflected(Surface s, vec3 L, inout vec3 diffuse, inout vec3 glossy)
         last = 3;
     }
 #endif
+#ifdef LIGHTS_DIFFUSE_ONLY
+    last = 0;     // a program that reads the diffuse light alone: Lambert's lobe only
+#endif
     vec4 share = vec4(0.0);
     for (int k = 0; k <= last; ++k)
         if (k != 2 || s.coat > 0.0) share[k] = ltc_share(inverses[k]);
