@@ -124,11 +124,10 @@ class Field:
     planes: object               # two hits' planes per distance texel
     grids: list
 
-    def bind(self, prog, irradiance=None):
-        """`irradiance`: another Field of the same grids whose light is read (with this
-        one's distances, probes and walls)."""
+    def bind(self, prog, light=None):
         unbind_samplers(self.irradiance.ctx)
-        (irradiance or self).irradiance.use(UNITS["field_irradiance"])
+        # `light`: another Field of these grids, read through this one's walls.
+        (light or self).irradiance.use(UNITS["field_irradiance"])
         self.distance.use(UNITS["field_distance"])
         self.probes.use(UNITS["field_probes"])
         self.planes.use(UNITS["field_planes"])
@@ -418,11 +417,7 @@ class IrradiancePass(Pass):
         return self.hits if done else None
 
     def bind_hits(self, prog, frame):
-        """Into `prog`: gather_tables and the light of the field of one bounce fewer
-        (field_hits.glsl), read through the shown field's distances and walls: those
-        hold the nearest hits of all the build's updates, which the wall test's cone is
-        sized for (near_cone); the update before the last's held fewer, and at low (64
-        rays a probe) let 0.1 of a sunlit wall into the sealed test room."""
+        """Into `prog`: gather_tables, the light one bounce fewer, the shown field's walls."""
         self.hits.bind(prog, frame.scene, self.field, self.tracer(frame.scene), self.lights,
                        self.environment, self.fewer is not None, light=self.fewer)
 
