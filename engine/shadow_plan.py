@@ -216,6 +216,11 @@ def stale_tiles(sm, light, R, moved) -> list:
         lo, hi = lo[near], hi[near]
         if not len(lo):
             return []
+    return [i for i in range(len(sm.mats)) if tile_sees(sm, i, lo, hi).any()]
+
+
+def tile_sees(sm, i, lo, hi) -> np.ndarray:
+    """(n,) bool: which world boxes (n, 3) meet tile i's frustum. A caster outside it
+    is clipped whole there, so it need not be drawn into the tile."""
     lo, hi = lo - sm.anchor, hi - sm.anchor        # the maps' matrices are anchor-relative
-    return [i for i, m in enumerate(sm.mats)
-            if not np.all(boxes_outside(frustum_planes(m), lo, hi))]
+    return ~boxes_outside(frustum_planes(sm.mats[i]), lo, hi)

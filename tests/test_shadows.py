@@ -184,6 +184,32 @@ def test_calibration_with_shadows_on(kind):
     assert rel.mean() <= 0.005 and rel.max() <= 0.02
 
 
+@pytest.mark.parametrize("max_gl", ["45", "33"])
+def test_a_shadow_tile_draws_only_the_casters_in_its_frustum(monkeypatch, max_gl):
+    """A point light's six faces: boxes a and c lie in its +x face only, b in -x only,
+    the plane below in the four side faces and -z. So 8 caster draws, not 6 x 4, with
+    the +x face's commands in two runs (a; c and the plane: b lies between them in
+    prim-path order). The image is the same as with every caster in every face, on
+    the multi-draw path and GL 3.3's."""
+    monkeypatch.setenv("LANTERN_MAX_GL", max_gl)
+    stage = ss.new_stage()
+    ss.add_box(stage, center=(2.5, 0.0, 1.5), size=0.5, name="a")
+    ss.add_box(stage, center=(-2.5, 0.0, 1.5), size=0.5, name="b")
+    ss.add_box(stage, center=(2.8, 1.2, 1.5), size=0.5, name="c")
+    ss.add_light(stage, "point", pos=(0.0, 0.0, 3.0), power=1000.0, radius=0.0)
+    top_down_camera(stage, 12.0)
+    culled = render(stage, 64, 64, bounces=DIRECT)
+    import lantern.engine.gpu.passes.shadows as shadows
+    monkeypatch.setattr(shadows, "tile_sees", lambda sm, i, lo, hi: np.ones(len(lo), bool))
+    every = render(stage, 64, 64, bounces=DIRECT)
+    assert culled.stats["shadow_passes"] == every.stats["shadow_passes"] == 6
+    assert (culled.stats["shadow_draws"], every.stats["shadow_draws"]) == (8, 24)
+    p = plane_points(64, 64, 12.0)
+    behind_a = (p[..., 0] > 4.2) & (p[..., 0] < 5.2) & (np.abs(p[..., 1]) < 0.1)
+    assert culled.rgba[..., 0][behind_a].max() == 0.0, "box a cast no shadow"
+    np.testing.assert_array_equal(culled.rgba, every.rgba)
+
+
 def test_lights_that_cast_no_shadow_get_no_shadow_pass():
     stage = ss.new_stage()
     ss.add_box(stage, center=(0, 0, 0.5))

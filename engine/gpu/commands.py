@@ -15,6 +15,8 @@ prim path so any session draws in the same order as a fresh one.
 Shadow casters draw every object once (all of its ranges, one command) from a
 buffer made with the commands, but for ranges of see-through materials (cut-outs,
 blended), whose casters test their opacity: those are listed apart (alpha_casters).
+A shadow tile draws only the casters whose boxes meet its frustum: runs of them from
+that buffer, nothing uploaded.
 What 1,000 separate objects cost against one merged mesh: docs/status.md."""
 from __future__ import annotations
 
@@ -50,7 +52,7 @@ class DrawCommands:
         self.stale = True                        # set by the geometry when a draw changes
         self.ranked = []                         # drawn objects with a box, by prim path
         self._ids = None                         # object-id attribute buffer (multi-draw)
-        self._casters = {}                       # store name -> (draws, commands, buffer)
+        self._casters = {}                       # store name -> (ranks, commands, buffer)
         self._see_through = frozenset()          # materials whose casters test opacity
         self._alpha_casters = []                 # their ranges (alpha_casters)
         self._gathered = None                    # the order in the indirect buffer
@@ -93,7 +95,7 @@ class DrawCommands:
             if store is None:
                 continue
             sel = [d for d in draws if geo.meshes[d.mesh_key][0] is store]
-            rows = []
+            rows, ranks = [], []
             for d in sel:
                 joined = False             # an object's consecutive solid ranges: one command
                 for material, first, count in d.ranges:
@@ -104,11 +106,12 @@ class DrawCommands:
                         rows[-1][0] += count
                     else:
                         rows.append([count, d.n, first, 0, d.oid])
+                        ranks.append(rank[d.path])
                         joined = True
             cast = np.array(rows, np.uint32).reshape(-1, COMMAND_UINTS)
             buf = self.uploads.buffer(cast, kind="commands") \
                 if self.multi_draw and len(cast) else None
-            self._casters[store.name] = (sel, cast, buf)
+            self._casters[store.name] = (np.array(ranks, np.int64), cast, buf)
         if self.multi_draw and len(self._cmd):
             self._upload()
         self.stale = False
@@ -204,26 +207,35 @@ class DrawCommands:
         self.ensure()
         return self._alpha_casters
 
-    def draw_casters(self, prog) -> int:
-        """Every object's opaque triangles with `prog`; returns the commands drawn."""
+    def draw_casters(self, prog, seen=None) -> int:
+        """The objects' opaque triangles with `prog`; returns the commands drawn.
+        seen: None (every object), or a bool per ranked object (world_boxes' order):
+        those whose boxes meet the tile's frustum. The others would be clipped whole,
+        so the image is the same; a point light's face or a cascade sees few of a
+        scene's objects, and llvmpipe shades every vertex of what is drawn."""
         self.ensure()
         n = 0
         for store in (self.geometry.static, self.geometry.dynamic):
             if store is None or store.name not in self._casters:
                 continue
-            _, cast, buf = self._casters[store.name]
-            if not len(cast):
+            ranks, cast, buf = self._casters[store.name]
+            rows = np.arange(len(cast)) if seen is None else np.flatnonzero(seen[ranks])
+            if not len(rows):
                 continue
             if self.multi_draw:
-                store.vao(prog, self._ids).render_indirect(buf, self.ctx.TRIANGLES,
-                                                           count=len(cast))
+                vao = store.vao(prog, self._ids)
+                # Runs of consecutive commands: one indirect draw each.
+                breaks = np.flatnonzero(np.diff(rows) != 1) + 1
+                for run in np.split(rows, breaks):
+                    vao.render_indirect(buf, self.ctx.TRIANGLES, count=len(run),
+                                        first=int(run[0]))
             else:
                 vao = store.vao(prog)
-                for count, instances, first, _, oid in cast:
+                for count, instances, first, _, oid in cast[rows]:
                     prog["u_object"].value = int(oid)
                     vao.render(self.ctx.TRIANGLES, vertices=int(count), first=int(first),
                                instances=int(instances))
-            n += len(cast)
+            n += len(rows)
         return n
 
     def object_defines(self) -> list:

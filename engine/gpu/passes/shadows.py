@@ -46,7 +46,7 @@ from dataclasses import replace
 import numpy as np
 
 from ....core.lights import SUN
-from ...shadow_plan import importance, plan, stale_tiles
+from ...shadow_plan import importance, plan, stale_tiles, tile_sees
 from ...view import translate
 from ..framegraph import Pass
 from ..programs import UNITS, set_uniform
@@ -239,7 +239,7 @@ class ShadowPass(Pass):
             if not tiles:
                 out[path] = old
                 continue
-            self._render(frame, sm, old, light, tiles, tinted)
+            self._render(frame, sm, old, light, tiles, tinted, view.boxes)
             self.maps[path] = out[path] = sm
             drawn[path] = tiles
             frame.count("shadow_maps_rendered")
@@ -259,9 +259,10 @@ class ShadowPass(Pass):
             sm.footprint = (0.0, pixel) if view.camera.ortho else (pixel, 0.0)
         board["shadow_maps"] = out
 
-    def _render(self, frame, sm, old, light, tiles, tinted):
+    def _render(self, frame, sm, old, light, tiles, tinted, boxes):
         """Draws the given tiles of the map (all of a new one), each cleared and
-        scissored to its own rectangle; `tinted`: the glass casters' colour too."""
+        scissored to its own rectangle, with the casters whose boxes (the view's
+        world_boxes) meet the tile; `tinted`: the glass casters' colour too."""
         if sm is old:
             pass                           # drawn again into its own texture
         elif old is not None and old.atlas == sm.atlas:
@@ -289,7 +290,8 @@ class ShadowPass(Pass):
             rect = sm.tile_pixels(i)
             start_tile(ctx, fbo, rect)
             set_uniform(prog, "view_proj", clip @ sm.mats[i])
-            frame.count("shadow_draws", self.geometry.commands.draw_casters(prog))
+            seen = None if boxes is None else tile_sees(sm, i, boxes[1], boxes[2])
+            frame.count("shadow_draws", self.geometry.commands.draw_casters(prog, seen))
             sm.stochastic |= self._draw_see_through(frame, sm, light, clip @ sm.mats[i], skip)
             if self.geometry.points.clouds:
                 frame.count("shadow_draws", self._draw_points(sm, light, clip @ sm.mats[i],
