@@ -54,9 +54,11 @@ def lit_room_stage(ground_half):
 
 
 def _bounce(stage):
+    """The field's own light (as a viewport shows it: no final gather, whose field is a
+    preset coarser) less the direct image."""
     with Session(stage, RenderSettings(**SIZE, bounces=DIRECT)) as s:
         direct = s.render()
-    with Session(stage, RenderSettings(**SIZE, bounces=Bounces())) as s:
+    with Session(stage, RenderSettings(**SIZE, bounces=Bounces(), final_gather=False)) as s:
         full = s.render()
     return full.rgba[..., :3] - direct.rgba[..., :3], full.stats
 

@@ -3,8 +3,7 @@ probes over the scene's bounds, or cascades about the camera where they are larg
 (Majercik et al. 2019, "Dynamic Diffuse Global Illumination with Ray-Traced Irradiance
 Fields"; 2021, "Scaling Probe-Based Real-Time Dynamic GI for Production"). The ambient
 pass reads it per pixel (shaders/irradiance_field.glsl) in place of the dome's diffuse
-light: the dome reaches surfaces through the rays that escape, so the sky is counted
-once.
+light: the dome reaches surfaces through the rays that escape, so the sky is counted once.
 
 An update traces the preset's rays from every probe with the ray tracer
 (engine/gpu/raytracer.py; shaders/irradiance_trace.comp), shades each hit with its
@@ -13,29 +12,25 @@ needed at hits and none leaks), and its albedo times the field as it was (the bo
 so far), or the dome where a ray escapes; then writes each probe's octahedral maps of
 irradiance, of the mean distance and its square, and of the planes of the nearest hits
 about each direction, of all the build's updates (which say what a wall hides;
-near_cone, shaders/irradiance_blend.comp),
-moves probes out of walls and switches off those inside geometry. The light at the hits
-that does not change from one update to the next (emission, the lights, the dome) is
-averaged over all the build's updates, each of new rays; only the bounces come from
-the last update (a probe moved starts that mean again). Each update adds
-one bounce: a field is the scene's diffuse bounces of them from nothing (a Build). A
-still and every frame of a sequence run all of it in the frame, so they render it
-converged. A viewport's frames (RenderSettings.progressive_field) run at most the
-preset's BUDGET of rays, a block of probes after the last, showing the last complete
-update meanwhile: an update spread over frames reads the same complete field and
-writes what one frame's writes, so the frames converge to the still's field itself.
+near_cone, shaders/irradiance_blend.comp), moves probes out of walls and switches off
+those inside geometry. The light at the hits that does not change from one update to
+the next (emission, the lights, the dome) is averaged over all the build's updates,
+each of new rays; only the bounces come from the last update (a probe moved starts that
+mean again). Each update adds one bounce: a field is the scene's diffuse bounces of them
+from nothing (a Build). A still and every frame of a sequence run all of it in the
+frame, so they render it converged. A viewport's frames (RenderSettings.progressive_field)
+run at most the preset's BUDGET of rays, a block of probes after the last, showing the
+last complete update meanwhile: an update spread over frames reads the same complete
+field and writes what one frame's writes, so the frames converge to the still's field.
 
 The field is kept while nothing it depends on changes (lights, geometry, materials,
 the dome, the bounces, the preset; the grids cover the traced triangles' bounds, and
 where those are large, cascades follow the camera: engine/probe_grids.py): stats
 field_updates counts the updates a frame completed, field_rays the rays it traced
-(a probe's, not their shadow rays), field_pending those left to converge.
-Only on GL 4.3 (compute shaders) and only when the frame's bounces have a diffuse
-bounce and the scene has surfaces and something that lights them; else the frame is
-today's direct image, with no tracer.
-
-What a hit is shaded with (albedo, emission, glass): engine/gpu/field_tables.py.
-
+(a probe's, not their shadow rays), field_pending those left to converge. Only on GL
+4.3 (compute shaders), when the frame's bounces have a diffuse bounce and the scene has
+surfaces and something to light them (else the direct image, no tracer); a hit's
+albedo, emission and glass: engine/gpu/field_tables.py.
 reads: view   writes: field (the Field: bind it into a shading program)"""
 from __future__ import annotations
 
@@ -69,6 +64,14 @@ RANK = tuple(PRESETS)        # presets, coarsest first
 ALL_BARRIERS = 0xFFFFFFFF
 FIELD_UNITS = ("field_irradiance", "field_distance", "field_probes", "field_materials",
                "field_rays", "field_planes")
+
+
+def density(frame) -> str:
+    """The preset whose probes and rays a frame's field takes: under a final gather,
+    which reads the field only at its rays' hits (later bounces, a block's rays
+    averaged), the next coarser one's (docs/rendering.md); else the frame's own."""
+    name = frame.preset.name
+    return RANK[max(RANK.index(name) - 1, 0)] if frame.options.gathers() else name
 
 
 def unbind_samplers(ctx):
@@ -238,7 +241,7 @@ class IrradiancePass(Pass):
                            else view.bounds)
         # The cascades' place about the camera (None: one grid) is part of what a
         # field is made for.
-        key = (bounces.diffuse_bounces, frame.preset.name, along,
+        key = (bounces.diffuse_bounces, density(frame), along,
                placement(*self.bounds[1], view.camera.position, view.camera.forward))
         progressive = frame.options.progressive_field
         if self.build is not None and self.build.version != self.version:
@@ -295,7 +298,7 @@ class IrradiancePass(Pass):
     def _start(self, frame, view, key, updates: int):
         """A new Build for `key` in place of the one under way, if any."""
         self._drop_build()
-        scene, preset = frame.scene, frame.preset.name
+        scene, preset = frame.scene, key[1]
         tracer = self.tracer(scene)
         lo, hi = self.bounds[1]
         made = grids(lo, hi, PROBES.get(preset, PROBES["medium"]), key[3])
@@ -393,13 +396,11 @@ class IrradiancePass(Pass):
         set to b's grids; Fields of other sizes that nothing reads are released."""
         size = atlas_size(b.n)
         busy = [f for f in (self.field, b.prev, self.fewer) if f is not None]
-        keep = []
-        for f in self.pool:
-            if f.irradiance.size != size and all(f is not x for x in busy):
-                f.release()
-            else:
-                keep.append(f)
-        self.pool = keep
+        unused = [f for f in self.pool if f.irradiance.size != size and
+                  all(f is not x for x in busy)]
+        for f in unused:
+            f.release()
+        self.pool = [f for f in self.pool if all(f is not x for x in unused)]
         spare = next((f for f in self.pool if f.irradiance.size == size and
                       all(f is not x for x in busy)), None)
         if spare is None:
@@ -437,8 +438,7 @@ class IrradiancePass(Pass):
 
     def _texture(self, size, linear: bool):
         tex = self.ctx.texture(size, 4, dtype="f4")
-        f = self.ctx.LINEAR if linear else self.ctx.NEAREST
-        tex.filter = (f, f)
+        tex.filter = (self.ctx.LINEAR if linear else self.ctx.NEAREST,) * 2
         tex.repeat_x = tex.repeat_y = False
         return tex
 
