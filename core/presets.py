@@ -15,7 +15,10 @@ near_block / near_steps: the same for the diffuse bounce's near-field search
 side to the AO's 8, at the same error against Cycles (docs/rendering.md, "Steady frame
 with the bounce": coarser blocks broke a PointInstancer's parity with its instances).
 supersample: the image is drawn this many times wider and taller and filtered down
-with Cycles' pixel filter (anti-aliasing; 1: not). edge_samples: a supersampled image's
+with Cycles' pixel filter (anti-aliasing; 1: not). supersample_within: the most
+sub-pixels a supersampled image may have (0: any): medium supersamples small stills
+(previews, thumbnails, the comparison suite's), whose edges are much of what is seen,
+at less than a 640x480 image's cost. edge_samples: a supersampled image's
 geometric edges are placed by four depth samples a sub-pixel (multisampled depth), not by
 the sub-pixels alone (engine/gpu/passes/antialias.py). fxaa: FXAA on images not
 supersampled.
@@ -43,19 +46,21 @@ class Preset:
     near_block: int
     near_steps: int
     supersample: int
+    supersample_within: int
     edge_samples: bool
     fxaa: bool
 
 
 PRESETS = {p.name: p for p in (
     Preset("low", "Low", "Fastest: smallest shadow maps, fewest filter taps, light occlusion, FXAA",
-           1.0, 16, 1, 512, 8, 8, 2, 2, 4, 2, 2, 4, 1, False, True),
-    Preset("medium", "Medium", "Balanced quality and speed, FXAA",
-           4.0, 32, 1, 1024, 16, 12, 3, 3, 8, 2, 2, 6, 1, False, True),
+           1.0, 16, 1, 512, 8, 8, 2, 2, 4, 2, 2, 4, 1, 0, False, True),
+    Preset("medium", "Medium", "Balanced quality and speed: FXAA, and 2x2 supersampling of "
+           "images up to 320x240 (F12 and command line)",
+           4.0, 32, 1, 1024, 16, 12, 3, 3, 8, 2, 2, 6, 2, 640 * 480, False, True),
     Preset("high", "High", "Larger shadow maps, 2x2 supersampling (F12 and command line)",
-           8.0, 32, 2, 2048, 16, 12, 4, 4, 12, 1, 1, 12, 2, True, False),
+           8.0, 32, 2, 2048, 16, 12, 4, 4, 12, 1, 1, 12, 2, 0, True, False),
     Preset("ultra", "Ultra", "Closest to Cycles, slowest: 3x3 supersampling",
-           16.0, 32, 2, 4096, 32, 16, 4, 8, 16, 1, 1, 16, 3, True, False),
+           16.0, 32, 2, 4096, 32, 16, 4, 8, 16, 1, 1, 16, 3, 0, True, False),
 )}
 DEFAULT = "medium"
 

@@ -38,7 +38,8 @@ def _renders(name):
     # Point-sampled references: no FXAA (as tests/test_shadows_vs_cycles.py).
     from lantern.engine.bounces import DIRECT       # the references: bounces 0
     settings = RenderSettings(width=width, height=height, preset="medium",
-                              frame=scene.frame_current, fxaa=False, bounces=DIRECT)
+                              frame=scene.frame_current, fxaa=False, supersample=1,
+                              bounces=DIRECT)
     images = []
     for shadow in (True, False):
         for light in bpy.data.lights:
@@ -168,7 +169,7 @@ def test_a_thin_slabs_penumbra_is_the_light_it_lets_through():
     penumbrae")."""
     from lantern.engine import RenderSettings, render_stage
     settings = RenderSettings(width=SLAB_W, height=SLAB_H, preset="medium",
-                              ambient_occlusion=False, fxaa=False)
+                              ambient_occlusion=False, fxaa=False, supersample=1)
     shadowed, lit = (render_stage(_slab_scene(s), settings).rgba[..., 0] for s in (True, False))
     x = (np.arange(SLAB_W) + 0.5) / SLAB_W * SLAB_SPAN - SLAB_SPAN / 2
     y = SLAB_SPAN * SLAB_H / SLAB_W / 2 - (np.arange(SLAB_H) + 0.5) / SLAB_W * SLAB_SPAN

@@ -17,6 +17,7 @@ def rendered(kind, tmp):
     from lantern.engine import RenderSettings, render_stage
     stage, (w, h) = ds.stage_with(ds.write_map(f"{tmp}/{kind}.exr", kind))
     return render_stage(stage, RenderSettings(width=w, height=h, ambient_occlusion=False,
+                                              supersample=1,
                                               passes=frozenset(["Normal", "DiffDir", "GlossDir"])))
 
 
@@ -78,7 +79,7 @@ def test_the_transparency_pass_reflects_the_dome_alike(tmp):
     path = ds.write_map(f"{tmp}/two-colour.exr", "two-colour")
     opaque = rendered("two-colour", tmp).rgba[..., :3].astype(np.float64)
     stage, (w, h) = ds.stage_with(path, opacity=0.5)
-    settings = RenderSettings(width=w, height=h, ambient_occlusion=False)
+    settings = RenderSettings(width=w, height=h, ambient_occlusion=False, supersample=1)
     blended = render_stage(stage, settings).rgba[..., :3].astype(np.float64)
     for prim in stage.GetPseudoRoot().GetChildren()[0].GetChildren():
         if prim.IsA(UsdGeom.Mesh):

@@ -16,7 +16,8 @@ from lantern.engine.usd.stage import StageReader
 
 
 def render(stage, form, stats=None):
-    res = render_stage(stage, RenderSettings(width=W, height=H, **FORMS[form]))
+    # Closed forms per pixel centre: one sample a pixel (no supersampling of small stills).
+    res = render_stage(stage, RenderSettings(width=W, height=H, supersample=1, **FORMS[form]))
     assert np.isfinite(res.rgba).all()
     if stats is not None:
         stats.update(res.stats, warnings=res.warnings)

@@ -35,7 +35,7 @@ def _lantern(kind, energy=None):
         bpy.data.lights[kind].energy = energy
     stage, report = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
     result = render_stage(stage, RenderSettings(width=calibration.SIZE, height=calibration.SIZE,
-                                                 bounces=DIRECT))   # direct light's units
+                                                 supersample=1, bounces=DIRECT))   # direct light's units
     assert np.isfinite(result.rgba).all()
     return result.rgba[..., 0].astype(np.float64)
 

@@ -242,7 +242,7 @@ def test_blend_shape_weights_at_a_new_frame(corpus):
             expected = session.render()
         assert live.stats["meshes_uploaded"] == 0 and live.stats["prims_read"] <= 4
         np.testing.assert_allclose(live.rgba, expected.rgba, atol=1e-5)
-        assert np.abs(live.rgba - before.rgba).max() > 1e-2     # the shapes moved
+        assert np.abs(live.rgba - before.rgba).max() > 5e-3     # the shapes moved (500x atol)
     finally:
         synced.close()
 

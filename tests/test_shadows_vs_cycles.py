@@ -33,7 +33,7 @@ def test_box_on_plane_against_cycles(kind):
     width, height = calibration.BOX_SIZE
     # The references are point-sampled (0.01 px filter): compare without anti-aliasing.
     result = render_stage(stage, RenderSettings(width=width, height=height, preset="medium",
-                                                fxaa=False, bounces=DIRECT))
+                                                fxaa=False, supersample=1, bounces=DIRECT))
     assert result.stats["shadow_maps"] == 1
     cycles = read_exr(str(REFERENCES / f"cycles_box_{kind}.exr"))
     flip = mean_flip(result.rgba, cycles)
@@ -53,6 +53,6 @@ def test_the_flip_check_sees_a_missing_shadow():
     stage, _ = stage_from_depsgraph(bpy.context.evaluated_depsgraph_get())
     width, height = calibration.BOX_SIZE
     result = render_stage(stage, RenderSettings(width=width, height=height, fxaa=False,
-                                                bounces=DIRECT))
+                                                supersample=1, bounces=DIRECT))
     cycles = read_exr(str(REFERENCES / "cycles_box_point.exr"))
     assert mean_flip(result.rgba, cycles) > 3 * THRESHOLDS["point"]

@@ -54,11 +54,15 @@ def shadow_ratio(sums: np.ndarray) -> np.ndarray:
     return np.repeat(np.clip(ratio, 0.0, 1.0)[..., None], 3, axis=2).astype(np.float32)
 
 
-def supersample_factor(frame) -> int:
-    """The preset's (or the settings') supersampling. Never lowered to fit the driver:
-    a frame too large for it at this factor is refused (budget.check)."""
-    o = frame.options.supersample
-    return max(int(frame.preset.supersample if o is None else o), 1)
+def supersample_factor(frame, size) -> int:
+    """The settings' supersampling, else the preset's where an image of `size` stays
+    within its sub-pixels (supersample_within). Never lowered to fit the driver: a
+    frame too large for it at this factor is refused (budget.check)."""
+    o, p = frame.options.supersample, frame.preset
+    if o is not None:
+        return max(int(o), 1)
+    fits = not p.supersample_within or size[0] * size[1] * p.supersample ** 2 <= p.supersample_within
+    return max(p.supersample if fits else 1, 1)
 
 
 # Every counter a render reports, zero when nothing of the kind happened.
@@ -195,7 +199,7 @@ class Renderer:
         frame.stats["meshes_uploaded"] = self.update(scene, changes, cull_backfaces)
         frame.scene = self._drawable(frame)
         frame.timings["upload"] = time.perf_counter() - t0
-        k = supersample_factor(frame)
+        k = supersample_factor(frame, size)
         frame.supersample, frame.output_size = k, tuple(size)
         frame.size = (size[0] * k, size[1] * k)
         plan = self.graph.plan(frame)

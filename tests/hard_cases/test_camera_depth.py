@@ -24,7 +24,7 @@ BOUND = 1e-3
 def _render(stage, w=W, h=H):
     # No FXAA: its edge thresholds would turn the 1e-5 differences measured here into
     # whole-pixel switches.
-    rgba = render_stage(stage, RenderSettings(width=w, height=h, fxaa=False)).rgba
+    rgba = render_stage(stage, RenderSettings(width=w, height=h, fxaa=False, supersample=1)).rgba
     assert np.isfinite(rgba).all()
     return rgba
 
@@ -107,7 +107,7 @@ def _plane_stage(distance, tilt_deg):
 def _position_error(distance, tilt=30.0):
     """Worst |position from depth - exact ray hit| / |exact ray hit| over the image."""
     stage, n, c = _plane_stage(distance, tilt)
-    pos, depth, view = E.positions_from_depth(stage, RenderSettings(width=64, height=36))
+    pos, depth, view = E.positions_from_depth(stage, RenderSettings(width=64, height=36, supersample=1))
     drawn = pos[..., 3] > 0
     assert drawn.mean() > 0.5
     rays = E.pixel_rays(view, 64, 36)

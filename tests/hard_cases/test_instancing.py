@@ -268,14 +268,14 @@ def test_instances_render_like_the_same_objects_made_real(empty_scene, hard_case
     meshes = [p for p in real.Traverse() if p.GetTypeName() == "Mesh"]
     assert len(meshes) == len(copies) > 34
     assert not any(p.IsA(UsdGeom.PointInstancer) for p in real.Traverse())
-    # Without ambient occlusion or FXAA: they read their neighbours, so the few pixels
+    # Without ambient occlusion, FXAA or supersampling: they read their neighbours, so the few pixels
     # decided by the last bit of depth (below) would spread into their surroundings.
     # Direct light: the bounce's reflections and field are traced, and a ray grazing
     # where the crossing faces meet takes either face as well (the instancing it
     # tests is the same with or without them).
     from lantern.engine.bounces import DIRECT
     settings = RenderSettings(width=96, height=54, ambient_occlusion=False, fxaa=False,
-                              bounces=DIRECT)
+                              supersample=1, bounces=DIRECT)
     a = render_stage(stage, settings)
     b = render_stage(real, settings)
     assert np.isfinite(a.rgba).all() and not a.warnings
