@@ -61,8 +61,10 @@ def supersample_factor(frame, size) -> int:
     o, p = frame.options.supersample, frame.preset
     if o is not None:
         return max(int(o), 1)
-    fits = not p.supersample_within or size[0] * size[1] * p.supersample ** 2 <= p.supersample_within
-    return max(p.supersample if fits else 1, 1)
+    k = max(p.supersample, 1)
+    if p.supersample_within and size[0] * size[1] * k * k > p.supersample_within:
+        return 1
+    return k
 
 
 # Every counter a render reports, zero when nothing of the kind happened.
