@@ -223,7 +223,8 @@ def test_blend_shape_weights_at_a_new_frame(corpus):
     try:
         for _, fragment in synced.fragments:
             apply(host_stage, fragment)
-        settings = RenderSettings(width=48, height=32)
+        # One sample a pixel: the shapes' motion, not the pixel filter's spread of it.
+        settings = RenderSettings(width=48, height=32, supersample=1)
         with Session(host_stage, settings) as session:
             before = session.render()
             synced.fragments.clear()
@@ -242,7 +243,7 @@ def test_blend_shape_weights_at_a_new_frame(corpus):
             expected = session.render()
         assert live.stats["meshes_uploaded"] == 0 and live.stats["prims_read"] <= 4
         np.testing.assert_allclose(live.rgba, expected.rgba, atol=1e-5)
-        assert np.abs(live.rgba - before.rgba).max() > 5e-3     # the shapes moved (500x atol)
+        assert np.abs(live.rgba - before.rgba).max() > 1e-2     # the shapes moved
     finally:
         synced.close()
 
