@@ -210,6 +210,28 @@ def test_a_shadow_tile_draws_only_the_casters_in_its_frustum(monkeypatch, max_gl
     np.testing.assert_array_equal(culled.rgba, every.rgba)
 
 
+def test_an_area_lights_exit_layer_draws_only_the_casters_in_each_tile(monkeypatch):
+    """The exit layer (the casters peeled once more, passes/shadow_exits.py) leaves
+    out, tile by tile, the casters its map's own depth leaves out: the same boxes as
+    above under a rect light, 8 draws a layer and not 24, and the same image."""
+    stage = ss.new_stage()
+    ss.add_box(stage, center=(2.5, 0.0, 1.5), size=0.5, name="a")
+    ss.add_box(stage, center=(-2.5, 0.0, 1.5), size=0.5, name="b")
+    ss.add_box(stage, center=(2.8, 1.2, 1.5), size=0.5, name="c")
+    ss.add_light(stage, "area", pos=(0.0, 0.0, 3.0), aim=(0.0, 0.0, 0.0), size=0.2,
+                 power=1000.0)
+    top_down_camera(stage, 12.0)
+    culled = render(stage, 64, 64, bounces=DIRECT)
+    import lantern.engine.gpu.passes.shadows as shadows
+    import lantern.engine.gpu.passes.shadow_exits as exits
+    for module in (shadows, exits):
+        monkeypatch.setattr(module, "tile_sees", lambda sm, i, lo, hi: np.ones(len(lo), bool))
+    every = render(stage, 64, 64, bounces=DIRECT)
+    assert culled.stats["shadow_passes"] == every.stats["shadow_passes"] == 6
+    assert (culled.stats["shadow_draws"], every.stats["shadow_draws"]) == (2 * 8, 2 * 24)
+    np.testing.assert_array_equal(culled.rgba, every.rgba)
+
+
 def test_lights_that_cast_no_shadow_get_no_shadow_pass():
     stage = ss.new_stage()
     ss.add_box(stage, center=(0, 0, 0.5))

@@ -16,6 +16,7 @@ layer that took a light's own map from it would cost that light its shadow."""
 from __future__ import annotations
 
 from ....core.lights import DISK, POLYGON, RECT
+from ...shadow_plan import tile_sees
 from ..programs import UNITS, set_uniform
 
 
@@ -24,13 +25,16 @@ def has_exits(light) -> bool:
     return light.kind in (RECT, DISK, POLYGON)
 
 
-def give_exits(ctx, pool, programs, geometry, maps, drawn, room, clip, set_light) -> int:
+def give_exits(ctx, pool, programs, geometry, maps, drawn, room, clip, set_light,
+               boxes=None) -> int:
     """Exit layers for the area lights' maps of `maps` (light path -> (light, its
     ShadowMap), most important first) while `room` bytes of the shadow budget last,
     after every map's own depth: a map left without one marches as it did before the
     layer (shadow_lookup.glsl shadow_exits). `drawn`: the tiles each map drew this frame,
     whose layers are drawn again; a map given a layer now draws it whole.
-    `set_light(prog, light, sm)` sets what a caster draw needs. Returns the draws."""
+    `set_light(prog, light, sm)` sets what a caster draw needs; `boxes`: the view's
+    world_boxes, whose casters outside a tile it leaves out, as the map's own depth
+    does (None: every caster). Returns the draws."""
     draws = 0
     geometry.bind_objects(UNITS["u_objects"])
     for path, (light, sm) in maps.items():
@@ -43,8 +47,9 @@ def give_exits(ctx, pool, programs, geometry, maps, drawn, room, clip, set_light
         room -= size
         tiles = range(sm.tiles) if sm.exit is None else drawn.get(path, ())
         for i in tiles:
+            seen = None if boxes is None else tile_sees(sm, i, boxes[1], boxes[2])
             draws += _draw_tile(ctx, pool, programs, geometry, sm, i,
-                                lambda prog: set_light(prog, light, sm), clip @ sm.mats[i])
+                                lambda prog: set_light(prog, light, sm), clip @ sm.mats[i], seen)
     ctx.scissor = None
     ctx.disable(ctx.DEPTH_TEST)
     return draws
@@ -62,8 +67,9 @@ def start_tile(ctx, fbo, rect):
     ctx.depth_func = "<"
 
 
-def _draw_tile(ctx, pool, programs, geometry, sm, tile, set_light, view_proj) -> int:
-    """The exit layer of one tile of map `sm`, whose own depth is drawn."""
+def _draw_tile(ctx, pool, programs, geometry, sm, tile, set_light, view_proj, seen) -> int:
+    """The exit layer of one tile of map `sm`, whose own depth is drawn; `seen`: the
+    casters drawn (DrawCommands.draw_casters)."""
     if sm.exit is None:
         sm.exit = pool.acquire(sm.atlas, "depth")
         sm.exit_raw = ctx.sampler(texture=sm.exit, filter=(ctx.NEAREST, ctx.NEAREST),
@@ -74,7 +80,7 @@ def _draw_tile(ctx, pool, programs, geometry, sm, tile, set_light, view_proj) ->
     set_light(prog)
     set_uniform(prog, "view_proj", view_proj)
     sm.raw.use(UNITS["shadow_raw"])          # the map's own depth, which it peels
-    return geometry.commands.draw_casters(prog)
+    return geometry.commands.draw_casters(prog, seen)
 
 
 def release_exits(pool, sm):

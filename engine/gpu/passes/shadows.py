@@ -250,7 +250,8 @@ class ShadowPass(Pass):
             self.ctx, self.pool, self.programs, self.geometry,
             {p: (scene.lights[p], sm) for p, sm in out.items()}, drawn,
             SHADOW_BUDGET_BYTES - used, self._clip(),
-            lambda prog, light, sm: _set_light(prog, sm, light, self._emitter_object(light))))
+            lambda prog, light, sm: _set_light(prog, sm, light, self._emitter_object(light)),
+            view.boxes))
         frame.count("shadow_maps", len(out))
         frame.count("unshadowed_lights", len(casting) - len(out))
         # A screen pixel's width per unit of view depth (perspective) or in all (ortho).
