@@ -56,6 +56,17 @@ def linear(img: np.ndarray, colorspace: str) -> np.ndarray:
     return img
 
 
+def linear_mean(img: np.ndarray, colorspace: str) -> np.ndarray:
+    """(4,) float64: the mean of linear(img, colorspace) over its texels. An 8-bit
+    image's from its histogram: one decode per byte value, not per texel."""
+    if img.dtype != np.uint8:
+        return linear(img, colorspace).reshape(-1, 4).mean(axis=0, dtype=np.float64)
+    values = linear(np.repeat(np.arange(256, dtype=np.uint8)[None, :, None], 4, axis=2),
+                    colorspace)[0].astype(np.float64)                     # (256, 4)
+    counts = np.stack([np.bincount(img[..., c].ravel(), minlength=256) for c in range(4)], 1)
+    return (values * counts).sum(axis=0) / (img.shape[0] * img.shape[1])
+
+
 def map_value(ref, rgba) -> np.ndarray:
     """What a map (a TextureRef) gives a surface input for linear texel values `rgba`
     (..., 4): times its scale plus its bias, then the channel it names alone, on all

@@ -7,6 +7,7 @@ import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade
 
 from lantern.engine import RenderSettings, render_stage
+from lantern.engine.bounces import Bounces
 
 W, H = 80, 60
 HALF = 2.0           # plane half size; the camera sees x in +-3.6, y in +-2.7
@@ -303,3 +304,29 @@ def test_a_textured_render_generates_no_mips_in_the_driver(tmp_path, monkeypatch
         patch = far.rgba[r - 3:r + 3, c - 3:c + 3, 0]
         assert abs(patch.mean() - mean) < 0.05 and patch.std() < 0.05, colorspace
     assert generated == []
+
+
+def test_an_images_mean_is_taken_from_its_pixels_once(tmp_path, monkeypatch):
+    """The irradiance field asks for a textured material's mean linear colour: for an
+    8-bit image it comes from the histogram, equal to the mean of the decoded texels,
+    and a render with bounces reads the file once, for the upload and the mean."""
+    from lantern.engine import textures
+    from lantern.engine.gpu import textures as gpu_textures
+    img = np.random.default_rng(5).integers(0, 256, (37, 29, 4), dtype=np.uint8)
+    for colorspace in ("auto", "raw", "sRGB"):
+        want = textures.linear(img, colorspace).reshape(-1, 4).mean(axis=0, dtype=np.float64)
+        np.testing.assert_allclose(textures.linear_mean(img, colorspace), want,
+                                   rtol=0, atol=1e-12)
+    path = tmp_path / "noise.png"
+    iio.imwrite(path, img[..., :3])
+    reads = []
+    real = gpu_textures.read_rgba
+    monkeypatch.setattr(gpu_textures, "read_rgba", lambda p: reads.append(p) or real(p))
+    stage = textured_stage(path)
+    cube = UsdGeom.Cube.Define(stage, "/root/cube")        # a surface the plane lights
+    cube.AddTranslateOp().Set((0.0, 0.0, 0.5))
+    cube.CreateSizeAttr(1.0)
+    UsdShade.MaterialBindingAPI.Apply(cube.GetPrim()).Bind(
+        UsdShade.Material(stage.GetPrimAtPath("/root/_materials/checker")))
+    result = render_stage(stage, RenderSettings(width=W, height=H, bounces=Bounces()))
+    assert result.stats["field_probes"] > 0 and reads == [str(path)]

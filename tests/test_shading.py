@@ -160,6 +160,38 @@ def test_srgb_mip_chain_averages_cycles_lookups_in_linear_light():
     assert level1[0, 0, 0] != 188            # what averaging in linear light alone gives
 
 
+@pytest.mark.parametrize("shape", [(5, 7), (1, 6), (6, 1), (2, 2), (300, 3)])
+def test_srgb_mip_level1_is_the_mean_of_cycles_lookups_over_each_texel(shape):
+    """Level 1 (before its encoding), lookup by lookup: Cycles' bilinear of the bytes
+    at +-1/4 texel about each level-0 texel's centre (edges repeat), decoded, averaged
+    over the level-1 texel's 2 x 2 level-0 texels (one across a side one texel thin;
+    an odd last row or column left out), alpha not decoded. In bands of rows (the
+    300-row case spans two)."""
+    from lantern.engine.gpu import textures
+    from lantern.engine.textures import srgb_to_linear
+    img = np.random.default_rng(3).integers(0, 256, shape + (4,), dtype=np.uint8)
+    h, w = shape
+    e = img.astype(np.float64) / 255.0
+
+    def lookup(y, x):                   # texel units, texel centres at integers
+        y0, x0 = int(np.floor(y)), int(np.floor(x))
+        fy, fx = y - y0, x - x0
+        at = lambda r, c: e[min(max(r, 0), h - 1), min(max(c, 0), w - 1)]
+        v = ((1 - fy) * ((1 - fx) * at(y0, x0) + fx * at(y0, x0 + 1)) +
+             fy * ((1 - fx) * at(y0 + 1, x0) + fx * at(y0 + 1, x0 + 1)))
+        return np.r_[srgb_to_linear(v[:3]), v[3]]
+
+    ry, rx = (2 if h > 1 else 1), (2 if w > 1 else 1)
+    want = np.array([[np.mean([lookup(ry * i + a + dy, rx * j + b + dx)
+                               for a in range(ry) for b in range(rx)
+                               for dy in (-0.25, 0.25) for dx in (-0.25, 0.25)], axis=0)
+                      for j in range(max(w // 2, 1))] for i in range(max(h // 2, 1))])
+    got = np.concatenate([textures._level1_band(img, r0, min(r0 + 128, len(want)), len(want[0]))
+                          for r0 in range(0, len(want), 128)])
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+    assert (textures.cycles_srgb_mips(img)[1] == textures.to_srgb8(want)).all()
+
+
 # --- anti-aliasing ----------------------------------------------------------------------
 
 def box_stage():

@@ -29,10 +29,12 @@ not an image) becomes a magenta texel and a warning naming the file, here and on
 here (`_image`), whatever the reader raises."""
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from ..color import to_srgb8
-from ..textures import is_srgb, linear, map_value, read_rgba, srgb_to_linear
+from ..textures import is_srgb, linear, linear_mean, map_value, read_rgba, srgb_to_linear
 from .pattern import pattern_images
 
 GL_SRGB8_ALPHA8 = 0x8C43
@@ -49,36 +51,68 @@ def _half(lin: np.ndarray) -> np.ndarray:
     return lin
 
 
+# Level-1 rows that cycles_srgb_mips makes at a time: their level-0 texels' lookups
+# are decoded into float64s, so a band of a 4k image holds tens of MB, where the
+# whole image's 2x grid of lookups took 2 GB.
+BAND_ROWS = 128
+# A lookup is (9a + 3b + 3c + d) / 16 of four bytes (bilinear weights 3/4 and 1/4 on
+# both axes): an integer over LOOKUP_SCALE, decoded by a table of its 4,081 values.
+LOOKUP_SCALE = 16 * 255
+
+
+@functools.lru_cache(maxsize=None)
+def _decoded_lookups() -> np.ndarray:
+    """(LOOKUP_SCALE + 1,) float64: the sRGB decode of every lookup."""
+    return srgb_to_linear(np.arange(LOOKUP_SCALE + 1) / LOOKUP_SCALE)
+
+
 def cycles_srgb_mips(img: np.ndarray) -> list:
     """The mip chain (uint8 RGBA, sRGB-encoded, level 0 first) whose level 1 holds,
     per texel, the mean of Cycles' lookup (bilinear of the encoded bytes, then decoded)
     over its 2x2 footprint of level 0 (a 4x4 grid of lookups; at the image's edges
-    the edge texels repeat, as GL's own mips never wrap), and whose deeper levels are
-    box averages in linear light."""
+    the edge texels repeat, as GL's own mips never wrap; an image one texel tall or
+    wide has 2 lookups across that side), and whose deeper levels are box averages in
+    linear light. Lookups are made in integers and decoded by a table, in bands of
+    rows."""
     levels = [img]
-    if img.shape[0] < 2 and img.shape[1] < 2:
+    h, w = img.shape[:2]
+    if h < 2 and w < 2:
         return levels
-    e = img.astype(np.float32) / 255.0
-    # Lookups at texel offsets +-0.25 from every texel centre: bilinear weights 3/4, 1/4.
-    for ax in (0, 1):
-        n = e.shape[ax]
-        prev = np.take(e, np.r_[0, 0:n - 1], axis=ax)
-        nxt = np.take(e, np.r_[1:n, n - 1], axis=ax)
-        lo = 0.75 * e + 0.25 * prev                      # a quarter texel back
-        hi = 0.75 * e + 0.25 * nxt                       # a quarter texel on
-        e = np.stack([lo, hi], axis=ax + 1).reshape(
-            e.shape[:ax] + (2 * e.shape[ax],) + e.shape[ax + 1:])
-    lin = e.astype(np.float64)
-    lin[..., :3] = srgb_to_linear(lin[..., :3])
-    # 4x4 lookups per level-1 texel (the 2x upsampled grid, box-averaged twice).
-    lin = _half(_half(lin)) if img.shape[0] > 1 and img.shape[1] > 1 else _half(lin)
-    h1, w1 = max(img.shape[0] // 2, 1), max(img.shape[1] // 2, 1)
-    lin = lin[:h1, :w1]
+    h1, w1 = max(h // 2, 1), max(w // 2, 1)
+    lin = np.empty((h1, w1, 4))
+    for r0 in range(0, h1, BAND_ROWS):
+        r1 = min(r0 + BAND_ROWS, h1)
+        lin[r0:r1] = _level1_band(img, r0, r1, w1)
     levels.append(to_srgb8(lin))
     while lin.shape[0] > 1 or lin.shape[1] > 1:
         lin = _half(lin)
         levels.append(to_srgb8(lin))
     return levels
+
+
+def _level1_band(img, r0, r1, w1) -> np.ndarray:
+    """Rows r0..r1 of cycles_srgb_mips' level 1 (linear, float64, RGBA last)."""
+    h, w = img.shape[:2]
+    ry, rx = (2 if h > 1 else 1), (2 if w > 1 else 1)     # level-0 texels a side
+    # Its level-0 rows, with the row before and after them (clamped at the image's
+    # edges), one plane a channel.
+    rows = np.arange(ry * r0, ry * r1)
+    rows = np.clip(np.r_[rows[0] - 1, rows, rows[-1] + 1], 0, h - 1)
+    band = np.ascontiguousarray(img[rows].transpose(2, 0, 1)).astype(np.uint16)
+    inner, cols = band[:, 1:-1], np.arange(w)
+    before, after = np.maximum(cols - 1, 0), np.minimum(cols + 1, w - 1)
+    table = _decoded_lookups()
+    # The four lookups at +-1/4 texel about each level-0 texel's centre, decoded and
+    # summed: a quarter texel up or down, then left or right.
+    total = np.zeros(inner.shape)
+    for down in (3 * inner + band[:, :-2], 3 * inner + band[:, 2:]):
+        for across in (3 * down + down[..., before], 3 * down + down[..., after]):
+            lookup = np.take(table, across)
+            lookup[3] = across[3] / LOOKUP_SCALE              # alpha is not encoded
+            total += lookup
+    total = total[:, :, :rx * w1].reshape(4, -1, w1, rx).sum(axis=3)
+    total = total.reshape(4, r1 - r0, ry, w1).sum(axis=2)
+    return (total / (4 * ry * rx)).transpose(1, 2, 0)
 
 
 def data_mips(img: np.ndarray) -> list:
@@ -135,8 +169,7 @@ class MaterialTextures:
         irradiance field takes for a textured surface its rays hit."""
         key = (ref.path, ref.colorspace)
         if key not in self._means:
-            self._means[key] = linear(self._image(ref.path), ref.colorspace).reshape(
-                -1, 4).mean(axis=0, dtype=np.float64)
+            self._means[key] = linear_mean(self._image(ref.path), ref.colorspace)
         return map_value(ref, self._means[key])
 
     def _image(self, path):
@@ -155,6 +188,9 @@ class MaterialTextures:
 
     def _upload(self, path, colorspace):
         img = self._image(path)
+        # Its mean too, from the pixels in hand: the irradiance field asks for it
+        # (a frame with bounces, the default), and the file is not read twice.
+        self._means[(path, colorspace)] = linear_mean(img, colorspace)
         img = np.ascontiguousarray(img[::-1])  # GL's t = 0 is the bottom row, as USD st
         h, w = img.shape[:2]
         srgb = is_srgb(img, colorspace)
