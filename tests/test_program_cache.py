@@ -186,3 +186,23 @@ def test_a_program_the_helper_keeps_too_long_is_made_in_place():
     helper._pending["recent"] = time.monotonic()
     assert helper.pending() == 1
     assert "not made within" in helper.failure("late") and helper.failure("recent") is None
+
+
+def test_shader_sources_follow_their_files(tmp_path, monkeypatch):
+    """A program's sources are assembled from files read once per version: an edited
+    include is read again (a long-lived engine host picks up a shader being worked
+    on), each include appears once, and defines follow #version."""
+    from lantern.engine.gpu import programs
+    monkeypatch.setattr(programs, "SHADER_DIR", str(tmp_path))
+    (tmp_path / "main.frag").write_text('#version 330 core\n#include "lib.glsl"\n'
+                                        '#include "lib.glsl"\nvoid main() {}\n')
+    lib = tmp_path / "lib.glsl"
+    lib.write_text("float one() { return 1.0; }\n")
+    first = programs.load_source("main.frag", ("RED",))
+    assert first == ("#version 330 core\n#define RED\nfloat one() { return 1.0; }\n"
+                     "\n\nvoid main() {}\n")      # an include line's own newline stays
+    lib.write_text("float two() { return 2.0; }\n")
+    stat = lib.stat()
+    os.utime(lib, ns=(stat.st_atime_ns, stat.st_mtime_ns + 1_000_000))
+    assert "two()" in programs.load_source("main.frag") and "one()" not in \
+        programs.load_source("main.frag")

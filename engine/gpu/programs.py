@@ -10,6 +10,7 @@ Linked programs persist across processes as program binaries
 (engine/gpu/program_binaries.py): a program found there is loaded, not compiled."""
 from __future__ import annotations
 
+import functools
 import logging
 import os
 import re
@@ -25,6 +26,7 @@ log = logging.getLogger(__name__)
 SHADER_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(
     os.path.abspath(__file__)))), "shaders")
 _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.M)
+_VERSION = re.compile(r"^[^\S\n]*#version[^\n]*", re.M)
 
 # Sampler name -> texture unit, for every sampler of every program. The G-buffer and
 # the light pass share units 0-8 (and the smooth normals), materials 9-14 and a pattern
@@ -84,27 +86,37 @@ def load_source(name: str, defines=(), _seen=None, generated=()) -> str:
     (a material's pattern graph: engine/gpu/pattern.py)."""
     seen = set() if _seen is None else _seen
     made = dict(generated)
-    if name in made:
-        src = made[name]
-    else:
-        with open(os.path.join(SHADER_DIR, name), encoding="utf-8") as f:
-            src = f.read()
-
-    def include(m):
-        inc = m.group(1)
-        if inc in seen:
-            return ""
-        seen.add(inc)
-        return load_source(inc, (), seen, generated)
-
-    src = _INCLUDE.sub(include, src)
-    if defines:
-        lines = src.split("\n")
-        head = [i for i, ln in enumerate(lines) if ln.strip().startswith("#version")]
-        at = head[0] + 1 if head else 0
-        lines[at:at] = [f"#define {d}" for d in defines]
-        src = "\n".join(lines)
+    parts = _INCLUDE.split(made[name]) if name in made else _file_parts(name)
+    out = []
+    for i, part in enumerate(parts):
+        if i % 2 == 0:
+            out.append(part)
+        elif part not in seen:               # an include, once per program
+            seen.add(part)
+            out.append(load_source(part, (), seen, generated))
+    src = "".join(out)
+    if defines:                                   # on the lines after #version
+        block = "".join(f"#define {d}\n" for d in defines)
+        version = _VERSION.search(src)
+        if version is None:
+            return block + src
+        at = version.end()
+        src = src[:at] + "\n" + block[:-1] + src[at:]
     return src
+
+
+def _file_parts(name: str) -> tuple:
+    """A shader file's text split at its #include lines: [text, include, text, ...].
+    Read once per version of the file (a program's sources are assembled from the same
+    few files, at every first use of a variant)."""
+    path = os.path.join(SHADER_DIR, name)
+    return _parts_of(path, os.stat(path).st_mtime_ns)
+
+
+@functools.lru_cache(maxsize=256)
+def _parts_of(path: str, mtime_ns: int) -> tuple:
+    with open(path, encoding="utf-8") as f:
+        return tuple(_INCLUDE.split(f.read()))
 
 
 class ProgramCache:
