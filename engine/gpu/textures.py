@@ -54,7 +54,7 @@ def _half(lin: np.ndarray) -> np.ndarray:
 # Level-1 texels that cycles_srgb_mips makes at a time, in bands of whole rows: their
 # level-0 texels' lookups are decoded into float64s, so a band stays within the CPU's
 # caches (a 1k image's chain 250 -> 110 ms against bands 4x as large; the whole 2x
-# grid of lookups at once took 2 GB for a 4k image).
+# grid of lookups at once took 660 MB for a 1k image).
 BAND_TEXELS = 16384
 # A lookup is (9a + 3b + 3c + d) / 16 of four bytes (bilinear weights 3/4 and 1/4 on
 # both axes): an integer over LOOKUP_SCALE, decoded by a table of its 4,081 values.
