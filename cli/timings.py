@@ -8,10 +8,12 @@ class Phases:
     """--timings: the seconds of the phases of a render, as they pass."""
 
     def __init__(self, started):
-        # started: (seconds from process start to main, or None; perf_counter at main)
+        # started: (seconds from process start to main, or None; perf_counter at main).
+        # The first phase counts from main: the command line's checks import too (the
+        # colour check, NumPy and OpenColorIO).
         self.started = started
         self.seconds = {}
-        self._last = time.perf_counter()
+        self._last = started[1] if started is not None else time.perf_counter()
 
     def mark(self, name):
         now = time.perf_counter()
