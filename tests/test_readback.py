@@ -341,3 +341,26 @@ def test_both_read_modes_read_the_same_pixels_into_memory_the_caller_owns(mode, 
     count = int((~np.isfinite(result.rgba).all(axis=-1)).sum())
     assert result.stats["nonfinite_pixels"] == count > 0
     assert any(f"{count} pixels" in w for w in result.warnings), result.warnings
+
+
+@pytest.mark.parametrize("software", [True, False])
+def test_a_software_device_is_not_asked_for_gl_46(monkeypatch, software):
+    """Mesa's software device offers GL 4.5 at most: its context is asked for 4.5 first
+    (a refused 4.6 cost every new process 20 ms); a GPU is asked for 4.6 first (NVIDIA
+    gives exactly the version asked for)."""
+    from dataclasses import replace
+
+    from lantern.engine.gpu import context, devices
+    listed = devices.egl_devices() or (devices.Device(0, True, None),)
+    monkeypatch.setattr(devices, "egl_devices",
+                        lambda: tuple(replace(d, software=software) for d in listed))
+    asked = []
+
+    def make(index, version):
+        asked.append(version)
+        raise RuntimeError("no context here")
+    monkeypatch.setattr(devices, "make_backend", make)
+    monkeypatch.setattr(devices, "asked", lambda: 0)     # no fallback to glcontext's own
+    with pytest.raises(RuntimeError, match="no headless OpenGL"):
+        context._backend(0)
+    assert asked[0] == (450 if software else 460) and asked[-1] == 330

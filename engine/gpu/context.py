@@ -36,6 +36,9 @@ GL_FLOOR = 330
 # Core profiles asked for, best first: 4.6 and 4.5 (glClipControl), 4.3 (multi-draw
 # indirect, compute), 4.1 (macOS's last), 3.3 (the floor).
 GL_VERSIONS = (460, 450, 430, 410, 330)
+# Mesa's software device (llvmpipe) offers 4.5 at most, and 4.6 adds no path of
+# Lantern's: asking it for 4.6 first was refused at 20 ms of every new process.
+SOFTWARE_GL_MAX = 450
 
 
 @dataclass(frozen=True)
@@ -133,13 +136,17 @@ def _backend(device):
     import glcontext
     makers = [lambda version: glcontext.default_backend()(glversion=version,
                                                           mode="standalone")]
+    versions = GL_VERSIONS
     if device is not None:     # EGL needs no display; GLX is the fallback
         makers.insert(0, lambda version: devices.make_backend(device, version))
         if devices.asked() is not None:
             makers = makers[:1]    # the device asked for, or an error: never another
+        listed = devices.egl_devices()
+        if device < len(listed) and listed[device].software:
+            versions = tuple(v for v in GL_VERSIONS if v <= SOFTWARE_GL_MAX)
     first_error = None
     for make in makers:
-        for version in GL_VERSIONS:
+        for version in versions:
             try:
                 return make(version), version
             except Exception as error:       # this version or this backend: try the next
