@@ -112,7 +112,7 @@ def patch_stencils(base: Cage, levels: int, block: int = 256):
         basis = np.zeros((n, min(block, n - start)))
         basis[np.arange(start, start + basis.shape[1]), np.arange(basis.shape[1])] = 1.0
         unit = Cage(basis, base.counts, base.indices, base.edges, base.edge_sharpness,
-                    base.vertex_sharpness, base.corners_sharp)
+                    base.vertex_sharpness, base.corners_sharp, base.corner_edge)
         weights = bezier_patches(refine(unit, levels)).reshape(-1, basis.shape[1])
         r, k = np.nonzero(weights)
         rows.append(r)

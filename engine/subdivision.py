@@ -26,6 +26,18 @@ class Cage:
     edge_sharpness: np.ndarray  # (E,) float64
     vertex_sharpness: np.ndarray  # (N,) float64
     corners_sharp: bool = False  # interpolateBoundary edgeAndCorner
+    # (C,) int64: each corner's edge (corner i to the next in its face), an index into
+    # `edges` where `edges` came from the same _edges; None until topology() needs it.
+    corner_edge: np.ndarray | None = None
+
+
+def topology(c: Cage):
+    """(edges, corner_edge) of `c`: found once per cage, as refinement, the vertex
+    rules, the limit points and the patches all ask for them. A cage's edges are its
+    faces' sorted pairs in _edges' order (edge_sharpness is aligned with them)."""
+    if c.corner_edge is None:
+        _, c.corner_edge = _edges(c.counts, c.indices)
+    return c.edges, c.corner_edge
 
 
 def cage(points, counts, indices, crease_pairs=(), crease_sharpness=(), corner_indices=(),
@@ -33,7 +45,7 @@ def cage(points, counts, indices, crease_pairs=(), crease_sharpness=(), corner_i
     """A Cage from USD-style arrays (creases as vertex pairs)."""
     points = np.asarray(points, np.float64)
     counts, indices = np.asarray(counts, np.int64), np.asarray(indices, np.int64)
-    edges, _ = _edges(counts, indices)
+    edges, corner_edge = _edges(counts, indices)
     sharp = np.zeros(len(edges))
     pairs = np.sort(np.asarray(crease_pairs, np.int64).reshape(-1, 2), axis=1)
     if len(pairs):
@@ -45,7 +57,7 @@ def cage(points, counts, indices, crease_pairs=(), crease_sharpness=(), corner_i
     vsharp = np.zeros(len(points))
     vsharp[np.asarray(corner_indices, np.int64)] = np.asarray(corner_sharpness, np.float64)
     return Cage(points, counts, indices, edges, sharp, vsharp,
-                corners_sharp=interpolate_boundary == "edgeAndCorner")
+                corners_sharp=interpolate_boundary == "edgeAndCorner", corner_edge=corner_edge)
 
 
 def _edges(counts, indices):
@@ -71,7 +83,7 @@ def refine(c: Cage, levels: int) -> Cage:
 def refine_once(c: Cage) -> Cage:
     n_v, n_f = len(c.points), len(c.counts)
     d = c.points.shape[1]       # 3, or any width: the rules are linear in the points
-    edges, corner_edge = _edges(c.counts, c.indices)
+    edges, corner_edge = topology(c)
     n_e = len(edges)
     corner_face = np.repeat(np.arange(n_f), c.counts)
     face_points = np.zeros((n_f, d))
@@ -163,7 +175,7 @@ def refine_once(c: Cage) -> Cage:
                  np.zeros((0, 2), np.int64), np.zeros(0), np.zeros(len(points)),
                  corners_sharp=c.corners_sharp)
     child.vertex_sharpness[:n_v] = child_vsharp
-    child_edges, _ = _edges(child.counts, child.indices)
+    child_edges, child.corner_edge = _edges(child.counts, child.indices)
     child.edges = child_edges
     child.edge_sharpness = np.zeros(len(child_edges))
     keep = np.concatenate([c.edge_sharpness, c.edge_sharpness]) > 0
@@ -183,7 +195,7 @@ def vertex_rules(c: Cage):
     Remaining semi-sharp sharpness counts as sharp, as OpenSubdiv's limit masks do.
     Also returns the edges and which of them are sharp."""
     n_v = len(c.points)
-    edges, corner_edge = _edges(c.counts, c.indices)
+    edges, corner_edge = topology(c)
     edge_faces = np.bincount(corner_edge, minlength=len(edges))
     sharp = (c.edge_sharpness > 0) | (edge_faces != 2)
     count = np.bincount(edges[sharp].ravel(), minlength=n_v)
@@ -285,7 +297,7 @@ def face_varying_cage(c: Cage, values, rule: str) -> Cage:
         ends = np.sort(point_of[fv.edges], axis=1)
         fv.edge_sharpness = np.array([lookup.get(tuple(e), 0.0) for e in ends.tolist()])
     fv.vertex_sharpness = c.vertex_sharpness[point_of].copy()
-    edges, corner_edge = _edges(fv.counts, fv.indices)
+    edges, corner_edge = topology(fv)
     open_edges = edges[np.bincount(corner_edge, minlength=len(edges)) == 1]
     on_boundary = np.zeros(len(unique), bool)
     on_boundary[open_edges.ravel()] = True

@@ -54,6 +54,24 @@ def test_patches_are_the_limit_surface_where_regular(name, levels):
         assert 1e-6 < centre[~exact].max() < 2e-3
 
 
+def test_a_cages_topology_is_found_once_per_level(monkeypatch):
+    """Refinement, the vertex rules, the limit points and the patches all ask for a
+    cage's edges and each corner's edge: found once per cage (here the cage and its
+    two levels), and the same as found afresh."""
+    import lantern.engine.subdivision as subdivision
+    calls = []
+    monkeypatch.setattr(subdivision, "_edges",
+                        lambda counts, indices: calls.append(len(counts)) or _edges(counts, indices))
+    c = refine(cage(CUBE_POINTS, [4] * 6, np.ravel(CUBE_FACES), crease_pairs=[(0, 1)],
+                    crease_sharpness=[1.5]), 2)
+    patches = bezier_patches(c)
+    assert calls == [6, 24, 96]
+    edges, corner_edge = _edges(c.counts, c.indices)
+    assert np.array_equal(subdivision.topology(c)[0], edges)
+    assert np.array_equal(subdivision.topology(c)[1], corner_edge)
+    assert np.isfinite(patches).all()
+
+
 def test_neighbouring_patches_share_their_edge_curves():
     """No cracks at any tessellation: along every shared edge both patches give one curve."""
     c = refine(cage(CUBE_POINTS, [4] * 6, np.ravel(CUBE_FACES)), 1)
