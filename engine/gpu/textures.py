@@ -201,9 +201,12 @@ class MaterialTextures:
 
     def _upload(self, path, colorspace):
         img = self._image(path)
-        # Its mean too, from the pixels in hand: the irradiance field asks for it
-        # (a frame with bounces, the default), and the file is not read twice.
-        self._means[(path, colorspace)] = linear_mean(img, colorspace)
+        if img.dtype == np.uint8:
+            # Its mean too, from the pixels in hand: the irradiance field asks for it
+            # (a frame with bounces, the default), and the file is not read twice. An
+            # 8-bit image's is a histogram; a deeper one's would decode every texel
+            # again, so it waits until the field asks (mean).
+            self._means[(path, colorspace)] = linear_mean(img, colorspace)
         img = np.ascontiguousarray(img[::-1])  # GL's t = 0 is the bottom row, as USD st
         h, w = img.shape[:2]
         srgb = is_srgb(img, colorspace)
