@@ -74,8 +74,10 @@ def check(view: str = STANDARD, look: str | None = None, exposure: float = 0.0) 
         _check_names(_config(), view, look)
         # Not a daemon: a process that ends meanwhile waits for it (at most the build)
         # rather than tearing OpenColorIO down under it.
-        threading.Thread(target=_build_ahead, args=(view, look or "", float(exposure)),
-                         name="lantern-colour").start()
+        key = (view, look or "", float(exposure))
+        _ahead[key] = thread = threading.Thread(target=_build_ahead, args=key,
+                                                name="lantern-colour")
+        thread.start()
 
 
 def _build_ahead(view, look, exposure):
@@ -159,9 +161,16 @@ def _check_names(config, view, look):
 
 
 _building = threading.Lock()        # one build of a transform, whoever asks first
+_ahead = {}                          # (view, look, exposure) -> the thread check() started
 
 
 def _processor(view, look, exposure):
+    # A transform check() is building is waited for, not raced for the lock: the
+    # image that asks gets the thread's build, whichever thread starts first.
+    ahead = _ahead.get((view, look, exposure))
+    if ahead is not None and ahead is not threading.current_thread():
+        ahead.join()
+        _ahead.pop((view, look, exposure), None)
     with _building:
         return _built_processor(view, look, exposure)
 
